@@ -1,0 +1,163 @@
+#include "common/log.h"
+
+#include <errno.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+static pthread_mutex_t log_lock = PTHREAD_MUTEX_INITIALIZER;
+static enum log_level current_level = LOG_INFO;
+static unsigned errors, warnings;
+static char last_error[1024];
+
+void log_set_level(enum log_level level)
+{
+    pthread_mutex_lock(&log_lock);
+    current_level = level;
+    pthread_mutex_unlock(&log_lock);
+}
+
+enum log_level log_get_level(void)
+{
+    return current_level;
+}
+
+void log_msg(enum log_level level, const char *fmt, ...)
+{
+    char line[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof(line), fmt, ap);
+    va_end(ap);
+
+    pthread_mutex_lock(&log_lock);
+    if (level == LOG_ERROR) {
+        errors++;
+        snprintf(last_error, sizeof(last_error), "%s", line);
+    } else if (level == LOG_WARN) {
+        warnings++;
+    }
+    if (level <= current_level) {
+        const char *tag = level == LOG_ERROR ? "error: " : level == LOG_WARN ? "warning: " : "";
+        fprintf(stderr, "anvil: %s%s\n", tag, line);
+    }
+    pthread_mutex_unlock(&log_lock);
+}
+
+unsigned log_error_count(void)
+{
+    return errors;
+}
+
+unsigned log_warn_count(void)
+{
+    return warnings;
+}
+
+const char *log_last_error(void)
+{
+    return last_error;
+}
+
+char *file_read_all(const char *path, size_t *len_out)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        log_error("%s: cannot open: %s", path, strerror(errno));
+        return NULL;
+    }
+    size_t cap = 4096, len = 0;
+    char *buf = malloc(cap);
+    if (!buf)
+        goto error_file;
+    for (;;) {
+        if (len + 1 >= cap) {
+            char *grown = realloc(buf, cap * 2);
+            if (!grown)
+                goto error_buf;
+            buf = grown;
+            cap *= 2;
+        }
+        size_t n = fread(buf + len, 1, cap - len - 1, f);
+        len += n;
+        if (n == 0)
+            break;
+    }
+    if (ferror(f)) {
+        log_error("%s: read failed: %s", path, strerror(errno));
+        goto error_buf;
+    }
+    fclose(f);
+    buf[len] = '\0';
+    if (len_out)
+        *len_out = len;
+    return buf;
+
+error_buf:
+    free(buf);
+error_file:
+    fclose(f);
+    return NULL;
+}
+
+bool file_write_atomic(const char *path, const void *data, size_t len)
+{
+    size_t plen = strlen(path);
+    char *tmp = malloc(plen + 16);
+    if (!tmp)
+        return false;
+    snprintf(tmp, plen + 16, "%s.tmpXXXXXX", path);
+    int fd = mkstemp(tmp);
+    if (fd < 0) {
+        log_error("%s: cannot create a temporary file beside it: %s", path, strerror(errno));
+        free(tmp);
+        return false;
+    }
+    const char *p = data;
+    size_t left = len;
+    while (left > 0) {
+        ssize_t n = write(fd, p, left);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            log_error("%s: write failed: %s", path, strerror(errno));
+            goto error_tmp;
+        }
+        p += n;
+        left -= (size_t)n;
+    }
+    if (fsync(fd) != 0) {
+        log_error("%s: fsync failed: %s", path, strerror(errno));
+        goto error_tmp;
+    }
+    if (close(fd) != 0) {
+        fd = -1;
+        log_error("%s: close failed: %s", path, strerror(errno));
+        goto error_tmp;
+    }
+    fd = -1;
+    if (rename(tmp, path) != 0) {
+        log_error("%s: cannot replace: %s", path, strerror(errno));
+        goto error_tmp;
+    }
+    free(tmp);
+    return true;
+
+error_tmp:
+    if (fd >= 0)
+        close(fd);
+    unlink(tmp);
+    free(tmp);
+    return false;
+}
+
+double time_now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}

@@ -1,0 +1,52 @@
+/*
+ * common: the one logging function every part reports through, and small helpers that every
+ * part needs (checked allocation, file reading).  Knows nothing about the renderer.
+ *
+ * Library code never prints or exits: it logs the reason for a failure here and returns
+ * false or NULL.  The program decides what reaches stderr through the log level.
+ */
+#ifndef ANVIL_COMMON_LOG_H
+#define ANVIL_COMMON_LOG_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+enum log_level {
+    LOG_ERROR = 0,
+    LOG_WARN = 1,
+    LOG_INFO = 2,  /* progress and timing lines */
+    LOG_DEBUG = 3, /* GL debug output, details */
+};
+
+/* Messages above this level are dropped.  Default LOG_INFO.  Thread safe. */
+void log_set_level(enum log_level level);
+enum log_level log_get_level(void);
+
+/* Formats one line to stderr, prefixed "anvil: " (and "error: "/"warning: ").  Thread safe. */
+void log_msg(enum log_level level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* Counts of errors and warnings logged so far (tests use them). */
+unsigned log_error_count(void);
+unsigned log_warn_count(void);
+
+/* Keeps the last error message logged, for tests to check wording.  Valid until the next
+ * log_msg call from any thread. */
+const char *log_last_error(void);
+
+#define log_error(...) log_msg(LOG_ERROR, __VA_ARGS__)
+#define log_warn(...) log_msg(LOG_WARN, __VA_ARGS__)
+#define log_info(...) log_msg(LOG_INFO, __VA_ARGS__)
+#define log_debug(...) log_msg(LOG_DEBUG, __VA_ARGS__)
+
+/* Reads a whole file into a NUL-terminated buffer the caller frees.  On failure logs
+ * "PATH: reason" and returns NULL.  *len_out (may be NULL) receives the length. */
+char *file_read_all(const char *path, size_t *len_out);
+
+/* Writes LEN bytes to PATH atomically: a temporary file in the same folder, fsync, rename.
+ * On failure the old file is untouched and the reason is logged. */
+bool file_write_atomic(const char *path, const void *data, size_t len);
+
+/* Monotonic time in milliseconds. */
+double time_now_ms(void);
+
+#endif

@@ -1,0 +1,63 @@
+#include "testutil.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static char tmpdir[256];
+static char pathbuf[4096];
+
+const char *test_shared_data(const char *name)
+{
+    snprintf(pathbuf, sizeof(pathbuf), "%s/%s", ANVIL_SHARED_DATA, name);
+    return pathbuf;
+}
+
+const char *test_fixture(const char *name)
+{
+    snprintf(pathbuf, sizeof(pathbuf), "%s/%s", ANVIL_TEST_DATA, name);
+    return pathbuf;
+}
+
+static void remove_tmpdir(void)
+{
+    if (tmpdir[0]) {
+        char cmd[300];
+        snprintf(cmd, sizeof(cmd), "rm -rf '%s'", tmpdir);
+        if (system(cmd) != 0)
+            fprintf(stderr, "could not remove %s\n", tmpdir);
+    }
+}
+
+const char *test_tmpdir(void)
+{
+    if (!tmpdir[0]) {
+        snprintf(tmpdir, sizeof(tmpdir), "/tmp/anvil-test-XXXXXX");
+        if (!mkdtemp(tmpdir)) {
+            perror("mkdtemp");
+            abort();
+        }
+        atexit(remove_tmpdir);
+    }
+    return tmpdir;
+}
+
+const char *test_tmp_path(const char *name)
+{
+    snprintf(pathbuf, sizeof(pathbuf), "%s/%s", test_tmpdir(), name);
+    return pathbuf;
+}
+
+const char *test_write_file(const char *name, const char *text)
+{
+    const char *path = test_tmp_path(name);
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        perror(path);
+        abort();
+    }
+    fputs(text, f);
+    fclose(f);
+    return path;
+}

@@ -1,0 +1,34 @@
+/*
+ * Test support shared by every test program: where the sample data and fixtures are, a
+ * per-test temporary folder, and the GL skip convention (exit 77 when no context).
+ * Include <cmocka.h> through this header.
+ */
+#ifndef ANVIL_TESTUTIL_H
+#define ANVIL_TESTUTIL_H
+
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+
+#define TEST_SKIP 77
+
+/* Path of a file under ../shared/data (e.g. "wrf/katrina_2005_mercator_wsm3.nc").  Returns a
+ * static buffer overwritten by the next call. */
+const char *test_shared_data(const char *name);
+
+/* Path of a fixture under tests/data.  Static buffer as above. */
+const char *test_fixture(const char *name);
+
+/* A fresh empty folder for this test program (created on first call, removed at exit). */
+const char *test_tmpdir(void);
+
+/* Path NAME inside test_tmpdir().  Static buffer as above. */
+const char *test_tmp_path(const char *name);
+
+/* Writes TEXT to a file NAME in the temporary folder and returns its path (static buffer). */
+const char *test_write_file(const char *name, const char *text);
+
+#endif
