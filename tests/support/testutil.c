@@ -1,5 +1,7 @@
 #include "testutil.h"
 
+#include "gpu/gpu.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -60,4 +62,14 @@ const char *test_write_file(const char *name, const char *text)
     fputs(text, f);
     fclose(f);
     return path;
+}
+
+struct gpu_context *test_gl_context_or_skip(void)
+{
+    struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){.backend = "egl"});
+    if (!ctx) {
+        fprintf(stderr, "no OpenGL 4.5 context: skipping\n");
+        exit(TEST_SKIP);
+    }
+    return ctx;
 }

@@ -31,4 +31,9 @@ const char *test_tmp_path(const char *name);
 /* Writes TEXT to a file NAME in the temporary folder and returns its path (static buffer). */
 const char *test_write_file(const char *name, const char *text);
 
+
+
+struct gpu_context;
+/* A headless OpenGL 4.5 context, or exit(TEST_SKIP) with a message when none can be made. */
+struct gpu_context *test_gl_context_or_skip(void);
 #endif

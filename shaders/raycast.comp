@@ -1,0 +1,94 @@
+// Eye pass: one invocation per pixel marches the view ray front to back through the
+// extinction volume and adds the sunlight single-scattered toward the eye (Nes eq. 5.18):
+//   L = T(0,e) L_bg + sum_s T(0,s) (1 - T_s) P_v(psi) L_l(s)
+// Variants (#define): LIGHTMAP 0 = unshadowed sunlight; 1 = dense light volume;
+// 2 = compressed deep light map.  GROUND_SHADOW 1 = the ground reads the light map too.
+
+#include "common.glsl"
+#include "lightmap_lookup.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(rgba32f, binding = 0) uniform writeonly image2D out_image;
+layout(binding = 0) uniform sampler3D beta_tex;  // r: ice-phase beta, g: water-phase beta [1/m]
+layout(binding = 1) uniform sampler1D phase_tex; // r: ice, g: water eye phase over psi in [0, pi]
+
+uniform mat4 inv_view_proj; // clip space -> world (metres)
+uniform ivec2 image_size;
+uniform ivec2 pixel_offset;  // this view's origin within a larger image (tiles), usually 0
+uniform vec3 box_min;
+uniform vec3 box_size;
+uniform float step_len;      // metres
+uniform float termination;   // stop below this transmittance
+uniform vec3 sun_dir;        // unit vector toward the sun
+uniform vec3 sun_radiance;
+uniform vec3 sky_radiance;
+uniform vec3 ground_albedo;
+uniform int ground_on;
+uniform float phase_size;    // entries in phase_tex
+
+vec2 eye_phase(float cos_psi)
+{
+    float psi = acos(clamp(cos_psi, -1.0, 1.0));
+    float u = (psi / PI * (phase_size - 1.0) + 0.5) / phase_size;
+    return texture(phase_tex, u).rg;
+}
+
+void main()
+{
+    ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
+    if (pix.x >= image_size.x || pix.y >= image_size.y)
+        return;
+    vec2 ndc = (vec2(pix) + 0.5) / vec2(image_size) * 2.0 - 1.0;
+    vec4 pn = inv_view_proj * vec4(ndc, -1.0, 1.0);
+    vec4 pf = inv_view_proj * vec4(ndc, 1.0, 1.0);
+    // Rays start at the near plane, so an eye inside the volume sees only what is in front.
+    vec3 origin = pn.xyz / pn.w;
+    vec3 dir = normalize(pf.xyz / pf.w - origin);
+
+    // Opaque ground at z = 0 ends the ray.
+    float t_ground = 1e30;
+    if (ground_on != 0 && dir.z < 0.0 && origin.z > 0.0)
+        t_ground = -origin.z / dir.z;
+
+    vec2 t = ray_box(origin, dir, box_min, box_min + box_size);
+    float t0 = max(t.x, 0.0);
+    float t1 = min(t.y, t_ground);
+
+    vec3 radiance = vec3(0.0);
+    float trans = 1.0;
+    float cos_psi = dot(dir, sun_dir); // scattering angle between sunlight and the eye ray
+    vec2 phase = eye_phase(cos_psi);
+    if (t1 > t0) {
+        float len = t1 - t0;
+        int n = max(1, int(ceil(len / step_len)));
+        float ds = len / float(n);
+        for (int i = 0; i < n; i++) {
+            vec3 p = origin + dir * (t0 + (float(i) + 0.5) * ds);
+            vec2 b = texture(beta_tex, (p - box_min) / box_size).rg;
+            float beta = b.r + b.g;
+            if (beta <= 0.0)
+                continue;
+            float ts = transmittance(beta * ds);
+            float pv = (b.r * phase.r + b.g * phase.g) / beta; // Nes eq. 5.12
+            float light = lightmap_light(p);
+            radiance += trans * (1.0 - ts) * pv * light * sun_radiance;
+            trans *= ts;
+            if (trans < termination) {
+                trans = 0.0;
+                break;
+            }
+        }
+    }
+
+    vec3 background;
+    if (t_ground < 1e29) {
+        vec3 g = origin + dir * t_ground;
+        float sun_light = max(sun_dir.z, 0.0) * ground_light(g);
+        background = ground_albedo * (sun_radiance * sun_light + sky_radiance);
+    } else {
+        background = sky_radiance;
+    }
+    radiance += trans * background;
+    imageStore(out_image, pix + pixel_offset, vec4(radiance, trans));
+}

@@ -1,0 +1,60 @@
+/*
+ * app: the command line, the main loop and the wiring between parts.  This file gathers what
+ * the commands share: turning a config into a volume, lighting settings and a camera, and
+ * the --stats report.
+ */
+#ifndef ANVIL_APP_H
+#define ANVIL_APP_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "config/config.h"
+#include "data/volume.h"
+#include "render/render.h"
+
+/* Exit codes of the program (documented in docs/user-guide.md). */
+enum {
+    EXIT_OK = 0,
+    EXIT_BAD_INPUT = 1, /* a config, data file or option value is wrong */
+    EXIT_USAGE = 2,     /* the command line itself is wrong */
+    EXIT_NO_GPU = 3,    /* no OpenGL 4.5 context could be made */
+    EXIT_FAILED = 4,    /* the work failed for another reason (out of memory, write error) */
+};
+
+/* Loads CONFIG_PATH (or the built-in defaults when NULL) and applies the --set overrides. */
+bool app_load_config(const char *config_path, char **sets, int n_sets, struct config *cfg);
+
+/* Builds the volume the config describes as extinction. */
+bool app_build_volume(const struct config *cfg, struct ext_volume *out);
+
+/* Lighting and background from the config. */
+void app_render_settings(const struct config *cfg, struct render_settings *s);
+
+/* The config's camera at WIDTH x HEIGHT. */
+void app_camera_view(const struct config *cfg, int width, int height, struct render_view *view);
+
+/* What a run did, written by --stats FILE.json. */
+struct app_stats {
+    const char *command;
+    const char *device;
+    unsigned views;
+    unsigned light_builds;
+    double view_ms[64];
+    unsigned n_view_ms;
+    double build_ms[64];
+    unsigned n_build_ms;
+    double light_bytes_dense, light_bytes_compressed;
+    size_t gpu_bytes;
+    size_t nonfinite_pixels;
+    double volume_ms, upload_ms, total_ms;
+};
+
+void app_stats_add_view(struct app_stats *st, double ms);
+void app_stats_add_build(struct app_stats *st, double ms);
+bool app_stats_write(const struct app_stats *st, const char *path);
+
+int cmd_render(int argc, char **argv);
+int cmd_run(int argc, char **argv);
+
+#endif

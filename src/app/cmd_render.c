@@ -1,0 +1,372 @@
+/* anvil render (headless, to files) and anvil run (a window). */
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <GLFW/glfw3.h>
+
+#include "app/app.h"
+#include "common/log.h"
+#include "gpu/gpu.h"
+#include "render/camera.h"
+
+struct render_options {
+    const char *config;
+    const char *output;
+    const char *stats;
+    char *sets[64];
+    int n_sets;
+};
+
+static int parse_options(int argc, char **argv, struct render_options *o, bool need_output)
+{
+    static const struct option longopts[] = {
+        {"output", required_argument, NULL, 'o'},
+        {"set", required_argument, NULL, 's'},
+        {"stats", required_argument, NULL, 'S'},
+        {"quiet", no_argument, NULL, 'q'},
+        {"help", no_argument, NULL, 'h'},
+        {NULL, 0, NULL, 0},
+    };
+    memset(o, 0, sizeof(*o));
+    optind = 1;
+    int c;
+    while ((c = getopt_long(argc, argv, "o:qh", longopts, NULL)) != -1) {
+        switch (c) {
+        case 'o':
+            o->output = optarg;
+            break;
+        case 's':
+            if (o->n_sets == 64) {
+                log_error("too many --set options (at most 64)");
+                return EXIT_USAGE;
+            }
+            o->sets[o->n_sets++] = optarg;
+            break;
+        case 'S':
+            o->stats = optarg;
+            break;
+        case 'q':
+            log_set_level(LOG_ERROR);
+            break;
+        case 'h':
+            return -1;
+        default:
+            return EXIT_USAGE;
+        }
+    }
+    if (optind < argc)
+        o->config = argv[optind++];
+    if (optind < argc) {
+        log_error("%s: unexpected argument \"%s\" (one config file at most)", argv[0],
+                  argv[optind]);
+        return EXIT_USAGE;
+    }
+    if (need_output && !o->output) {
+        log_error("render: missing -o FILE.png or -o FILE.pfm");
+        return EXIT_USAGE;
+    }
+    return EXIT_OK;
+}
+
+/* What both commands share once a context is current. */
+struct session {
+    struct config cfg;
+    struct renderer *renderer;
+    struct render_settings settings;
+    struct app_stats stats;
+};
+
+static int session_start(struct session *s, const struct render_options *o)
+{
+    struct ext_volume vol = {0};
+    double t = time_now_ms();
+    if (!app_build_volume(&s->cfg, &vol))
+        return EXIT_BAD_INPUT;
+    s->stats.volume_ms = time_now_ms() - t;
+    log_info("volume %dx%dx%d (%.1f x %.1f x %.1f km) built in %.0f ms", vol.grid.n[0],
+             vol.grid.n[1], vol.grid.n[2], vol.grid.n[0] * vol.grid.spacing[0] / 1000.0,
+             vol.grid.n[1] * vol.grid.spacing[1] / 1000.0,
+             vol.grid.n[2] * vol.grid.spacing[2] / 1000.0, s->stats.volume_ms);
+    s->renderer = renderer_create();
+    if (!s->renderer) {
+        ext_volume_finish(&vol);
+        return EXIT_FAILED;
+    }
+    bool ok = renderer_set_optics(s->renderer, &s->cfg.optics.params) &&
+              renderer_set_volume(s->renderer, &vol);
+    ext_volume_finish(&vol);
+    if (!ok)
+        return EXIT_FAILED;
+    s->stats.upload_ms = renderer_stats(s->renderer)->upload_ms;
+    app_render_settings(&s->cfg, &s->settings);
+    s->stats.device = gpu_renderer_name();
+    return EXIT_OK;
+}
+
+static int usage_render(void)
+{
+    fprintf(stderr, "usage: anvil render [CONFIG] -o FILE.png|FILE.pfm [--set PATH=VALUE]... "
+                    "[--stats FILE.json] [--quiet]\n");
+    return EXIT_USAGE;
+}
+
+int cmd_render(int argc, char **argv)
+{
+    struct render_options o;
+    int rc = parse_options(argc, argv, &o, true);
+    if (rc < 0) {
+        usage_render();
+        return EXIT_OK;
+    }
+    if (rc != EXIT_OK)
+        return usage_render();
+    double start = time_now_ms();
+    struct session s = {.stats.command = "render"};
+    if (!app_load_config(o.config, o.sets, o.n_sets, &s.cfg))
+        return EXIT_BAD_INPUT;
+
+    struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){.backend = "egl"});
+    if (!ctx)
+        return EXIT_NO_GPU;
+    rc = session_start(&s, &o);
+    if (rc != EXIT_OK)
+        goto done;
+
+    struct render_view view;
+    app_camera_view(&s.cfg, s.cfg.render.width, s.cfg.render.height, &view);
+    struct gpu_texture target = {0};
+    struct image img = {0};
+    rc = EXIT_FAILED;
+    if (!renderer_draw(s.renderer, &s.settings, &view, &target))
+        goto done_target;
+    const struct render_stats *rs = renderer_stats(s.renderer);
+    app_stats_add_view(&s.stats, rs->view_ms_total);
+    if (!renderer_read(&target, &img))
+        goto done_target;
+    s.stats.nonfinite_pixels = image_count_nonfinite(&img);
+    if (s.stats.nonfinite_pixels)
+        log_warn("%zu pixels are not finite", s.stats.nonfinite_pixels);
+    if (!image_write(&img, o.output, (float)s.cfg.render.exposure)) {
+        rc = EXIT_FAILED;
+        goto done_image;
+    }
+    log_info("wrote %s (%dx%d, view %.1f ms on %s)", o.output, img.width, img.height,
+             rs->view_ms_total, s.stats.device);
+    s.stats.gpu_bytes = gpu_bytes_allocated();
+    s.stats.total_ms = time_now_ms() - start;
+    rc = EXIT_OK;
+    if (o.stats && !app_stats_write(&s.stats, o.stats))
+        rc = EXIT_FAILED;
+done_image:
+    image_finish(&img);
+done_target:
+    gpu_texture_finish(&target);
+done:
+    renderer_destroy(s.renderer);
+    gpu_context_destroy(ctx);
+    return rc;
+}
+
+/* ---- anvil run: one window, orbit and zoom with mouse and keys ------------------------- */
+
+struct run_state {
+    struct camera_orbit orbit, home;
+    bool dragging;
+    double last_x, last_y;
+    bool dirty;
+    double sun_az, sun_el;
+    bool sun_dirty;
+};
+
+static void on_scroll(GLFWwindow *w, double dx, double dy)
+{
+    struct run_state *st = glfwGetWindowUserPointer(w);
+    st->orbit.distance_m *= pow(0.9, dy);
+    st->dirty = true;
+}
+
+static void on_button(GLFWwindow *w, int button, int action, int mods)
+{
+    struct run_state *st = glfwGetWindowUserPointer(w);
+    if (button == GLFW_MOUSE_BUTTON_LEFT) {
+        st->dragging = action == GLFW_PRESS;
+        glfwGetCursorPos(w, &st->last_x, &st->last_y);
+    }
+}
+
+static void on_cursor(GLFWwindow *w, double x, double y)
+{
+    struct run_state *st = glfwGetWindowUserPointer(w);
+    if (!st->dragging)
+        return;
+    st->orbit.azimuth_deg += 0.3 * (x - st->last_x);
+    st->orbit.elevation_deg += 0.3 * (y - st->last_y);
+    if (st->orbit.elevation_deg > 89.0)
+        st->orbit.elevation_deg = 89.0;
+    if (st->orbit.elevation_deg < -89.0)
+        st->orbit.elevation_deg = -89.0;
+    st->last_x = x;
+    st->last_y = y;
+    st->dirty = true;
+}
+
+static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
+{
+    struct run_state *st = glfwGetWindowUserPointer(w);
+    if (action == GLFW_RELEASE)
+        return;
+    switch (key) {
+    case GLFW_KEY_ESCAPE:
+    case GLFW_KEY_Q:
+        glfwSetWindowShouldClose(w, GLFW_TRUE);
+        break;
+    case GLFW_KEY_LEFT:
+        st->orbit.azimuth_deg -= 5.0;
+        break;
+    case GLFW_KEY_RIGHT:
+        st->orbit.azimuth_deg += 5.0;
+        break;
+    case GLFW_KEY_UP:
+        st->orbit.elevation_deg = fmin(89.0, st->orbit.elevation_deg + 5.0);
+        break;
+    case GLFW_KEY_DOWN:
+        st->orbit.elevation_deg = fmax(-89.0, st->orbit.elevation_deg - 5.0);
+        break;
+    case GLFW_KEY_EQUAL:
+    case GLFW_KEY_KP_ADD:
+    case GLFW_KEY_PAGE_UP:
+        st->orbit.distance_m *= 0.9;
+        break;
+    case GLFW_KEY_MINUS:
+    case GLFW_KEY_KP_SUBTRACT:
+    case GLFW_KEY_PAGE_DOWN:
+        st->orbit.distance_m /= 0.9;
+        break;
+    case GLFW_KEY_R:
+        st->orbit = st->home;
+        break;
+    case GLFW_KEY_A:
+        st->sun_az -= 5.0;
+        st->sun_dirty = true;
+        break;
+    case GLFW_KEY_D:
+        st->sun_az += 5.0;
+        st->sun_dirty = true;
+        break;
+    case GLFW_KEY_W:
+        st->sun_el = fmin(90.0, st->sun_el + 2.0);
+        st->sun_dirty = true;
+        break;
+    case GLFW_KEY_S:
+        st->sun_el = fmax(-10.0, st->sun_el - 2.0);
+        st->sun_dirty = true;
+        break;
+    default:
+        return;
+    }
+    st->dirty = true;
+}
+
+static int usage_run(void)
+{
+    fprintf(stderr,
+            "usage: anvil run [CONFIG] [--set PATH=VALUE]... [--stats FILE.json] [--quiet]\n"
+            "  mouse drag / arrows: orbit    wheel / + -: zoom    R: reset view\n"
+            "  A D: sun azimuth    W S: sun elevation    Esc Q: quit\n");
+    return EXIT_USAGE;
+}
+
+int cmd_run(int argc, char **argv)
+{
+    struct render_options o;
+    int rc = parse_options(argc, argv, &o, false);
+    if (rc < 0) {
+        usage_run();
+        return EXIT_OK;
+    }
+    if (rc != EXIT_OK)
+        return usage_run();
+    double start = time_now_ms();
+    struct session s = {.stats.command = "run"};
+    if (!app_load_config(o.config, o.sets, o.n_sets, &s.cfg))
+        return EXIT_BAD_INPUT;
+    struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){
+        .backend = "glfw",
+        .width = s.cfg.render.width,
+        .height = s.cfg.render.height,
+        .title = "anvil",
+        .monitor = -1,
+    });
+    if (!ctx)
+        return EXIT_NO_GPU;
+    rc = session_start(&s, &o);
+    if (rc != EXIT_OK)
+        goto done;
+
+    struct run_state st = {.dirty = true};
+    double eye[3], target[3];
+    for (int i = 0; i < 3; i++) {
+        eye[i] = s.cfg.camera.position_km[i] * 1000.0;
+        target[i] = s.cfg.camera.target_km[i] * 1000.0;
+    }
+    camera_orbit_from(eye, target, &st.orbit);
+    st.home = st.orbit;
+    st.sun_az = s.cfg.light.azimuth_deg;
+    st.sun_el = s.cfg.light.elevation_deg;
+    GLFWwindow *win = gpu_context_window(ctx);
+    glfwSetWindowUserPointer(win, &st);
+    glfwSetScrollCallback(win, on_scroll);
+    glfwSetMouseButtonCallback(win, on_button);
+    glfwSetCursorPosCallback(win, on_cursor);
+    glfwSetKeyCallback(win, on_key);
+    const char *frames_env = getenv("ANVIL_RUN_FRAMES"); /* for automated runs */
+    long frames_left = frames_env ? strtol(frames_env, NULL, 10) : -1;
+
+    struct gpu_texture hdr = {0}, ldr = {0};
+    rc = EXIT_OK;
+    while (!glfwWindowShouldClose(win) && frames_left != 0) {
+        if (st.sun_dirty) {
+            s.cfg.light.azimuth_deg = st.sun_az;
+            s.cfg.light.elevation_deg = st.sun_el;
+            app_render_settings(&s.cfg, &s.settings);
+            st.sun_dirty = false;
+        }
+        int w, h;
+        gpu_context_size(ctx, &w, &h);
+        if (st.dirty && w > 0 && h > 0) {
+            struct render_view view;
+            camera_orbit_eye(&st.orbit, eye);
+            camera_look_at(eye, st.orbit.target, s.cfg.camera.up, s.cfg.camera.fov_deg,
+                           s.cfg.camera.near_m, s.cfg.camera.far_km * 1000.0, w, h, &view);
+            double before = renderer_stats(s.renderer)->view_ms_total;
+            if (!renderer_draw(s.renderer, &s.settings, &view, &hdr) ||
+                !renderer_tonemap(s.renderer, &hdr, (float)s.cfg.render.exposure, &ldr)) {
+                rc = EXIT_FAILED;
+                break;
+            }
+            app_stats_add_view(&s.stats, renderer_stats(s.renderer)->view_ms_total - before);
+            gpu_present(&ldr, 0, 0, w, h, 0);
+            gpu_context_swap(ctx);
+            st.dirty = false;
+            if (frames_left > 0)
+                frames_left--;
+        }
+        if (frames_left > 0)
+            glfwPollEvents();
+        else
+            glfwWaitEventsTimeout(0.1);
+    }
+    gpu_texture_finish(&hdr);
+    gpu_texture_finish(&ldr);
+    s.stats.gpu_bytes = gpu_bytes_allocated();
+    s.stats.total_ms = time_now_ms() - start;
+    if (o.stats && !app_stats_write(&s.stats, o.stats))
+        rc = EXIT_FAILED;
+done:
+    renderer_destroy(s.renderer);
+    gpu_context_destroy(ctx);
+    return rc;
+}

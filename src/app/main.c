@@ -1,0 +1,65 @@
+/* anvil: immersive multi-view stereo volume rendering of weather simulations. */
+#include <stdio.h>
+#include <string.h>
+
+#include "app/app.h"
+#include "common/log.h"
+#include "config/config.h"
+
+struct command {
+    const char *name;
+    int (*run)(int argc, char **argv);
+    const char *summary;
+};
+
+static const struct command commands[] = {
+    {"render", cmd_render, "render views headless (EGL) to PNG or PFM files"},
+    {"run", cmd_run, "open a window: orbit, zoom, move the sun"},
+};
+
+static void usage(FILE *out)
+{
+    fprintf(out, "usage: anvil [--quiet] COMMAND [ARGS]\n"
+                 "       anvil --help | --version | --config-reference\n\ncommands:\n");
+    for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
+        fprintf(out, "  %-10s %s\n", commands[i].name, commands[i].summary);
+    fprintf(out, "\nanvil COMMAND --help shows a command's options.  Exit codes: 0 done, 1 bad "
+                 "input (config, data, option value), 2 usage, 3 no OpenGL 4.5 context, "
+                 "4 other failure.\n");
+}
+
+int main(int argc, char **argv)
+{
+    int i = 1;
+    for (; i < argc && argv[i][0] == '-'; i++) {
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
+            usage(stdout);
+            return EXIT_OK;
+        } else if (strcmp(argv[i], "--version") == 0) {
+            printf("anvil %s\n", ANVIL_VERSION);
+            return EXIT_OK;
+        } else if (strcmp(argv[i], "--quiet") == 0 || strcmp(argv[i], "-q") == 0) {
+            log_set_level(LOG_ERROR);
+        } else if (strcmp(argv[i], "--verbose") == 0 || strcmp(argv[i], "-v") == 0) {
+            log_set_level(LOG_DEBUG);
+        } else if (strcmp(argv[i], "--config-reference") == 0) {
+            config_write_reference(stdout);
+            return EXIT_OK;
+        } else {
+            fprintf(stderr, "anvil: unknown option %s\n", argv[i]);
+            usage(stderr);
+            return EXIT_USAGE;
+        }
+    }
+    if (i >= argc) {
+        usage(stderr);
+        return EXIT_USAGE;
+    }
+    for (size_t c = 0; c < sizeof(commands) / sizeof(commands[0]); c++) {
+        if (strcmp(argv[i], commands[c].name) == 0)
+            return commands[c].run(argc - i, argv + i);
+    }
+    fprintf(stderr, "anvil: unknown command \"%s\"\n", argv[i]);
+    usage(stderr);
+    return EXIT_USAGE;
+}

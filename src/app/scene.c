@@ -1,0 +1,154 @@
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "app/app.h"
+#include "common/log.h"
+#include "data/synth.h"
+#include "render/camera.h"
+
+bool app_load_config(const char *config_path, char **sets, int n_sets, struct config *cfg)
+{
+    config_defaults(cfg);
+    if (config_path && !config_load(config_path, cfg))
+        return false;
+    for (int i = 0; i < n_sets; i++) {
+        if (!config_set(cfg, sets[i]))
+            return false;
+    }
+    return config_validate(cfg);
+}
+
+bool app_build_volume(const struct config *cfg, struct ext_volume *out)
+{
+    const struct config_scene *sc = &cfg->scene;
+    struct synth_desc d = {0};
+    switch (sc->kind) {
+    case SCENE_STORM:
+        d.kind = SYNTH_STORM;
+        break;
+    case SCENE_SLAB:
+        d.kind = SYNTH_SLAB;
+        break;
+    case SCENE_SPHERE:
+        d.kind = SYNTH_SPHERE;
+        break;
+    case SCENE_EMPTY:
+        d.kind = SYNTH_EMPTY;
+        break;
+    case SCENE_VOXEL:
+        d.kind = SYNTH_VOXEL;
+        break;
+    case SCENE_DATA:
+        log_error("%s: scene.kind = \"data\" is not supported by this build", cfg->path);
+        return false;
+    }
+    for (int i = 0; i < 3; i++) {
+        d.n[i] = sc->size[i];
+        d.extent_m[i] = sc->extent_km[i] * 1000.0;
+    }
+    d.tau = sc->tau;
+    d.ice_phase = sc->phase == PHASE_ICE;
+    d.seed = sc->seed;
+    d.time = sc->time;
+    if (d.kind != SYNTH_STORM)
+        return synth_extinction(&d, &cfg->optics.params, out);
+
+    /* The storm goes through the species selection like real data does. */
+    struct field_volume fields = {0};
+    if (!synth_storm_fields(&d, &fields))
+        return false;
+    struct species_select sel;
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        sel.enabled[f] = cfg->optics.enabled[f];
+        sel.scale[f] = cfg->optics.scale[f];
+    }
+    bool ok = ext_volume_from_fields(&fields, &cfg->optics.params, &sel, out);
+    field_volume_finish(&fields);
+    return ok;
+}
+
+void app_render_settings(const struct config *cfg, struct render_settings *s)
+{
+    memset(s, 0, sizeof(*s));
+    double sun[3];
+    camera_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
+    for (int i = 0; i < 3; i++) {
+        s->sun_dir[i] = (float)sun[i];
+        s->sun_radiance[i] = (float)(cfg->light.intensity * cfg->light.color[i]);
+        s->sky[i] = (float)cfg->render.sky[i];
+        s->ground[i] = (float)cfg->render.ground[i];
+    }
+    s->ground_on = cfg->render.ground_on;
+    s->step_m = (float)cfg->render.step_m;
+    s->termination = (float)cfg->render.termination;
+}
+
+void app_camera_view(const struct config *cfg, int width, int height, struct render_view *view)
+{
+    const struct config_camera *c = &cfg->camera;
+    double eye[3], target[3];
+    for (int i = 0; i < 3; i++) {
+        eye[i] = c->position_km[i] * 1000.0;
+        target[i] = c->target_km[i] * 1000.0;
+    }
+    camera_look_at(eye, target, c->up, c->fov_deg, c->near_m, c->far_km * 1000.0, width,
+                   height, view);
+}
+
+void app_stats_add_view(struct app_stats *st, double ms)
+{
+    st->views++;
+    if (st->n_view_ms < sizeof(st->view_ms) / sizeof(st->view_ms[0]))
+        st->view_ms[st->n_view_ms++] = ms;
+}
+
+void app_stats_add_build(struct app_stats *st, double ms)
+{
+    st->light_builds++;
+    if (st->n_build_ms < sizeof(st->build_ms) / sizeof(st->build_ms[0]))
+        st->build_ms[st->n_build_ms++] = ms;
+}
+
+static void write_list(FILE *f, const double *v, unsigned n)
+{
+    fputc('[', f);
+    for (unsigned i = 0; i < n; i++)
+        fprintf(f, "%s%.4f", i ? ", " : "", v[i]);
+    fputc(']', f);
+}
+
+bool app_stats_write(const struct app_stats *st, const char *path)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    if (!f) {
+        log_error("%s: out of memory", path);
+        return false;
+    }
+    fprintf(f, "{\n  \"command\": \"%s\",\n", st->command ? st->command : "");
+    fprintf(f, "  \"device\": \"");
+    for (const char *p = st->device ? st->device : ""; *p; p++) {
+        if (*p == '"' || *p == '\\')
+            fputc('\\', f);
+        fputc(*p, f);
+    }
+    fprintf(f, "\",\n  \"views\": %u,\n  \"light_map_builds\": %u,\n", st->views,
+            st->light_builds);
+    fprintf(f, "  \"view_ms\": ");
+    write_list(f, st->view_ms, st->n_view_ms);
+    fprintf(f, ",\n  \"build_ms\": ");
+    write_list(f, st->build_ms, st->n_build_ms);
+    fprintf(f, ",\n  \"light_map_bytes_dense\": %.0f,\n", st->light_bytes_dense);
+    fprintf(f, "  \"light_map_bytes_compressed\": %.0f,\n", st->light_bytes_compressed);
+    fprintf(f, "  \"gpu_bytes\": %zu,\n  \"nonfinite_pixels\": %zu,\n", st->gpu_bytes,
+            st->nonfinite_pixels);
+    fprintf(f, "  \"volume_ms\": %.3f,\n  \"upload_ms\": %.3f,\n  \"total_ms\": %.3f\n}\n",
+            st->volume_ms, st->upload_ms, st->total_ms);
+    fclose(f);
+    bool ok = file_write_atomic(path, buf, len);
+    free(buf);
+    return ok;
+}

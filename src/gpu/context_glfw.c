@@ -1,0 +1,122 @@
+/* Window contexts through GLFW. */
+#include <stdlib.h>
+
+#include <epoxy/gl.h>
+#include <GLFW/glfw3.h>
+
+#include "common/log.h"
+#include "gpu/context_impl.h"
+
+struct glfw_context {
+    struct gpu_context base;
+    GLFWwindow *window;
+};
+
+static int glfw_users;
+
+static void error_callback(int code, const char *text)
+{
+    log_warn("GLFW: %s (0x%x)", text, code);
+}
+
+static struct gpu_context *glfw_create(const struct gpu_context_desc *desc)
+{
+    if (glfw_users == 0) {
+        glfwSetErrorCallback(error_callback);
+        if (!glfwInit()) {
+            log_error("GLFW could not start (no window system? use the headless \"egl\" "
+                      "backend, e.g. anvil render, or run under xvfb-run)");
+            return NULL;
+        }
+    }
+    glfw_users++;
+    struct glfw_context *c = calloc(1, sizeof(*c));
+    if (!c)
+        goto error_glfw;
+    glfwDefaultWindowHints();
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    glfwWindowHint(GLFW_OPENGL_DEBUG_CONTEXT, desc->no_debug ? GLFW_FALSE : GLFW_TRUE);
+    glfwWindowHint(GLFW_AUTO_ICONIFY, GLFW_FALSE);
+    glfwWindowHint(GLFW_STEREO, desc->stereo ? GLFW_TRUE : GLFW_FALSE);
+    GLFWmonitor *monitor = NULL;
+    if (desc->monitor >= 0) {
+        int count = 0;
+        GLFWmonitor **monitors = glfwGetMonitors(&count);
+        if (desc->monitor < count)
+            monitor = monitors[desc->monitor];
+        else
+            log_warn("monitor %d does not exist (%d connected): opening a window instead",
+                     desc->monitor, count);
+    }
+    int w = desc->width > 0 ? desc->width : 960, h = desc->height > 0 ? desc->height : 720;
+    c->window = glfwCreateWindow(w, h, desc->title ? desc->title : "anvil", monitor,
+                                 (GLFWwindow *)desc->share_window);
+    if (!c->window && desc->stereo) {
+        log_warn("no quad-buffer stereo framebuffer on this driver: falling back to mono");
+        glfwWindowHint(GLFW_STEREO, GLFW_FALSE);
+        c->window = glfwCreateWindow(w, h, desc->title ? desc->title : "anvil", monitor,
+                                     (GLFWwindow *)desc->share_window);
+    } else if (c->window) {
+        c->base.stereo = desc->stereo;
+    }
+    if (!c->window) {
+        log_error("GLFW could not open an OpenGL 4.5 core window");
+        goto error_alloc;
+    }
+    glfwMakeContextCurrent(c->window);
+    glfwSwapInterval(1);
+    c->base.width = w;
+    c->base.height = h;
+    return &c->base;
+
+error_alloc:
+    free(c);
+error_glfw:
+    if (--glfw_users == 0)
+        glfwTerminate();
+    return NULL;
+}
+
+static void glfw_destroy(struct gpu_context *ctx)
+{
+    struct glfw_context *c = (struct glfw_context *)ctx;
+    glfwDestroyWindow(c->window);
+    free(c);
+    if (--glfw_users == 0)
+        glfwTerminate();
+}
+
+static void glfw_make_current(struct gpu_context *ctx)
+{
+    glfwMakeContextCurrent(((struct glfw_context *)ctx)->window);
+}
+
+static void glfw_swap(struct gpu_context *ctx)
+{
+    glfwSwapBuffers(((struct glfw_context *)ctx)->window);
+}
+
+static void glfw_size(struct gpu_context *ctx, int *w, int *h)
+{
+    glfwGetFramebufferSize(((struct glfw_context *)ctx)->window, w, h);
+}
+
+static void *glfw_window(struct gpu_context *ctx)
+{
+    return ((struct glfw_context *)ctx)->window;
+}
+
+const struct gpu_context_impl gpu_context_glfw_impl = {
+    .name = "glfw",
+    .description = "OpenGL 4.5 core window through GLFW (X11/Wayland; quad-buffer stereo "
+                   "where the driver has it)",
+    .create = glfw_create,
+    .destroy = glfw_destroy,
+    .make_current = glfw_make_current,
+    .swap = glfw_swap,
+    .size = glfw_size,
+    .window = glfw_window,
+};

@@ -1,0 +1,33 @@
+/*
+ * gpu internal: the context backend table.  Each backend embeds struct gpu_context as its
+ * first member and fills a const gpu_context_impl.
+ */
+#ifndef ANVIL_GPU_CONTEXT_IMPL_H
+#define ANVIL_GPU_CONTEXT_IMPL_H
+
+#include "gpu/gpu.h"
+
+struct gpu_context_impl {
+    const char *name;
+    const char *description;
+    struct gpu_context *(*create)(const struct gpu_context_desc *desc);
+    void (*destroy)(struct gpu_context *ctx);
+    void (*make_current)(struct gpu_context *ctx);
+    void (*swap)(struct gpu_context *ctx);
+    void (*size)(struct gpu_context *ctx, int *w, int *h);
+    void *(*window)(struct gpu_context *ctx);
+};
+
+struct gpu_context {
+    const struct gpu_context_impl *impl;
+    bool stereo;
+    int width, height;
+};
+
+extern const struct gpu_context_impl gpu_context_egl_impl;
+extern const struct gpu_context_impl gpu_context_glfw_impl;
+
+/* Shared set-up once a context is current: checks the version, hooks the debug output. */
+bool gpu_context_setup_current(struct gpu_context *ctx, bool debug);
+
+#endif

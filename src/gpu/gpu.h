@@ -1,0 +1,151 @@
+/*
+ * gpu: the only part that calls OpenGL, EGL or GLFW's context functions.  It gives the rest
+ * of the program contexts (headless EGL or a GLFW window, behind one table), compute
+ * programs loaded from shaders/ with #include and #define variants, textures, storage
+ * buffers and timer queries, so that no other part includes a GL header.
+ *
+ * Every function except gpu_context_* needs a context current on the calling thread.
+ */
+#ifndef ANVIL_GPU_H
+#define ANVIL_GPU_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+/* ---- contexts ---------------------------------------------------------------------- */
+
+struct gpu_context;
+
+struct gpu_context_desc {
+    const char *backend; /* "egl" (headless) or "glfw" (window); NULL = "egl" */
+    int width, height;   /* window size (glfw); ignored headless */
+    const char *title;   /* window title */
+    bool debug;          /* GL debug output to the log (default on: zero means on) */
+    bool no_debug;       /* set to turn the debug output off */
+    void *share_window;  /* glfw: a GLFWwindow to share objects with, or NULL */
+    int monitor;         /* glfw: monitor index for fullscreen, -1 = windowed */
+    bool stereo;         /* glfw: ask for a quad-buffer stereo framebuffer */
+};
+
+/* Creates an OpenGL 4.5 core context and makes it current.  Returns NULL (reason logged) when
+ * no such context can be made: tests then exit 77.  Destroy with gpu_context_destroy. */
+struct gpu_context *gpu_context_create(const struct gpu_context_desc *desc);
+void gpu_context_destroy(struct gpu_context *ctx);
+void gpu_context_make_current(struct gpu_context *ctx);
+const char *gpu_context_backend(const struct gpu_context *ctx);
+/* Prints the backends one per line with a description (for --display help and docs). */
+void gpu_context_list(void (*print)(const char *name, const char *what, void *user), void *user);
+
+/* Window contexts: the GLFWwindow (as void *), NULL for headless.  Valid until destroy. */
+void *gpu_context_window(struct gpu_context *ctx);
+bool gpu_context_has_stereo(const struct gpu_context *ctx);
+void gpu_context_swap(struct gpu_context *ctx);
+/* Framebuffer size of a window context; the desc size for headless. */
+void gpu_context_size(struct gpu_context *ctx, int *width, int *height);
+
+/* Renderer and version strings of the current context (static storage). */
+const char *gpu_renderer_name(void);
+
+/* ---- textures ------------------------------------------------------------------------ */
+
+enum gpu_format { GPU_R32F, GPU_RG32F, GPU_RGBA32F, GPU_RGBA8, GPU_R16F, GPU_RG16F };
+
+struct gpu_texture {
+    unsigned id;
+    int dims;          /* 1, 2 or 3 */
+    int size[3];
+    enum gpu_format format;
+    size_t bytes;
+};
+
+/* Creates a texture with linear filtering and clamp-to-edge; DATA (may be NULL) is tightly
+ * packed float (or uint8 for GPU_RGBA8), x fastest.  Returns false (logged) on failure. */
+bool gpu_texture_init(struct gpu_texture *tex, int dims, const int size[3],
+                      enum gpu_format format, const void *data);
+/* Replaces the whole content; same layout as init. */
+void gpu_texture_upload(struct gpu_texture *tex, const void *data);
+/* Reads the whole level 0 back into OUT (bytes as for init, float or uint8). */
+void gpu_texture_read(const struct gpu_texture *tex, void *out, size_t out_bytes);
+void gpu_texture_finish(struct gpu_texture *tex);
+/* Binds for sampling at texture unit UNIT. */
+void gpu_texture_bind(const struct gpu_texture *tex, unsigned unit);
+/* Binds level 0 as an image at image unit UNIT (write-only when WRITE, else read-only). */
+void gpu_image_bind(const struct gpu_texture *tex, unsigned unit, bool write);
+void gpu_image_bind_rw(const struct gpu_texture *tex, unsigned unit);
+
+/* ---- storage buffers ----------------------------------------------------------------- */
+
+struct gpu_buffer {
+    unsigned id;
+    size_t bytes;
+};
+
+bool gpu_buffer_init(struct gpu_buffer *buf, size_t bytes, const void *data);
+void gpu_buffer_upload(struct gpu_buffer *buf, size_t offset, size_t bytes, const void *data);
+void gpu_buffer_read(const struct gpu_buffer *buf, size_t offset, size_t bytes, void *out);
+void gpu_buffer_bind(const struct gpu_buffer *buf, unsigned binding);
+void gpu_buffer_finish(struct gpu_buffer *buf);
+
+/* Bytes currently held by textures and buffers made through this part. */
+size_t gpu_bytes_allocated(void);
+
+/* ---- compute programs ---------------------------------------------------------------- */
+
+struct gpu_program {
+    unsigned id;
+    int local_size[3];
+};
+
+/* Compiles shaders/NAME as a compute shader.  "#version 450 core" comes first, then DEFINES
+ * (lines like "#define SHADOWS 1\n", may be NULL), then the file, where a line
+ * `#include "file.glsl"` is replaced by shaders/file.glsl (nested, each file once).  Compile
+ * and link errors are logged with the file name and line.  The shader directory is
+ * $ANVIL_SHADER_DIR if set, else the source tree's shaders/. */
+bool gpu_program_init(struct gpu_program *prog, const char *name, const char *defines);
+void gpu_program_finish(struct gpu_program *prog);
+void gpu_program_use(const struct gpu_program *prog);
+
+/* Uniform setters on the program (no need to use it first); a name the compiler removed is
+ * ignored. */
+void gpu_uniform_int(const struct gpu_program *p, const char *name, int v);
+void gpu_uniform_float(const struct gpu_program *p, const char *name, float v);
+void gpu_uniform_vec2(const struct gpu_program *p, const char *name, const float v[2]);
+void gpu_uniform_vec3(const struct gpu_program *p, const char *name, const float v[3]);
+void gpu_uniform_ivec2(const struct gpu_program *p, const char *name, const int v[2]);
+void gpu_uniform_ivec3(const struct gpu_program *p, const char *name, const int v[3]);
+void gpu_uniform_vec4(const struct gpu_program *p, const char *name, const float v[4]);
+void gpu_uniform_mat4(const struct gpu_program *p, const char *name, const float m[16]);
+
+/* Runs PROG over enough groups to cover W x H x D invocations, then a memory barrier so the
+ * next dispatch, texture fetch or read-back sees the writes. */
+void gpu_dispatch(const struct gpu_program *prog, int w, int h, int d);
+
+/* Waits for all GL work. */
+void gpu_finish(void);
+
+/* ---- presenting to a window ---------------------------------------------------------- */
+
+/* Copies an RGBA8 texture into the current default framebuffer's region (x, y, w, h), into
+ * the back-left, back-right or back buffer as BUFFER says (0 back, 1 back-left, 2 back-right). */
+void gpu_present(const struct gpu_texture *tex, int x, int y, int w, int h, int buffer);
+void gpu_clear_default(float r, float g, float b);
+
+/* ---- timers -------------------------------------------------------------------------- */
+
+struct gpu_timer {
+    unsigned query[2]; /* GL_TIMESTAMP before and after */
+    double cpu_start, cpu_ms;
+    bool running, pending;
+};
+
+void gpu_timer_init(struct gpu_timer *t);
+void gpu_timer_begin(struct gpu_timer *t);
+void gpu_timer_end(struct gpu_timer *t);
+/* Milliseconds of GPU time between begin and end; waits for the result.  Where the driver's
+ * timestamps do not advance across compute work (llvmpipe runs it on the calling thread),
+ * the wall time measured around a glFinish is returned instead. */
+double gpu_timer_ms(struct gpu_timer *t);
+void gpu_timer_finish(struct gpu_timer *t);
+
+#endif

@@ -1,0 +1,40 @@
+/*
+ * render/image: pictures on disk.  Linear float RGBA images (rows bottom to top, as GL
+ * stores them) written as PNG (tone-mapped sRGB, through libpng) or PFM (linear float
+ * radiance), both atomically: a failed write leaves any existing file untouched.  No GL.
+ */
+#ifndef ANVIL_RENDER_IMAGE_H
+#define ANVIL_RENDER_IMAGE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+struct image {
+    int width, height;
+    float *rgba; /* width * height * 4, row 0 at the bottom */
+};
+
+bool image_init(struct image *img, int width, int height);
+void image_finish(struct image *img);
+
+/* Tone mapping shared with shaders/tonemap.comp: c = 1 - exp(-exposure L), then sRGB. */
+uint8_t image_tonemap(float linear, float exposure);
+
+/* Writes by extension: ".png" tone-mapped with EXPOSURE, ".pfm" linear RGB.  Anything else
+ * is an error naming the path and the accepted extensions. */
+bool image_write(const struct image *img, const char *path, float exposure);
+bool image_write_png(const struct image *img, const char *path, float exposure);
+bool image_write_pfm(const struct image *img, const char *path);
+
+/* Reads a PFM written by image_write_pfm (or any little/big-endian "PF"/"Pf" file) into IMG
+ * (alpha = 1).  Logs and returns false on a malformed file. */
+bool image_read_pfm(const char *path, struct image *img);
+
+/* Pixels whose RGB is not finite. */
+size_t image_count_nonfinite(const struct image *img);
+
+/* Places SRC into DST with its lower-left corner at (X, Y); clips at DST's edges. */
+void image_blit(struct image *dst, const struct image *src, int x, int y);
+
+#endif

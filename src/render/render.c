@@ -1,0 +1,218 @@
+#include "render/render.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cglm/cglm.h>
+
+#include "common/log.h"
+
+#define PHASE_TABLE_SIZE 512
+#define MAX_VARIANTS 8
+
+struct variant {
+    char defines[256];
+    struct gpu_program prog;
+};
+
+struct renderer {
+    struct gpu_texture beta;
+    struct grid3 grid;
+    bool have_volume;
+    struct gpu_texture phase;
+    struct gpu_program tonemap;
+    struct variant variants[MAX_VARIANTS];
+    int n_variants;
+    const struct render_light *light;
+    struct gpu_timer timer;
+    struct render_stats stats;
+};
+
+static const struct gpu_program *variant(struct renderer *r, const char *defines)
+{
+    if (!defines)
+        defines = "";
+    for (int i = 0; i < r->n_variants; i++) {
+        if (strcmp(r->variants[i].defines, defines) == 0)
+            return &r->variants[i].prog;
+    }
+    if (r->n_variants == MAX_VARIANTS) {
+        gpu_program_finish(&r->variants[0].prog);
+        memmove(&r->variants[0], &r->variants[1], sizeof(r->variants[0]) * (MAX_VARIANTS - 1));
+        r->n_variants--;
+    }
+    struct variant *v = &r->variants[r->n_variants];
+    snprintf(v->defines, sizeof(v->defines), "%s", defines);
+    if (!gpu_program_init(&v->prog, "raycast.comp", defines))
+        return NULL;
+    r->n_variants++;
+    return &v->prog;
+}
+
+struct renderer *renderer_create(void)
+{
+    struct renderer *r = calloc(1, sizeof(*r));
+    if (!r)
+        return NULL;
+    if (!variant(r, NULL) || !gpu_program_init(&r->tonemap, "tonemap.comp", NULL)) {
+        renderer_destroy(r);
+        return NULL;
+    }
+    struct optics_params optics;
+    optics_params_defaults(&optics);
+    if (!renderer_set_optics(r, &optics)) {
+        renderer_destroy(r);
+        return NULL;
+    }
+    gpu_timer_init(&r->timer);
+    return r;
+}
+
+void renderer_destroy(struct renderer *r)
+{
+    if (!r)
+        return;
+    gpu_texture_finish(&r->beta);
+    gpu_texture_finish(&r->phase);
+    gpu_program_finish(&r->tonemap);
+    for (int i = 0; i < r->n_variants; i++)
+        gpu_program_finish(&r->variants[i].prog);
+    gpu_timer_finish(&r->timer);
+    free(r);
+}
+
+bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
+{
+    double start = time_now_ms();
+    const int *n = vol->grid.n;
+    if (r->beta.id && memcmp(r->beta.size, n, sizeof(int) * 3) == 0) {
+        gpu_texture_upload(&r->beta, vol->beta);
+    } else {
+        gpu_texture_finish(&r->beta);
+        if (!gpu_texture_init(&r->beta, 3, n, GPU_RG32F, vol->beta))
+            return false;
+    }
+    r->grid = vol->grid;
+    r->have_volume = true;
+    r->stats.upload_ms = time_now_ms() - start;
+    return true;
+}
+
+const struct grid3 *renderer_grid(const struct renderer *r)
+{
+    return &r->grid;
+}
+
+const struct gpu_texture *renderer_volume_texture(const struct renderer *r)
+{
+    return &r->beta;
+}
+
+bool renderer_set_optics(struct renderer *r, const struct optics_params *optics)
+{
+    float table[PHASE_TABLE_SIZE * 2];
+    optics_eye_phase_table(optics, PHASE_TABLE_SIZE, table);
+    if (r->phase.id) {
+        gpu_texture_upload(&r->phase, table);
+        return true;
+    }
+    int size[3] = {PHASE_TABLE_SIZE, 1, 1};
+    return gpu_texture_init(&r->phase, 1, size, GPU_RG32F, table);
+}
+
+void renderer_set_light(struct renderer *r, const struct render_light *light)
+{
+    r->light = light;
+}
+
+static bool ensure_texture(struct gpu_texture *t, int w, int h, enum gpu_format f)
+{
+    if (t->id && t->size[0] == w && t->size[1] == h && t->format == f)
+        return true;
+    gpu_texture_finish(t);
+    int size[3] = {w, h, 1};
+    return gpu_texture_init(t, 2, size, f, NULL);
+}
+
+bool renderer_draw(struct renderer *r, const struct render_settings *s,
+                   const struct render_view *view, struct gpu_texture *out)
+{
+    if (!r->have_volume) {
+        log_error("nothing to draw: no volume was set");
+        return false;
+    }
+    if (!ensure_texture(out, view->width, view->height, GPU_RGBA32F))
+        return false;
+    const struct gpu_program *prog = variant(r, r->light ? r->light->defines : NULL);
+    if (!prog)
+        return false;
+
+    mat4 vp, inv;
+    glm_mat4_mul((vec4 *)view->proj, (vec4 *)view->view, vp);
+    glm_mat4_inv(vp, inv);
+    const struct grid3 *g = &r->grid;
+    float box_min[3], box_size[3];
+    float min_spacing = INFINITY;
+    for (int i = 0; i < 3; i++) {
+        box_min[i] = (float)g->origin[i];
+        box_size[i] = (float)(g->n[i] * g->spacing[i]);
+        if (g->spacing[i] < min_spacing)
+            min_spacing = (float)g->spacing[i];
+    }
+    float step = s->step_m > 0.0f ? s->step_m : 0.5f * min_spacing;
+    int image_size[2] = {view->width, view->height};
+
+    gpu_uniform_mat4(prog, "inv_view_proj", (const float *)inv);
+    gpu_uniform_vec3(prog, "box_min", box_min);
+    gpu_uniform_vec3(prog, "box_size", box_size);
+    gpu_uniform_float(prog, "step_len", step);
+    gpu_uniform_float(prog, "termination", s->termination);
+    gpu_uniform_vec3(prog, "sun_dir", s->sun_dir);
+    gpu_uniform_vec3(prog, "sun_radiance", s->sun_radiance);
+    gpu_uniform_vec3(prog, "sky_radiance", s->sky);
+    gpu_uniform_vec3(prog, "ground_albedo", s->ground);
+    gpu_uniform_int(prog, "ground_on", s->ground_on ? 1 : 0);
+    gpu_uniform_float(prog, "phase_size", (float)PHASE_TABLE_SIZE);
+    gpu_uniform_ivec2(prog, "image_size", image_size);
+    int zero[2] = {0, 0};
+    gpu_uniform_ivec2(prog, "pixel_offset", zero);
+    gpu_texture_bind(&r->beta, 0);
+    gpu_texture_bind(&r->phase, 1);
+    gpu_image_bind(out, 0, true);
+    if (r->light && r->light->bind)
+        r->light->bind(r->light, prog);
+
+    gpu_timer_begin(&r->timer);
+    gpu_dispatch(prog, view->width, view->height, 1);
+    gpu_timer_end(&r->timer);
+    r->stats.views++;
+    r->stats.view_ms_total += gpu_timer_ms(&r->timer);
+    return true;
+}
+
+bool renderer_tonemap(struct renderer *r, const struct gpu_texture *in, float exposure,
+                      struct gpu_texture *out)
+{
+    if (!ensure_texture(out, in->size[0], in->size[1], GPU_RGBA8))
+        return false;
+    gpu_uniform_ivec2(&r->tonemap, "image_size", in->size);
+    gpu_uniform_float(&r->tonemap, "exposure", exposure);
+    gpu_image_bind(in, 0, false);
+    gpu_image_bind(out, 1, true);
+    gpu_dispatch(&r->tonemap, in->size[0], in->size[1], 1);
+    return true;
+}
+
+bool renderer_read(const struct gpu_texture *tex, struct image *img)
+{
+    if (!image_init(img, tex->size[0], tex->size[1]))
+        return false;
+    gpu_texture_read(tex, img->rgba, (size_t)img->width * img->height * 4 * sizeof(float));
+    return true;
+}
+
+const struct render_stats *renderer_stats(const struct renderer *r)
+{
+    return &r->stats;
+}

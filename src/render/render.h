@@ -1,0 +1,86 @@
+/*
+ * render: ray casting one view of the volume on the GPU (compute shader), and tone mapping.
+ * A renderer owns the view-independent GPU state — the extinction texture, the eye phase
+ * table, the programs — so any number of views can be drawn from it without redoing that
+ * work.  It does not know where views come from (display) or how the volume was made (data).
+ * Every function needs the GL context current.
+ */
+#ifndef ANVIL_RENDER_H
+#define ANVIL_RENDER_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "data/volume.h"
+#include "gpu/gpu.h"
+#include "optics/optics.h"
+#include "render/image.h"
+
+/* Lighting and background shared by every view of a frame. */
+struct render_settings {
+    float sun_dir[3];      /* unit vector toward the sun */
+    float sun_radiance[3]; /* intensity times colour */
+    float sky[3];          /* background radiance */
+    float ground[3];       /* ground albedo */
+    bool ground_on;
+    float step_m;          /* ray step; 0 = half the smallest voxel side */
+    float termination;     /* stop rays below this transmittance */
+};
+
+/* One view: camera matrices (column-major, world metres) and image size. */
+struct render_view {
+    float view[16];
+    float proj[16];
+    int width, height;
+};
+
+/* Statistics a caller may report (--stats). */
+struct render_stats {
+    unsigned views;         /* views drawn */
+    double view_ms_total;   /* GPU time of all views */
+    double upload_ms;       /* CPU+GPU time of the last volume upload */
+};
+
+/* Hooks for light maps: a light map binds its own textures/buffers and uniforms before the
+ * eye pass and names the shader variant that reads it.  NULL means no light map. */
+struct render_light {
+    const char *defines; /* e.g. "#define LIGHTMAP 1\n" */
+    void (*bind)(const struct render_light *light, const struct gpu_program *prog);
+};
+
+struct renderer;
+
+/* Creates the renderer and compiles the default program.  Returns NULL (logged) when a shader
+ * does not compile. */
+struct renderer *renderer_create(void);
+void renderer_destroy(struct renderer *r);
+
+/* Uploads the extinction volume (replacing the last one; the texture is reused when the size
+ * is unchanged).  The volume is not kept. */
+bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol);
+/* The grid of the last volume set. */
+const struct grid3 *renderer_grid(const struct renderer *r);
+/* The extinction texture (for light map builds).  Valid until the next set_volume. */
+const struct gpu_texture *renderer_volume_texture(const struct renderer *r);
+
+/* Tabulates the eye phase functions. */
+bool renderer_set_optics(struct renderer *r, const struct optics_params *optics);
+
+/* Uses LIGHT for the following draws (NULL: no light map).  LIGHT must stay valid. */
+void renderer_set_light(struct renderer *r, const struct render_light *light);
+
+/* Draws VIEW into OUT, an RGBA32F 2D texture of the view's size (alpha = transmittance to the
+ * background).  Creates or resizes OUT when its size differs. */
+bool renderer_draw(struct renderer *r, const struct render_settings *s,
+                   const struct render_view *view, struct gpu_texture *out);
+
+/* Tone maps IN (RGBA32F) into OUT (RGBA8, created or resized to match). */
+bool renderer_tonemap(struct renderer *r, const struct gpu_texture *in, float exposure,
+                      struct gpu_texture *out);
+
+/* Reads an RGBA32F texture back into IMG (initialised here). */
+bool renderer_read(const struct gpu_texture *tex, struct image *img);
+
+const struct render_stats *renderer_stats(const struct renderer *r);
+
+#endif

@@ -1,0 +1,159 @@
+/* Eye pass on EGL/llvmpipe: exact background, Beer-Lambert through a slab, a finite storm. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+
+#include "app/app.h"
+#include "common/log.h"
+#include "gpu/gpu.h"
+#include "render/render.h"
+
+static struct gpu_context *ctx;
+static struct renderer *renderer;
+
+/* Renders CFG (after the --set strings) into IMG. */
+static void render_config(struct config *cfg, const char **sets, int n, struct image *img)
+{
+    config_defaults(cfg);
+    for (int i = 0; i < n; i++)
+        assert_true(config_set(cfg, sets[i]));
+    assert_true(config_validate(cfg));
+    struct ext_volume vol = {0};
+    assert_true(app_build_volume(cfg, &vol));
+    assert_true(renderer_set_volume(renderer, &vol));
+    assert_true(renderer_set_optics(renderer, &cfg->optics.params));
+    ext_volume_finish(&vol);
+    struct render_settings s;
+    app_render_settings(cfg, &s);
+    struct render_view view;
+    app_camera_view(cfg, cfg->render.width, cfg->render.height, &view);
+    struct gpu_texture out = {0};
+    assert_true(renderer_draw(renderer, &s, &view, &out));
+    assert_true(renderer_read(&out, img));
+    gpu_texture_finish(&out);
+}
+
+static void test_empty_scene_is_background(void **state)
+{
+    struct config cfg;
+    struct image img;
+    const char *sets[] = {"scene.kind=empty", "scene.size=[16,16,8]", "render.width=64",
+                          "render.height=48", "render.ground_on=false",
+                          "render.sky=[0.25,0.5,0.75]"};
+    render_config(&cfg, sets, 6, &img);
+    for (int i = 0; i < img.width * img.height; i++) {
+        assert_true(img.rgba[4 * i] == 0.25f);
+        assert_true(img.rgba[4 * i + 1] == 0.5f);
+        assert_true(img.rgba[4 * i + 2] == 0.75f);
+        assert_true(img.rgba[4 * i + 3] == 1.0f);
+    }
+    image_finish(&img);
+
+    /* With the ground: below the horizon each pixel is albedo (sun sin(elevation) + sky). */
+    const char *sets2[] = {"scene.kind=empty", "scene.size=[16,16,8]", "render.width=64",
+                           "render.height=48", "render.sky=[0.25,0.5,0.75]",
+                           "render.ground=[0.5,0.5,0.5]", "light.elevation=30",
+                           "light.color=[1,1,1]", "light.intensity=2"};
+    render_config(&cfg, sets2, 9, &img);
+    float ground = 0.5f * (2.0f * sinf(30.0f * (float)M_PI / 180.0f) + 0.25f);
+    int bottom = 2 * 4; /* lower-left pixel looks at the ground from the default camera */
+    assert_float_equal(img.rgba[bottom], ground, 1e-5);
+    /* Top row looks at the sky. */
+    int top = 4 * (img.width * (img.height - 1) + img.width / 2);
+    assert_float_equal(img.rgba[top], 0.25f, 0.0f);
+    image_finish(&img);
+}
+
+static void test_slab_transmits_exp_minus_tau(void **state)
+{
+    /* Looking straight down through a 10 x 10 x 1 km slab of optical depth 2 onto the sky
+     * (no ground, no sun): the background arrives attenuated by exp(-tau / cos(angle)). */
+    struct config cfg;
+    struct image img;
+    const char *sets[] = {"scene.kind=slab", "scene.size=[16,16,8]",
+                          "scene.extent=[10,10,1]", "scene.tau=2", "light.intensity=0",
+                          "render.ground_on=false", "render.sky=[1,1,1]",
+                          "camera.position=[5,5,3]", "camera.target=[5,5,0]",
+                          "camera.up=[0,1,0]", "camera.fov=30", "render.width=64",
+                          "render.height=64"};
+    render_config(&cfg, sets, 13, &img);
+    /* The four centre pixels straddle the axis; their rays are 0.33 degrees off vertical. */
+    double half = 30.0 * M_PI / 360.0;
+    for (int dy = 31; dy <= 32; dy++) {
+        for (int dx = 31; dx <= 32; dx++) {
+            double nx = (dx + 0.5) / 32.0 - 1.0, ny = (dy + 0.5) / 32.0 - 1.0;
+            double tx = nx * tan(half), ty = ny * tan(half);
+            double cosang = 1.0 / sqrt(1.0 + tx * tx + ty * ty);
+            double expect = exp(-2.0 / cosang);
+            float got = img.rgba[4 * (dy * 64 + dx)];
+            assert_true(fabs(got - expect) / expect < 1e-3);
+        }
+    }
+    /* A corner pixel: a slanted ray, a longer path (tests anisotropy and path length). */
+    {
+        double nx = 0.5 / 32.0 - 1.0, ny = 0.5 / 32.0 - 1.0;
+        double tx = nx * tan(half), ty = ny * tan(half);
+        double cosang = 1.0 / sqrt(1.0 + tx * tx + ty * ty);
+        double expect = exp(-2.0 / cosang);
+        float got = img.rgba[0];
+        assert_true(fabs(got - expect) / expect < 1e-3);
+        assert_true(got < exp(-2.0) * 0.99);
+    }
+    image_finish(&img);
+}
+
+static void test_storm_is_finite_and_not_blank(void **state)
+{
+    struct config cfg;
+    struct image img;
+    const char *sets[] = {"scene.size=[64,64,32]", "render.width=96", "render.height=72"};
+    render_config(&cfg, sets, 3, &img);
+    assert_int_equal(image_count_nonfinite(&img), 0);
+    /* The storm hides part of the background: some pixels' transmittance is far below 1,
+     * and the image is not flat. */
+    int covered = 0;
+    float lo = INFINITY, hi = -INFINITY;
+    for (int i = 0; i < img.width * img.height; i++) {
+        if (img.rgba[4 * i + 3] < 0.5f)
+            covered++;
+        lo = fminf(lo, img.rgba[4 * i]);
+        hi = fmaxf(hi, img.rgba[4 * i]);
+    }
+    assert_true(covered > img.width * img.height / 50);
+    assert_true(hi - lo > 0.05f);
+    image_finish(&img);
+}
+
+static void test_sun_along_axis_is_finite(void **state)
+{
+    struct config cfg;
+    struct image img;
+    const char *sets[] = {"scene.kind=sphere", "scene.size=[16,16,16]",
+                          "scene.extent=[10,10,10]", "light.elevation=90",
+                          "light.azimuth=0", "camera.position=[5,-20,5]",
+                          "camera.target=[5,5,5]", "render.width=32", "render.height=32"};
+    render_config(&cfg, sets, 9, &img);
+    assert_int_equal(image_count_nonfinite(&img), 0);
+    image_finish(&img);
+}
+
+int main(void)
+{
+    log_set_level(LOG_WARN);
+    ctx = test_gl_context_or_skip();
+    renderer = renderer_create();
+    if (!renderer)
+        return 1;
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_empty_scene_is_background),
+        cmocka_unit_test(test_slab_transmits_exp_minus_tau),
+        cmocka_unit_test(test_storm_is_finite_and_not_blank),
+        cmocka_unit_test(test_sun_along_axis_is_finite),
+    };
+    int rc = cmocka_run_group_tests(tests, NULL, NULL);
+    renderer_destroy(renderer);
+    gpu_context_destroy(ctx);
+    return rc;
+}
