@@ -336,6 +336,8 @@ int cmd_run(int argc, char **argv)
         }
         int w, h;
         gpu_context_size(ctx, &w, &h);
+        if (frames_left > 0)
+            st.dirty = true; /* automated runs draw every frame */
         if (st.dirty && w > 0 && h > 0) {
             struct render_view view;
             camera_orbit_eye(&st.orbit, eye);

@@ -1,0 +1,102 @@
+#!/bin/bash
+# The command line as a user meets it: help, version, exit codes, messages with file:line,
+# PNG/PFM/stats output, nothing half-written on failure, and a real window under Xvfb.
+# Arguments: ANVIL_BINARY SOURCE_DIR SHARED_DATA_DIR.  Exits 77 when no GL context exists.
+set -u
+anvil=$1
+src=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+check() { # description, then a command that must succeed
+    local what=$1
+    shift
+    if "$@"; then echo "ok: $what"; else echo "FAIL: $what"; fail=1; fi
+}
+expect_exit() { # code, description, command...
+    local code=$1 what=$2
+    shift 2
+    "$@" >"$tmp/out" 2>"$tmp/err"
+    local rc=$?
+    if [ "$rc" -eq "$code" ]; then echo "ok: $what (exit $rc)"; else
+        echo "FAIL: $what: exit $rc, expected $code"; cat "$tmp/err"; fail=1; fi
+}
+stderr_has() { grep -q -- "$1" "$tmp/err" || { echo "  stderr lacks \"$1\":"; cat "$tmp/err"; return 1; }; }
+
+expect_exit 0 "--help" "$anvil" --help
+check "--help lists render and run" grep -q "render" "$tmp/out"
+expect_exit 0 "--version" "$anvil" --version
+check "--version prints the version" grep -q "^anvil [0-9]" "$tmp/out"
+expect_exit 2 "no command" "$anvil"
+expect_exit 2 "unknown command" "$anvil" frobnicate
+expect_exit 2 "render without -o" "$anvil" render "$src/configs/default.cfg"
+expect_exit 0 "--config-reference" "$anvil" --config-reference
+check "reference lists light.elevation" grep -q "light.elevation" "$tmp/out"
+
+# Bad configs: exit 1, one message naming file and line.
+printf 'light = { elevation = 120.0; };\n' >"$tmp/range.cfg"
+expect_exit 1 "out-of-range value" "$anvil" render "$tmp/range.cfg" -o "$tmp/x.png"
+check "message names file:line and setting" stderr_has "range.cfg:1"
+check "message names the setting" stderr_has "light.elevation"
+printf 'light = {\n  elevation = ;\n};\n' >"$tmp/syntax.cfg"
+expect_exit 1 "syntax error" "$anvil" render "$tmp/syntax.cfg" -o "$tmp/x.png"
+check "syntax error names file:line" stderr_has "syntax.cfg:2"
+expect_exit 1 "missing config" "$anvil" render "$tmp/missing.cfg" -o "$tmp/x.png"
+check "missing file named" stderr_has "missing.cfg"
+expect_exit 1 "bad --set" "$anvil" render "$src/configs/default.cfg" --set light.elevaton=3 \
+    -o "$tmp/x.png"
+check "--set error names the setting" stderr_has "light.elevaton"
+
+# GL from here on.
+"$anvil" render --quiet "$src/configs/empty.cfg" -o "$tmp/probe.png" 2>"$tmp/err"
+if [ $? -eq 3 ]; then echo "no OpenGL context: skipping the rest"; exit 77; fi
+
+small="--set scene.size=[48,48,24] --set render.width=160 --set render.height=120"
+expect_exit 0 "render PNG with stats" "$anvil" render "$src/configs/default.cfg" $small \
+    -o "$tmp/storm.png" --stats "$tmp/stats.json"
+check "PNG written" bash -c "head -c 8 '$tmp/storm.png' | od -c | grep -q 'P   N   G'"
+for key in views light_map_builds view_ms build_ms gpu_bytes nonfinite_pixels; do
+    check "stats has $key" grep -q "\"$key\"" "$tmp/stats.json"
+done
+check "stats: one view" grep -q '"views": 1,' "$tmp/stats.json"
+check "stats: no non-finite pixels" grep -q '"nonfinite_pixels": 0,' "$tmp/stats.json"
+expect_exit 0 "render PFM" "$anvil" render --quiet "$src/configs/default.cfg" $small \
+    -o "$tmp/storm.pfm"
+check "PFM header" bash -c "head -c 3 '$tmp/storm.pfm' | grep -q PF"
+check "PFM size" bash -c "[ \$(stat -c %s '$tmp/storm.pfm') -gt \$((160*120*12)) ]"
+check "quiet is quiet" bash -c "[ ! -s '$tmp/err' ]"
+expect_exit 4 "unknown image extension" "$anvil" render "$src/configs/empty.cfg" \
+    -o "$tmp/x.jpg"
+check "extension error explains" stderr_has ".png or .pfm"
+
+# A failed render or a failed write leaves the old file intact.
+echo "precious" >"$tmp/keep.png"
+"$anvil" render --quiet "$tmp/range.cfg" -o "$tmp/keep.png" 2>/dev/null
+check "old file intact after a bad config" grep -q precious "$tmp/keep.png"
+mkdir "$tmp/locked"
+echo "precious" >"$tmp/locked/keep.png"
+if chattr +i "$tmp/locked" 2>/dev/null; then
+    "$anvil" render --quiet "$src/configs/empty.cfg" -o "$tmp/locked/keep.png" 2>"$tmp/err"
+    rc=$?
+    chattr -i "$tmp/locked"
+    check "failed write exits 4" test $rc -eq 4
+    check "failed write names the file" stderr_has "keep.png"
+    check "old file intact after a failed write" grep -q precious "$tmp/locked/keep.png"
+    check "no temporary file left" bash -c "[ \$(ls '$tmp/locked' | wc -l) -eq 1 ]"
+else
+    echo "chattr not supported here: failed-write check not run"
+fi
+
+# A window under Xvfb, a few frames.
+if command -v xvfb-run >/dev/null; then
+    ANVIL_RUN_FRAMES=2 timeout 120 xvfb-run -a -s "-screen 0 800x600x24" "$anvil" run --quiet \
+        "$src/configs/default.cfg" $small --stats "$tmp/run.json" 2>"$tmp/err"
+    rc=$?
+    check "run in a window exits 0" test $rc -eq 0
+    check "run drew two frames" grep -q '"views": 2,' "$tmp/run.json"
+else
+    echo "xvfb-run not installed: window test not run"
+fi
+
+[ $fail -eq 0 ] && echo "all CLI checks passed"
+exit $fail
