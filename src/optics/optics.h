@@ -54,7 +54,8 @@ double optics_wrf_air_density(double p_total_pa, double theta_k);
 
 /* Phase functions of the scattering angle's cosine MU, in 1/sr, normalised so that the
  * integral over the sphere is 1.  Finite for |g| <= 0.999 in both precisions: the
- * denominator 1 + g^2 - 2 g mu is computed as (1-g)^2 + 2 g (1-mu). */
+ * denominator 1 + g^2 - 2 g mu is computed without cancellation, as (1-g)^2 + 2 g (1-mu) for
+ * g >= 0 and (1+g)^2 - 2 g (1+mu) for g < 0. */
 double phase_hg(double g, double mu);
 double phase_cs(double g, double mu);
 float phase_hg_f(float g, float mu);
