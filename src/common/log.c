@@ -41,7 +41,7 @@ void log_msg(enum log_level level, const char *fmt, ...)
     } else if (level == LOG_WARN) {
         warnings++;
     }
-    if (level <= current_level) {
+    if ((int)level <= (int)current_level) {
         const char *tag = level == LOG_ERROR ? "error: " : level == LOG_WARN ? "warning: " : "";
         fprintf(stderr, "anvil: %s%s\n", tag, line);
     }

@@ -12,6 +12,7 @@
 #include <stddef.h>
 
 enum log_level {
+    LOG_NONE = -1, /* nothing printed (tests that provoke errors on purpose) */
     LOG_ERROR = 0,
     LOG_WARN = 1,
     LOG_INFO = 2,  /* progress and timing lines */
