@@ -1,0 +1,116 @@
+/*
+ * config/display_config: display files (displays/*.cfg, libconfig syntax) to one plain struct:
+ * which display backend, its walls (three corners each in tracker space), the stereo mode, the
+ * head and where it comes from, the navigation transform that places the storm in the room, and
+ * the HMD's device and lens.  Knows nothing about GL, windows or OpenHMD; src/display/ turns
+ * this struct into views.
+ *
+ * Tracker space: metres, x to the right, y up, z toward the viewer (the OpenGL and OpenHMD
+ * convention), so a viewer facing the front wall looks along -z.  World space (the scene): x
+ * east, y north, z up, metres; the navigation transform maps world to tracker.
+ */
+#ifndef ANVIL_DISPLAY_CONFIG_H
+#define ANVIL_DISPLAY_CONFIG_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "config/config.h"
+
+#define DISPLAY_MAX_WALLS 8
+#define DISPLAY_NAME_MAX 32
+
+/* The display backends (src/display/display.c holds the table with the same names). */
+enum display_type {
+    DISPLAY_TYPE_HEADLESS, /* "headless": offscreen views only */
+    DISPLAY_TYPE_DESKTOP,  /* "desktop": one mono window */
+    DISPLAY_TYPE_STEREO,   /* "stereo": one window, side-by-side / anaglyph / quad-buffer */
+    DISPLAY_TYPE_CAVE,     /* "cave": one window per wall, or viewports of one window */
+    DISPLAY_TYPE_HMD,      /* "hmd": OpenHMD device, per-eye views and lens warp */
+};
+
+enum display_stereo {
+    DISPLAY_STEREO_MONO,         /* "mono": one view from the centre of the head */
+    DISPLAY_STEREO_SIDE_BY_SIDE, /* "side-by-side": left eye in the left half */
+    DISPLAY_STEREO_ANAGLYPH,     /* "anaglyph": red (left) / cyan (right) */
+    DISPLAY_STEREO_QUAD_BUFFER,  /* "quad-buffer": GL back-left / back-right (active stereo) */
+};
+
+enum display_head_source {
+    DISPLAY_HEAD_FIXED,   /* "fixed": head.position, head.orientation */
+    DISPLAY_HEAD_PATH,    /* "path": a file of timed poses, linearly interpolated */
+    DISPLAY_HEAD_OPENHMD, /* "openhmd": the pose of an OpenHMD device (head.device) */
+};
+
+struct display_wall {
+    char name[DISPLAY_NAME_MAX];  /* walls.[i].name: used in file names ("front") */
+    double lower_left[3];         /* walls.[i].lower_left: tracker metres */
+    double lower_right[3];        /* walls.[i].lower_right */
+    double upper_left[3];         /* walls.[i].upper_left */
+    int monitor;                  /* walls.[i].monitor: fullscreen on this monitor; -1 = window */
+    int viewport[4];              /* walls.[i].viewport: [x, y, w, h] in the shared window;
+                                     w = 0: the wall has its own window */
+    int size[2];                  /* walls.[i].size: image pixels; 0 = from render.height and
+                                     the wall's aspect ratio */
+    enum display_stereo stereo;   /* walls.[i].mode: default display.mode */
+    int line;                     /* line of the wall's group in the file (for messages) */
+};
+
+struct display_head {
+    enum display_head_source source; /* head.source */
+    double position[3];              /* head.position: tracker metres (openhmd: added to the
+                                        device's position) */
+    double orientation_deg[3];       /* head.orientation: heading, pitch, roll, degrees */
+    char path[CONFIG_PATH_MAX];      /* head.path: pose file, resolved against the config */
+    char device[128];                /* head.device: OpenHMD product name, or "null" */
+};
+
+struct display_navigation {
+    double scale;              /* navigation.scale: tracker metres per world metre */
+    double origin_km[3];       /* navigation.origin: world point (km) placed at position */
+    double position[3];        /* navigation.position: tracker metres */
+    double orientation_deg[3]; /* navigation.orientation: heading, pitch, roll, degrees */
+};
+
+struct display_hmd {
+    char device[128];        /* hmd.device: OpenHMD product name (substring), or "null" */
+    bool lens_override;      /* hmd.distortion given: use it instead of the device's */
+    double distortion[4];    /* hmd.distortion: PanoTools [a, b, c, d] (OpenHMD's
+                                UNIVERSAL_DISTORTION_K) */
+    double aberration[3];    /* hmd.aberration: per-channel scale (UNIVERSAL_ABERRATION_K) */
+    bool warp;               /* hmd.warp: apply the lens distortion pass */
+};
+
+struct display_config {
+    char path[CONFIG_PATH_MAX];        /* the file it came from */
+    enum display_type type;            /* display.type */
+    enum display_stereo stereo;        /* display.mode: default stereo mode of the walls */
+    double eye_separation;             /* display.eye_separation: metres */
+    double near_m, far_m;              /* display.near, display.far: tracker metres */
+    int window_size[2];                /* display.window_size: the shared window (viewports,
+                                          desktop), pixels */
+    int monitor;                       /* display.monitor: of the shared window; -1 = window */
+    struct display_head head;
+    struct display_navigation navigation;
+    struct display_hmd hmd;
+    struct display_wall walls[DISPLAY_MAX_WALLS];
+    int wall_count;
+};
+
+/* Fills every setting with its default: a desktop mono window 0.52 x 0.32 m seen from 0.6 m,
+ * the storm 60 km wide shown 0.6 m wide behind the screen. */
+void display_config_defaults(struct display_config *cfg);
+
+/* Reads PATH on top of the defaults (a file with walls replaces the default wall list).  On
+ * failure logs one message "FILE:LINE: SETTING: expected ..." and returns false. */
+bool display_config_load(const char *path, struct display_config *cfg);
+
+/* Names of the enums as written in files ("cave", "anaglyph", "path"); static strings. */
+const char *display_type_name(enum display_type t);
+const char *display_stereo_name(enum display_stereo s);
+const char *display_head_source_name(enum display_head_source s);
+
+/* Writes the display settings as a markdown table (docs/displays.md's reference). */
+void display_config_write_reference(FILE *out);
+
+#endif
