@@ -7,6 +7,7 @@
 #define ANVIL_APP_H
 
 #include <stdbool.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "config/config.h"
@@ -53,6 +54,21 @@ struct app_stats {
 void app_stats_add_view(struct app_stats *st, double ms);
 void app_stats_add_build(struct app_stats *st, double ms);
 bool app_stats_write(const struct app_stats *st, const char *path);
+
+/* The deep light map of a session: built on the GPU when the config asks for one, rebuilt
+ * only when the sun, the volume (GENERATION), the optics or the light map settings change.
+ * Needs the GL context current. */
+struct light_gpu;
+struct app_light {
+    struct light_gpu *gpu; /* NULL when lightmap.mode = "off" */
+    uint64_t generation;   /* bump when the volume on the GPU changes */
+};
+
+bool app_light_init(struct app_light *al, const struct config *cfg);
+/* Builds when stale and points the renderer at the light map; counts builds in ST. */
+bool app_light_update(struct app_light *al, const struct config *cfg, struct renderer *r,
+                      struct app_stats *st);
+void app_light_finish(struct app_light *al);
 
 int cmd_render(int argc, char **argv);
 int cmd_run(int argc, char **argv);

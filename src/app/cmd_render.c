@@ -9,6 +9,8 @@
 
 #include "app/app.h"
 #include "common/log.h"
+#include "config/display_config.h"
+#include "display/display.h"
 #include "gpu/gpu.h"
 #include "render/camera.h"
 
@@ -18,6 +20,8 @@ struct render_options {
     const char *stats;
     char *sets[64];
     int n_sets;
+    const char *display; /* --display FILE: views from a display config */
+    double time;         /* --time SECONDS: where on a scripted head path (with --display) */
 };
 
 static int parse_options(int argc, char **argv, struct render_options *o, bool need_output)
@@ -27,6 +31,8 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         {"set", required_argument, NULL, 's'},
         {"stats", required_argument, NULL, 'S'},
         {"quiet", no_argument, NULL, 'q'},
+        {"display", required_argument, NULL, 'D'},
+        {"time", required_argument, NULL, 'T'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -51,6 +57,18 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         case 'q':
             log_set_level(LOG_ERROR);
             break;
+        case 'D':
+            o->display = optarg;
+            break;
+        case 'T': {
+            char *end;
+            o->time = strtod(optarg, &end);
+            if (*end || !isfinite(o->time)) {
+                log_error("--time %s: expected a number of seconds", optarg);
+                return EXIT_USAGE;
+            }
+            break;
+        }
         case 'h':
             return -1;
         default:
@@ -64,8 +82,9 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
                   argv[optind]);
         return EXIT_USAGE;
     }
-    if (need_output && !o->output) {
-        log_error("render: missing -o FILE.png or -o FILE.pfm");
+    if (need_output && !o->output && !(o->display && strcmp(o->display, "help") == 0)) {
+        log_error(o->display ? "render: missing -o FOLDER/ (one image per view goes there)"
+                             : "render: missing -o FILE.png or -o FILE.pfm");
         return EXIT_USAGE;
     }
     return EXIT_OK;
@@ -77,7 +96,21 @@ struct session {
     struct renderer *renderer;
     struct render_settings settings;
     struct app_stats stats;
+    struct app_light light;
 };
+
+/* Builds the light map if the sun, volume or settings changed since the last build. */
+static bool session_light(struct session *s)
+{
+    return app_light_update(&s->light, &s->cfg, s->renderer, &s->stats);
+}
+
+static void session_finish(struct session *s)
+{
+    app_light_finish(&s->light);
+    renderer_destroy(s->renderer);
+    s->renderer = NULL;
+}
 
 static int session_start(struct session *s, const struct render_options *o)
 {
@@ -101,6 +134,8 @@ static int session_start(struct session *s, const struct render_options *o)
     if (!ok)
         return EXIT_FAILED;
     s->stats.upload_ms = renderer_stats(s->renderer)->upload_ms;
+    if (!app_light_init(&s->light, &s->cfg))
+        return EXIT_FAILED;
     app_render_settings(&s->cfg, &s->settings);
     s->stats.device = gpu_renderer_name();
     return EXIT_OK;
@@ -109,8 +144,125 @@ static int session_start(struct session *s, const struct render_options *o)
 static int usage_render(void)
 {
     fprintf(stderr, "usage: anvil render [CONFIG] -o FILE.png|FILE.pfm [--set PATH=VALUE]... "
-                    "[--stats FILE.json] [--quiet]\n");
+                    "[--stats FILE.json] [--quiet]\n"
+                    "       anvil render [CONFIG] --display DISPLAY.cfg [--time SECONDS] "
+                    "-o FOLDER/ [...]\n"
+                    "       anvil render --display help\n");
     return EXIT_USAGE;
+}
+
+/* ---- --display: many views, one light map ------------------------------------------------ */
+
+static void print_backend(const char *name, const char *what, void *user)
+{
+    fprintf(user, "  %-10s %s\n", name, what);
+}
+
+static int display_help(void)
+{
+    printf("display backends (display.type in a display config, see displays/*.cfg and "
+           "docs/displays.md):\n");
+    display_list(print_backend, stdout);
+    return EXIT_OK;
+}
+
+/* Opens the display and the session on its primary context. */
+static int display_start(struct session *s, const struct render_options *o, bool offscreen,
+                         struct display **out)
+{
+    *out = NULL;
+    struct display_config dcfg;
+    if (!display_config_load(o->display, &dcfg))
+        return EXIT_BAD_INPUT;
+    struct display *d = display_create(&dcfg, &(struct display_desc){
+        .offscreen = offscreen,
+        .height = s->cfg.render.height,
+    });
+    if (!d)
+        return offscreen ? EXIT_NO_GPU : EXIT_FAILED;
+    *out = d;
+    int rc = session_start(s, o);
+    if (rc != EXIT_OK)
+        return rc;
+    if (!display_update(d, o->time))
+        return EXIT_FAILED;
+    log_info("display %s (%s): %d views", o->display, display_type_name(dcfg.type),
+             display_view_count(d));
+    return EXIT_OK;
+}
+
+/* One frame: the view loop draws (no light map build, no upload), then the display composes. */
+static bool display_frame(struct session *s, struct display *d)
+{
+    if (!session_light(s))
+        return false;
+    if (!display_draw(d, s->renderer, &s->settings))
+        return false;
+    for (int i = 0; i < display_view_count(d); i++) {
+        const struct view *v = display_view(d, i);
+        if (v->visible)
+            app_stats_add_view(&s->stats, v->ms);
+    }
+    return display_present(d, s->renderer, (float)s->cfg.render.exposure);
+}
+
+static int render_display(struct session *s, const struct render_options *o, double start)
+{
+    struct display *d = NULL;
+    int rc = display_start(s, o, true, &d);
+    if (rc == EXIT_OK) {
+        rc = EXIT_FAILED;
+        if (display_frame(s, d) &&
+            display_write_images(d, o->output, (float)s->cfg.render.exposure,
+                                 &s->stats.nonfinite_pixels))
+            rc = EXIT_OK;
+    }
+    if (s->stats.nonfinite_pixels)
+        log_warn("%zu pixels are not finite", s->stats.nonfinite_pixels);
+    if (d) {
+        s->stats.gpu_bytes = gpu_bytes_allocated();
+        s->stats.total_ms = time_now_ms() - start;
+        if (rc == EXIT_OK && o->stats && !app_stats_write(&s->stats, o->stats))
+            rc = EXIT_FAILED;
+    }
+    session_finish(s);
+    display_destroy(d);
+    return rc;
+}
+
+static int run_display(struct session *s, const struct render_options *o, double start)
+{
+    struct display *d = NULL;
+    int rc = display_start(s, o, false, &d);
+    const char *frames_env = getenv("ANVIL_RUN_FRAMES"); /* for automated runs */
+    long frames_left = frames_env ? strtol(frames_env, NULL, 10) : -1;
+    bool moving = d && display_get_config(d)->head.source != DISPLAY_HEAD_FIXED;
+    double t0 = time_now_ms();
+    bool dirty = true;
+    while (rc == EXIT_OK && !display_should_close(d) && frames_left != 0) {
+        if (display_navigation_changed(d))
+            dirty = true;
+        if (dirty || moving || frames_left > 0) {
+            if (!display_update(d, o->time + (time_now_ms() - t0) * 1e-3) ||
+                !display_frame(s, d)) {
+                rc = EXIT_FAILED;
+                break;
+            }
+            dirty = false;
+            if (frames_left > 0)
+                frames_left--;
+        }
+        display_poll(d, moving || frames_left > 0 ? 0.0 : 0.1);
+    }
+    if (d) {
+        s->stats.gpu_bytes = gpu_bytes_allocated();
+        s->stats.total_ms = time_now_ms() - start;
+        if (rc == EXIT_OK && o->stats && !app_stats_write(&s->stats, o->stats))
+            rc = EXIT_FAILED;
+    }
+    session_finish(s);
+    display_destroy(d);
+    return rc;
 }
 
 int cmd_render(int argc, char **argv)
@@ -123,10 +275,14 @@ int cmd_render(int argc, char **argv)
     }
     if (rc != EXIT_OK)
         return usage_render();
+    if (o.display && strcmp(o.display, "help") == 0)
+        return display_help();
     double start = time_now_ms();
     struct session s = {.stats.command = "render"};
     if (!app_load_config(o.config, o.sets, o.n_sets, &s.cfg))
         return EXIT_BAD_INPUT;
+    if (o.display)
+        return render_display(&s, &o, start);
 
     struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){.backend = "egl"});
     if (!ctx)
@@ -140,7 +296,7 @@ int cmd_render(int argc, char **argv)
     struct gpu_texture target = {0};
     struct image img = {0};
     rc = EXIT_FAILED;
-    if (!renderer_draw(s.renderer, &s.settings, &view, &target))
+    if (!session_light(&s) || !renderer_draw(s.renderer, &s.settings, &view, &target))
         goto done_target;
     const struct render_stats *rs = renderer_stats(s.renderer);
     app_stats_add_view(&s.stats, rs->view_ms_total);
@@ -165,7 +321,7 @@ done_image:
 done_target:
     gpu_texture_finish(&target);
 done:
-    renderer_destroy(s.renderer);
+    session_finish(&s);
     gpu_context_destroy(ctx);
     return rc;
 }
@@ -275,7 +431,10 @@ static int usage_run(void)
     fprintf(stderr,
             "usage: anvil run [CONFIG] [--set PATH=VALUE]... [--stats FILE.json] [--quiet]\n"
             "  mouse drag / arrows: orbit    wheel / + -: zoom    R: reset view\n"
-            "  A D: sun azimuth    W S: sun elevation    Esc Q: quit\n");
+            "  A D: sun azimuth    W S: sun elevation    Esc Q: quit\n"
+            "       anvil run [CONFIG] --display DISPLAY.cfg [--time SECONDS] [...]\n"
+            "  W S: fly forward/back    A D: sideways    R F: up/down    arrows: turn\n"
+            "  + -: scale the storm    Esc Q: quit\n");
     return EXIT_USAGE;
 }
 
@@ -289,10 +448,14 @@ int cmd_run(int argc, char **argv)
     }
     if (rc != EXIT_OK)
         return usage_run();
+    if (o.display && strcmp(o.display, "help") == 0)
+        return display_help();
     double start = time_now_ms();
     struct session s = {.stats.command = "run"};
     if (!app_load_config(o.config, o.sets, o.n_sets, &s.cfg))
         return EXIT_BAD_INPUT;
+    if (o.display)
+        return run_display(&s, &o, start);
     struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){
         .backend = "glfw",
         .width = s.cfg.render.width,
@@ -344,6 +507,10 @@ int cmd_run(int argc, char **argv)
             camera_look_at(eye, st.orbit.target, s.cfg.camera.up, s.cfg.camera.fov_deg,
                            s.cfg.camera.near_m, s.cfg.camera.far_km * 1000.0, w, h, &view);
             double before = renderer_stats(s.renderer)->view_ms_total;
+            if (!session_light(&s)) {
+                rc = EXIT_FAILED;
+                break;
+            }
             if (!renderer_draw(s.renderer, &s.settings, &view, &hdr) ||
                 !renderer_tonemap(s.renderer, &hdr, (float)s.cfg.render.exposure, &ldr)) {
                 rc = EXIT_FAILED;
@@ -368,7 +535,7 @@ int cmd_run(int argc, char **argv)
     if (o.stats && !app_stats_write(&s.stats, o.stats))
         rc = EXIT_FAILED;
 done:
-    renderer_destroy(s.renderer);
+    session_finish(&s);
     gpu_context_destroy(ctx);
     return rc;
 }

@@ -5,6 +5,7 @@
  */
 #include "config/display_config.h"
 
+#include <errno.h>
 #include <limits.h>
 #include <math.h>
 #include <stddef.h>
@@ -498,6 +499,8 @@ bool display_config_load(const char *path, struct display_config *cfg)
             goto done;
     }
     (void)have_walls;
+    cfg->hmd.distortion_set = config_lookup(&lc, "hmd.distortion") != NULL;
+    cfg->hmd.aberration_set = config_lookup(&lc, "hmd.aberration") != NULL;
     if (cfg->head.source == DISPLAY_HEAD_PATH && cfg->head.path[0] == '\0') {
         const config_setting_t *h = config_setting_get_member(root, "head");
         fail(&rd, h, "head.path", "a pose file when head.source = \"path\"");

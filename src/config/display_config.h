@@ -1,9 +1,9 @@
 /*
- * config/display_config: display files (displays/*.cfg, libconfig syntax) to one plain struct:
- * which display backend, its walls (three corners each in tracker space), the stereo mode, the
- * head and where it comes from, the navigation transform that places the storm in the room, and
- * the HMD's device and lens.  Knows nothing about GL, windows or OpenHMD; src/display/ turns
- * this struct into views.
+ * config/display_config: display files (displays/NAME.cfg, libconfig syntax) to one plain
+ * struct: which display backend, its walls (three corners each in tracker space), the stereo
+ * mode, the head and where it comes from, the navigation transform that places the storm in
+ * the room, and the HMD's device and lens.  Knows nothing about GL, windows or OpenHMD;
+ * src/display/ turns this struct into views.
  *
  * Tracker space: metres, x to the right, y up, z toward the viewer (the OpenGL and OpenHMD
  * convention), so a viewer facing the front wall looks along -z.  World space (the scene): x
@@ -74,7 +74,8 @@ struct display_navigation {
 
 struct display_hmd {
     char device[128];        /* hmd.device: OpenHMD product name (substring), or "null" */
-    bool lens_override;      /* hmd.distortion given: use it instead of the device's */
+    bool distortion_set;     /* hmd.distortion given: it replaces the device's */
+    bool aberration_set;     /* hmd.aberration given: it replaces the device's */
     double distortion[4];    /* hmd.distortion: PanoTools [a, b, c, d] (OpenHMD's
                                 UNIVERSAL_DISTORTION_K) */
     double aberration[3];    /* hmd.aberration: per-channel scale (UNIVERSAL_ABERRATION_K) */

@@ -148,4 +148,10 @@ void gpu_timer_end(struct gpu_timer *t);
 double gpu_timer_ms(struct gpu_timer *t);
 void gpu_timer_finish(struct gpu_timer *t);
 
+/* ---- window swapping (context_swap.c) ------------------------------------------------- */
+
+/* Makes CTX current and sets how many vertical blanks its swaps wait for (0: none).  Windows
+ * that swap together wait in the last one only.  No effect on headless contexts. */
+void gpu_context_swap_interval(struct gpu_context *ctx, int interval);
+
 #endif

@@ -101,23 +101,24 @@ static void test_defaults(void **state)
         assert_true(cfg.optics.scale[f] == 1.0);
     }
 
-    assert_true(cfg.light.azimuth_deg == 135.0);
+    assert_true(cfg.light.azimuth_deg == 210.0);
     assert_true(cfg.light.elevation_deg == 35.0);
+    assert_true(cfg.light.intensity == 6.0);
     assert_true(cfg.light.color[1] == 0.97);
-    assert_true(cfg.camera.position_km[1] == -45.0);
+    assert_true(cfg.camera.position_km[1] == -14.0);
     assert_true(cfg.camera.target_km[0] == 30.0);
     assert_true(cfg.camera.up[2] == 1.0 && cfg.camera.up[0] == 0.0);
-    assert_true(cfg.camera.fov_deg == 45.0);
+    assert_true(cfg.camera.fov_deg == 50.0);
     assert_true(cfg.camera.near_m == 10.0);
     assert_true(cfg.camera.far_km == 2000.0);
     assert_int_equal(cfg.render.width, 640);
     assert_int_equal(cfg.render.height, 480);
     assert_true(cfg.render.step_m == 0.0);
     assert_true(cfg.render.sky[2] == 0.75);
-    assert_true(cfg.render.ground[0] == 0.22);
+    assert_true(cfg.render.ground[0] == 0.08);
     assert_true(cfg.render.ground_on);
     assert_true(cfg.render.termination == 0.001);
-    assert_int_equal(cfg.lightmap.mode, LIGHTMAP_OFF);
+    assert_int_equal(cfg.lightmap.mode, LIGHTMAP_DENSE);
     assert_int_equal(cfg.lightmap.resolution[2], 128);
     assert_true(cfg.lightmap.epsilon == 0.01);
     assert_true(cfg.lightmap.forward_angle_deg == 20.0);
@@ -267,10 +268,10 @@ static void test_file_errors(void **state)
     EXPECT_LOAD_ERROR("config/bad_enum.cfg", "bad_enum.cfg:2:", "lightmap.mode",
                       "expected one of \"off\", \"dense\", \"compressed\"", "\"sparse\"");
     EXPECT_LOAD_ERROR("config/bad_vector.cfg", "bad_vector.cfg:2:", "scene.size",
-                      "expected an array of 3 integers in [1, 2048]", "got 2 elements");
+                      "expected an array of 3 integers in [1, 500]", "got 2 elements");
     /* The line of the bad element, not of the array. */
     EXPECT_LOAD_ERROR("config/bad_element.cfg", "bad_element.cfg:3:", "scene.size[1]",
-                      "expected an integer in [1, 2048]", "got 0");
+                      "expected an integer in [1, 500]", "got 0");
     EXPECT_LOAD_ERROR("config/mixed_array.cfg", "mixed_array.cfg:2:", "syntax error", "mismatched");
     EXPECT_LOAD_ERROR("config/not_group.cfg", "not_group.cfg:1:", "light", "expected a group");
 }
@@ -283,6 +284,7 @@ static void test_missing_file(void **state)
     check_error(before, "/nonexistent/folder/scene.cfg", "No such file", NULL);
     /* Defaults remain. */
     assert_true(cfg.light.elevation_deg == 35.0);
+    assert_true(cfg.light.intensity == 6.0);
 }
 
 static void test_load_keeps_values_read_before_error(void **state)
@@ -292,6 +294,7 @@ static void test_load_keeps_values_read_before_error(void **state)
     assert_int_equal(cfg.scene.size[2], 32);
     assert_true(cfg.camera.fov_deg == 60.0);
     assert_true(cfg.light.elevation_deg == 35.0);
+    assert_true(cfg.light.intensity == 6.0);
 }
 
 static void test_data_files_glob(void **state)
@@ -540,8 +543,8 @@ static void test_reference(void **state)
 
     assert_non_null(strstr(table, "| setting | type | default | range | description |\n"));
     assert_non_null(strstr(table, "| `light.elevation` | float | `35.0` | [-90, 90] |"));
-    assert_non_null(strstr(table, "| `scene.size` | int[3] | `[128, 128, 64]` | [1, 2048] |"));
-    assert_non_null(strstr(table, "| `lightmap.mode` | string | `\"off\"` | "
+    assert_non_null(strstr(table, "| `scene.size` | int[3] | `[128, 128, 64]` | [1, 500] |"));
+    assert_non_null(strstr(table, "| `lightmap.mode` | string | `\"dense\"` | "
                                   "\"off\", \"dense\", \"compressed\" |"));
     assert_non_null(strstr(table, "| `optics.radius_mm.rain` | float | `1.0` |"));
     assert_non_null(strstr(table, "| `optics.radius_mm.cloud` | float | `0.01` |"));

@@ -1,0 +1,130 @@
+// Deep light map, dense: one node plane of the light-space grid per dispatch, swept from the
+// sun (Nes §5.2.3, Riley §4.4).  Mirrors light_map_build() in src/light/transport.c operation
+// for operation in float32; see docs/lightmap.md for the grid and what a node stores.
+
+#include "common.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(binding = 0) uniform sampler3D beta_tex;      // read with texelFetch only
+layout(r32f, binding = 0) uniform image3D light_img; // node (i, j, k) = light at that point
+
+uniform ivec3 vol_n;
+uniform vec3 vol_origin;
+uniform vec3 vol_inv_spacing;
+uniform ivec3 grid_n;
+uniform vec3 g_origin, g_du, g_dv, g_dw;
+uniform int plane;       // k
+uniform int substeps;
+uniform float dsub;      // metres per substep
+uniform int forward;     // central (and peripheral) forward scattering on
+uniform int peripheral;
+uniform vec4 cp;         // water_ctr, ice_ctr, water_per, ice_per
+uniform vec2 per_offset; // peripheral offset in node units along u and v
+
+// Lower index and upper weight along one axis, clamped to the edge voxels (transport.c).
+int axis_weight(float x, int n, out float t)
+{
+    float f = x - 0.5;
+    if (n < 2 || f <= 0.0) {
+        t = 0.0;
+        return 0;
+    }
+    if (f >= float(n - 1)) {
+        t = 1.0;
+        return n - 2;
+    }
+    int i = int(f);
+    t = f - float(i);
+    return i;
+}
+
+vec2 fetch(ivec3 c)
+{
+    return texelFetch(beta_tex, c, 0).rg;
+}
+
+vec2 sample_beta(vec3 p)
+{
+    vec3 x = (p - vol_origin) * vol_inv_spacing;
+    for (int a = 0; a < 3; a++) {
+        if (!(x[a] >= 0.0 && x[a] <= float(vol_n[a])))
+            return vec2(0.0);
+    }
+    vec3 t;
+    ivec3 i0, d;
+    for (int a = 0; a < 3; a++) {
+        float ta;
+        i0[a] = axis_weight(x[a], vol_n[a], ta);
+        t[a] = ta;
+        d[a] = vol_n[a] > 1 ? 1 : 0;
+    }
+    vec2 c000 = fetch(i0), c100 = fetch(i0 + ivec3(d.x, 0, 0));
+    vec2 c010 = fetch(i0 + ivec3(0, d.y, 0)), c110 = fetch(i0 + ivec3(d.x, d.y, 0));
+    vec2 c001 = fetch(i0 + ivec3(0, 0, d.z)), c101 = fetch(i0 + ivec3(d.x, 0, d.z));
+    vec2 c011 = fetch(i0 + ivec3(0, d.y, d.z)), c111 = fetch(i0 + d);
+    vec2 c00 = c000 + t.x * (c100 - c000);
+    vec2 c10 = c010 + t.x * (c110 - c010);
+    vec2 c01 = c001 + t.x * (c101 - c001);
+    vec2 c11 = c011 + t.x * (c111 - c011);
+    vec2 c0 = c00 + t.y * (c10 - c00);
+    vec2 c1 = c01 + t.y * (c11 - c01);
+    vec2 v = c0 + t.z * (c1 - c0);
+    return vec2(v.x >= 0.0 ? min(v.x, 1e30) : 0.0, v.y >= 0.0 ? min(v.y, 1e30) : 0.0);
+}
+
+// Bilinear tap in node plane k-1; nodes outside the plane read as the incident light 1.
+float node(int i, int j, int k)
+{
+    if (i < 0 || j < 0 || i >= grid_n.x || j >= grid_n.y)
+        return 1.0;
+    return imageLoad(light_img, ivec3(i, j, k)).r;
+}
+
+float plane_tap(float x, float y, int k)
+{
+    float fx = floor(x), fy = floor(y);
+    float tx = x - fx, ty = y - fy;
+    int ix = int(fx), iy = int(fy);
+    float v00 = node(ix, iy, k), v10 = node(ix + 1, iy, k);
+    float v01 = node(ix, iy + 1, k), v11 = node(ix + 1, iy + 1, k);
+    float r0 = v00 + tx * (v10 - v00);
+    float r1 = v01 + tx * (v11 - v01);
+    return r0 + ty * (r1 - r0);
+}
+
+void main()
+{
+    ivec2 ij = ivec2(gl_GlobalInvocationID.xy);
+    if (ij.x >= grid_n.x || ij.y >= grid_n.y)
+        return;
+    int k = plane;
+    if (k == 0) {
+        imageStore(light_img, ivec3(ij, 0), vec4(1.0));
+        return;
+    }
+    float fi = float(ij.x), fj = float(ij.y);
+    vec2 b = vec2(0.0);
+    for (int m = 0; m < substeps; m++) {
+        float kz = float(k - 1) + (float(m) + 0.5) / float(substeps);
+        vec3 p = g_origin + fi * g_du + fj * g_dv + kz * g_dw;
+        b += sample_beta(p);
+    }
+    float beta = b.x + b.y;
+    float l_in = imageLoad(light_img, ivec3(ij, k - 1)).r;
+    float t = exp(-beta * dsub);
+    float l = l_in * t; // Nes eq. 5.8
+    if (forward != 0 && beta > 0.0) {
+        float f_ice = b.x / beta;
+        float scat = 1.0 - t;
+        l += l_in * scat * (cp.x + f_ice * (cp.y - cp.x)); // Nes eq. 5.9
+        if (peripheral != 0) {
+            float l_per = 0.25 * (plane_tap(fi + per_offset.x, fj, k - 1) +
+                                  plane_tap(fi - per_offset.x, fj, k - 1) +
+                                  plane_tap(fi, fj + per_offset.y, k - 1) +
+                                  plane_tap(fi, fj - per_offset.y, k - 1));
+            l += l_per * scat * (cp.z + f_ice * (cp.w - cp.z)); // Nes eq. 5.10
+        }
+    }
+    imageStore(light_img, ivec3(ij, k), vec4(clamp(l, 0.0, 1.0))); // Nes eq. 5.11
+}

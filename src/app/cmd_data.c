@@ -1,0 +1,480 @@
+#include "app/cmd_data.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "app/app.h"
+#include "common/log.h"
+#include "data/extfile.h"
+#include "data/synth.h"
+#include "data/wrf.h"
+#include "data/wrf_write.h"
+
+void cmd_data_source_desc(const struct config *cfg, const char **file_ptrs,
+                          struct data_source_desc *out)
+{
+    const struct config_data *cd = &cfg->data;
+    memset(out, 0, sizeof(*out));
+    out->format = cd->format == DATA_ISABEL       ? DATA_SOURCE_ISABEL
+                  : cd->format == DATA_EXTINCTION ? DATA_SOURCE_EXTINCTION
+                                                  : DATA_SOURCE_WRF;
+    for (int i = 0; i < cd->file_count; i++)
+        file_ptrs[i] = cd->files[i];
+    out->files = file_ptrs;
+    out->file_count = cd->file_count;
+    wrf_desc_defaults(&out->wrf);
+    out->wrf.levels = cd->levels;
+    out->wrf.top_m = cd->top_km * 1000.0;
+    for (int a = 0; a < 3; a++)
+        out->wrf.stride[a] = cd->stride[a];
+    for (int i = 0; i < 6; i++)
+        out->wrf.crop[i] = cd->crop[i];
+    out->wrf.memory_mb = cd->memory_mb;
+    for (int a = 0; a < 3; a++) {
+        out->isabel.n[a] = cd->isabel_size[a];
+        out->isabel.extent_m[a] = cd->isabel_extent_km[a] * 1000.0;
+    }
+    out->optics = cfg->optics.params;
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        out->select.enabled[f] = cfg->optics.enabled[f];
+        out->select.scale[f] = cfg->optics.scale[f];
+    }
+}
+
+/* ---- anvil info ------------------------------------------------------------------------- */
+
+static void print_range(const char *name, const struct wrf_var_stats *s)
+{
+    if (!s->read)
+        return;
+    printf("    %-7s %12.5g .. %-12.5g", name, s->min, s->max);
+    size_t bad = wrf_var_stats_bad(s);
+    if (bad)
+        printf("  bad: %zu (NaN %zu, Inf %zu, fill %zu, negative %zu, >1 %zu)", bad, s->nan,
+               s->inf, s->fill, s->negative, s->absurd);
+    printf("\n");
+}
+
+static int info_extinction(const char *path)
+{
+    struct extfile *f = extfile_open(path);
+    if (!f)
+        return EXIT_BAD_INPUT;
+    const struct grid3 *g = extfile_grid(f);
+    printf("%s: extinction volumes (CF NetCDF)\n", path);
+    printf("  grid        %d x %d x %d voxels of %.4g x %.4g x %.4g m\n", g->n[0], g->n[1],
+           g->n[2], g->spacing[0], g->spacing[1], g->spacing[2]);
+    printf("  extent      %.4g x %.4g x %.4g km from (%.4g, %.4g, %.4g) km\n",
+           g->n[0] * g->spacing[0] / 1e3, g->n[1] * g->spacing[1] / 1e3,
+           g->n[2] * g->spacing[2] / 1e3, g->origin[0] / 1e3, g->origin[1] / 1e3,
+           g->origin[2] / 1e3);
+    printf("  time steps  %d\n", extfile_step_count(f));
+    int rc = EXIT_OK;
+    for (int s = 0; s < extfile_step_count(f); s++) {
+        struct ext_volume v;
+        struct extfile_stats st;
+        if (!extfile_read_step(f, s, &v, &st)) {
+            rc = EXIT_BAD_INPUT;
+            break;
+        }
+        double mi = 0, mw = 0;
+        size_t n = grid3_count(g);
+        for (size_t i = 0; i < n; i++) {
+            mi = fmax(mi, v.beta[2 * i]);
+            mw = fmax(mw, v.beta[2 * i + 1]);
+        }
+        printf("  %3d %-19s  max beta ice %.4g, water %.4g 1/m", s, extfile_step_date(f, s), mi,
+               mw);
+        size_t bad = st.nan + st.inf + st.fill + st.negative;
+        if (bad)
+            printf("  bad: %zu", bad);
+        printf("\n");
+        ext_volume_finish(&v);
+    }
+    extfile_close(f);
+    return rc;
+}
+
+static int info_wrf(char **paths, int count)
+{
+    struct wrf *w = wrf_open((const char *const *)paths, count);
+    if (!w)
+        return EXIT_BAD_INPUT;
+    const struct wrf_meta *m = wrf_get_meta(w);
+    for (int i = 0; i < count; i++)
+        printf("%s%s", i ? ", " : "", paths[i]);
+    printf(": WRF output\n");
+    printf("  grid        %d x %d columns x %d mass levels (west_east x south_north x "
+           "bottom_top), DX %.6g m, DY %.6g m\n",
+           m->nx, m->ny, m->nz, m->dx, m->dy);
+    printf("  projection  MAP_PROJ %d, CEN_LAT %.4f, CEN_LON %.4f, MP_PHYSICS %d\n",
+           m->map_proj, m->cen_lat, m->cen_lon, m->mp_physics);
+    if (isfinite(m->lat_min))
+        printf("  lat/lon     %.3f to %.3f N, %.3f to %.3f E\n", m->lat_min, m->lat_max,
+               m->lon_min, m->lon_max);
+    printf("  species     present:");
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        if (m->has_species[f])
+            printf(" %s", species_wrf_name((enum species)f));
+    printf("%s; absent (read as zero):", m->has_qvapor ? " (and QVAPOR)" : "");
+    int absent = 0;
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        if (!m->has_species[f]) {
+            printf(" %s", species_wrf_name((enum species)f));
+            absent++;
+        }
+    printf("%s\n", absent ? "" : " none");
+    printf("  terrain     HGT %s, LANDMASK %s\n", m->hgt ? "yes" : "no",
+           m->landmask ? "yes" : "no");
+    printf("  time steps  %d\n", wrf_step_count(w));
+
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    d.qvapor = true;
+    int rc = EXIT_OK;
+    for (int s = 0; s < wrf_step_count(w); s++) {
+        struct field_volume v;
+        struct wrf_stats st;
+        if (!wrf_read_step(w, s, &d, &v, &st)) {
+            rc = EXIT_BAD_INPUT;
+            break;
+        }
+        if (s == 0)
+            printf("  extent      %.4g x %.4g x %.4g km (height grid: %d levels of %.4g m, "
+                   "top at the highest model top)\n",
+                   v.grid.n[0] * v.grid.spacing[0] / 1e3, v.grid.n[1] * v.grid.spacing[1] / 1e3,
+                   (v.grid.origin[2] + v.grid.n[2] * v.grid.spacing[2]) / 1e3, v.grid.n[2],
+                   v.grid.spacing[2]);
+        printf("  %3d %s  (%s)\n", s, wrf_step_date(w, s), wrf_step_path(w, s));
+        for (int k = 0; k < WRF_VAR_COUNT; k++)
+            print_range(wrf_var_name((enum wrf_var)k), &st.var[k]);
+        field_volume_finish(&v);
+    }
+    wrf_close(w);
+    return rc;
+}
+
+int cmd_info(int argc, char **argv)
+{
+    if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
+        FILE *out = argc < 2 ? stderr : stdout;
+        fprintf(out, "usage: anvil info FILE... \n"
+                     "  Describes WRF output (one series: several files are ordered by Times)\n"
+                     "  or an extinction file: dimensions, species present and absent, time\n"
+                     "  steps and dates, extent, lat/lon box, value ranges, bad-value counts.\n");
+        return argc < 2 ? EXIT_USAGE : EXIT_OK;
+    }
+    if (argc == 2 && extfile_probe(argv[1]))
+        return info_extinction(argv[1]);
+    return info_wrf(argv + 1, argc - 1);
+}
+
+/* ---- anvil synth ------------------------------------------------------------------------ */
+
+static bool parse_triple_int(const char *s, int out[3])
+{
+    char tail;
+    return sscanf(s, "%dx%dx%d%c", &out[0], &out[1], &out[2], &tail) == 3 && out[0] > 0 &&
+           out[1] > 0 && out[2] > 0;
+}
+
+static bool parse_triple_double(const char *s, double out[3])
+{
+    char tail;
+    return sscanf(s, "%lfx%lfx%lf%c", &out[0], &out[1], &out[2], &tail) == 3 && out[0] > 0 &&
+           out[1] > 0 && out[2] > 0;
+}
+
+static void synth_usage(FILE *out)
+{
+    fprintf(out, "usage: anvil synth -o OUT.nc [--size NXxNYxNZ] [--steps N] [--extent XxYxZ]\n"
+                 "                   [--seed N] [--start YYYY-MM-DD_hh:mm:ss] [--interval MIN]\n"
+                 "                   [--center LAT,LON]\n"
+                 "  Writes the procedural storm as WRF-convention NetCDF, evolving over the\n"
+                 "  steps.  Defaults: --size 128x128x64 --steps 1 --extent 60x60x16 (km)\n"
+                 "  --seed 1 --start 2000-01-01_00:00:00 --interval 10 --center 25,-89.\n");
+}
+
+/* Adds SECONDS to a WRF date (no time zones, proleptic Gregorian). */
+static void date_add(const char *start, double seconds, char out[32])
+{
+    double t0;
+    if (!extfile_parse_date(start, &t0))
+        t0 = 0.0;
+    long long t = (long long)llround(t0 + seconds);
+    long long days = t / 86400, rem = t % 86400;
+    if (rem < 0) {
+        rem += 86400;
+        days--;
+    }
+    /* civil_from_days */
+    long long z = days + 719468;
+    long long era = (z >= 0 ? z : z - 146096) / 146097;
+    long long doe = z - era * 146097;
+    long long yoe = (doe - doe / 1460 + doe / 36524 - doe / 146096) / 365;
+    long long y = yoe + era * 400;
+    long long doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    long long mp = (5 * doy + 2) / 153;
+    long long d = doy - (153 * mp + 2) / 5 + 1;
+    long long m = mp + (mp < 10 ? 3 : -9);
+    y += m <= 2;
+    snprintf(out, 32, "%04d-%02d-%02d_%02d:%02d:%02d", (int)(y % 10000), (int)m % 100,
+             (int)d % 100, (int)(rem / 3600) % 100, (int)(rem / 60 % 60), (int)(rem % 60));
+}
+
+int cmd_synth(int argc, char **argv)
+{
+    const char *out = NULL, *start = "2000-01-01_00:00:00";
+    int size[3] = {128, 128, 64}, steps = 1;
+    double extent_km[3] = {60.0, 60.0, 16.0}, interval_min = 10.0, lat = 25.0, lon = -89.0;
+    unsigned seed = 1;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            synth_usage(stdout);
+            return EXIT_OK;
+        }
+        if (!v) {
+            log_error("synth: %s needs a value", a);
+            synth_usage(stderr);
+            return EXIT_USAGE;
+        }
+        i++;
+        char tail;
+        if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
+            out = v;
+        } else if (!strcmp(a, "--size")) {
+            if (!parse_triple_int(v, size)) {
+                log_error("synth: --size %s: expected NXxNYxNZ, e.g. 500x500x100", v);
+                return EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--extent")) {
+            if (!parse_triple_double(v, extent_km)) {
+                log_error("synth: --extent %s: expected XxYxZ in km, e.g. 60x60x16", v);
+                return EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--steps")) {
+            if (sscanf(v, "%d%c", &steps, &tail) != 1 || steps < 1 || steps > 10000) {
+                log_error("synth: --steps %s: expected a count from 1 to 10000", v);
+                return EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--seed")) {
+            if (sscanf(v, "%u%c", &seed, &tail) != 1) {
+                log_error("synth: --seed %s: expected a non-negative integer", v);
+                return EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--start")) {
+            double t;
+            if (!extfile_parse_date(v, &t)) {
+                log_error("synth: --start %s: expected YYYY-MM-DD_hh:mm:ss", v);
+                return EXIT_USAGE;
+            }
+            start = v;
+        } else if (!strcmp(a, "--interval")) {
+            if (sscanf(v, "%lf%c", &interval_min, &tail) != 1 || !(interval_min > 0)) {
+                log_error("synth: --interval %s: expected minutes > 0", v);
+                return EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--center")) {
+            if (sscanf(v, "%lf,%lf%c", &lat, &lon, &tail) != 2 || fabs(lat) > 80 ||
+                fabs(lon) > 360) {
+                log_error("synth: --center %s: expected LAT,LON in degrees (|LAT| <= 80)", v);
+                return EXIT_USAGE;
+            }
+        } else {
+            log_error("synth: unknown option %s", a);
+            synth_usage(stderr);
+            return EXIT_USAGE;
+        }
+    }
+    if (!out) {
+        log_error("synth: no output file (-o OUT.nc)");
+        synth_usage(stderr);
+        return EXIT_USAGE;
+    }
+    struct synth_desc sd = {.kind = SYNTH_STORM, .seed = seed};
+    for (int a = 0; a < 3; a++) {
+        sd.n[a] = size[a];
+        sd.extent_m[a] = extent_km[a] * 1000.0;
+    }
+    struct wrf_write_desc wd = {.cen_lat = lat, .cen_lon = lon};
+    struct wrf_writer *w = NULL;
+    double t0 = time_now_ms();
+    for (int s = 0; s < steps; s++) {
+        sd.time = steps > 1 ? (double)s / (steps - 1) : 0.0;
+        struct field_volume fv;
+        if (!synth_storm_fields(&sd, &fv)) {
+            wrf_writer_destroy(w);
+            return EXIT_BAD_INPUT;
+        }
+        if (!w)
+            w = wrf_writer_create(out, &fv.grid, &wd);
+        char date[32];
+        date_add(start, s * interval_min * 60.0, date);
+        bool ok = w && wrf_writer_add(w, &fv, date);
+        field_volume_finish(&fv);
+        if (!ok) {
+            wrf_writer_destroy(w);
+            return EXIT_FAILED;
+        }
+        log_info("synth: step %d/%d (%s) written", s + 1, steps, date);
+    }
+    if (!wrf_writer_finish(w))
+        return EXIT_FAILED;
+    log_info("synth: %s: %d x %d x %d, %d steps in %.1f s", out, size[0], size[1], size[2],
+             steps, (time_now_ms() - t0) / 1000.0);
+    return EXIT_OK;
+}
+
+/* ---- anvil convert ---------------------------------------------------------------------- */
+
+static void convert_usage(FILE *out)
+{
+    fprintf(out, "usage: anvil convert CONFIG -o OUT.nc [--set PATH=VALUE]...\n"
+                 "       anvil convert WRF-FILE... -o OUT.nc\n"
+                 "  Precomputes per time step the ice-phase (ice + snow + graupel) and the\n"
+                 "  water-phase (cloud + rain) extinction into a CF NetCDF file that the\n"
+                 "  renderer loads with data.format = \"extinction\".  With a config, its data.*\n"
+                 "  settings, optics and species toggles apply; with files, the defaults.\n");
+}
+
+/* NetCDF files start with "CDF" (classic) or the HDF5 signature. */
+static bool is_netcdf(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return false;
+    unsigned char b[8] = {0};
+    size_t n = fread(b, 1, sizeof(b), f);
+    fclose(f);
+    return n >= 4 && ((b[0] == 'C' && b[1] == 'D' && b[2] == 'F') ||
+                      (b[0] == 0x89 && b[1] == 'H' && b[2] == 'D' && b[3] == 'F'));
+}
+
+int cmd_convert(int argc, char **argv)
+{
+    const char *out = NULL;
+    char *inputs[CONFIG_MAX_FILES];
+    int n_inputs = 0;
+    char *sets[64];
+    int n_sets = 0;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            convert_usage(stdout);
+            return EXIT_OK;
+        } else if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--set")) {
+            if (i + 1 >= argc) {
+                log_error("convert: %s needs a value", a);
+                return EXIT_USAGE;
+            }
+            if (a[1] == 'o' || a[2] == 'o')
+                out = argv[++i];
+            else if (n_sets < 64)
+                sets[n_sets++] = argv[++i];
+        } else if (a[0] == '-' && a[1]) {
+            log_error("convert: unknown option %s", a);
+            convert_usage(stderr);
+            return EXIT_USAGE;
+        } else if (n_inputs < CONFIG_MAX_FILES) {
+            inputs[n_inputs++] = argv[i];
+        } else {
+            log_error("convert: more than %d inputs", CONFIG_MAX_FILES);
+            return EXIT_USAGE;
+        }
+    }
+    if (!out || n_inputs == 0) {
+        log_error("convert: %s", !out ? "no output file (-o OUT.nc)" : "no input");
+        convert_usage(stderr);
+        return EXIT_USAGE;
+    }
+
+    struct config *cfg = malloc(sizeof(*cfg));
+    if (!cfg) {
+        log_error("convert: out of memory");
+        return EXIT_FAILED;
+    }
+    bool from_config = n_inputs == 1 && !is_netcdf(inputs[0]);
+    if (from_config) {
+        if (!app_load_config(inputs[0], sets, n_sets, cfg)) {
+            free(cfg);
+            return EXIT_BAD_INPUT;
+        }
+        if (cfg->data.file_count == 0) {
+            log_error("%s: data.files: no input files to convert", inputs[0]);
+            free(cfg);
+            return EXIT_BAD_INPUT;
+        }
+    } else {
+        if (!app_load_config(NULL, sets, n_sets, cfg)) {
+            free(cfg);
+            return EXIT_BAD_INPUT;
+        }
+        cfg->data.format = DATA_WRF;
+        cfg->data.file_count = n_inputs;
+        for (int i = 0; i < n_inputs; i++)
+            snprintf(cfg->data.files[i], CONFIG_PATH_MAX, "%s", inputs[i]);
+    }
+    if (cfg->data.format == DATA_EXTINCTION) {
+        log_error("convert: the input is already an extinction file (data.format)");
+        free(cfg);
+        return EXIT_BAD_INPUT;
+    }
+    const char *ptrs[CONFIG_MAX_FILES];
+    struct data_source_desc sd;
+    cmd_data_source_desc(cfg, ptrs, &sd);
+    struct data_source *src = data_source_open(&sd);
+    if (!src) {
+        free(cfg);
+        return EXIT_BAD_INPUT;
+    }
+
+    /* Provenance: sources, command line, species settings (what the file can no longer
+     * change). */
+    char source[4096] = "", history[4096] = "", species[512] = "";
+    for (int i = 0; i < sd.file_count; i++)
+        snprintf(source + strlen(source), sizeof(source) - strlen(source), "%s%s",
+                 i ? " " : "", sd.files[i]);
+    for (int i = 0; i < argc; i++)
+        snprintf(history + strlen(history), sizeof(history) - strlen(history), "%s%s",
+                 i ? " " : "anvil ", argv[i]);
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        snprintf(species + strlen(species), sizeof(species) - strlen(species), "%s%s %s x%g",
+                 f ? ", " : "", species_name((enum species)f),
+                 sd.select.enabled[f] ? "on" : "off", sd.select.scale[f]);
+
+    int rc = EXIT_OK;
+    struct extfile_writer *w = NULL;
+    int steps = data_source_step_count(src);
+    for (int s = 0; s < steps; s++) {
+        struct ext_volume v;
+        double load_ms, convert_ms;
+        if (!data_source_load(src, s, &v, &load_ms, &convert_ms)) {
+            rc = EXIT_BAD_INPUT;
+            break;
+        }
+        if (!w)
+            w = extfile_writer_create(out, &v.grid, source, history, species);
+        bool ok = w && extfile_writer_add(w, &v, data_source_step_date(src, s));
+        log_info("convert: step %d/%d %s: read %.0f ms, converted %.0f ms, max beta %.3g 1/m",
+                 s + 1, steps, data_source_step_date(src, s), load_ms, convert_ms,
+                 ext_volume_max_beta(&v));
+        ext_volume_finish(&v);
+        if (!ok) {
+            rc = EXIT_FAILED;
+            break;
+        }
+    }
+    if (rc == EXIT_OK) {
+        if (!extfile_writer_finish(w))
+            rc = EXIT_FAILED;
+    } else {
+        extfile_writer_destroy(w);
+    }
+    data_source_close(src);
+    free(cfg);
+    return rc;
+}

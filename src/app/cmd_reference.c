@@ -1,0 +1,199 @@
+/* anvil reference: the Monte Carlo reference image of a config and its standard error. */
+#include <errno.h>
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "app/app.h"
+#include "app/cmd_bench.h"
+#include "bench/reference.h"
+#include "common/log.h"
+
+#define MAX_SETS 64
+
+struct reference_options {
+    const char *config;
+    const char *output;
+    char *sets[MAX_SETS];
+    int n_sets;
+    long spp, threads;
+    unsigned long long seed;
+    double albedo;
+    bool jitter;
+};
+
+static int usage(FILE *out)
+{
+    fprintf(out, "usage: anvil reference [CONFIG] -o FILE.pfm --spp N [--threads N] [--seed S]\n"
+                 "                       [--albedo A] [--jitter] [--set PATH=VALUE]... [--quiet]\n"
+                 "Path-traces the config's view (Monte Carlo: all orders of scattering, sun and\n"
+                 "sky) and writes the mean radiance to FILE.pfm and the standard error of each\n"
+                 "pixel to FILE.stderr.pfm (docs/reference.md).\n"
+                 "  --spp N      samples per pixel (default 64; the standard error needs >= 2)\n"
+                 "  --threads N  worker threads (default: one per CPU); the image does not\n"
+                 "               depend on it\n"
+                 "  --seed S     random seed (default 1)\n"
+                 "  --albedo A   single-scattering albedo in [0, 1] (default 1)\n"
+                 "  --jitter     spread samples over each pixel (default: pixel centres, as the\n"
+                 "               renderer samples)\n");
+    return EXIT_USAGE;
+}
+
+static bool parse_long(const char *what, const char *s, long lo, long hi, long *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (errno || end == s || *end || v < lo || v > hi) {
+        log_error("reference: %s: expected an integer in [%ld, %ld], got \"%s\"", what, lo, hi, s);
+        return false;
+    }
+    *out = v;
+    return true;
+}
+
+static int parse_options(int argc, char **argv, struct reference_options *o)
+{
+    static const struct option longopts[] = {
+        {"output", required_argument, NULL, 'o'},  {"spp", required_argument, NULL, 'n'},
+        {"threads", required_argument, NULL, 't'}, {"seed", required_argument, NULL, 'r'},
+        {"albedo", required_argument, NULL, 'a'},  {"jitter", no_argument, NULL, 'j'},
+        {"set", required_argument, NULL, 's'},     {"quiet", no_argument, NULL, 'q'},
+        {"help", no_argument, NULL, 'h'},          {NULL, 0, NULL, 0},
+    };
+    memset(o, 0, sizeof(*o));
+    o->spp = 64;
+    o->seed = 1;
+    o->albedo = 1.0;
+    optind = 1;
+    int c;
+    long v;
+    char *end;
+    while ((c = getopt_long(argc, argv, "o:qh", longopts, NULL)) != -1) {
+        switch (c) {
+        case 'o':
+            o->output = optarg;
+            break;
+        case 'n':
+            if (!parse_long("--spp", optarg, 1, 1L << 30, &o->spp))
+                return EXIT_BAD_INPUT;
+            break;
+        case 't':
+            if (!parse_long("--threads", optarg, 0, 4096, &o->threads))
+                return EXIT_BAD_INPUT;
+            break;
+        case 'r':
+            if (!parse_long("--seed", optarg, 0, 0x7fffffffL, &v))
+                return EXIT_BAD_INPUT;
+            o->seed = (unsigned long long)v;
+            break;
+        case 'a':
+            errno = 0;
+            o->albedo = strtod(optarg, &end);
+            if (errno || end == optarg || *end || !(o->albedo >= 0.0 && o->albedo <= 1.0)) {
+                log_error("reference: --albedo: expected a number in [0, 1], got \"%s\"", optarg);
+                return EXIT_BAD_INPUT;
+            }
+            break;
+        case 'j':
+            o->jitter = true;
+            break;
+        case 's':
+            if (o->n_sets == MAX_SETS) {
+                log_error("too many --set options (at most %d)", MAX_SETS);
+                return EXIT_USAGE;
+            }
+            o->sets[o->n_sets++] = optarg;
+            break;
+        case 'q':
+            log_set_level(LOG_ERROR);
+            break;
+        case 'h':
+            return -1;
+        default:
+            return EXIT_USAGE;
+        }
+    }
+    if (optind < argc)
+        o->config = argv[optind++];
+    if (optind < argc) {
+        log_error("reference: unexpected argument \"%s\" (one config file at most)", argv[optind]);
+        return EXIT_USAGE;
+    }
+    if (!o->output) {
+        log_error("reference: missing -o FILE.pfm");
+        return EXIT_USAGE;
+    }
+    return EXIT_OK;
+}
+
+/* FILE.pfm -> FILE.stderr.pfm (the extension, if any, replaced).  Caller frees. */
+static char *stderr_path(const char *output)
+{
+    const char *slash = strrchr(output, '/');
+    const char *dot = strrchr(output, '.');
+    size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - output) : strlen(output);
+    char *p = malloc(stem + sizeof(".stderr.pfm"));
+    if (!p)
+        return NULL;
+    memcpy(p, output, stem);
+    strcpy(p + stem, ".stderr.pfm");
+    return p;
+}
+
+int cmd_reference(int argc, char **argv)
+{
+    struct reference_options o;
+    int rc = parse_options(argc, argv, &o);
+    if (rc < 0) {
+        usage(stdout);
+        return EXIT_OK;
+    }
+    if (rc == EXIT_USAGE)
+        return usage(stderr);
+    if (rc != EXIT_OK)
+        return rc;
+
+    struct config cfg;
+    if (!app_load_config(o.config, o.sets, o.n_sets, &cfg))
+        return EXIT_BAD_INPUT;
+    double start = time_now_ms();
+    struct ext_volume vol = {0};
+    if (!app_build_volume(&cfg, &vol))
+        return EXIT_BAD_INPUT;
+
+    struct render_settings settings;
+    app_render_settings(&cfg, &settings);
+    struct reference_desc desc;
+    reference_desc_from_render(&settings, &cfg.optics.params, &desc);
+    desc.albedo = o.albedo;
+    struct render_view view;
+    app_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
+
+    rc = EXIT_FAILED;
+    char *err_path = stderr_path(o.output);
+    struct reference *ref = reference_create(&vol, &desc);
+    struct image mean = {0}, err = {0};
+    if (!err_path || !ref)
+        goto done;
+    struct reference_image_desc id = {
+        .spp = (int)o.spp, .threads = (int)o.threads, .seed = o.seed, .jitter = o.jitter};
+    double t = time_now_ms();
+    if (!reference_render(ref, &view, &id, &mean, &err))
+        goto done;
+    double ms = time_now_ms() - t;
+    if (!image_write(&mean, o.output, (float)cfg.render.exposure) ||
+        !image_write_pfm(&err, err_path))
+        goto done;
+    log_info("wrote %s and %s (%dx%d, %ld spp, %.1f s; total %.1f s)", o.output, err_path,
+             mean.width, mean.height, o.spp, ms / 1000.0, (time_now_ms() - start) / 1000.0);
+    rc = EXIT_OK;
+done:
+    image_finish(&mean);
+    image_finish(&err);
+    reference_destroy(ref);
+    free(err_path);
+    ext_volume_finish(&vol);
+    return rc;
+}

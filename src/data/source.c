@@ -1,0 +1,134 @@
+#include "data/source.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/log.h"
+#include "data/extfile.h"
+
+struct data_source {
+    struct data_source_desc desc;
+    struct wrf *wrf;
+    struct extfile *ext;
+    int isabel_steps;
+};
+
+struct data_source *data_source_open(const struct data_source_desc *d)
+{
+    if (d->file_count < 1 || !d->files || !d->files[0]) {
+        log_error("no data files given (data.files)");
+        return NULL;
+    }
+    struct data_source *s = calloc(1, sizeof(*s));
+    if (!s) {
+        log_error("out of memory");
+        return NULL;
+    }
+    s->desc = *d;
+    switch (d->format) {
+    case DATA_SOURCE_WRF:
+        s->wrf = wrf_open(d->files, d->file_count);
+        if (!s->wrf)
+            goto error;
+        break;
+    case DATA_SOURCE_ISABEL:
+        s->desc.isabel.dir = d->files[0];
+        s->isabel_steps = isabel_step_count(&s->desc.isabel);
+        if (s->isabel_steps == 0)
+            goto error;
+        break;
+    case DATA_SOURCE_EXTINCTION:
+        if (d->file_count > 1)
+            log_warn("%s: an extinction file holds the whole series: the other %d files are "
+                     "ignored",
+                     d->files[0], d->file_count - 1);
+        s->ext = extfile_open(d->files[0]);
+        if (!s->ext)
+            goto error;
+        break;
+    }
+    return s;
+
+error:
+    free(s);
+    return NULL;
+}
+
+void data_source_close(struct data_source *s)
+{
+    if (!s)
+        return;
+    wrf_close(s->wrf);
+    extfile_close(s->ext);
+    free(s);
+}
+
+int data_source_step_count(const struct data_source *s)
+{
+    if (s->wrf)
+        return wrf_step_count(s->wrf);
+    if (s->ext)
+        return extfile_step_count(s->ext);
+    return s->isabel_steps;
+}
+
+const char *data_source_step_date(const struct data_source *s, int step)
+{
+    if (s->wrf)
+        return wrf_step_date(s->wrf, step);
+    if (s->ext)
+        return extfile_step_date(s->ext, step);
+    return "";
+}
+
+struct wrf *data_source_wrf(struct data_source *s)
+{
+    return s->wrf;
+}
+
+bool data_source_load_fields(struct data_source *s, int step, struct field_volume *out)
+{
+    if (s->wrf)
+        return wrf_read_step(s->wrf, step, &s->desc.wrf, out, NULL);
+    if (s->ext) {
+        memset(out, 0, sizeof(*out));
+        log_error("%s: an extinction file has no mass ratios", s->desc.files[0]);
+        return false;
+    }
+    if (step < 0 || step >= s->isabel_steps) {
+        memset(out, 0, sizeof(*out));
+        log_error("%s: time step %d out of range (0 to %d)", s->desc.files[0], step,
+                  s->isabel_steps - 1);
+        return false;
+    }
+    return isabel_read_step(&s->desc.isabel, step, out, NULL);
+}
+
+bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,
+                      double *convert_ms)
+{
+    double t0 = time_now_ms();
+    if (convert_ms)
+        *convert_ms = 0.0;
+    if (s->ext) {
+        bool ok = extfile_read_step(s->ext, step, out, NULL);
+        if (load_ms)
+            *load_ms = time_now_ms() - t0;
+        return ok;
+    }
+    struct field_volume fv;
+    bool ok = data_source_load_fields(s, step, &fv);
+    double t1 = time_now_ms();
+    if (load_ms)
+        *load_ms = t1 - t0;
+    if (!ok) {
+        memset(out, 0, sizeof(*out));
+        return false;
+    }
+    ok = ext_volume_from_fields(&fv, &s->desc.optics, &s->desc.select, out);
+    field_volume_finish(&fv);
+    if (convert_ms)
+        *convert_ms = time_now_ms() - t1;
+    return ok;
+}

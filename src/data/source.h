@@ -1,0 +1,52 @@
+/*
+ * data/source: one interface over the three on-disk formats (WRF NetCDF, Isabel bricks,
+ * extinction files) that yields a time step as an extinction volume, with the time spent
+ * reading and converting.  The time series cache (data/series.h) and the commands load steps
+ * through it.  No GL, no config: the caller fills struct data_source_desc (app/cmd_data.h has
+ * the mapping from struct config).
+ */
+#ifndef ANVIL_DATA_SOURCE_H
+#define ANVIL_DATA_SOURCE_H
+
+#include <stdbool.h>
+
+#include "data/isabel.h"
+#include "data/volume.h"
+#include "data/wrf.h"
+
+enum data_source_format { DATA_SOURCE_WRF, DATA_SOURCE_ISABEL, DATA_SOURCE_EXTINCTION };
+
+struct data_source_desc {
+    enum data_source_format format;
+    const char *const *files; /* WRF: files or glob patterns; Isabel: the folder (files[0]);
+                                 extinction: one file (files[0]) */
+    int file_count;
+    struct wrf_desc wrf;       /* WRF reading (call wrf_desc_defaults) */
+    struct isabel_desc isabel; /* Isabel sizes (dir is taken from files[0]) */
+    struct optics_params optics;  /* mass ratio -> extinction (WRF, Isabel) */
+    struct species_select select; /* per-species toggles and scales (WRF, Isabel) */
+};
+
+struct data_source;
+
+/* Opens the files D names (D's pointers must stay valid until data_source_close).  NULL
+ * after one log_error. */
+struct data_source *data_source_open(const struct data_source_desc *d);
+void data_source_close(struct data_source *s); /* NULL is fine */
+
+int data_source_step_count(const struct data_source *s);
+const char *data_source_step_date(const struct data_source *s, int step); /* "" if unknown */
+
+/* Loads STEP as extinction into OUT (initialised here; the caller finishes it).  LOAD_MS and
+ * CONVERT_MS (may be NULL) receive the milliseconds spent reading and converting.  Not to be
+ * called from two threads at once on one source. */
+bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,
+                      double *convert_ms);
+
+/* Loads STEP's mass ratios (WRF and Isabel only; false and logged for extinction files). */
+bool data_source_load_fields(struct data_source *s, int step, struct field_volume *out);
+
+/* The WRF reader behind S, or NULL for other formats (for metadata: lat/lon, terrain). */
+struct wrf *data_source_wrf(struct data_source *s);
+
+#endif

@@ -1,0 +1,936 @@
+#include "data/wrf.h"
+
+#include <glob.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <netcdf.h>
+
+#include "common/log.h"
+#include "data/nclock.h"
+
+static const char *var_names[WRF_VAR_COUNT] = {
+    "QCLOUD", "QRAIN", "QICE", "QSNOW", "QGRAUP", "QVAPOR", "P", "PB", "T", "PH", "PHB",
+};
+
+/* Variables every file must have: density needs P, PB, T; heights need PH, PHB. */
+static const enum wrf_var required_vars[] = {WRF_P, WRF_PB, WRF_T, WRF_PH, WRF_PHB};
+
+struct wrf_file {
+    char *path;
+    int ncid;
+    int ntimes;
+    int varid[WRF_VAR_COUNT]; /* -1 when absent */
+};
+
+struct wrf_step {
+    char date[WRF_DATE_LEN + 1];
+    int file;
+    int index; /* time index inside the file */
+};
+
+struct wrf {
+    struct wrf_file *files;
+    int file_count;
+    struct wrf_step *steps;
+    int step_count;
+    struct wrf_meta meta;
+    int nzs; /* bottom_top_stag */
+};
+
+const char *wrf_var_name(enum wrf_var v)
+{
+    return (v >= 0 && v < WRF_VAR_COUNT) ? var_names[v] : "?";
+}
+
+void wrf_desc_defaults(struct wrf_desc *d)
+{
+    memset(d, 0, sizeof(*d));
+    for (int i = 0; i < 6; i++)
+        d->crop[i] = -1;
+}
+
+size_t wrf_var_stats_bad(const struct wrf_var_stats *s)
+{
+    return s->nan + s->inf + s->fill + s->negative + s->absurd;
+}
+
+static bool is_mass_ratio(enum wrf_var v)
+{
+    return v <= WRF_QVAPOR;
+}
+
+/* ---- opening ---------------------------------------------------------------------------- */
+
+static bool dim_len(const char *path, int ncid, const char *name, int *len, int *dimid_out)
+{
+    int dimid, st = nc_inq_dimid(ncid, name, &dimid);
+    if (st != NC_NOERR) {
+        log_error("%s: not a WRF file: no dimension %s", path, name);
+        return false;
+    }
+    size_t n;
+    st = nc_inq_dimlen(ncid, dimid, &n);
+    if (st != NC_NOERR || n == 0 || n > INT32_MAX) {
+        log_error("%s: dimension %s: %s", path, name,
+                  st != NC_NOERR ? nc_strerror(st) : "bad length");
+        return false;
+    }
+    *len = (int)n;
+    if (dimid_out)
+        *dimid_out = dimid;
+    return true;
+}
+
+/* Checks that VAR is float or double over (Time, LEVEL_DIM, south_north, west_east). */
+static bool check_var(const char *path, int ncid, const char *name, int varid, const int dims[4])
+{
+    nc_type type;
+    int ndims, vdims[NC_MAX_VAR_DIMS];
+    int st = nc_inq_var(ncid, varid, NULL, &type, &ndims, vdims, NULL);
+    if (st != NC_NOERR) {
+        log_error("%s: variable %s: %s", path, name, nc_strerror(st));
+        return false;
+    }
+    if (type != NC_FLOAT && type != NC_DOUBLE) {
+        log_error("%s: variable %s: expected float or double values, found type %d", path,
+                  name, (int)type);
+        return false;
+    }
+    if (ndims != 4) {
+        log_error("%s: variable %s: expected 4 dimensions (Time, bottom_top%s, south_north, "
+                  "west_east), found %d",
+                  path, name, (name[0] == 'P' && name[1] == 'H') ? "_stag" : "", ndims);
+        return false;
+    }
+    for (int i = 0; i < 4; i++) {
+        if (vdims[i] != dims[i]) {
+            char dname[NC_MAX_NAME + 1] = "?", want[NC_MAX_NAME + 1] = "?";
+            nc_inq_dimname(ncid, vdims[i], dname);
+            nc_inq_dimname(ncid, dims[i], want);
+            log_error("%s: variable %s: dimension %d is %s, expected %s", path, name, i + 1,
+                      dname, want);
+            return false;
+        }
+    }
+    return true;
+}
+
+static bool read_times(const char *path, int ncid, int time_dim, int ntimes, struct wrf_step *out,
+                       int file_index)
+{
+    for (int t = 0; t < ntimes; t++) {
+        out[t].date[0] = '\0';
+        out[t].file = file_index;
+        out[t].index = t;
+    }
+    int varid;
+    if (nc_inq_varid(ncid, "Times", &varid) != NC_NOERR) {
+        log_warn("%s: no Times variable: steps keep the file's order and have no dates", path);
+        return true;
+    }
+    nc_type type;
+    int ndims, dims[NC_MAX_VAR_DIMS];
+    if (nc_inq_var(ncid, varid, NULL, &type, &ndims, dims, NULL) != NC_NOERR ||
+        type != NC_CHAR || ndims != 2 || dims[0] != time_dim) {
+        log_error("%s: variable Times: expected char Times(Time, <string length>)", path);
+        return false;
+    }
+    size_t len;
+    if (nc_inq_dimlen(ncid, dims[1], &len) != NC_NOERR || len == 0 || len > 256) {
+        log_error("%s: variable Times: bad string length", path);
+        return false;
+    }
+    char *buf = malloc((size_t)ntimes * len);
+    if (!buf) {
+        log_error("%s: out of memory reading Times", path);
+        return false;
+    }
+    int st = nc_get_var_text(ncid, varid, buf);
+    if (st != NC_NOERR) {
+        log_error("%s: variable Times: %s", path, nc_strerror(st));
+        free(buf);
+        return false;
+    }
+    for (int t = 0; t < ntimes; t++) {
+        size_t n = len < WRF_DATE_LEN ? len : WRF_DATE_LEN;
+        memcpy(out[t].date, buf + (size_t)t * len, n);
+        out[t].date[n] = '\0';
+        /* Strip trailing NULs/spaces some writers pad with. */
+        for (int i = (int)n - 1; i >= 0 && (out[t].date[i] == ' ' || out[t].date[i] == '\0');
+             i--)
+            out[t].date[i] = '\0';
+    }
+    free(buf);
+    return true;
+}
+
+static int compare_steps(const void *a, const void *b)
+{
+    const struct wrf_step *x = a, *y = b;
+    int c = strcmp(x->date, y->date);
+    if (c)
+        return c;
+    if (x->file != y->file)
+        return x->file < y->file ? -1 : 1;
+    return x->index - y->index;
+}
+
+static double global_double(int ncid, const char *name, double fallback)
+{
+    double v;
+    if (nc_get_att_double(ncid, NC_GLOBAL, name, &v) != NC_NOERR || !isfinite(v))
+        return fallback;
+    return v;
+}
+
+/* Reads a 2-D field (south_north, west_east), with or without a leading Time dimension (first
+ * time then), into a new array.  Absent → *out NULL, true.  Wrong shape → logged, false. */
+static bool read_meta_2d(const char *path, int ncid, const char *name, int nx, int ny,
+                         float **out)
+{
+    *out = NULL;
+    int varid, ndims, dims[NC_MAX_VAR_DIMS];
+    if (nc_inq_varid(ncid, name, &varid) != NC_NOERR)
+        return true;
+    nc_type type;
+    if (nc_inq_var(ncid, varid, NULL, &type, &ndims, dims, NULL) != NC_NOERR)
+        return true;
+    if (ndims != 2 && ndims != 3) {
+        log_error("%s: variable %s: expected 2 or 3 dimensions ([Time,] south_north, "
+                  "west_east), found %d",
+                  path, name, ndims);
+        return false;
+    }
+    size_t ylen = 0, xlen = 0;
+    nc_inq_dimlen(ncid, dims[ndims - 2], &ylen);
+    nc_inq_dimlen(ncid, dims[ndims - 1], &xlen);
+    if ((int)ylen != ny || (int)xlen != nx) {
+        log_error("%s: variable %s: expected %d x %d columns, found %zu x %zu", path, name, nx,
+                  ny, xlen, ylen);
+        return false;
+    }
+    float *buf = malloc((size_t)nx * ny * sizeof(float));
+    if (!buf) {
+        log_error("%s: out of memory reading %s", path, name);
+        return false;
+    }
+    size_t start[3] = {0, 0, 0}, count[3] = {1, (size_t)ny, (size_t)nx};
+    size_t *s = ndims == 3 ? start : start + 1, *c = ndims == 3 ? count : count + 1;
+    int st = nc_get_vara_float(ncid, varid, s, c, buf);
+    if (st != NC_NOERR) {
+        log_error("%s: variable %s: %s", path, name, nc_strerror(st));
+        free(buf);
+        return false;
+    }
+    *out = buf;
+    return true;
+}
+
+static bool read_meta(struct wrf *w)
+{
+    struct wrf_meta *m = &w->meta;
+    const struct wrf_file *f = &w->files[w->steps[0].file];
+    int ncid = f->ncid;
+    m->dx = global_double(ncid, "DX", NAN);
+    m->dy = global_double(ncid, "DY", NAN);
+    if (!(m->dx > 0) || !(m->dy > 0)) {
+        log_error("%s: global attributes DX and DY (grid spacing, m) missing or not positive",
+                  f->path);
+        return false;
+    }
+    m->map_proj = (int)global_double(ncid, "MAP_PROJ", 0);
+    m->mp_physics = (int)global_double(ncid, "MP_PHYSICS", -1);
+    m->cen_lat = global_double(ncid, "CEN_LAT", NAN);
+    m->cen_lon = global_double(ncid, "CEN_LON", NAN);
+    m->truelat1 = global_double(ncid, "TRUELAT1", NAN);
+    m->truelat2 = global_double(ncid, "TRUELAT2", NAN);
+    m->stand_lon = global_double(ncid, "STAND_LON", NAN);
+    for (int s = 0; s < SPECIES_COUNT; s++)
+        m->has_species[s] = f->varid[s] >= 0;
+    m->has_qvapor = f->varid[WRF_QVAPOR] >= 0;
+
+    if (!read_meta_2d(f->path, ncid, "XLAT", m->nx, m->ny, &m->xlat) ||
+        !read_meta_2d(f->path, ncid, "XLONG", m->nx, m->ny, &m->xlong) ||
+        !read_meta_2d(f->path, ncid, "HGT", m->nx, m->ny, &m->hgt) ||
+        !read_meta_2d(f->path, ncid, "LANDMASK", m->nx, m->ny, &m->landmask))
+        return false;
+    m->lat_min = m->lat_max = m->lon_min = m->lon_max = NAN;
+    if (m->xlat && m->xlong) {
+        double a = INFINITY, b = -INFINITY, c = INFINITY, d = -INFINITY;
+        for (size_t i = 0; i < (size_t)m->nx * m->ny; i++) {
+            if (isfinite(m->xlat[i]) && fabsf(m->xlat[i]) <= 90.0f) {
+                a = fmin(a, m->xlat[i]);
+                b = fmax(b, m->xlat[i]);
+            }
+            if (isfinite(m->xlong[i]) && fabsf(m->xlong[i]) <= 360.0f) {
+                c = fmin(c, m->xlong[i]);
+                d = fmax(d, m->xlong[i]);
+            }
+        }
+        if (a <= b && c <= d) {
+            m->lat_min = a;
+            m->lat_max = b;
+            m->lon_min = c;
+            m->lon_max = d;
+        }
+    }
+    return true;
+}
+
+/* Opens one file and checks it against the first (REF NULL for the first). */
+static bool open_file(struct wrf_file *f, const struct wrf *ref_w, const struct wrf_file *ref,
+                      int *nx, int *ny, int *nz, int *nzs)
+{
+    int st = nc_open(f->path, NC_NOWRITE, &f->ncid);
+    if (st != NC_NOERR) {
+        f->ncid = -1;
+        log_error("%s: cannot open as NetCDF: %s", f->path, nc_strerror(st));
+        return false;
+    }
+    int dims[4], dstag[4], lx, ly, lz, lzs, lt;
+    if (!dim_len(f->path, f->ncid, "west_east", &lx, &dims[3]) ||
+        !dim_len(f->path, f->ncid, "south_north", &ly, &dims[2]) ||
+        !dim_len(f->path, f->ncid, "bottom_top", &lz, &dims[1]) ||
+        !dim_len(f->path, f->ncid, "bottom_top_stag", &lzs, &dstag[1]) ||
+        !dim_len(f->path, f->ncid, "Time", &lt, &dims[0]))
+        return false;
+    dstag[0] = dims[0];
+    dstag[2] = dims[2];
+    dstag[3] = dims[3];
+    if (lzs != lz + 1) {
+        log_error("%s: bottom_top_stag is %d, expected bottom_top + 1 = %d", f->path, lzs,
+                  lz + 1);
+        return false;
+    }
+    if (ref_w && (lx != *nx || ly != *ny || lz != *nz)) {
+        log_error("%s: grid %d x %d x %d (west_east x south_north x bottom_top) differs from "
+                  "%s's %d x %d x %d",
+                  f->path, lx, ly, lz, ref->path, *nx, *ny, *nz);
+        return false;
+    }
+    *nx = lx;
+    *ny = ly;
+    *nz = lz;
+    *nzs = lzs;
+    f->ntimes = lt;
+    for (int v = 0; v < WRF_VAR_COUNT; v++) {
+        if (nc_inq_varid(f->ncid, var_names[v], &f->varid[v]) != NC_NOERR) {
+            f->varid[v] = -1;
+            continue;
+        }
+        bool stag = v == WRF_PH || v == WRF_PHB;
+        if (!check_var(f->path, f->ncid, var_names[v], f->varid[v], stag ? dstag : dims))
+            return false;
+    }
+    for (size_t r = 0; r < sizeof(required_vars) / sizeof(required_vars[0]); r++) {
+        enum wrf_var v = required_vars[r];
+        if (f->varid[v] < 0) {
+            log_error("%s: required variable %s is missing (P, PB, T give air density; PH, "
+                      "PHB give heights)",
+                      f->path, var_names[v]);
+            return false;
+        }
+    }
+    if (ref) {
+        for (int v = 0; v <= WRF_QVAPOR; v++) {
+            if ((f->varid[v] >= 0) != (ref->varid[v] >= 0)) {
+                log_error("%s: variable %s is %s here but %s in %s", f->path, var_names[v],
+                          f->varid[v] >= 0 ? "present" : "missing",
+                          ref->varid[v] >= 0 ? "present" : "missing", ref->path);
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
+static bool has_glob_chars(const char *s)
+{
+    return strpbrk(s, "*?[") != NULL;
+}
+
+/* Expands patterns into a list of owned strings. */
+static char **expand_paths(const char *const *paths, int count, int *n_out)
+{
+    int n = 0, cap = 0;
+    char **list = NULL;
+    for (int i = 0; i < count; i++) {
+        glob_t g;
+        memset(&g, 0, sizeof(g));
+        const char *const *names = &paths[i];
+        size_t nn = 1;
+        bool globbed = false;
+        if (has_glob_chars(paths[i])) {
+            int st = glob(paths[i], 0, NULL, &g);
+            if (st != 0 || g.gl_pathc == 0) {
+                log_error("%s: no file matches", paths[i]);
+                globfree(&g);
+                goto error;
+            }
+            names = (const char *const *)g.gl_pathv;
+            nn = g.gl_pathc;
+            globbed = true;
+        }
+        for (size_t k = 0; k < nn; k++) {
+            if (n == cap) {
+                cap = cap ? cap * 2 : 8;
+                char **grown = realloc(list, (size_t)cap * sizeof(*list));
+                if (!grown) {
+                    if (globbed)
+                        globfree(&g);
+                    goto error_oom;
+                }
+                list = grown;
+            }
+            list[n] = strdup(names[k]);
+            if (!list[n]) {
+                if (globbed)
+                    globfree(&g);
+                goto error_oom;
+            }
+            n++;
+        }
+        if (globbed)
+            globfree(&g);
+    }
+    *n_out = n;
+    return list;
+
+error_oom:
+    log_error("out of memory listing WRF files");
+error:
+    for (int i = 0; i < n; i++)
+        free(list[i]);
+    free(list);
+    return NULL;
+}
+
+struct wrf *wrf_open(const char *const *paths, int count)
+{
+    if (count <= 0) {
+        log_error("no WRF files given");
+        return NULL;
+    }
+    struct wrf *w = calloc(1, sizeof(*w));
+    if (!w) {
+        log_error("out of memory opening WRF files");
+        return NULL;
+    }
+    int n = 0;
+    char **list = expand_paths(paths, count, &n);
+    if (!list) {
+        free(w);
+        return NULL;
+    }
+    w->files = calloc((size_t)n, sizeof(*w->files));
+    if (!w->files) {
+        for (int i = 0; i < n; i++)
+            free(list[i]);
+        free(list);
+        free(w);
+        log_error("out of memory opening WRF files");
+        return NULL;
+    }
+    for (int i = 0; i < n; i++) {
+        w->files[i].path = list[i];
+        w->files[i].ncid = -1;
+    }
+    free(list);
+    w->file_count = n;
+
+    data_nc_lock();
+    int total = 0;
+    for (int i = 0; i < n; i++) {
+        if (!open_file(&w->files[i], i ? w : NULL, i ? &w->files[0] : NULL, &w->meta.nx,
+                       &w->meta.ny, &w->meta.nz, &w->nzs))
+            goto error;
+        total += w->files[i].ntimes;
+    }
+    w->steps = calloc((size_t)total, sizeof(*w->steps));
+    if (!w->steps) {
+        log_error("out of memory for %d time steps", total);
+        goto error;
+    }
+    int dims_time;
+    for (int i = 0, at = 0; i < n; i++) {
+        nc_inq_dimid(w->files[i].ncid, "Time", &dims_time);
+        if (!read_times(w->files[i].path, w->files[i].ncid, dims_time, w->files[i].ntimes,
+                        w->steps + at, i))
+            goto error;
+        at += w->files[i].ntimes;
+    }
+    w->step_count = total;
+    bool dated = true;
+    for (int s = 0; s < total; s++)
+        dated = dated && w->steps[s].date[0];
+    if (dated) {
+        qsort(w->steps, (size_t)total, sizeof(*w->steps), compare_steps);
+        for (int s = 1; s < total; s++) {
+            if (!strcmp(w->steps[s].date, w->steps[s - 1].date)) {
+                log_error("%s: time %s also appears in %s", w->files[w->steps[s].file].path,
+                          w->steps[s].date, w->files[w->steps[s - 1].file].path);
+                goto error;
+            }
+        }
+    }
+    if (!read_meta(w))
+        goto error;
+    data_nc_unlock();
+    return w;
+
+error:
+    data_nc_unlock();
+    wrf_close(w);
+    return NULL;
+}
+
+void wrf_close(struct wrf *w)
+{
+    if (!w)
+        return;
+    data_nc_lock();
+    for (int i = 0; i < w->file_count; i++) {
+        if (w->files[i].ncid >= 0)
+            nc_close(w->files[i].ncid);
+        free(w->files[i].path);
+    }
+    data_nc_unlock();
+    free(w->files);
+    free(w->steps);
+    free(w->meta.xlat);
+    free(w->meta.xlong);
+    free(w->meta.hgt);
+    free(w->meta.landmask);
+    free(w);
+}
+
+const struct wrf_meta *wrf_get_meta(const struct wrf *w)
+{
+    return &w->meta;
+}
+
+int wrf_step_count(const struct wrf *w)
+{
+    return w->step_count;
+}
+
+const char *wrf_step_date(const struct wrf *w, int step)
+{
+    return (step >= 0 && step < w->step_count) ? w->steps[step].date : "";
+}
+
+const char *wrf_step_path(const struct wrf *w, int step)
+{
+    return (step >= 0 && step < w->step_count) ? w->files[w->steps[step].file].path : "";
+}
+
+/* ---- reading a step -------------------------------------------------------------------- */
+
+/* The selection a desc makes, in file columns and output levels. */
+struct selection {
+    int x0, sx, nx; /* first column, stride, count */
+    int y0, sy, ny;
+    int z0, sz, nz; /* first output level of the full regular grid, stride, count */
+    int levels;     /* full regular grid */
+};
+
+static bool axis_select(const char *axis, int len, int lo, int hi, int stride, int *first,
+                        int *step, int *count)
+{
+    if (lo < 0)
+        lo = 0;
+    if (hi < 0 || hi >= len)
+        hi = len - 1;
+    if (stride <= 0)
+        stride = 1;
+    if (lo > hi) {
+        log_error("data.crop: %s range [%d, %d] is empty for an axis of %d", axis, lo, hi, len);
+        return false;
+    }
+    *first = lo;
+    *step = stride;
+    *count = (hi - lo) / stride + 1;
+    return true;
+}
+
+static bool make_selection(const struct wrf *w, const struct wrf_desc *d, struct selection *s)
+{
+    s->levels = d->levels > 0 ? d->levels : w->meta.nz;
+    return axis_select("x", w->meta.nx, d->crop[0], d->crop[1], d->stride[0], &s->x0, &s->sx,
+                       &s->nx) &&
+           axis_select("y", w->meta.ny, d->crop[2], d->crop[3], d->stride[1], &s->y0, &s->sy,
+                       &s->ny) &&
+           axis_select("z", s->levels, d->crop[4], d->crop[5], d->stride[2], &s->z0, &s->sz,
+                       &s->nz);
+}
+
+static size_t arrays_out(const struct wrf *w, const struct wrf_desc *d)
+{
+    size_t n = 0;
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        n += w->meta.has_species[f];
+    if (d->qvapor && w->meta.has_qvapor)
+        n++;
+    if (!d->no_density)
+        n++;
+    return n;
+}
+
+size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d)
+{
+    struct selection s;
+    if (!make_selection(w, d, &s))
+        return 0;
+    size_t cols = (size_t)s.nx * s.ny;
+    size_t out = arrays_out(w, d) * cols * (size_t)s.nz * sizeof(float);
+    /* Scratch: summed geopotential on staggered levels and two mass-level buffers. */
+    size_t scratch = cols * ((size_t)w->nzs + 2 * (size_t)w->meta.nz) * sizeof(float);
+    return out + scratch;
+}
+
+static bool read_var(const struct wrf *w, int step, enum wrf_var v, const struct selection *s,
+                     int levels, float *buf)
+{
+    const struct wrf_file *f = &w->files[w->steps[step].file];
+    size_t start[4] = {(size_t)w->steps[step].index, 0, (size_t)s->y0, (size_t)s->x0};
+    size_t count[4] = {1, (size_t)levels, (size_t)s->ny, (size_t)s->nx};
+    ptrdiff_t stride[4] = {1, 1, s->sy, s->sx};
+    int st;
+    if (s->sx == 1 && s->sy == 1)
+        st = nc_get_vara_float(f->ncid, f->varid[v], start, count, buf);
+    else
+        st = nc_get_vars_float(f->ncid, f->varid[v], start, count, stride, buf);
+    if (st != NC_NOERR) {
+        log_error("%s: variable %s, time %d: cannot read: %s", f->path, var_names[v],
+                  w->steps[step].index, nc_strerror(st));
+        return false;
+    }
+    return true;
+}
+
+/* A fill value attribute of VAR, if any (converted to float). */
+static bool fill_attr(int ncid, int varid, const char *name, float *out)
+{
+    nc_type type;
+    size_t len;
+    if (nc_inq_att(ncid, varid, name, &type, &len) != NC_NOERR || len < 1 || type == NC_CHAR ||
+        type == NC_STRING)
+        return false;
+    float vals[8];
+    if (len > 8)
+        return false;
+    return nc_get_att_float(ncid, varid, name, vals) == NC_NOERR && (*out = vals[0], true);
+}
+
+/* Replaces bad values by REPLACEMENT and counts them.  Mass ratios also lose negatives and
+ * values above 1 kg/kg. */
+static void sanitize(const struct wrf *w, int step, enum wrf_var v, float *buf, size_t n,
+                     float replacement, struct wrf_var_stats *st)
+{
+    const struct wrf_file *f = &w->files[w->steps[step].file];
+    float fv = 0.0f, mv = 0.0f;
+    bool has_fv = fill_attr(f->ncid, f->varid[v], "_FillValue", &fv);
+    bool has_mv = fill_attr(f->ncid, f->varid[v], "missing_value", &mv);
+    bool mass = is_mass_ratio(v);
+    memset(st, 0, sizeof(*st));
+    st->read = true;
+    st->count = n;
+    double lo = INFINITY, hi = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        float x = buf[i];
+        if (isnan(x)) {
+            st->nan++;
+        } else if (isinf(x)) {
+            st->inf++;
+        } else if (x == NC_FILL_FLOAT || (has_fv && x == fv) || (has_mv && x == mv)) {
+            st->fill++;
+        } else if (mass && x < 0.0f) {
+            st->negative++;
+        } else if (mass && x > 1.0f) {
+            st->absurd++;
+        } else {
+            if (x < lo)
+                lo = x;
+            if (x > hi)
+                hi = x;
+            continue;
+        }
+        buf[i] = replacement;
+    }
+    st->min = lo <= hi ? lo : 0.0;
+    st->max = lo <= hi ? hi : 0.0;
+}
+
+/* Logs what sanitize found; false (error) when no value at all was usable. */
+static bool report(const struct wrf *w, int step, enum wrf_var v, const struct wrf_var_stats *st)
+{
+    const char *path = w->files[w->steps[step].file].path;
+    size_t unusable = st->nan + st->inf + st->fill;
+    if (st->count > 0 && unusable == st->count) {
+        log_error("%s: variable %s, time %d (%s): all %zu values are NaN, Inf or fill", path,
+                  var_names[v], w->steps[step].index, w->steps[step].date, st->count);
+        return false;
+    }
+    if (wrf_var_stats_bad(st) > 0) {
+        log_warn("%s: variable %s, time %d: %zu NaN, %zu Inf, %zu fill, %zu negative, %zu above "
+                 "1 kg/kg (of %zu) %s",
+                 path, var_names[v], w->steps[step].index, st->nan, st->inf, st->fill,
+                 st->negative, st->absurd, st->count,
+                 is_mass_ratio(v) ? "set to zero" : "ignored");
+    }
+    return true;
+}
+
+int wrf_resample_column(const double *z, const float *v, int nz, double z_ground, double z_top,
+                        double z0, double dz, int n, float outside, float *out, int *below)
+{
+    double tol = 1e-4 * fabs(dz);
+    int k = 0, outside_count = 0, below_count = 0;
+    for (int o = 0; o < n; o++) {
+        double zt = z0 + (o + 0.5) * dz;
+        if (zt < z_ground - tol || zt > z_top + tol) {
+            out[o] = outside;
+            outside_count++;
+            below_count += zt < z_ground;
+            continue;
+        }
+        while (k + 1 < nz && z[k + 1] <= zt)
+            k++;
+        if (fabs(zt - z[k]) <= tol) {
+            out[o] = v[k];
+        } else if (k + 1 < nz && fabs(z[k + 1] - zt) <= tol) {
+            out[o] = v[k + 1];
+        } else if (zt < z[0]) {
+            out[o] = v[0]; /* between the ground and the first mass level */
+        } else if (k + 1 >= nz) {
+            out[o] = v[nz - 1]; /* between the last mass level and the model top */
+        } else {
+            double t = (zt - z[k]) / (z[k + 1] - z[k]);
+            out[o] = (float)((1.0 - t) * v[k] + t * v[k + 1]);
+        }
+    }
+    if (below)
+        *below = below_count;
+    return outside_count;
+}
+
+/* Heights of the mass levels of every column from PH + PHB on staggered levels. */
+struct columns {
+    int nz, nzs;
+    size_t cols;
+    float *zw;   /* staggered heights, m: zw[k * cols + c] */
+    double *zm;  /* one column's mass-level heights */
+    float *col;  /* one column's values */
+};
+
+static bool column_heights(struct columns *c, size_t col)
+{
+    for (int k = 0; k < c->nz; k++) {
+        c->zm[k] = 0.5 * ((double)c->zw[(size_t)k * c->cols + col] +
+                          (double)c->zw[(size_t)(k + 1) * c->cols + col]);
+        if (k > 0 && !(c->zm[k] > c->zm[k - 1]))
+            return false;
+    }
+    return true;
+}
+
+/* Resamples one mass-level variable BUF (nz * cols) into OUT on the output grid. */
+static void resample_var(struct columns *c, const float *buf, const struct grid3 *g,
+                         float outside, float *out, struct wrf_stats *stats)
+{
+    int no = g->n[2];
+    float *tmp = c->col + c->nz;
+    for (size_t col = 0; col < c->cols; col++) {
+        column_heights(c, col);
+        for (int k = 0; k < c->nz; k++)
+            c->col[k] = buf[(size_t)k * c->cols + col];
+        int below = 0;
+        int outn = wrf_resample_column(c->zm, c->col, c->nz, c->zw[col],
+                                       c->zw[(size_t)c->nz * c->cols + col], g->origin[2],
+                                       g->spacing[2], no, outside, tmp, &below);
+        if (stats) {
+            stats->below_terrain += (size_t)below;
+            stats->above_top += (size_t)(outn - below);
+        }
+        for (int o = 0; o < no; o++)
+            out[col + c->cols * (size_t)o] = tmp[o];
+    }
+}
+
+bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct field_volume *out,
+                   struct wrf_stats *stats)
+{
+    memset(out, 0, sizeof(*out));
+    struct wrf_stats local;
+    if (!stats)
+        stats = &local;
+    memset(stats, 0, sizeof(*stats));
+    if (step < 0 || step >= w->step_count) {
+        log_error("time step %d out of range: the data has %d (0 to %d)", step, w->step_count,
+                  w->step_count - 1);
+        return false;
+    }
+    const char *path = w->files[w->steps[step].file].path;
+    struct selection s;
+    if (!make_selection(w, d, &s))
+        return false;
+    size_t need = wrf_step_bytes(w, d);
+    if (d->memory_mb > 0 && (double)need > d->memory_mb * 1048576.0) {
+        log_error("%s: one time step on a %d x %d x %d grid needs %.0f MiB, above the budget "
+                  "data.memory = %.0f MiB: subsample with data.stride or data.crop (or fewer "
+                  "data.levels)",
+                  path, s.nx, s.ny, s.nz, (double)need / 1048576.0, d->memory_mb);
+        return false;
+    }
+
+    struct columns c = {.nz = w->meta.nz, .nzs = w->nzs, .cols = (size_t)s.nx * s.ny};
+    float *buf = NULL, *buf2 = NULL;
+    bool ok = false;
+    c.zw = malloc(c.cols * (size_t)c.nzs * sizeof(float));
+    c.zm = malloc((size_t)c.nz * sizeof(double));
+    c.col = malloc((size_t)(c.nz + s.nz + s.levels) * sizeof(float));
+    buf = malloc(c.cols * (size_t)c.nz * sizeof(float));
+    buf2 = malloc(c.cols * (size_t)c.nz * sizeof(float));
+    if (!c.zw || !c.zm || !c.col || !buf || !buf2) {
+        log_error("%s: out of memory reading time step %d", path, step);
+        goto done;
+    }
+
+    data_nc_lock();
+    /* Heights: (PH + PHB) / g on staggered levels. */
+    float *phb = malloc(c.cols * (size_t)c.nzs * sizeof(float));
+    if (!phb) {
+        log_error("%s: out of memory reading time step %d", path, step);
+        goto unlock;
+    }
+    bool hok = read_var(w, step, WRF_PH, &s, c.nzs, c.zw) &&
+               read_var(w, step, WRF_PHB, &s, c.nzs, phb);
+    if (hok) {
+        size_t n = c.cols * (size_t)c.nzs;
+        sanitize(w, step, WRF_PH, c.zw, n, NAN, &stats->var[WRF_PH]);
+        sanitize(w, step, WRF_PHB, phb, n, NAN, &stats->var[WRF_PHB]);
+        for (size_t i = 0; i < n; i++)
+            c.zw[i] = (float)(((double)c.zw[i] + (double)phb[i]) / WRF_G);
+        for (int v = WRF_PH; v <= WRF_PHB && hok; v++) {
+            const struct wrf_var_stats *st = &stats->var[v];
+            if (st->nan + st->inf + st->fill > 0) {
+                log_error("%s: variable %s, time %d: %zu NaN, Inf or fill values: heights "
+                          "cannot be placed",
+                          path, var_names[v], w->steps[step].index, st->nan + st->inf + st->fill);
+                hok = false;
+            }
+        }
+    }
+    free(phb);
+    if (!hok)
+        goto unlock;
+    double top = 0.0;
+    for (size_t col = 0; col < c.cols; col++) {
+        if (!column_heights(&c, col)) {
+            log_error("%s: variables PH, PHB, time %d: heights do not increase upward in column "
+                      "(%zu, %zu)",
+                      path, w->steps[step].index, s.x0 + (col % s.nx) * s.sx,
+                      s.y0 + (col / s.nx) * s.sy);
+            goto unlock;
+        }
+        top = fmax(top, c.zw[(size_t)c.nz * c.cols + col]);
+    }
+
+    /* The output grid. */
+    double bottom = d->bottom_m;
+    if (d->top_m > 0)
+        top = d->top_m;
+    if (!(top > bottom)) {
+        log_error("%s: height grid top %.0f m is not above its bottom %.0f m", path, top, bottom);
+        goto unlock;
+    }
+    double dzf = (top - bottom) / s.levels;
+    struct grid3 *g = &out->grid;
+    g->n[0] = s.nx;
+    g->n[1] = s.ny;
+    g->n[2] = s.nz;
+    g->spacing[0] = w->meta.dx * s.sx;
+    g->spacing[1] = w->meta.dy * s.sy;
+    g->spacing[2] = dzf * s.sz;
+    g->origin[0] = (s.x0 + 0.5) * w->meta.dx - 0.5 * g->spacing[0];
+    g->origin[1] = (s.y0 + 0.5) * w->meta.dy - 0.5 * g->spacing[1];
+    g->origin[2] = bottom + (s.z0 + 0.5) * dzf - 0.5 * g->spacing[2];
+    size_t nout = grid3_count(g);
+
+    bool counted = false; /* below/above counts come from the first variable resampled */
+    for (int v = 0; v <= WRF_QVAPOR; v++) {
+        if (v < SPECIES_COUNT ? !w->meta.has_species[v] : !(d->qvapor && w->meta.has_qvapor))
+            continue;
+        float *dst = malloc(nout * sizeof(float));
+        if (!dst) {
+            log_error("%s: out of memory for %s", path, var_names[v]);
+            goto unlock;
+        }
+        if (v < SPECIES_COUNT)
+            out->q[v] = dst;
+        else
+            out->qvapor = dst;
+        if (!read_var(w, step, (enum wrf_var)v, &s, c.nz, buf))
+            goto unlock;
+        sanitize(w, step, (enum wrf_var)v, buf, c.cols * (size_t)c.nz, 0.0f, &stats->var[v]);
+        if (!report(w, step, (enum wrf_var)v, &stats->var[v]))
+            goto unlock;
+        resample_var(&c, buf, g, 0.0f, dst, counted ? NULL : stats);
+        counted = true;
+    }
+
+    if (!d->no_density) {
+        size_t n = c.cols * (size_t)c.nz;
+        if (!read_var(w, step, WRF_P, &s, c.nz, buf) || !read_var(w, step, WRF_PB, &s, c.nz, buf2))
+            goto unlock;
+        sanitize(w, step, WRF_P, buf, n, NAN, &stats->var[WRF_P]);
+        sanitize(w, step, WRF_PB, buf2, n, NAN, &stats->var[WRF_PB]);
+        if (!report(w, step, WRF_P, &stats->var[WRF_P]) ||
+            !report(w, step, WRF_PB, &stats->var[WRF_PB]))
+            goto unlock;
+        for (size_t i = 0; i < n; i++)
+            buf[i] += buf2[i];
+        if (!read_var(w, step, WRF_T, &s, c.nz, buf2))
+            goto unlock;
+        sanitize(w, step, WRF_T, buf2, n, NAN, &stats->var[WRF_T]);
+        if (!report(w, step, WRF_T, &stats->var[WRF_T]))
+            goto unlock;
+        for (size_t i = 0; i < n; i++) {
+            double rho = optics_wrf_air_density(buf[i], (double)buf2[i] + WRF_T0);
+            buf[i] = (isfinite(rho) && rho > 0.0) ? (float)rho : NAN;
+        }
+        out->rho_air = malloc(nout * sizeof(float));
+        if (!out->rho_air) {
+            log_error("%s: out of memory for air density", path);
+            goto unlock;
+        }
+        resample_var(&c, buf, g, NAN, out->rho_air, NULL);
+        /* Below the ground, above the top, or where P/PB/T were bad: standard atmosphere. */
+        for (int k = 0; k < g->n[2]; k++) {
+            double z = g->origin[2] + (k + 0.5) * g->spacing[2];
+            float std = (float)optics_std_atmosphere_density(z);
+            float *layer = out->rho_air + c.cols * (size_t)k;
+            for (size_t col = 0; col < c.cols; col++) {
+                if (!isfinite(layer[col]))
+                    layer[col] = std;
+            }
+        }
+    }
+    ok = true;
+
+unlock:
+    data_nc_unlock();
+done:
+    free(c.zw);
+    free(c.zm);
+    free(c.col);
+    free(buf);
+    free(buf2);
+    if (!ok)
+        field_volume_finish(out);
+    return ok;
+}

@@ -1,0 +1,141 @@
+/*
+ * data/wrf: reads WRF model output (NetCDF) into field volumes on a regular height grid.
+ *
+ * One file with many times or many files (a list or glob patterns) are one time series,
+ * ordered by their Times strings.  A step is read into a struct field_volume: the mass ratios
+ * of the five hydrometeor species (a species the microphysics scheme did not write stays
+ * NULL and reads as zero), optionally QVAPOR, and air density from P, PB and T.  The model's
+ * terrain-following mass levels are resampled per column onto regular heights above sea level
+ * (docs/data.md says exactly how).  Bad values (NaN, Inf, negative mass ratios, NetCDF's
+ * default fill, _FillValue / missing_value) become zero, are counted in struct wrf_stats and
+ * reported with log_warn.
+ *
+ * Knows nothing of the config file (the caller fills struct wrf_desc), optics beyond air
+ * density, or the GPU.  NetCDF calls are serialised through data_nc_lock (data/nclock.h), so a
+ * reader may be used from a background thread; one struct wrf must not be used by two threads
+ * at once.
+ */
+#ifndef ANVIL_DATA_WRF_H
+#define ANVIL_DATA_WRF_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "data/volume.h"
+
+#define WRF_DATE_LEN 19 /* "2005-08-28_12:00:00" */
+#define WRF_G 9.81      /* gravity WRF uses to turn geopotential into height, m/s^2 */
+#define WRF_T0 300.0    /* base potential temperature: theta = T + WRF_T0, K */
+
+/* How to read a step.  Zero means default for every member except crop (wrf_desc_defaults
+ * fills -1 there); call wrf_desc_defaults first and change what you need. */
+struct wrf_desc {
+    int levels;       /* regular height levels; 0 = as many as the file's mass levels */
+    double top_m;     /* top of the height grid above sea level, m; 0 = the highest model top
+                         (staggered top level) over all columns of the step */
+    double bottom_m;  /* bottom of the height grid, m (default 0 = sea level) */
+    int stride[3];    /* keep every stride-th column along x, y and every stride-th output
+                         level along z; 0 or 1 = all */
+    int crop[6];      /* [x0, x1, y0, y1, z0, z1]: index ranges kept, inclusive, x/y in the
+                         file's mass columns, z in the output levels; -1 = from the start / to
+                         the end.  Applied before stride. */
+    double memory_mb; /* refuse a step whose arrays need more than this; 0 = no limit */
+    bool qvapor;      /* also read QVAPOR (optional in the file) */
+    bool no_density;  /* leave rho_air NULL (standard atmosphere) instead of reading P/PB/T */
+};
+
+void wrf_desc_defaults(struct wrf_desc *d);
+
+/* The variables the reader touches, for statistics. */
+enum wrf_var {
+    WRF_QCLOUD, /* the first SPECIES_COUNT follow enum species */
+    WRF_QRAIN,
+    WRF_QICE,
+    WRF_QSNOW,
+    WRF_QGRAUP,
+    WRF_QVAPOR,
+    WRF_P,
+    WRF_PB,
+    WRF_T,
+    WRF_PH,
+    WRF_PHB,
+    WRF_VAR_COUNT
+};
+
+const char *wrf_var_name(enum wrf_var v);
+
+/* Bad-value counts and the range of the good values of one variable in one step. */
+struct wrf_var_stats {
+    bool read;         /* the variable was read for this step */
+    size_t count;      /* values read */
+    size_t nan, inf;   /* not finite */
+    size_t fill;       /* NetCDF default fill, _FillValue or missing_value */
+    size_t negative;   /* mass ratios only: below zero */
+    size_t absurd;     /* mass ratios only: above 1 kg/kg (and not a fill value) */
+    double min, max;   /* of the good values; 0 when there are none */
+};
+
+struct wrf_stats {
+    struct wrf_var_stats var[WRF_VAR_COUNT];
+    size_t below_terrain; /* output voxels below the model's ground (set to zero) */
+    size_t above_top;     /* output voxels above the model top (set to zero) */
+};
+
+/* Bad values of one variable (nan + inf + fill + negative + absurd). */
+size_t wrf_var_stats_bad(const struct wrf_var_stats *s);
+
+/* What does not change from step to step.  Arrays are nx * ny, west_east fastest, taken from
+ * the first time of the first file in time order. */
+struct wrf_meta {
+    int nx, ny, nz;          /* mass grid: west_east, south_north, bottom_top */
+    double dx, dy;           /* global DX, DY, m */
+    int map_proj;            /* MAP_PROJ: 1 Lambert, 2 polar, 3 Mercator, 6 lat-lon; 0 unknown */
+    int mp_physics;          /* MP_PHYSICS; -1 unknown */
+    double cen_lat, cen_lon, truelat1, truelat2, stand_lon; /* NAN when absent */
+    bool has_species[SPECIES_COUNT];
+    bool has_qvapor;
+    float *xlat, *xlong;     /* degrees north / east; NULL when absent */
+    float *hgt;              /* terrain height, m; NULL when absent */
+    float *landmask;         /* 1 land, 0 water; NULL when absent */
+    double lat_min, lat_max, lon_min, lon_max; /* NAN when XLAT/XLONG are absent */
+};
+
+struct wrf;
+
+/* Opens COUNT paths (each a file or a glob pattern; patterns expand in sorted order), checks
+ * that they agree on the grid and the variables the reader needs, and orders all their time
+ * steps by Times.  Returns NULL after one log_error naming the file and what is wrong.
+ * The paths are copied.  Free with wrf_close. */
+struct wrf *wrf_open(const char *const *paths, int count);
+void wrf_close(struct wrf *w); /* NULL is fine */
+
+/* Valid until wrf_close. */
+const struct wrf_meta *wrf_get_meta(const struct wrf *w);
+int wrf_step_count(const struct wrf *w);
+/* "YYYY-MM-DD_hh:mm:ss" as the file wrote it ("" when the file has no Times); valid until
+ * wrf_close. */
+const char *wrf_step_date(const struct wrf *w, int step);
+/* The file a step comes from; valid until wrf_close. */
+const char *wrf_step_path(const struct wrf *w, int step);
+
+/* Bytes of the arrays a step read with D will allocate in OUT plus the reader's scratch
+ * (what memory_mb is compared with).  Returns 0 and logs when D selects nothing. */
+size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d);
+
+/* Reads STEP into OUT (initialised here; the caller frees it with field_volume_finish).  STATS
+ * (may be NULL) receives the bad-value counts; each bad count is also reported with one
+ * log_warn per variable.  On failure OUT is zeroed, one log_error names the file and variable,
+ * and false is returned. */
+bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct field_volume *out,
+                   struct wrf_stats *stats);
+
+/* Resamples one column given on NZ mass levels at heights Z (increasing) with values V onto
+ * N output levels centred at z0 + (k + 0.5) dz: linear in height between the two enclosing
+ * levels; from the ground Z_GROUND up to the first level the first level's value (clamp); from
+ * the last level up to the model top Z_TOP the last level's value; below the ground and above
+ * the top OUTSIDE.  A target within 1e-4 dz of a level takes that level's value exactly.
+ * Returns the number of outputs set to OUTSIDE (below ground in *BELOW, may be NULL). */
+int wrf_resample_column(const double *z, const float *v, int nz, double z_ground, double z_top,
+                        double z0, double dz, int n, float outside, float *out, int *below);
+
+#endif

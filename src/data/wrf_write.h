@@ -1,0 +1,57 @@
+/*
+ * data/wrf_write: writes field volumes as a WRF-convention NetCDF file (what `anvil synth`
+ * produces), so realistic-size series exist without downloads and the WRF reader can be
+ * tested on them.
+ *
+ * The file has WRF's dimensions (Time, DateStrLen, west_east, south_north, bottom_top,
+ * bottom_top_stag), variables (QCLOUD ... QGRAUP for the species present, QVAPOR, P, PB, T,
+ * PH, PHB, HGT, LANDMASK, XLAT, XLONG, Times) with FieldType/MemoryOrder/description/units/
+ * stagger attributes, and the global attributes a WRF reader looks for (DX, DY, MAP_PROJ = 3
+ * Mercator, CEN_LAT, CEN_LON, TRUELAT1/2, STAND_LON, MP_PHYSICS, *_GRID_DIMENSION).
+ *
+ * Vertical levels: the staggered levels are the volume's cell faces, origin_z + k dz, with
+ * PHB = g z and PH = 0, so the mass levels sit exactly on the cell centres and reading the file
+ * back with wrf_read_step (levels = nz, bottom = origin_z, top = automatic) returns the mass
+ * ratios unchanged.  Pressure and temperature are the 1976 US standard atmosphere (PB = p(z),
+ * P = 0); where the volume has rho_air, T is chosen so that P, PB, T give that density.
+ * QVAPOR is the volume's or, when absent, 10 g/kg falling off with a 2.5 km scale height.
+ *
+ * No GL, no config.  NetCDF calls hold data_nc_lock.
+ */
+#ifndef ANVIL_DATA_WRF_WRITE_H
+#define ANVIL_DATA_WRF_WRITE_H
+
+#include <stdbool.h>
+
+#include "data/volume.h"
+
+/* Zero means default for every member. */
+struct wrf_write_desc {
+    double cen_lat, cen_lon; /* domain centre, degrees (default 0, 0: pass the real one) */
+    int mp_physics;          /* MP_PHYSICS; 0 = 8 (Thompson) when an ice species is present,
+                                else 3 (WSM3) */
+    const char *title;       /* TITLE; default "OUTPUT FROM ANVIL SYNTH" */
+};
+
+struct wrf_writer;
+
+/* Starts writing PATH (a temporary file in the same folder replaces PATH only when
+ * wrf_writer_finish succeeds).  Every step must have GRID.  Returns NULL after logging. */
+struct wrf_writer *wrf_writer_create(const char *path, const struct grid3 *grid,
+                                     const struct wrf_write_desc *d);
+
+/* Appends one time step.  DATE is "YYYY-MM-DD_hh:mm:ss".  The first step fixes which species
+ * the file has; later steps must have the same ones. */
+bool wrf_writer_add(struct wrf_writer *w, const struct field_volume *v, const char *date);
+
+/* Closes, moves the file into place and frees W.  False (logged) when anything failed. */
+bool wrf_writer_finish(struct wrf_writer *w);
+
+/* Abandons the file and frees W; NULL is fine. */
+void wrf_writer_destroy(struct wrf_writer *w);
+
+/* 1976 US standard atmosphere temperature [K] and pressure [Pa] at geometric height Z [m]
+ * (troposphere and stratosphere; clamped to 0-47 km). */
+void wrf_std_atmosphere(double z, double *temperature, double *pressure);
+
+#endif

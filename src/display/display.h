@@ -1,0 +1,182 @@
+/*
+ * display: view sets.  A frame renders N views — CAVE walls times eyes, HMD eyes, a desktop
+ * window — each a render target, a view matrix, a projection and an eye, and then presents
+ * them: offscreen (files), a window, side-by-side / anaglyph / quad-buffer stereo, one window
+ * per wall, or an HMD with its lens warp.  The backends sit behind one const table (display.c,
+ * `--display help`).
+ *
+ * Every view of a frame is drawn from the same renderer, so the view-independent work (the
+ * volume, the deep light map) is done once per change whatever the number of views: the view
+ * loop (display_draw) calls only renderer_draw.  This part knows nothing about how the volume
+ * or the light map is made, and calls no GL itself (src/gpu does).
+ *
+ * Frames: world metres (x east, y north, z up) -> navigation transform -> tracker metres
+ * (x right, y up, z toward the viewer) -> eye.  Pure math (navigation, head poses, Kooima's
+ * generalized perspective) is in view.c and head.c and needs no GL context.
+ */
+#ifndef ANVIL_DISPLAY_H
+#define ANVIL_DISPLAY_H
+
+#include <stdbool.h>
+
+#include "config/display_config.h"
+#include "gpu/gpu.h"
+#include "render/image.h"
+#include "render/render.h"
+
+#define DISPLAY_MAX_VIEWS (2 * DISPLAY_MAX_WALLS)
+
+/* ---- math: poses, navigation, generalized perspective (no GL) ------------------------- */
+
+/* A rigid pose in tracker space: position (m) and rotation (unit quaternion x, y, z, w). */
+struct display_pose {
+    float position[3];
+    float rotation[4];
+};
+
+/* The pose from a position and heading, pitch, roll in degrees (heading about +y, counter-
+ * clockwise seen from above; pitch about the head's x, up positive; roll about its z). */
+void display_pose_from_euler(const double position[3], const double hpr_deg[3],
+                             struct display_pose *out);
+
+/* World metres -> tracker metres (column-major 4x4):
+ *   p_tracker = position + R * scale * A * (p_world - origin),
+ * A turns world axes into tracker axes (east -> x, up -> y, north -> -z) and
+ * R = Rz(roll) Rx(pitch) Ry(heading) (degrees, as in display_pose_from_euler). */
+void display_navigation_matrix(const struct display_navigation *nav, float out[16]);
+
+/* Eye positions: the head position -/+ half SEPARATION along the head's right axis (LEFT gets
+ * the minus). */
+void display_pose_eyes(const struct display_pose *head, double separation, float left[3],
+                       float right[3]);
+
+/* Kooima's generalized perspective for the screen WALL seen from EYE (tracker metres):
+ * VIEW (tracker -> screen-aligned eye frame: x along the wall's bottom edge, y up the wall,
+ * z out of the wall toward the viewer, origin at the eye) and PROJ (an off-axis frustum with
+ * NEAR and FAR measured perpendicular to the wall).  EXTENT (may be NULL) receives the frustum
+ * [left, right, bottom, top] at the near plane.  Returns false when the eye is on the wall's
+ * plane or behind it (the wall is then invisible from there). */
+bool display_wall_projection(const struct display_wall *wall, const float eye[3], float near,
+                             float far, float view[16], float proj[16], float extent[4]);
+
+/* ---- head tracking ------------------------------------------------------------------- */
+
+/* A scripted head path: "t x y z heading pitch roll" per line (seconds, tracker metres,
+ * degrees; '#' starts a comment; times strictly increasing). */
+struct display_path {
+    int count;
+    double *time;          /* count */
+    struct display_pose *pose; /* count */
+};
+
+/* Reads a path file.  On failure logs "FILE:LINE: expected ..." and returns false (PATH is then
+ * empty).  Free with display_path_finish. */
+bool display_path_load(const char *file, struct display_path *path);
+void display_path_finish(struct display_path *path);
+/* The pose at time T: linear in position, spherical-linear in rotation between the two
+ * surrounding poses; clamped to the first and last. */
+void display_path_eval(const struct display_path *path, double t, struct display_pose *out);
+
+/* ---- views --------------------------------------------------------------------------- */
+
+enum view_eye { VIEW_EYE_MONO, VIEW_EYE_LEFT, VIEW_EYE_RIGHT };
+
+struct view {
+    /* World -> eye and projection, image size.  16-byte aligned: renderer_draw hands the
+     * matrices to cglm's SIMD code. */
+    _Alignas(16) struct render_view rv;
+    char name[48];             /* "front-left", "screen", "left": image file names */
+    int wall;                  /* wall index (hmd: 0) */
+    enum view_eye eye;
+    float eye_tracker[3];      /* eye position in tracker metres */
+    float extent[4];           /* frustum [l, r, b, t] at the near plane (walls) */
+    bool visible;              /* false: the eye is behind this wall; not drawn */
+    struct gpu_texture target; /* RGBA32F render target (owned, made on first draw) */
+    double ms;                 /* time of its last renderer_draw */
+};
+
+struct view_set {
+    struct view views[DISPLAY_MAX_VIEWS];
+    int count;
+};
+
+/* Lays out the walls of CFG (one view per wall for mono walls, left and right for stereo
+ * ones) for the head pose HEAD.  SIZES gives each wall's image [w, h].  Matrices map world
+ * metres through CFG's navigation transform.  Textures already in SET are kept when the layout
+ * is unchanged.  No GL. */
+void view_set_layout(struct view_set *set, const struct display_config *cfg,
+                     const struct display_pose *head, const int (*sizes)[2]);
+
+/* Image size of wall W: walls[w].size, else HEIGHT pixels high and the wall's aspect wide. */
+void view_set_wall_size(const struct display_config *cfg, int w, int height, int out[2]);
+
+/* Frees the views' textures (GL context current). */
+void view_set_finish(struct view_set *set);
+
+/* ---- displays ------------------------------------------------------------------------ */
+
+struct display;
+
+struct display_desc {
+    bool offscreen;              /* render into textures only (anvil render): no windows */
+    struct gpu_context *context; /* offscreen: use this context (not owned); NULL: create an
+                                    EGL one */
+    int height;                  /* image height of walls without a size (render.height) */
+};
+
+/* Lists the backends (name, one-line description) for --display help. */
+void display_list(void (*print)(const char *name, const char *what, void *user), void *user);
+
+/* Opens the display CFG describes: its windows (or offscreen targets), its HMD device, its
+ * head tracker.  The primary context is current on return.  CFG is copied.  Returns NULL
+ * (reason logged) when a window, context or device cannot be had.  Destroy with
+ * display_destroy (which accepts NULL). */
+struct display *display_create(const struct display_config *cfg, const struct display_desc *desc);
+void display_destroy(struct display *d);
+
+/* The primary GL context (owned by the display unless it was given in the desc).  Valid until
+ * display_destroy. */
+struct gpu_context *display_context(struct display *d);
+
+/* Reads the head pose at time T (seconds) and recomputes every view's matrices. */
+bool display_update(struct display *d, double t);
+
+/* The views of the current frame.  Pointers stay valid until display_destroy. */
+int display_view_count(const struct display *d);
+struct view *display_view(struct display *d, int i);
+const struct display_config *display_get_config(const struct display *d);
+
+/* The per-frame view loop: one renderer_draw per visible view, nothing else (no light map
+ * build, no volume upload).  Each view's ms is set.  Needs the primary context current. */
+bool display_draw(struct display *d, struct renderer *r, const struct render_settings *s);
+
+/* Composes the drawn views the way the display shows them (stereo composition, lens warp),
+ * tone maps with EXPOSURE, and shows them in the windows, swapping all together.  Offscreen
+ * displays compose into textures only. */
+bool display_present(struct display *d, struct renderer *r, float exposure);
+
+/* Composed screen images (e.g. the anaglyph, both HMD eyes after the warp): COUNT and each
+ * one's name and linear RGBA32F texture.  Valid after display_present until the next one. */
+int display_output_count(const struct display *d);
+const struct gpu_texture *display_output(const struct display *d, int i, const char **name);
+
+/* Windows: events, and whether the user asked to close (Esc, Q, a window's close button). */
+void display_poll(struct display *d, double timeout_s);
+bool display_should_close(const struct display *d);
+/* Keyboard flying in the windows moves the navigation; true once since the last call when it
+ * did (the next display_update uses it). */
+bool display_navigation_changed(struct display *d);
+
+/* Writes every drawn view as DIR/NAME.png, every composed output likewise, and a contact
+ * sheet DIR/contact.png of all views (walls across, eyes down).  Creates DIR.  Returns false
+ * (logged) on a failed write.  NONFINITE (may be NULL) receives the count of non-finite
+ * pixels over all views. */
+bool display_write_images(struct display *d, const char *dir, float exposure,
+                          size_t *nonfinite);
+
+/* Arranges IMAGES (N of them) in a grid of COLUMNS, row 0 at the top, with GAP pixels of
+ * BACKGROUND between them, into OUT (initialised here).  No GL. */
+bool display_contact_sheet(const struct image *images, int n, int columns, int gap,
+                           const float background[4], struct image *out);
+
+#endif

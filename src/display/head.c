@@ -1,0 +1,258 @@
+/*
+ * Head poses: fixed, a scripted path of timed poses, or an OpenHMD device; and opening
+ * OpenHMD devices by name (never by index: indices change with what is plugged in).
+ */
+#include <ctype.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include <cglm/cglm.h>
+
+#include "common/log.h"
+#include "display/display_impl.h"
+
+/* ---- scripted paths ------------------------------------------------------------------ */
+
+void display_path_finish(struct display_path *path)
+{
+    if (!path)
+        return;
+    free(path->time);
+    free(path->pose);
+    memset(path, 0, sizeof(*path));
+}
+
+bool display_path_load(const char *file, struct display_path *path)
+{
+    memset(path, 0, sizeof(*path));
+    char *text = file_read_all(file, NULL);
+    if (!text)
+        return false;
+    int cap = 0, line = 0;
+    bool ok = true;
+    for (char *p = text; *p && ok;) {
+        char *end = strchr(p, '\n');
+        if (end)
+            *end = '\0';
+        line++;
+        char *hash = strchr(p, '#');
+        if (hash)
+            *hash = '\0';
+        char *q = p;
+        while (isspace((unsigned char)*q))
+            q++;
+        if (*q) {
+            double v[7];
+            int used = 0;
+            int got = sscanf(q, "%lf %lf %lf %lf %lf %lf %lf %n", &v[0], &v[1], &v[2], &v[3],
+                             &v[4], &v[5], &v[6], &used);
+            bool finite = true;
+            for (int i = 0; i < got; i++)
+                finite = finite && isfinite(v[i]);
+            if (got != 7 || q[used] != '\0' || !finite) {
+                log_error("%s:%d: expected 7 numbers: t x y z heading pitch roll (seconds, "
+                          "metres, degrees)",
+                          file, line);
+                ok = false;
+                break;
+            }
+            if (path->count > 0 && !(v[0] > path->time[path->count - 1])) {
+                log_error("%s:%d: expected a time after %g s (times must increase)", file, line,
+                          path->time[path->count - 1]);
+                ok = false;
+                break;
+            }
+            if (path->count == cap) {
+                cap = cap ? 2 * cap : 16;
+                double *t = realloc(path->time, sizeof(double) * (size_t)cap);
+                if (t)
+                    path->time = t;
+                struct display_pose *ps = realloc(path->pose, sizeof(*ps) * (size_t)cap);
+                if (ps)
+                    path->pose = ps;
+                if (!t || !ps) {
+                    log_error("%s: out of memory", file);
+                    ok = false;
+                    break;
+                }
+            }
+            path->time[path->count] = v[0];
+            display_pose_from_euler(&v[1], &v[4], &path->pose[path->count]);
+            path->count++;
+        }
+        p = end ? end + 1 : p + strlen(p);
+    }
+    free(text);
+    if (ok && path->count == 0) {
+        log_error("%s:%d: expected at least one pose line: t x y z heading pitch roll", file,
+                  line);
+        ok = false;
+    }
+    if (!ok)
+        display_path_finish(path);
+    return ok;
+}
+
+void display_path_eval(const struct display_path *path, double t, struct display_pose *out)
+{
+    int n = path->count;
+    if (n == 0) {
+        memset(out, 0, sizeof(*out));
+        out->rotation[3] = 1.0f;
+        return;
+    }
+    if (t <= path->time[0] || n == 1) {
+        *out = path->pose[0];
+        return;
+    }
+    if (t >= path->time[n - 1]) {
+        *out = path->pose[n - 1];
+        return;
+    }
+    int lo = 0, hi = n - 1;
+    while (hi - lo > 1) {
+        int mid = (lo + hi) / 2;
+        if (path->time[mid] <= t)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    float s = (float)((t - path->time[lo]) / (path->time[hi] - path->time[lo]));
+    const struct display_pose *a = &path->pose[lo], *b = &path->pose[hi];
+    for (int i = 0; i < 3; i++)
+        out->position[i] = a->position[i] + s * (b->position[i] - a->position[i]);
+    versor qa, qb, q;
+    memcpy(qa, a->rotation, sizeof(qa));
+    memcpy(qb, b->rotation, sizeof(qb));
+    glm_quat_slerp(qa, qb, s, q);
+    memcpy(out->rotation, q, sizeof(q));
+}
+
+/* ---- OpenHMD ------------------------------------------------------------------------- */
+
+static bool name_matches(const char *product, const char *want)
+{
+    size_t n = strlen(want);
+    for (const char *p = product; *p; p++) {
+        if (strncasecmp(p, want, n) == 0)
+            return true;
+    }
+    return false;
+}
+
+bool display_ohmd_open(const char *name, int device_class, ohmd_context **ctx,
+                       ohmd_device **device)
+{
+    *ctx = NULL;
+    *device = NULL;
+    ohmd_context *c = ohmd_ctx_create();
+    if (!c) {
+        log_error("OpenHMD: could not create a context");
+        return false;
+    }
+    int count = ohmd_ctx_probe(c);
+    bool want_null = strcasecmp(name, "null") == 0;
+    int found = -1;
+    for (int i = 0; i < count && found < 0; i++) {
+        int flags = 0, cls = 0;
+        ohmd_list_geti(c, i, OHMD_DEVICE_FLAGS, &flags);
+        ohmd_list_geti(c, i, OHMD_DEVICE_CLASS, &cls);
+        if (device_class >= 0 && cls != device_class)
+            continue;
+        const char *product = ohmd_list_gets(c, i, OHMD_PRODUCT);
+        if (want_null ? (flags & OHMD_DEVICE_FLAGS_NULL_DEVICE) != 0
+                      : name_matches(product ? product : "", name))
+            found = i;
+    }
+    if (found < 0) {
+        char list[512] = "";
+        size_t len = 0;
+        for (int i = 0; i < count && len < sizeof(list); i++) {
+            const char *product = ohmd_list_gets(c, i, OHMD_PRODUCT);
+            len += (size_t)snprintf(list + len, sizeof(list) - len, "%s\"%s\"", i ? ", " : "",
+                                    product ? product : "?");
+        }
+        log_error("OpenHMD: no device named \"%s\" (found: %s; \"null\" picks the Null HMD)",
+                  name, count > 0 ? list : "none");
+        ohmd_ctx_destroy(c);
+        return false;
+    }
+    ohmd_device *dev = ohmd_list_open_device(c, found);
+    if (!dev) {
+        log_error("OpenHMD: could not open \"%s\": %s", ohmd_list_gets(c, found, OHMD_PRODUCT),
+                  ohmd_ctx_get_error(c));
+        ohmd_ctx_destroy(c);
+        return false;
+    }
+    log_info("OpenHMD: opened \"%s\"", ohmd_list_gets(c, found, OHMD_PRODUCT));
+    *ctx = c;
+    *device = dev;
+    return true;
+}
+
+/* ---- head trackers ------------------------------------------------------------------- */
+
+bool display_head_tracker_init(struct display_head_tracker *h, const struct display_head *cfg)
+{
+    memset(h, 0, sizeof(*h));
+    h->source = cfg->source;
+    display_pose_from_euler(cfg->position, cfg->orientation_deg, &h->fixed);
+    switch (cfg->source) {
+    case DISPLAY_HEAD_FIXED:
+        return true;
+    case DISPLAY_HEAD_PATH:
+        return display_path_load(cfg->path, &h->path);
+    case DISPLAY_HEAD_OPENHMD:
+        return display_ohmd_open(cfg->device, -1, &h->ohmd, &h->device);
+    }
+    return false;
+}
+
+void display_head_tracker_finish(struct display_head_tracker *h)
+{
+    if (!h)
+        return;
+    display_path_finish(&h->path);
+    if (h->ohmd)
+        ohmd_ctx_destroy(h->ohmd); /* closes its devices */
+    memset(h, 0, sizeof(*h));
+}
+
+bool display_head_tracker_pose(struct display_head_tracker *h, double t,
+                               struct display_pose *out)
+{
+    switch (h->source) {
+    case DISPLAY_HEAD_FIXED:
+        *out = h->fixed;
+        return true;
+    case DISPLAY_HEAD_PATH:
+        display_path_eval(&h->path, t, out);
+        return true;
+    case DISPLAY_HEAD_OPENHMD: {
+        ohmd_ctx_update(h->ohmd);
+        float q[4] = {0, 0, 0, 1}, p[3] = {0, 0, 0};
+        ohmd_device_getf(h->device, OHMD_ROTATION_QUAT, q);
+        ohmd_device_getf(h->device, OHMD_POSITION_VECTOR, p);
+        float len = sqrtf(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        if (!(len > 1e-6f)) { /* the Null devices report a zero quaternion */
+            q[0] = q[1] = q[2] = 0.0f;
+            q[3] = len = 1.0f;
+        }
+        /* The configured pose is the device's origin in the room. */
+        versor qo, qd, qr;
+        memcpy(qo, h->fixed.rotation, sizeof(qo));
+        for (int i = 0; i < 4; i++)
+            qd[i] = q[i] / len;
+        glm_quat_mul(qo, qd, qr);
+        vec3 pr;
+        glm_quat_rotatev(qo, p, pr);
+        for (int i = 0; i < 3; i++)
+            out->position[i] = h->fixed.position[i] + pr[i];
+        memcpy(out->rotation, qr, sizeof(qr));
+        return true;
+    }
+    }
+    return false;
+}

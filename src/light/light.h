@@ -1,0 +1,227 @@
+/*
+ * light: the deep light map (Nes §5.3) on the CPU.  A light-space grid across and along the sun
+ * direction, light transport swept slice by slice from the sun side with self-shadowing and
+ * central plus peripheral forward scattering (Nes eq. 5.8-5.11, Riley eq. 14-17), node
+ * compression of each light ray (Nes Algorithm 2, Lokovic-Veach), and the key that decides when
+ * a map must be rebuilt.
+ *
+ * This is the reference that the GPU build (a compute shader, later in this folder) mirrors: the
+ * same grid, the same sample positions, the same float32 arithmetic.  docs/lightmap.md states
+ * the discretisation.  No GL here, no config, no files; volumes come from data/volume.h and
+ * cumulative phases from optics (optics_forward_cp), passed in through light_settings.
+ *
+ * Light-space frame: w = -sun (the direction light travels), u and v across it, (u, v, w)
+ * right-handed.  The grid has n[0] x n[1] x n[2] NODES spanning the projection of the volume box
+ * on u, v and w exactly: node (i, j, k) sits at light coordinates lo + (i, j, k) * step with
+ * step = (hi - lo) / (n - 1).  Node plane k = 0 is the plane through the box corner nearest the
+ * sun; k grows along the light.  Values are stored i fastest: index = i + n0 (j + n1 k).
+ *
+ * Stored value: the light intensity at the node's world point, relative to the incident sun
+ * (1 = unattenuated), travelling along w: direct light plus light forward-scattered within the
+ * forward angle.  It is what a particle at that point receives from the sun; the eye pass
+ * multiplies it by the sample's (1 - T_s) P_v(psi) (Nes eq. 5.18).  Always within [0, 1].
+ */
+#ifndef ANVIL_LIGHT_H
+#define ANVIL_LIGHT_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "data/volume.h"
+#include "optics/optics.h"
+
+/* Unit vector TOWARD the sun in the world frame (x east, y north, z up) from the azimuth
+ * (degrees clockwise from north) and elevation (degrees above the horizon):
+ * (sin az cos el, cos az cos el, sin el).  Multiples of 90 degrees give exact zeros and ones. */
+void light_sun_direction(double azimuth_deg, double elevation_deg, double out[3]);
+
+/* Extinction at world point P [m] from VOL: trilinear between voxel centres, clamped to the
+ * edge voxels inside the box, zero outside the box (the box is closed: its faces are inside).
+ * OUT[0] scatters with the ice phase, OUT[1] with the water phase, 1/m.  Float32 like the GPU;
+ * a negative or NaN result reads as 0. */
+void light_sample_beta(const struct ext_volume *vol, const float p[3], float out[2]);
+
+/* ---- light-space grid ------------------------------------------------------------------- */
+
+struct light_grid {
+    double sun[3];           /* unit, toward the sun */
+    double u[3], v[3], w[3]; /* orthonormal, w = -sun, u x v = w */
+    double lo[3], hi[3];     /* volume box projected on u, v, w: metres */
+    int n[3];                /* nodes along u, v, w (each >= 2) */
+    double step[3];          /* node spacing along u, v, w: (hi - lo) / (n - 1), metres */
+    /* World position of node (i, j, k) = origin + i du + j dv + k dw, as the float32 values
+     * the transport loop uses (GPU uniforms). */
+    float origin[3], du[3], dv[3], dw[3];
+    /* World point (metres, homogeneous) -> texture coordinates of a 3D texture holding the
+     * nodes, column-major: node (i, j, k) maps to the texel centre ((i, j, k) + 0.5) / n, so
+     * hardware trilinear filtering interpolates between nodes.  Points inside the volume box
+     * map inside [0.5/n, 1 - 0.5/n]. */
+    float world_to_tex[16];
+};
+
+/* Sets up the grid for the sun direction SUN (toward the sun, any nonzero length) over the box
+ * of BOX with N nodes per axis.  u is horizontal unless the sun is within ~26 degrees of the
+ * zenith or nadir (then u is taken across the x axis); the choice is deterministic and exact
+ * for axis-aligned suns.  Returns false (logged) on a zero or non-finite SUN, a degenerate
+ * box, or N outside [2, 4096]. */
+bool light_grid_init(struct light_grid *g, const double sun[3], const struct grid3 *box,
+                     const int n[3]);
+
+/* World position of node (i, j, k), metres (double, from the frame; for tests and tools). */
+void light_grid_node_world(const struct light_grid *g, double i, double j, double k, double out[3]);
+
+/* World point P -> texture coordinates (applies world_to_tex). */
+void light_grid_world_to_tex(const struct light_grid *g, const double p[3], double out[3]);
+
+/* ---- settings and the dense map ----------------------------------------------------------- */
+
+struct light_settings {
+    int resolution[3];        /* nodes [across u, across v, along the light] */
+    double forward_angle_deg; /* theta: light scattered within theta/2 stays in the beam */
+    bool forward;             /* forward scattering on; off = shadow only */
+    bool peripheral;          /* peripheral ring theta/4 .. theta/2 on (needs forward) */
+    struct optics_cp cp;      /* CP(theta/4) and CP(theta/2) - CP(theta/4) per phase */
+    double epsilon;           /* compression error bound (compressed storage only) */
+    int substeps;             /* extinction samples per slice; 0 = light_auto_substeps */
+};
+
+/* Defaults: 128^3 nodes, theta = 20 degrees, forward and peripheral on, epsilon 0.002,
+ * substeps auto, and cp all zero: call light_settings_set_optics (or fill cp) before building
+ * with forward on. */
+void light_settings_defaults(struct light_settings *s);
+
+/* Sets the forward angle and fills cp from OPTICS with optics_forward_cp. */
+void light_settings_set_optics(struct light_settings *s, const struct optics_params *optics,
+                               double forward_angle_deg);
+
+/* Peripheral offset (metres): the distance in the across-light plane, one slice spacing DZ
+ * back, of a ray arriving from the middle of the peripheral ring, 3 theta / 8:
+ * dz tan(3 theta / 8). */
+double light_peripheral_offset(double forward_angle_deg, double dz);
+
+/* Extinction samples per slice so that the samples along the light are no farther apart than
+ * the shortest distance in which the light crosses one voxel (min over axes of
+ * spacing_a / |w_a|): 1 when the light grid is as fine as the volume, more for flat volumes
+ * lit at low sun (Isabel: 2000 km wide, 20 km high).  At most 128. */
+int light_auto_substeps(const struct light_grid *g, const struct grid3 *box);
+
+struct light_map {
+    struct light_grid grid;
+    int substeps; /* extinction samples per slice used by the build */
+    float *light; /* grid.n[0] * grid.n[1] * grid.n[2] values in [0, 1], owned */
+};
+
+/* Computes the dense light map of VOL for the sun direction SUN (toward the sun) with settings
+ * S.  MAP must be zeroed or hold an earlier map (its array is reused when the size matches).
+ * On failure (logged) MAP is finished.  CPU, single thread, float32 transport. */
+bool light_map_build(const struct ext_volume *vol, const double sun[3],
+                     const struct light_settings *s, struct light_map *map);
+
+/* Frees the array and zeroes MAP; NULL and zeroed maps are fine. */
+void light_map_finish(struct light_map *map);
+
+static inline float light_map_node(const struct light_map *m, int i, int j, int k)
+{
+    const int *n = m->grid.n;
+    return m->light[(size_t)i + (size_t)n[0] * ((size_t)j + (size_t)n[1] * (size_t)k)];
+}
+
+/* Trilinear lookup at texture coordinates TEX (as from world_to_tex), clamped to the edge
+ * nodes: what a GL_LINEAR, CLAMP_TO_EDGE sampler3D returns (up to its weight precision). */
+float light_map_sample(const struct light_map *m, const float tex[3]);
+
+/* Bytes of the dense map as a float32 3D texture. */
+size_t light_map_bytes(const struct light_map *m);
+
+/* ---- compression ------------------------------------------------------------------------- */
+
+/* Compresses one visibility function: COUNT samples (DEPTH[i], VALUE[i]), depths
+ * non-decreasing, into nodes (OUT[2 m] = depth, OUT[2 m + 1] = intensity) such that linear
+ * interpolation between the nodes stays within EPSILON of every sample (up to float rounding)
+ * (Nes Algorithm 2, eq. 5.14-5.17, with Lokovic-Veach's choice of the node on the feasible
+ * slope cone).  Equal depths give a step (two nodes at one depth) or merge when within EPSILON;
+ * EPSILON = 0 keeps exactly collinear runs merged.  A flat start or tail (within EPSILON) is
+ * left to the clamping of light_column_eval, so a constant function is one node and the first
+ * node need not sit at the first depth.  OUT holds at least 2 COUNT floats.  Returns
+ * the number of nodes (>= 1 when COUNT >= 1), or -1 (logged) on decreasing or non-finite
+ * input or a negative or non-finite EPSILON. */
+int light_compress_column(const float *depth, const float *value, int count, double epsilon,
+                          float *out);
+
+/* Value of a compressed visibility function at DEPTH: binary search for the segment, then linear
+ * interpolation; clamped to the first and last node; a step (equal depths) takes the later
+ * node; the result is clamped to [0, 1]. */
+float light_column_eval(const float *nodes, uint32_t count, float depth);
+
+/* The compressed deep light map in a GPU-friendly layout (two SSBOs): per column (i + n0 j)
+ * columns[2 c] = index of its first node, columns[2 c + 1] = its node count; nodes[2 m] = depth
+ * in node-plane units (k, so depth d is at light coordinate lo_w + d step_w), nodes[2 m + 1] =
+ * intensity. */
+struct light_compressed {
+    struct light_grid grid;
+    uint32_t *columns; /* 2 n0 n1, owned */
+    float *nodes;      /* 2 node_count, owned */
+    size_t node_count;
+    double epsilon;
+};
+
+/* Compresses every column of MAP within EPSILON.  OUT is initialised here; on failure (logged)
+ * it is finished. */
+bool light_compressed_build(const struct light_map *map, double epsilon,
+                            struct light_compressed *out);
+
+void light_compressed_finish(struct light_compressed *c);
+
+/* Lookup at texture coordinates TEX, mirroring light_map_sample: bilinear over the four
+ * neighbouring columns (clamped to the edge), each evaluated at the depth by light_column_eval. */
+float light_compressed_sample(const struct light_compressed *c, const float tex[3]);
+
+/* Bytes of both arrays as SSBOs. */
+size_t light_compressed_bytes(const struct light_compressed *c);
+
+/* ---- rebuild on change ------------------------------------------------------------------- */
+
+/* Everything that determines a light map.  VOLUME_ID names the data (e.g. the time step);
+ * VOLUME_GENERATION must change whenever the extinction values change for any other reason
+ * (optics radii/densities, species selection or scale, a reload). */
+struct light_key {
+    struct grid3 box;
+    double sun[3]; /* normalised */
+    uint64_t volume_id;
+    uint64_t volume_generation;
+    struct light_settings settings;
+};
+
+void light_key_init(struct light_key *k, const struct grid3 *box, const double sun[3],
+                    uint64_t volume_id, uint64_t volume_generation, const struct light_settings *s);
+
+/* Field-wise equality (no padding bytes compared) and a 64-bit FNV-1a hash of the same
+ * fields.  -0.0 and 0.0 compare and hash equal. */
+bool light_key_equal(const struct light_key *a, const struct light_key *b);
+uint64_t light_key_hash(const struct light_key *k);
+
+/* Remembers the key of the map that is current, and counts builds. */
+struct light_cache {
+    bool valid;
+    struct light_key key;
+    uint64_t hash;
+    unsigned builds;
+    double last_ms, total_ms;
+};
+
+void light_cache_init(struct light_cache *c);
+/* True when no map has been built yet or K differs from the current map's key. */
+bool light_cache_stale(const struct light_cache *c, const struct light_key *k);
+/* Records that a map for K has just been built, taking MS milliseconds. */
+void light_cache_built(struct light_cache *c, const struct light_key *k, double ms);
+/* Forgets the current map (e.g. after a failed build or a lost GL context). */
+void light_cache_invalidate(struct light_cache *c);
+
+/* CPU convenience: rebuilds MAP (and COMPRESSED when not NULL) only when K is stale.  Returns
+ * false (logged) when a needed build failed; *BUILT says whether a build happened. */
+bool light_map_update(const struct ext_volume *vol, const struct light_key *k,
+                      struct light_cache *cache, struct light_map *map,
+                      struct light_compressed *compressed, bool *built);
+
+#endif

@@ -1,0 +1,211 @@
+#include "light/light_gpu.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/log.h"
+
+struct light_gpu {
+    struct render_light hook; /* first: the renderer's bind callback gets it back */
+    struct gpu_program build;
+    struct gpu_texture light; /* R32F node volume */
+    struct gpu_buffer columns, nodes;
+    struct light_grid grid;
+    struct light_cache cache;
+    enum light_gpu_mode mode;
+    bool have_key_mode;
+    enum light_gpu_mode built_mode;
+    double built_epsilon;
+    size_t compressed_bytes;
+    struct gpu_timer timer;
+    char defines[64];
+};
+
+static void bind(const struct render_light *light, const struct gpu_program *prog)
+{
+    const struct light_gpu *lg = (const struct light_gpu *)light;
+    gpu_uniform_mat4(prog, "light_world_to_tex", lg->grid.world_to_tex);
+    gpu_uniform_ivec3(prog, "light_n", lg->grid.n);
+    if (lg->built_mode == LIGHT_GPU_DENSE) {
+        gpu_texture_bind(&lg->light, 2);
+    } else {
+        gpu_buffer_bind(&lg->columns, 0);
+        gpu_buffer_bind(&lg->nodes, 1);
+    }
+}
+
+struct light_gpu *light_gpu_create(void)
+{
+    struct light_gpu *lg = calloc(1, sizeof(*lg));
+    if (!lg)
+        return NULL;
+    if (!gpu_program_init(&lg->build, "light_build.comp", NULL)) {
+        free(lg);
+        return NULL;
+    }
+    light_cache_init(&lg->cache);
+    gpu_timer_init(&lg->timer);
+    lg->hook.bind = bind;
+    lg->hook.defines = lg->defines;
+    return lg;
+}
+
+void light_gpu_destroy(struct light_gpu *lg)
+{
+    if (!lg)
+        return;
+    gpu_program_finish(&lg->build);
+    gpu_texture_finish(&lg->light);
+    gpu_buffer_finish(&lg->columns);
+    gpu_buffer_finish(&lg->nodes);
+    gpu_timer_finish(&lg->timer);
+    free(lg);
+}
+
+static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src,
+                        const struct light_settings *s)
+{
+    const struct light_grid *g = &lg->grid;
+    if (!lg->light.id || memcmp(lg->light.size, g->n, sizeof(g->n)) != 0) {
+        gpu_texture_finish(&lg->light);
+        if (!gpu_texture_init(&lg->light, 3, g->n, GPU_R32F, NULL))
+            return false;
+    }
+    const struct gpu_program *p = &lg->build;
+    int substeps = s->substeps > 0 ? s->substeps : light_auto_substeps(g, src->grid);
+    float vol_origin[3], inv_spacing[3];
+    for (int a = 0; a < 3; a++) {
+        vol_origin[a] = (float)src->grid->origin[a];
+        inv_spacing[a] = (float)(1.0 / src->grid->spacing[a]);
+    }
+    double r = light_peripheral_offset(s->forward_angle_deg, g->step[2]);
+    float per[2] = {(float)(r / g->step[0]), (float)(r / g->step[1])};
+    float cp[4] = {(float)s->cp.water_ctr, (float)s->cp.ice_ctr, (float)s->cp.water_per,
+                   (float)s->cp.ice_per};
+    gpu_uniform_ivec3(p, "vol_n", src->grid->n);
+    gpu_uniform_vec3(p, "vol_origin", vol_origin);
+    gpu_uniform_vec3(p, "vol_inv_spacing", inv_spacing);
+    gpu_uniform_ivec3(p, "grid_n", g->n);
+    gpu_uniform_vec3(p, "g_origin", g->origin);
+    gpu_uniform_vec3(p, "g_du", g->du);
+    gpu_uniform_vec3(p, "g_dv", g->dv);
+    gpu_uniform_vec3(p, "g_dw", g->dw);
+    gpu_uniform_int(p, "substeps", substeps);
+    gpu_uniform_float(p, "dsub", (float)(g->step[2] / substeps));
+    gpu_uniform_int(p, "forward", s->forward ? 1 : 0);
+    gpu_uniform_int(p, "peripheral", s->forward && s->peripheral ? 1 : 0);
+    gpu_uniform_vec4(p, "cp", cp);
+    gpu_uniform_vec2(p, "per_offset", per);
+    gpu_texture_bind(src->beta, 0);
+    gpu_image_bind_rw(&lg->light, 0);
+    for (int k = 0; k < g->n[2]; k++) {
+        gpu_uniform_int(p, "plane", k);
+        gpu_dispatch(p, g->n[0], g->n[1], 1);
+    }
+    return true;
+}
+
+bool light_gpu_read(const struct light_gpu *lg, struct light_map *map)
+{
+    memset(map, 0, sizeof(*map));
+    if (!lg->light.id) {
+        log_error("light map: nothing built yet");
+        return false;
+    }
+    map->grid = lg->grid;
+    size_t count = (size_t)lg->grid.n[0] * lg->grid.n[1] * lg->grid.n[2];
+    map->light = malloc(count * sizeof(float));
+    if (!map->light) {
+        log_error("light map: out of memory reading %zu nodes back", count);
+        return false;
+    }
+    gpu_texture_read(&lg->light, map->light, count * sizeof(float));
+    return true;
+}
+
+static bool build_compressed(struct light_gpu *lg, double epsilon)
+{
+    struct light_map dense;
+    if (!light_gpu_read(lg, &dense))
+        return false;
+    struct light_compressed c;
+    bool ok = light_compressed_build(&dense, epsilon, &c);
+    light_map_finish(&dense);
+    if (!ok)
+        return false;
+    size_t col_bytes = (size_t)c.grid.n[0] * c.grid.n[1] * 2 * sizeof(uint32_t);
+    size_t node_bytes = c.node_count * 2 * sizeof(float);
+    gpu_buffer_finish(&lg->columns);
+    gpu_buffer_finish(&lg->nodes);
+    ok = gpu_buffer_init(&lg->columns, col_bytes, c.columns) &&
+         gpu_buffer_init(&lg->nodes, node_bytes, c.nodes);
+    lg->compressed_bytes = light_compressed_bytes(&c);
+    light_compressed_finish(&c);
+    return ok;
+}
+
+bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
+                      const double sun[3], const struct light_settings *settings,
+                      enum light_gpu_mode mode, bool *built)
+{
+    if (built)
+        *built = false;
+    struct light_key key;
+    light_key_init(&key, src->grid, sun, src->volume_id, src->generation, settings);
+    bool stale = light_cache_stale(&lg->cache, &key) || !lg->have_key_mode ||
+                 lg->built_mode != mode ||
+                 (mode == LIGHT_GPU_COMPRESSED && lg->built_epsilon != settings->epsilon);
+    if (!stale)
+        return true;
+    if (!light_grid_init(&lg->grid, sun, src->grid, settings->resolution))
+        return false;
+    gpu_timer_begin(&lg->timer);
+    bool ok = build_dense(lg, src, settings);
+    gpu_timer_end(&lg->timer);
+    double ms = gpu_timer_ms(&lg->timer);
+    if (ok && mode == LIGHT_GPU_COMPRESSED) {
+        double start = time_now_ms();
+        ok = build_compressed(lg, settings->epsilon);
+        ms += time_now_ms() - start;
+    } else {
+        gpu_buffer_finish(&lg->columns);
+        gpu_buffer_finish(&lg->nodes);
+        lg->compressed_bytes = 0;
+    }
+    if (!ok) {
+        light_cache_invalidate(&lg->cache);
+        return false;
+    }
+    light_cache_built(&lg->cache, &key, ms);
+    lg->have_key_mode = true;
+    lg->built_mode = mode;
+    lg->built_epsilon = settings->epsilon;
+    snprintf(lg->defines, sizeof(lg->defines), "#define LIGHTMAP %d\n",
+             mode == LIGHT_GPU_DENSE ? 1 : 2);
+    if (built)
+        *built = true;
+    return true;
+}
+
+const struct render_light *light_gpu_render_light(struct light_gpu *lg)
+{
+    return &lg->hook;
+}
+
+unsigned light_gpu_builds(const struct light_gpu *lg)
+{
+    return lg->cache.builds;
+}
+
+double light_gpu_last_build_ms(const struct light_gpu *lg)
+{
+    return lg->cache.last_ms;
+}
+
+void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed)
+{
+    *dense = lg->light.bytes;
+    *compressed = lg->compressed_bytes;
+}

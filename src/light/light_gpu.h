@@ -1,0 +1,56 @@
+/*
+ * light/light_gpu: the deep light map on the GPU.  The dense light volume is swept plane by
+ * plane in shaders/light_build.comp, mirroring light_map_build() (the CPU reference) in
+ * float32; the compressed mode compresses that volume's columns with the reference
+ * compressor (light_compressed_build, on the CPU) and keeps the nodes in two storage buffers
+ * that the eye pass searches.  The map is rebuilt only when its key (sun, volume, optics,
+ * settings) changes, whatever the number of views.  Every function needs the GL context
+ * current.
+ */
+#ifndef ANVIL_LIGHT_GPU_H
+#define ANVIL_LIGHT_GPU_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "gpu/gpu.h"
+#include "light/light.h"
+#include "render/render.h"
+
+enum light_gpu_mode { LIGHT_GPU_DENSE, LIGHT_GPU_COMPRESSED };
+
+struct light_gpu;
+
+/* Compiles the build program.  NULL (logged) when it does not compile. */
+struct light_gpu *light_gpu_create(void);
+void light_gpu_destroy(struct light_gpu *lg);
+
+/* What a build reads: the extinction texture the renderer holds (RG32F, ice and water β),
+ * its grid, and an identity for the volume's content (bump GENERATION when it changes). */
+struct light_gpu_source {
+    const struct gpu_texture *beta;
+    const struct grid3 *grid;
+    uint64_t volume_id, generation;
+};
+
+/* Rebuilds the light map when anything in its key changed since the last build; *BUILT (may
+ * be NULL) says whether it did.  Returns false (logged) on failure. */
+bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
+                      const double sun[3], const struct light_settings *settings,
+                      enum light_gpu_mode mode, bool *built);
+
+/* The hook for renderer_set_light: valid until destroy; reads the last built map. */
+const struct render_light *light_gpu_render_light(struct light_gpu *lg);
+
+/* Builds so far and the GPU milliseconds of the last one. */
+unsigned light_gpu_builds(const struct light_gpu *lg);
+double light_gpu_last_build_ms(const struct light_gpu *lg);
+
+/* Bytes of the dense light volume and of the compressed nodes (0 in dense mode). */
+void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed);
+
+/* Reads the dense light volume back into MAP (initialised here, finish with
+ * light_map_finish): the same layout as the CPU reference. */
+bool light_gpu_read(const struct light_gpu *lg, struct light_map *map);
+
+#endif

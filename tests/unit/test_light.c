@@ -1,0 +1,969 @@
+/*
+ * light: the CPU deep light map.  Grid frame and texture mapping, transport against closed
+ * forms (slab, single voxel), the hard cases (empty, axis-aligned and grazing sun, optically
+ * very thick), invariants (shadow monotone, forward >= shadow only, [0, 1]), the silver lining,
+ * compression error bounds, and rebuild-on-change.
+ */
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/log.h"
+#include "data/synth.h"
+#include "data/volume.h"
+#include "light/light.h"
+#include "optics/optics.h"
+#include "testutil.h"
+
+#define PI 3.14159265358979323846
+
+/* ---- helpers ----------------------------------------------------------------------------- */
+
+static void make_volume(struct ext_volume *v, int nx, int ny, int nz, double sx, double sy,
+                        double sz)
+{
+    struct grid3 g = {.n = {nx, ny, nz}, .spacing = {sx, sy, sz}, .origin = {0.0, 0.0, 0.0}};
+    assert_true(ext_volume_init(v, &g));
+}
+
+static void set_beta(struct ext_volume *v, int i, int j, int k, float ice, float water)
+{
+    size_t idx = grid3_index(&v->grid, i, j, k);
+    v->beta[2 * idx] = ice;
+    v->beta[2 * idx + 1] = water;
+}
+
+static void fill_uniform(struct ext_volume *v, float ice, float water)
+{
+    size_t n = grid3_count(&v->grid);
+    for (size_t i = 0; i < n; i++) {
+        v->beta[2 * i] = ice;
+        v->beta[2 * i + 1] = water;
+    }
+}
+
+/* A homogeneous ball of optical depth TAU along its diameter, radius 0.4 of the smallest box
+ * side, centred in the box; voxel centres inside get the full extinction (water phase). */
+static double fill_sphere(struct ext_volume *v, double tau)
+{
+    const struct grid3 *g = &v->grid;
+    double ext[3], c[3];
+    for (int a = 0; a < 3; a++) {
+        ext[a] = g->n[a] * g->spacing[a];
+        c[a] = 0.5 * ext[a];
+    }
+    double r = 0.4 * fmin(ext[0], fmin(ext[1], ext[2]));
+    float beta = (float)(tau / (2.0 * r));
+    for (int k = 0; k < g->n[2]; k++)
+        for (int j = 0; j < g->n[1]; j++)
+            for (int i = 0; i < g->n[0]; i++) {
+                double x = (i + 0.5) * g->spacing[0] - c[0];
+                double y = (j + 0.5) * g->spacing[1] - c[1];
+                double z = (k + 0.5) * g->spacing[2] - c[2];
+                if (x * x + y * y + z * z <= r * r)
+                    set_beta(v, i, j, k, 0.0f, beta);
+            }
+    return r;
+}
+
+static uint32_t rng_state = 12345u;
+static double rnd(void)
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 17;
+    rng_state ^= rng_state << 5;
+    return (rng_state >> 8) * (1.0 / 16777216.0);
+}
+
+/* Blobby random medium of both phases, up to BMAX per metre. */
+static void fill_random(struct ext_volume *v, float bmax)
+{
+    size_t n = grid3_count(&v->grid);
+    for (size_t i = 0; i < n; i++) {
+        double a = rnd(), b = rnd();
+        v->beta[2 * i] = a > 0.5 ? (float)(bmax * (a - 0.5) * 2.0) : 0.0f;
+        v->beta[2 * i + 1] = b > 0.6 ? (float)(bmax * (b - 0.6) * 2.5) : 0.0f;
+    }
+}
+
+static void realistic_settings(struct light_settings *s, int n)
+{
+    struct optics_params op;
+    optics_params_defaults(&op);
+    light_settings_defaults(s);
+    light_settings_set_optics(s, &op, 20.0);
+    s->resolution[0] = s->resolution[1] = s->resolution[2] = n;
+}
+
+static void assert_all_in_unit(const struct light_map *m)
+{
+    size_t n = (size_t)m->grid.n[0] * m->grid.n[1] * m->grid.n[2];
+    for (size_t i = 0; i < n; i++) {
+        float l = m->light[i];
+        if (!(isfinite(l) && l >= 0.0f && l <= 1.0f))
+            fail_msg("node %zu holds %g", i, (double)l);
+    }
+}
+
+static float map_min(const struct light_map *m)
+{
+    size_t n = (size_t)m->grid.n[0] * m->grid.n[1] * m->grid.n[2];
+    float lo = 1.0f;
+    for (size_t i = 0; i < n; i++)
+        lo = fminf(lo, m->light[i]);
+    return lo;
+}
+
+static bool inside_box(const struct grid3 *g, const double p[3], double margin)
+{
+    for (int a = 0; a < 3; a++) {
+        double lo = g->origin[a], hi = lo + g->n[a] * g->spacing[a];
+        if (p[a] < lo + margin || p[a] > hi - margin)
+            return false;
+    }
+    return true;
+}
+
+/* ---- sun direction and grid ---------------------------------------------------------------- */
+
+static void test_sun_direction(void **state)
+{
+    double d[3];
+    light_sun_direction(0.0, 90.0, d);
+    assert_true(d[0] == 0.0 && d[1] == 0.0 && d[2] == 1.0);
+    light_sun_direction(90.0, 0.0, d);
+    assert_true(d[0] == 1.0 && d[1] == 0.0 && d[2] == 0.0);
+    light_sun_direction(180.0, 0.0, d);
+    assert_true(d[0] == 0.0 && d[1] == -1.0 && d[2] == 0.0);
+    light_sun_direction(-90.0, 0.0, d);
+    assert_true(d[0] == -1.0 && d[1] == 0.0 && d[2] == 0.0);
+    light_sun_direction(135.0, 30.0, d); /* south-east, 30 degrees up */
+    assert_float_equal(d[0], sqrt(0.5) * cos(PI / 6), 1e-12);
+    assert_float_equal(d[1], -sqrt(0.5) * cos(PI / 6), 1e-12);
+    assert_float_equal(d[2], 0.5, 1e-12);
+}
+
+static void test_grid_frame_and_mapping(void **state)
+{
+    struct grid3 box = {
+        .n = {20, 30, 10}, .spacing = {200.0, 100.0, 50.0}, .origin = {-1000.0, 500.0, 0.0}};
+    const double suns[][3] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},      {0, -1, 0},  {0, 0, 1},
+                              {0, 0, -1}, {1, 1, 1},  {0.3, -2, 0.1}, {0, 0.2, 1}, {0, 0, 0}};
+    for (size_t s = 0; s < sizeof suns / sizeof suns[0]; s++) {
+        double sun[3];
+        if (s + 1 == sizeof suns / sizeof suns[0])
+            light_sun_direction(33.0, 1.0, sun); /* grazing */
+        else
+            memcpy(sun, suns[s], sizeof sun);
+        struct light_grid g;
+        const int n[3] = {9, 7, 11};
+        assert_true(light_grid_init(&g, sun, &box, n));
+        /* Orthonormal, right-handed, w = -sun. */
+        double uu = 0, vv = 0, ww = 0, uv = 0, uw = 0, vw = 0, sl = 0;
+        for (int a = 0; a < 3; a++) {
+            uu += g.u[a] * g.u[a], vv += g.v[a] * g.v[a], ww += g.w[a] * g.w[a];
+            uv += g.u[a] * g.v[a], uw += g.u[a] * g.w[a], vw += g.v[a] * g.w[a];
+            sl += sun[a] * sun[a];
+        }
+        assert_float_equal(uu, 1.0, 1e-12);
+        assert_float_equal(vv, 1.0, 1e-12);
+        assert_float_equal(ww, 1.0, 1e-12);
+        assert_float_equal(uv, 0.0, 1e-12);
+        assert_float_equal(uw, 0.0, 1e-12);
+        assert_float_equal(vw, 0.0, 1e-12);
+        double cx[3] = {g.u[1] * g.v[2] - g.u[2] * g.v[1], g.u[2] * g.v[0] - g.u[0] * g.v[2],
+                        g.u[0] * g.v[1] - g.u[1] * g.v[0]};
+        for (int a = 0; a < 3; a++) {
+            assert_float_equal(cx[a], g.w[a], 1e-12);
+            assert_float_equal(g.w[a], -sun[a] / sqrt(sl), 1e-12);
+            assert_true(isfinite(g.lo[a]) && g.step[a] > 0.0);
+        }
+        /* Nodes map to texel centres; every box corner maps inside the texel-centre range. */
+        for (int t = 0; t < 20; t++) {
+            int i = (int)(rnd() * n[0]), j = (int)(rnd() * n[1]), k = (int)(rnd() * n[2]);
+            double p[3], tex[3];
+            light_grid_node_world(&g, i, j, k, p);
+            light_grid_world_to_tex(&g, p, tex);
+            assert_float_equal(tex[0], (i + 0.5) / n[0], 2e-6);
+            assert_float_equal(tex[1], (j + 0.5) / n[1], 2e-6);
+            assert_float_equal(tex[2], (k + 0.5) / n[2], 2e-6);
+            /* The float32 node position the transport uses agrees with the double one. */
+            for (int a = 0; a < 3; a++) {
+                double pf =
+                    g.origin[a] + (double)i * g.du[a] + (double)j * g.dv[a] + (double)k * g.dw[a];
+                assert_float_equal(pf, p[a], 1e-2);
+            }
+        }
+        for (int c = 0; c < 8; c++) {
+            double p[3], tex[3];
+            for (int a = 0; a < 3; a++)
+                p[a] = box.origin[a] + ((c >> a) & 1) * box.n[a] * box.spacing[a];
+            light_grid_world_to_tex(&g, p, tex);
+            for (int a = 0; a < 3; a++) {
+                assert_true(tex[a] >= 0.5 / n[a] - 1e-6);
+                assert_true(tex[a] <= 1.0 - 0.5 / n[a] + 1e-6);
+            }
+        }
+    }
+}
+
+static void test_grid_rejects_bad_input(void **state)
+{
+    struct grid3 box = {.n = {4, 4, 4}, .spacing = {1, 1, 1}};
+    struct light_grid g;
+    const int n[3] = {8, 8, 8}, bad[3] = {8, 1, 8};
+    const double zero[3] = {0, 0, 0}, nan3[3] = {NAN, 0, 1}, up[3] = {0, 0, 1};
+    unsigned errors = log_error_count();
+    assert_false(light_grid_init(&g, zero, &box, n));
+    assert_false(light_grid_init(&g, nan3, &box, n));
+    assert_false(light_grid_init(&g, up, &box, bad));
+    struct grid3 flat = box;
+    flat.spacing[2] = 0.0;
+    assert_false(light_grid_init(&g, up, &flat, n));
+    assert_int_equal(log_error_count(), errors + 4);
+}
+
+static void test_peripheral_offset(void **state)
+{
+    assert_float_equal(light_peripheral_offset(20.0, 100.0), 100.0 * tan(7.5 * PI / 180.0),
+                       1e-12);
+    assert_float_equal(light_peripheral_offset(0.0, 100.0), 0.0, 0.0);
+}
+
+/* ---- transport ----------------------------------------------------------------------------- */
+
+static void test_beta_sampling(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 4, 4, 4, 10.0, 10.0, 10.0);
+    set_beta(&v, 1, 1, 1, 2.0f, 4.0f);
+    float b[2];
+    light_sample_beta(&v, (const float[3]){15.0f, 15.0f, 15.0f}, b); /* the voxel centre */
+    assert_float_equal(b[0], 2.0f, 1e-6);
+    assert_float_equal(b[1], 4.0f, 1e-6);
+    light_sample_beta(&v, (const float[3]){20.0f, 15.0f, 15.0f}, b); /* halfway to the next */
+    assert_float_equal(b[1], 2.0f, 1e-6);
+    light_sample_beta(&v, (const float[3]){20.0f, 20.0f, 20.0f}, b);
+    assert_float_equal(b[1], 0.5f, 1e-6);
+    /* Clamp to edge inside the box, zero outside. */
+    fill_uniform(&v, 0.0f, 3.0f);
+    light_sample_beta(&v, (const float[3]){0.0f, 1.0f, 39.0f}, b);
+    assert_float_equal(b[1], 3.0f, 1e-6);
+    light_sample_beta(&v, (const float[3]){40.0f, 40.0f, 40.0f}, b); /* the far corner */
+    assert_float_equal(b[1], 3.0f, 1e-6);
+    light_sample_beta(&v, (const float[3]){-0.01f, 20.0f, 20.0f}, b);
+    assert_true(b[0] == 0.0f && b[1] == 0.0f);
+    light_sample_beta(&v, (const float[3]){20.0f, 20.0f, 40.5f}, b);
+    assert_true(b[1] == 0.0f);
+    light_sample_beta(&v, (const float[3]){NAN, 20.0f, 20.0f}, b);
+    assert_true(b[1] == 0.0f);
+    ext_volume_finish(&v);
+}
+
+static void test_empty_volume_all_ones(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 8, 8, 8, 100.0, 100.0, 100.0);
+    struct light_settings s;
+    realistic_settings(&s, 16);
+    struct light_map m = {0};
+    double suns[3][3] = {{0, 0, 1}, {1, 0, 0}, {0.4, -0.3, 0.8}};
+    for (int t = 0; t < 3; t++) {
+        assert_true(light_map_build(&v, suns[t], &s, &m));
+        size_t n = (size_t)16 * 16 * 16;
+        for (size_t i = 0; i < n; i++)
+            assert_true(m.light[i] == 1.0f);
+    }
+    light_map_finish(&m);
+    light_map_finish(&m); /* finished twice and NULL are fine */
+    light_map_finish(NULL);
+    ext_volume_finish(&v);
+}
+
+/* Slab lit from straight above, nodes aligned with the slab: L_k = exp(-beta k dz) exactly. */
+static void test_slab_closed_form_overhead(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 16, 16, 20, 200.0, 200.0, 50.0); /* 1 km thick */
+    const float beta = 0.005f;                       /* tau = 5 through the slab */
+    fill_uniform(&v, 0.0f, beta);
+    struct light_settings s;
+    light_settings_defaults(&s);
+    s.forward = false;
+    s.resolution[0] = s.resolution[1] = 8;
+    s.resolution[2] = 21; /* dz = 50 m */
+    struct light_map m = {0};
+    assert_true(light_map_build(&v, (const double[3]){0, 0, 1}, &s, &m));
+    assert_float_equal(m.grid.step[2], 50.0, 1e-9);
+    for (int k = 0; k < 21; k++) {
+        double expect = exp(-0.005 * 50.0 * k);
+        for (int j = 0; j < 8; j++)
+            for (int i = 0; i < 8; i++)
+                assert_float_equal(light_map_node(&m, i, j, k), expect, 2e-6 + 1e-5 * expect);
+    }
+    light_map_finish(&m);
+    ext_volume_finish(&v);
+}
+
+/* Slab lit at 60 degrees elevation: light at depth d is exp(-beta d) up to one light step of
+ * path, d = (H - z) / sin(elevation). */
+static void test_slab_closed_form_oblique(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 64, 64, 20, 200.0, 200.0, 50.0);
+    const double beta = 0.004, H = 1000.0;
+    fill_uniform(&v, 0.0f, (float)beta);
+    struct light_settings s;
+    light_settings_defaults(&s);
+    s.forward = false;
+    s.resolution[0] = s.resolution[1] = 48;
+    s.resolution[2] = 64;
+    double sun[3];
+    light_sun_direction(30.0, 60.0, sun);
+    struct light_map m = {0};
+    assert_true(light_map_build(&v, sun, &s, &m));
+    double el = 60.0 * PI / 180.0, dw = m.grid.step[2];
+    int checked = 0;
+    for (int k = 0; k < 64; k++)
+        for (int j = 0; j < 48; j++)
+            for (int i = 0; i < 48; i++) {
+                double p[3];
+                light_grid_node_world(&m.grid, i, j, k, p);
+                if (!inside_box(&v.grid, p, 1.0))
+                    continue;
+                double d = (H - p[2]) / sin(el);
+                double top[3];
+                for (int a = 0; a < 3; a++)
+                    top[a] = p[a] + d * sun[a];
+                if (!inside_box(&v.grid, (double[3]){top[0], top[1], 0.5 * H}, 1.0))
+                    continue; /* the sunward ray leaves through a side wall */
+                float l = light_map_node(&m, i, j, k);
+                assert_true(l >= exp(-beta * (d + dw)) - 1e-6);
+                assert_true(l <= exp(-beta * fmax(d - dw, 0.0)) + 1e-6);
+                checked++;
+            }
+    assert_true(checked > 1000);
+    light_map_finish(&m);
+    ext_volume_finish(&v);
+}
+
+/* One voxel: shadow strictly behind it (the four light columns its trilinear footprint
+ * touches, below its centre), exactly exp(-tau/4) there, exactly 1 everywhere else. */
+static void test_single_voxel(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 9, 9, 9, 100.0, 100.0, 100.0);
+    const double tau = 2.0;
+    set_beta(&v, 4, 4, 4, 0.0f, (float)(tau / 100.0));
+    for (int fwd = 0; fwd < 2; fwd++) {
+        struct light_settings s;
+        realistic_settings(&s, 10); /* nodes on voxel faces, 100 m apart */
+        s.forward = fwd;
+        struct light_map m = {0};
+        assert_true(light_map_build(&v, (const double[3]){0, 0, 1}, &s, &m));
+        int shadowed = 0;
+        for (int k = 0; k < 10; k++)
+            for (int j = 0; j < 10; j++)
+                for (int i = 0; i < 10; i++) {
+                    double p[3];
+                    light_grid_node_world(&m.grid, i, j, k, p);
+                    bool behind =
+                        fabs(p[0] - 450.0) < 100.0 && fabs(p[1] - 450.0) < 100.0 && p[2] < 450.0;
+                    float l = light_map_node(&m, i, j, k);
+                    if (!behind) {
+                        assert_true(l == 1.0f);
+                        continue;
+                    }
+                    shadowed++;
+                    double t = exp(-0.25 * tau);
+                    if (fwd)
+                        assert_true(l > t + 1e-3 && l < 1.0f);
+                    else
+                        assert_float_equal(l, t, 1e-6);
+                }
+        assert_int_equal(shadowed, 4 * 5);
+        light_map_finish(&m);
+    }
+    ext_volume_finish(&v);
+}
+
+/* Sun exactly along each axis (also from below) and at 1 degree elevation: finite, [0, 1],
+ * and a real shadow. */
+static void test_axis_and_grazing_sun(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 24, 20, 16, 300.0, 300.0, 100.0);
+    fill_sphere(&v, 8.0);
+    struct light_settings s;
+    realistic_settings(&s, 24);
+    double suns[8][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    light_sun_direction(0.0, 1.0, suns[6]);
+    light_sun_direction(247.0, 1.0, suns[7]);
+    struct light_map m = {0};
+    for (int t = 0; t < 8; t++) {
+        assert_true(light_map_build(&v, suns[t], &s, &m));
+        assert_all_in_unit(&m);
+        assert_true(map_min(&m) < 0.5f);
+    }
+    light_map_finish(&m);
+    ext_volume_finish(&v);
+}
+
+/* Whole column tau 1e4, per light sample tau ~ 300: no NaN/Inf, within [0, 1]; shadow only
+ * reaches 0; forward scattering keeps light finite and monotone along the light too. */
+static void test_very_thick(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 8, 8, 32, 100.0, 100.0, 31.25); /* 1 km */
+    fill_uniform(&v, 4.0f, 6.0f);                   /* beta 10 /m: tau 1e4 */
+    struct light_settings s;
+    realistic_settings(&s, 8);
+    s.resolution[2] = 33; /* dz 31.25 m: tau 312.5 per sample */
+    double suns[2][3] = {{0, 0, 1}, {0.5, 0.2, 0.7}};
+    for (int t = 0; t < 2; t++) {
+        for (int fwd = 0; fwd < 2; fwd++) {
+            s.forward = fwd;
+            struct light_map m = {0};
+            assert_true(light_map_build(&v, suns[t], &s, &m));
+            assert_all_in_unit(&m);
+            if (t == 0 && !fwd) {
+                for (int k = 1; k < 33; k++)
+                    for (int c = 0; c < 64; c++) {
+                        float a = m.light[c + 64 * (k - 1)], b = m.light[c + 64 * k];
+                        assert_true(b <= a);
+                    }
+                assert_true(light_map_node(&m, 4, 4, 32) == 0.0f);
+            }
+            light_map_finish(&m);
+        }
+    }
+    ext_volume_finish(&v);
+}
+
+/* Shadow only: never increases along the light, for a random medium and an oblique sun. */
+static void test_shadow_monotone(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 24, 24, 24, 250.0, 250.0, 100.0);
+    fill_random(&v, 0.01f);
+    struct light_settings s;
+    realistic_settings(&s, 32);
+    s.forward = false;
+    double sun[3];
+    light_sun_direction(200.0, 35.0, sun);
+    struct light_map m = {0};
+    assert_true(light_map_build(&v, sun, &s, &m));
+    assert_all_in_unit(&m);
+    size_t plane = 32 * 32;
+    for (int k = 1; k < 32; k++)
+        for (size_t c = 0; c < plane; c++)
+            assert_true(m.light[c + plane * k] <= m.light[c + plane * (k - 1)]);
+    assert_true(map_min(&m) < 0.2f);
+    light_map_finish(&m);
+    ext_volume_finish(&v);
+}
+
+/* Forward scattering on is at least as bright as off, everywhere; strictly brighter inside the
+ * medium (Nes Fig. 5.4: the low-albedo model is too dark inside). */
+static void test_forward_at_least_shadow(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 24, 24, 24, 250.0, 250.0, 100.0);
+    fill_random(&v, 0.01f);
+    struct light_settings s;
+    realistic_settings(&s, 32);
+    double sun[3];
+    light_sun_direction(120.0, 50.0, sun);
+    struct light_map on = {0}, off = {0}, central = {0};
+    assert_true(light_map_build(&v, sun, &s, &on));
+    s.peripheral = false;
+    assert_true(light_map_build(&v, sun, &s, &central));
+    s.forward = false;
+    assert_true(light_map_build(&v, sun, &s, &off));
+    size_t n = (size_t)32 * 32 * 32, shadowed = 0, brighter = 0;
+    for (size_t i = 0; i < n; i++) {
+        assert_true(on.light[i] >= central.light[i]);
+        assert_true(central.light[i] >= off.light[i]);
+        if (off.light[i] < 0.9f) {
+            shadowed++;
+            brighter += on.light[i] > 1.2f * off.light[i];
+        }
+    }
+    print_message("forward on > 1.2 x off at %zu of %zu shadowed nodes\n", brighter, shadowed);
+    assert_true(shadowed > n / 4);
+    assert_true(brighter > shadowed * 3 / 4);
+    light_map_finish(&on);
+    light_map_finish(&central);
+    light_map_finish(&off);
+    ext_volume_finish(&v);
+}
+
+/* Peripheral scattering carries light sideways into a shadow: behind an opaque column the
+ * nodes near its edge get light from their lit neighbours, which central scattering cannot
+ * give. */
+static void test_peripheral_spreads_light(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 32, 32, 32, 100.0, 100.0, 100.0);
+    for (int k = 8; k < 32; k++)
+        for (int j = 0; j < 32; j++)
+            for (int i = 0; i < 16; i++)
+                set_beta(&v, i, j, k, 0.0f, 0.05f); /* tau 5 per voxel: opaque half space */
+    struct light_settings s;
+    realistic_settings(&s, 33);
+    s.forward_angle_deg = 60.0; /* wide ring: offset 0.41 node per slice */
+    struct light_map per = {0}, ctr = {0};
+    assert_true(light_map_build(&v, (const double[3]){0, 0, 1}, &s, &per));
+    s.peripheral = false;
+    assert_true(light_map_build(&v, (const double[3]){0, 0, 1}, &s, &ctr));
+    /* Sun overhead: u = y, v = x, node (i, j, k) at y = 100 i, x = 100 j, z = 3200 - 100 k.
+     * Plane k = 24 is the block's bottom face, 2.4 km below its top; j = 15 is one node inside
+     * the edge at x = 1600 m, j = 4 deep inside. */
+    float edge_per = light_map_node(&per, 16, 15, 24), deep_per = light_map_node(&per, 16, 4, 24);
+    float edge_ctr = light_map_node(&ctr, 16, 15, 24), deep_ctr = light_map_node(&ctr, 16, 4, 24);
+    assert_true(edge_per > deep_per * 1.5f + 1e-6f);
+    assert_true(edge_per > edge_ctr);
+    assert_float_equal(edge_ctr, deep_ctr, 1e-6 + 1e-3 * deep_ctr);
+    light_map_finish(&per);
+    light_map_finish(&ctr);
+    ext_volume_finish(&v);
+}
+
+/* Silver lining.  A dense sphere (tau 20 along its diameter) in front of the sun.  For an
+ * observer behind it looking at the sun along -w, each light column sends
+ * R = sum_s T(s -> observer) (1 - T_s) L_l(s)  (Nes eq. 5.18 with the phase constant near
+ * psi = 0).  Through the centre the light map is dark where the sphere is thin to the
+ * observer and vice versa, so R is small; near the rim both are moderate, so R peaks there:
+ * the rim is brighter than the centre.  The cloud also shadows the ground below it. */
+static void test_silver_lining(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 48, 48, 48, 100.0, 100.0, 100.0);
+    double radius = fill_sphere(&v, 20.0);
+    struct light_settings s;
+    realistic_settings(&s, 49);
+    struct light_map m = {0}, off = {0};
+    assert_true(light_map_build(&v, (const double[3]){0, 0, 1}, &s, &m));
+    s.forward = false;
+    assert_true(light_map_build(&v, (const double[3]){0, 0, 1}, &s, &off));
+    const int n = 49, jc = 24;
+    double profile[49], exit_light[49];
+    for (int i = 0; i < n; i++) {
+        double tr = 1.0, r = 0.0;
+        exit_light[i] = 1.0;
+        for (int k = n - 1; k >= 1; k--) { /* from the observer's side back toward the sun */
+            double pm[3];
+            light_grid_node_world(&m.grid, i, jc, k - 0.5, pm);
+            float b[2];
+            light_sample_beta(&v, (const float[3]){(float)pm[0], (float)pm[1], (float)pm[2]}, b);
+            double ts = exp(-(double)(b[0] + b[1]) * m.grid.step[2]);
+            double l = 0.5 * (light_map_node(&m, i, jc, k - 1) + light_map_node(&m, i, jc, k));
+            r += tr * (1.0 - ts) * l;
+            tr *= ts;
+        }
+        profile[i] = r;
+        /* Light leaving the sphere: the last node plane of the column inside the medium. */
+        for (int k = 1; k < n; k++) {
+            double pm[3];
+            light_grid_node_world(&m.grid, i, jc, k - 0.5, pm);
+            float b[2];
+            light_sample_beta(&v, (const float[3]){(float)pm[0], (float)pm[1], (float)pm[2]}, b);
+            if (b[1] > 0.0f)
+                exit_light[i] = light_map_node(&m, i, jc, k);
+        }
+    }
+    /* Node i sits at x = 100 i: the centre column is i = 24; the rim at 24 +- radius/100. */
+    int best = 24;
+    for (int i = 24; i < n; i++)
+        if (profile[i] > profile[best])
+            best = i;
+    double rim_r = (best - 24) * 100.0;
+    print_message("silver lining: centre R %.3g, peak R %.3g at %.0f m of radius %.0f m\n",
+                  profile[24], profile[best], rim_r, radius);
+    assert_true(rim_r >= 0.7 * radius && rim_r <= radius + 100.0);
+    assert_true(profile[best] > 10.0 * profile[24]);
+    assert_true(profile[n - 1] == 0.0); /* clear sky beside the sphere scatters nothing */
+    /* The light that gets through: the rim passes more than the centre. */
+    assert_true(exit_light[best] > 5.0 * exit_light[24]);
+    /* Forward scattering lets light deeper in (Nes Fig. 5.4 is the "off" case). */
+    assert_true(light_map_node(&m, 24, 24, 24) > 1.5f * light_map_node(&off, 24, 24, 24));
+    /* Ground shadow: the bottom of the box below the sphere is dark, the far corner is lit. */
+    float tex_c[3], tex_o[3];
+    double pc[3] = {2400.0, 2400.0, 0.0}, po[3] = {50.0, 50.0, 0.0}, t[3];
+    light_grid_world_to_tex(&m.grid, pc, t);
+    for (int a = 0; a < 3; a++)
+        tex_c[a] = (float)t[a];
+    light_grid_world_to_tex(&m.grid, po, t);
+    for (int a = 0; a < 3; a++)
+        tex_o[a] = (float)t[a];
+    assert_true(light_map_sample(&m, tex_c) < 0.1f);
+    assert_true(light_map_sample(&m, tex_o) == 1.0f);
+    light_map_finish(&m);
+    light_map_finish(&off);
+    ext_volume_finish(&v);
+}
+
+/* A flat, wide volume at low sun: a light slice is far longer than the light needs to cross
+ * one voxel layer.  Automatic sub-steps follow a finely sub-stepped reference; one extinction
+ * sample per slice does not. */
+static void test_substeps_flat_volume(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 40, 40, 10, 2000.0, 2000.0, 200.0); /* 80 km x 80 km x 2 km */
+    for (int k = 0; k < 10; k++)
+        for (int j = 0; j < 40; j++)
+            for (int i = 0; i < 40; i++)
+                set_beta(&v, i, j, k, 0.0f, (k >= 2 && k <= 4) ? 1e-3f : 0.0f); /* a layer */
+    struct light_settings s;
+    light_settings_defaults(&s);
+    s.forward = false;
+    s.resolution[0] = s.resolution[1] = s.resolution[2] = 24;
+    double sun[3];
+    light_sun_direction(200.0, 20.0, sun);
+    struct light_map ref = {0}, aut = {0}, one = {0}, two = {0};
+    s.substeps = 128;
+    assert_true(light_map_build(&v, sun, &s, &ref));
+    s.substeps = 0;
+    assert_true(light_map_build(&v, sun, &s, &aut));
+    s.substeps = 1;
+    assert_true(light_map_build(&v, sun, &s, &one));
+    assert_int_equal(aut.substeps, light_auto_substeps(&aut.grid, &v.grid));
+    assert_true(aut.substeps > 4);
+    s.substeps = 2 * aut.substeps;
+    assert_true(light_map_build(&v, sun, &s, &two));
+    double err_auto = 0.0, err_one = 0.0, err_two = 0.0;
+    size_t n = (size_t)24 * 24 * 24;
+    for (size_t i = 0; i < n; i++) {
+        err_auto = fmax(err_auto, fabs(aut.light[i] - ref.light[i]));
+        err_one = fmax(err_one, fabs(one.light[i] - ref.light[i]));
+        err_two = fmax(err_two, fabs(two.light[i] - ref.light[i]));
+    }
+    print_message("flat volume: max error with %d auto sub-steps %.3g, twice as many %.3g, one "
+                  "sample per slice %.3g\n",
+                  aut.substeps, err_auto, err_two, err_one);
+    assert_true(err_auto < 0.25);
+    assert_true(err_one > 3.0 * err_auto);
+    assert_true(err_two < 0.6 * err_auto);
+    /* Matching grids need one sample per slice. */
+    struct light_grid g;
+    struct grid3 cube = {.n = {32, 32, 32}, .spacing = {100, 100, 100}};
+    assert_true(light_grid_init(&g, (const double[3]){0, 0, 1}, &cube, (const int[3]){33, 33, 33}));
+    assert_int_equal(light_auto_substeps(&g, &cube), 1);
+    light_map_finish(&ref);
+    light_map_finish(&aut);
+    light_map_finish(&one);
+    light_map_finish(&two);
+    ext_volume_finish(&v);
+}
+
+/* ---- compression ------------------------------------------------------------------------- */
+
+static void check_compressed(const struct light_map *m, double eps)
+{
+    struct light_compressed c;
+    assert_true(light_compressed_build(m, eps, &c));
+    const int *n = m->grid.n;
+    size_t dense_nodes = (size_t)n[0] * n[1] * n[2];
+    assert_true(c.node_count <= dense_nodes);
+    assert_true(light_compressed_bytes(&c) == (size_t)n[0] * n[1] * 8 + c.node_count * 8);
+    /* Every stored sample within epsilon (plus float rounding). */
+    for (int j = 0; j < n[1]; j++)
+        for (int i = 0; i < n[0]; i++) {
+            size_t col = (size_t)i + (size_t)n[0] * j;
+            const float *nodes = c.nodes + 2 * (size_t)c.columns[2 * col];
+            uint32_t cnt = c.columns[2 * col + 1];
+            assert_true(cnt >= 1 && cnt <= (uint32_t)n[2]);
+            assert_true(nodes[0] >= 0.0f && nodes[2 * (cnt - 1)] <= (float)(n[2] - 1));
+            for (uint32_t q = 1; q < cnt; q++)
+                assert_true(nodes[2 * q] >= nodes[2 * (q - 1)]);
+            for (int k = 0; k < n[2]; k++) {
+                float d = light_map_node(m, i, j, k);
+                float e = light_column_eval(nodes, cnt, (float)k);
+                if (!(fabsf(d - e) <= eps + 1e-6))
+                    fail_msg("eps %g column (%d, %d) k %d: dense %.9g compressed %.9g", eps, i, j,
+                             k, (double)d, (double)e);
+            }
+        }
+    /* And at random points through the lookups the eye pass uses. */
+    for (int t = 0; t < 2000; t++) {
+        float tex[3] = {(float)rnd(), (float)rnd(), (float)rnd()};
+        float d = light_map_sample(m, tex), e = light_compressed_sample(&c, tex);
+        assert_true(fabsf(d - e) <= eps + 1e-5);
+    }
+    light_compressed_finish(&c);
+}
+
+static void test_compressed_within_epsilon(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 24, 24, 24, 250.0, 250.0, 100.0);
+    fill_random(&v, 0.004f);
+    struct light_settings s;
+    realistic_settings(&s, 32);
+    double sun[3];
+    light_sun_direction(300.0, 40.0, sun);
+    struct light_map m = {0};
+    assert_true(light_map_build(&v, sun, &s, &m));
+    const double eps[] = {0.0, 1e-4, 1e-3, 0.01, 0.05};
+    for (size_t e = 0; e < sizeof eps / sizeof eps[0]; e++)
+        check_compressed(&m, eps[e]);
+    light_map_finish(&m);
+    ext_volume_finish(&v);
+}
+
+static void test_compress_degenerate(void **state)
+{
+    float out[64];
+    /* Equal depths: a step, and a repeated sample, with epsilon 0. */
+    const float d1[] = {0, 1, 1, 2, 2, 2, 3};
+    const float v1[] = {1, 0.8f, 0.4f, 0.4f, 0.4f, 0.3f, 0.2f};
+    int m = light_compress_column(d1, v1, 7, 0.0, out);
+    assert_true(m >= 2 && m <= 7);
+    for (int i = 0; i < 2 * m; i++)
+        assert_true(isfinite(out[i]));
+    for (int i = 1; i < m; i++)
+        assert_true(out[2 * i] >= out[2 * (i - 1)]);
+    /* Both sides of the step are kept, the later value wins at the step. */
+    assert_float_equal(light_column_eval(out, (uint32_t)m, 0.5f), 0.9f, 1e-6);
+    assert_float_equal(light_column_eval(out, (uint32_t)m, 1.0f), 0.4f, 1e-6);
+    assert_float_equal(light_column_eval(out, (uint32_t)m, 2.0f), 0.3f, 1e-6);
+    assert_float_equal(light_column_eval(out, (uint32_t)m, 2.5f), 0.25f, 1e-6);
+    /* All samples at one depth. */
+    const float d2[] = {5, 5, 5, 5}, v2[] = {0.5f, 0.5f, 0.5f, 0.5f};
+    m = light_compress_column(d2, v2, 4, 0.0, out);
+    assert_int_equal(m, 1);
+    assert_float_equal(light_column_eval(out, 1, 5.0f), 0.5f, 0);
+    assert_float_equal(light_column_eval(out, 1, 0.0f), 0.5f, 0);
+    /* Epsilon 0 on an exact ramp: two nodes; on a non-linear profile: every sample kept. */
+    float d3[16], v3[16];
+    for (int i = 0; i < 16; i++) {
+        d3[i] = (float)i;
+        v3[i] = 1.0f - 0.0625f * i;
+    }
+    assert_int_equal(light_compress_column(d3, v3, 16, 0.0, out), 2);
+    for (int i = 0; i < 16; i++)
+        v3[i] = (float)(i * i) / 256.0f;
+    assert_int_equal(light_compress_column(d3, v3, 16, 0.0, out), 16);
+    /* Flat start and tail: 1 until depth 5, a ramp to 0.5 at depth 9, then 0.5: two nodes,
+     * exact with epsilon 0; a constant function is one node. */
+    for (int i = 0; i < 16; i++)
+        v3[i] = i <= 5 ? 1.0f : i >= 9 ? 0.5f : 1.0f - 0.125f * (float)(i - 5);
+    int flat = light_compress_column(d3, v3, 16, 0.0, out);
+    assert_int_equal(flat, 2);
+    assert_true(out[0] == 5.0f && out[1] == 1.0f && out[2] == 9.0f && out[3] == 0.5f);
+    for (int i = 0; i < 16; i++)
+        assert_float_equal(light_column_eval(out, 2, d3[i]), v3[i], 1e-6);
+    for (int i = 0; i < 16; i++)
+        v3[i] = 0.75f;
+    assert_int_equal(light_compress_column(d3, v3, 16, 0.0, out), 1);
+    assert_true(out[1] == 0.75f);
+    /* One sample, none, and bad input. */
+    assert_int_equal(light_compress_column(d3, v3, 1, 0.0, out), 1);
+    assert_int_equal(light_compress_column(d3, v3, 0, 0.0, out), 0);
+    assert_float_equal(light_column_eval(out, 0, 3.0f), 1.0f, 0);
+    unsigned errors = log_error_count();
+    const float bad_d[] = {0, 2, 1};
+    assert_int_equal(light_compress_column(bad_d, v3, 3, 0.0, out), -1);
+    assert_int_equal(light_compress_column(d3, v3, 3, -1.0, out), -1);
+    assert_int_equal(light_compress_column(d3, v3, 3, NAN, out), -1);
+    assert_int_equal(log_error_count(), errors + 3);
+}
+
+/* On a smooth profile compression really removes nodes, within the bound. */
+static void test_compression_reduces(void **state)
+{
+    float d[256], v[256], out[512];
+    for (int i = 0; i < 256; i++) {
+        d[i] = (float)i;
+        v[i] = (float)exp(-i / 40.0);
+    }
+    int m = light_compress_column(d, v, 256, 1e-3, out);
+    print_message("exp profile, 256 samples, eps 1e-3: %d nodes\n", m);
+    assert_true(m >= 3 && m <= 40);
+    for (int i = 0; i < 256; i++)
+        assert_true(fabsf(light_column_eval(out, (uint32_t)m, d[i]) - v[i]) <= 1e-3 + 1e-6);
+
+    /* A whole map: the slab's light falls exponentially. */
+    struct ext_volume vol;
+    make_volume(&vol, 16, 16, 16, 100.0, 100.0, 100.0);
+    fill_uniform(&vol, 0.0f, 0.002f);
+    struct light_settings s;
+    realistic_settings(&s, 32);
+    s.resolution[2] = 128;
+    double sun[3];
+    light_sun_direction(45.0, 60.0, sun);
+    struct light_map map = {0};
+    assert_true(light_map_build(&vol, sun, &s, &map));
+    struct light_compressed c;
+    assert_true(light_compressed_build(&map, 0.002, &c));
+    print_message("slab 32x32x128 light map, eps 0.002: %zu nodes, %zu of %zu bytes\n",
+                  c.node_count, light_compressed_bytes(&c), light_map_bytes(&map));
+    assert_true(c.node_count * 8 < (size_t)32 * 32 * 128);
+    assert_true(light_compressed_bytes(&c) * 6 < light_map_bytes(&map));
+    light_compressed_finish(&c);
+    light_compressed_finish(&c);
+    light_compressed_finish(NULL);
+    light_map_finish(&map);
+    ext_volume_finish(&vol);
+}
+
+/* ---- rebuild on change -------------------------------------------------------------------- */
+
+static void test_key_and_cache(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 8, 8, 8, 100.0, 100.0, 100.0);
+    fill_sphere(&v, 4.0);
+    struct light_settings s;
+    realistic_settings(&s, 12);
+    double sun[3];
+    light_sun_direction(135.0, 30.0, sun);
+    struct light_key k, k2;
+    light_key_init(&k, &v.grid, sun, 7, 1, &s);
+    double sun2[3] = {2 * sun[0], 2 * sun[1], 2 * sun[2]}; /* same direction */
+    light_key_init(&k2, &v.grid, sun2, 7, 1, &s);
+    assert_true(light_key_equal(&k, &k2));
+    assert_true(light_key_hash(&k) == light_key_hash(&k2));
+
+    struct light_cache cache;
+    light_cache_init(&cache);
+    struct light_map m = {0};
+    struct light_compressed c = {0};
+    bool built;
+    /* Twelve camera positions, one frame each: the light map does not depend on the camera. */
+    for (int cam = 0; cam < 12; cam++) {
+        assert_true(light_map_update(&v, &k, &cache, &m, &c, &built));
+        assert_true(built == (cam == 0));
+    }
+    assert_int_equal(cache.builds, 1);
+    assert_true(c.node_count > 0);
+
+    /* Each input that matters triggers exactly one rebuild. */
+    struct light_key changed[9];
+    for (int i = 0; i < 9; i++)
+        changed[i] = k;
+    light_sun_direction(136.0, 30.0, changed[0].sun);
+    changed[1].volume_id = 8;
+    changed[2].volume_generation = 2;
+    changed[3].settings.cp.ice_ctr += 0.01;
+    changed[4].settings.resolution[2] = 13;
+    changed[5].settings.peripheral = false;
+    changed[6].settings.epsilon = 0.01;
+    changed[7].box.spacing[0] = 101.0;
+    changed[8].settings.substeps = 3;
+    for (int i = 0; i < 9; i++) {
+        assert_false(light_key_equal(&k, &changed[i]));
+        assert_true(light_key_hash(&k) != light_key_hash(&changed[i]));
+        unsigned before = cache.builds;
+        if (i == 7) { /* a different box must come with its volume */
+            assert_true(light_cache_stale(&cache, &changed[i]));
+            continue;
+        }
+        assert_true(light_map_update(&v, &changed[i], &cache, &m, NULL, &built));
+        assert_true(built);
+        assert_true(light_map_update(&v, &changed[i], &cache, &m, NULL, &built));
+        assert_false(built);
+        assert_int_equal(cache.builds, before + 1);
+    }
+    assert_true(cache.total_ms >= cache.last_ms && cache.last_ms >= 0.0);
+    light_cache_invalidate(&cache);
+    assert_true(light_cache_stale(&cache, &changed[6]));
+    light_compressed_finish(&c);
+    light_map_finish(&m);
+    ext_volume_finish(&v);
+}
+
+/* ---- memory figures on the procedural storm (docs/lightmap.md) ---------------------------- */
+
+static void test_storm_memory_figures(void **state)
+{
+    struct synth_desc d = {.kind = SYNTH_STORM,
+                           .n = {128, 128, 64},
+                           .extent_m = {60000.0, 60000.0, 16000.0},
+                           .seed = 1,
+                           .time = 0.5};
+    struct ext_volume v;
+    if (!synth_extinction(&d, NULL, &v)) {
+        print_message("synthetic storm unavailable; skipping memory figures\n");
+        return;
+    }
+    struct light_settings s;
+    realistic_settings(&s, 128);
+    double sun[3];
+    light_sun_direction(135.0, 35.0, sun); /* the default scene's sun */
+    struct light_map m = {0};
+    double t0 = time_now_ms();
+    assert_true(light_map_build(&v, sun, &s, &m));
+    double ms = time_now_ms() - t0;
+    assert_all_in_unit(&m);
+    print_message("default storm (128x128x64 voxels), light map 128^3, sun az 135 el 35:\n"
+                  "  max beta %.3g /m, %d sub-steps, build %.0f ms, min light %.3g, dense %zu "
+                  "bytes\n",
+                  ext_volume_max_beta(&v), m.substeps, ms, (double)map_min(&m),
+                  light_map_bytes(&m));
+    size_t prev = SIZE_MAX;
+    const double eps[] = {0.0, 0.001, 0.002, 0.005, 0.01, 0.02};
+    for (size_t e = 0; e < sizeof eps / sizeof eps[0]; e++) {
+        struct light_compressed c;
+        t0 = time_now_ms();
+        assert_true(light_compressed_build(&m, eps[e], &c));
+        double cms = time_now_ms() - t0;
+        size_t bytes = light_compressed_bytes(&c);
+        float worst = 0.0f;
+        for (int t = 0; t < 20000; t++) {
+            float tex[3] = {(float)rnd(), (float)rnd(), (float)rnd()};
+            worst =
+                fmaxf(worst, fabsf(light_map_sample(&m, tex) - light_compressed_sample(&c, tex)));
+        }
+        uint32_t most = 0;
+        size_t busy = 0, busy_nodes = 0; /* columns that cross the storm */
+        for (size_t col = 0; col < (size_t)128 * 128; col++) {
+            uint32_t cnt = c.columns[2 * col + 1];
+            most = cnt > most ? cnt : most;
+            if (cnt > 2)
+                busy++, busy_nodes += cnt;
+        }
+        print_message("  eps %-6g %zu columns with > 2 nodes, %.1f nodes each\n", eps[e], busy,
+                      busy ? (double)busy_nodes / busy : 0.0);
+        print_message("  eps %-6g nodes %9zu (%.2f per column, max %u) bytes %10zu (%.1f%% of "
+                      "dense) compress %.0f ms, worst sampled error %.2g\n",
+                      eps[e], c.node_count, (double)c.node_count / (128.0 * 128.0), most, bytes,
+                      100.0 * bytes / light_map_bytes(&m), cms, (double)worst);
+        assert_true(worst <= eps[e] + 1e-5);
+        assert_true(bytes <= prev);
+        prev = bytes;
+        light_compressed_finish(&c);
+    }
+    light_map_finish(&m);
+    ext_volume_finish(&v);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_sun_direction),
+        cmocka_unit_test(test_grid_frame_and_mapping),
+        cmocka_unit_test(test_grid_rejects_bad_input),
+        cmocka_unit_test(test_peripheral_offset),
+        cmocka_unit_test(test_beta_sampling),
+        cmocka_unit_test(test_empty_volume_all_ones),
+        cmocka_unit_test(test_slab_closed_form_overhead),
+        cmocka_unit_test(test_slab_closed_form_oblique),
+        cmocka_unit_test(test_single_voxel),
+        cmocka_unit_test(test_axis_and_grazing_sun),
+        cmocka_unit_test(test_very_thick),
+        cmocka_unit_test(test_shadow_monotone),
+        cmocka_unit_test(test_forward_at_least_shadow),
+        cmocka_unit_test(test_peripheral_spreads_light),
+        cmocka_unit_test(test_silver_lining),
+        cmocka_unit_test(test_substeps_flat_volume),
+        cmocka_unit_test(test_compressed_within_epsilon),
+        cmocka_unit_test(test_compress_degenerate),
+        cmocka_unit_test(test_compression_reduces),
+        cmocka_unit_test(test_key_and_cache),
+        cmocka_unit_test(test_storm_memory_figures),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
