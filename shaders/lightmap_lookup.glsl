@@ -22,12 +22,23 @@ float lightmap_light(vec3 p)
 uniform mat4 light_world_to_tex;
 uniform ivec3 light_n;
 
+// The light grid's columns span the volume's projection across the light: a point beside
+// them (the ground around the volume) has nothing between it and the sun.  Along the light,
+// lookups clamp: beyond the far end the light is what left the volume.
+bool outside_light_columns(vec3 tex)
+{
+    return tex.x < 0.0 || tex.x > 1.0 || tex.y < 0.0 || tex.y > 1.0;
+}
+
 #if LIGHTMAP == 1
 layout(binding = 2) uniform sampler3D light_tex;
 
 float lightmap_light(vec3 p)
 {
-    return texture(light_tex, (light_world_to_tex * vec4(p, 1.0)).xyz).r;
+    vec3 tex = (light_world_to_tex * vec4(p, 1.0)).xyz;
+    if (outside_light_columns(tex))
+        return 1.0;
+    return texture(light_tex, tex).r;
 }
 #else
 layout(std430, binding = 0) readonly buffer light_columns { uint columns[]; }; // first, count
@@ -79,6 +90,8 @@ float column_eval(int i, int j, float depth)
 float lightmap_light(vec3 p)
 {
     vec3 tex = (light_world_to_tex * vec4(p, 1.0)).xyz;
+    if (outside_light_columns(tex))
+        return 1.0;
     float tx, ty;
     int i = tex_column(tex.x, light_n.x, tx);
     int j = tex_column(tex.y, light_n.y, ty);

@@ -84,8 +84,11 @@ void main()
     vec3 background;
     if (t_ground < 1e29) {
         vec3 g = origin + dir * t_ground;
+        // Lambertian ground.  sun_radiance is E / (4 pi) for a sun of irradiance E (so that
+        // the volume's single scattering is T (1 - T_s) (4 pi p) sun_radiance), hence the
+        // ground's rho E cos / pi = 4 rho sun_radiance cos; a uniform sky adds rho L_sky.
         float sun_light = max(sun_dir.z, 0.0) * ground_light(g);
-        background = ground_albedo * (sun_radiance * sun_light + sky_radiance);
+        background = ground_albedo * (4.0 * sun_radiance * sun_light + sky_radiance);
     } else {
         background = sky_radiance;
     }

@@ -3,6 +3,8 @@
 #include <string.h>
 
 #include "app/app.h"
+#include "app/cmd_bench.h"
+#include "app/cmd_data.h"
 #include "common/log.h"
 #include "config/config.h"
 
@@ -15,6 +17,10 @@ struct command {
 static const struct command commands[] = {
     {"render", cmd_render, "render views headless (EGL) to PNG or PFM files"},
     {"run", cmd_run, "open a window: orbit, zoom, move the sun"},
+    {"info", cmd_info, "describe WRF, Isabel or extinction files"},
+    {"synth", cmd_synth, "write the procedural storm as a WRF-convention NetCDF time series"},
+    {"convert", cmd_convert, "precompute ice and water extinction volumes into a NetCDF file"},
+    {"reference", cmd_reference, "Monte Carlo reference image and its standard error (CPU)"},
 };
 
 static void usage(FILE *out)

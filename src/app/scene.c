@@ -4,7 +4,9 @@
 #include <string.h>
 
 #include "app/app.h"
+#include "app/cmd_data.h"
 #include "common/log.h"
+#include "data/source.h"
 #include "data/synth.h"
 #include "render/camera.h"
 
@@ -18,6 +20,31 @@ bool app_load_config(const char *config_path, char **sets, int n_sets, struct co
             return false;
     }
     return config_validate(cfg);
+}
+
+/* One time step (data.step) of the files the config names, as extinction. */
+static bool load_data_step(const struct config *cfg, struct ext_volume *out)
+{
+    const char *files[CONFIG_MAX_FILES];
+    struct data_source_desc desc;
+    cmd_data_source_desc(cfg, files, &desc);
+    struct data_source *src = data_source_open(&desc);
+    if (!src)
+        return false;
+    int steps = data_source_step_count(src);
+    bool ok = false;
+    if (cfg->data.step < 0 || cfg->data.step >= steps) {
+        log_error("%s: data.step: expected a time step in [0, %d], got %d", cfg->path,
+                  steps - 1, cfg->data.step);
+    } else {
+        double load_ms = 0.0, convert_ms = 0.0;
+        ok = data_source_load(src, cfg->data.step, out, &load_ms, &convert_ms);
+        if (ok)
+            log_info("time step %d (%s) read in %.0f ms, converted in %.0f ms", cfg->data.step,
+                     data_source_step_date(src, cfg->data.step), load_ms, convert_ms);
+    }
+    data_source_close(src);
+    return ok;
 }
 
 bool app_build_volume(const struct config *cfg, struct ext_volume *out)
@@ -41,8 +68,7 @@ bool app_build_volume(const struct config *cfg, struct ext_volume *out)
         d.kind = SYNTH_VOXEL;
         break;
     case SCENE_DATA:
-        log_error("%s: scene.kind = \"data\" is not supported by this build", cfg->path);
-        return false;
+        return load_data_step(cfg, out);
     }
     for (int i = 0; i < 3; i++) {
         d.n[i] = sc->size[i];

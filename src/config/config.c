@@ -176,7 +176,7 @@ static const struct setting settings[] = {
     DBL("render.exposure", render.exposure, 0, 1e6, F_MIN_OPEN, 1.0,
         "multiplies radiance before tone mapping"),
     DBL3("render.sky", render.sky, 0, 1e6, 0, 0.30, 0.45, 0.75, "background radiance, linear RGB"),
-    DBL3("render.ground", render.ground, 0, 1, 0, 0.08, 0.08, 0.07, "ground albedo, linear RGB"),
+    DBL3("render.ground", render.ground, 0, 1, 0, 0.05, 0.05, 0.045, "ground albedo, linear RGB"),
     BOOL("render.ground_on", render.ground_on, 1, "draw the ground plane"),
     DBL("render.termination", render.termination, 0, 1, F_MAX_OPEN, 0.001,
         "stop a ray when its transmittance falls below this"),

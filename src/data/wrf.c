@@ -1,11 +1,13 @@
 #include "data/wrf.h"
 
 #include <glob.h>
+#include <pthread.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <netcdf.h>
 
@@ -640,8 +642,17 @@ static void sanitize(const struct wrf *w, int step, enum wrf_var v, float *buf, 
     st->read = true;
     st->count = n;
     double lo = INFINITY, hi = -INFINITY;
+    /* Fast path for the usual good mass ratio (NaN fails both comparisons). */
+    bool fast = mass && !(has_fv && fv >= 0.0f && fv <= 1.0f) &&
+                !(has_mv && mv >= 0.0f && mv <= 1.0f);
+    float flo = INFINITY, fhi = -INFINITY;
     for (size_t i = 0; i < n; i++) {
         float x = buf[i];
+        if (fast && x >= 0.0f && x <= 1.0f) {
+            flo = x < flo ? x : flo;
+            fhi = x > fhi ? x : fhi;
+            continue;
+        }
         if (isnan(x)) {
             st->nan++;
         } else if (isinf(x)) {
@@ -660,6 +671,10 @@ static void sanitize(const struct wrf *w, int step, enum wrf_var v, float *buf, 
             continue;
         }
         buf[i] = replacement;
+    }
+    if (flo <= fhi) {
+        lo = fmin(lo, flo);
+        hi = fmax(hi, fhi);
     }
     st->min = lo <= hi ? lo : 0.0;
     st->max = lo <= hi ? hi : 0.0;
@@ -718,47 +733,123 @@ int wrf_resample_column(const double *z, const float *v, int nz, double z_ground
     return outside_count;
 }
 
-/* Heights of the mass levels of every column from PH + PHB on staggered levels. */
+/* Heights of the mass levels of every column from PH + PHB on staggered levels.  Columns are
+ * resampled in blocks of BLOCK neighbours so that reading levels and writing output planes
+ * touch memory in order. */
+#define BLOCK 32
+
 struct columns {
     int nz, nzs;
     size_t cols;
-    float *zw;   /* staggered heights, m: zw[k * cols + c] */
-    double *zm;  /* one column's mass-level heights */
-    float *col;  /* one column's values */
+    float *zw;  /* staggered heights, m: zw[k * cols + c] */
+    double *zm; /* one column's mass-level heights (for the checks before resampling) */
 };
 
-static bool column_heights(struct columns *c, size_t col)
+static bool column_heights(const struct columns *c, size_t col, double *zm)
 {
     for (int k = 0; k < c->nz; k++) {
-        c->zm[k] = 0.5 * ((double)c->zw[(size_t)k * c->cols + col] +
-                          (double)c->zw[(size_t)(k + 1) * c->cols + col]);
-        if (k > 0 && !(c->zm[k] > c->zm[k - 1]))
+        zm[k] = 0.5 * ((double)c->zw[(size_t)k * c->cols + col] +
+                       (double)c->zw[(size_t)(k + 1) * c->cols + col]);
+        if (k > 0 && !(zm[k] > zm[k - 1]))
             return false;
     }
     return true;
 }
 
-/* Resamples one mass-level variable BUF (nz * cols) into OUT on the output grid. */
-static void resample_var(struct columns *c, const float *buf, const struct grid3 *g,
+/* One thread's share of resample_var: columns [begin, end). */
+struct resample_job {
+    const struct columns *c;
+    const float *buf;
+    const struct grid3 *g;
+    float outside;
+    float *out;
+    size_t begin, end;
+    size_t below, above;
+    bool ok;
+    pthread_t thread;
+};
+
+static void *resample_range(void *arg)
+{
+    struct resample_job *j = arg;
+    const struct columns *c = j->c;
+    int no = j->g->n[2], nz = c->nz;
+    double *zm = malloc((size_t)BLOCK * nz * sizeof(double));
+    float *vin = malloc((size_t)BLOCK * nz * sizeof(float));
+    float *vout = malloc((size_t)BLOCK * no * sizeof(float));
+    j->ok = zm && vin && vout;
+    for (size_t c0 = j->begin; c0 < j->end && j->ok; c0 += BLOCK) {
+        int nb = (int)(j->end - c0 < BLOCK ? j->end - c0 : BLOCK);
+        for (int k = 0; k < nz; k++) {
+            const float *row = j->buf + (size_t)k * c->cols + c0;
+            for (int b = 0; b < nb; b++)
+                vin[b * nz + k] = row[b];
+        }
+        for (int b = 0; b < nb; b++) {
+            size_t col = c0 + (size_t)b;
+            double *z = zm + (size_t)b * nz;
+            column_heights(c, col, z);
+            int below = 0;
+            int outn = wrf_resample_column(z, vin + (size_t)b * nz, nz, c->zw[col],
+                                           c->zw[(size_t)nz * c->cols + col], j->g->origin[2],
+                                           j->g->spacing[2], no, j->outside,
+                                           vout + (size_t)b * no, &below);
+            j->below += (size_t)below;
+            j->above += (size_t)(outn - below);
+        }
+        for (int o = 0; o < no; o++) {
+            float *dst = j->out + c->cols * (size_t)o + c0;
+            for (int b = 0; b < nb; b++)
+                dst[b] = vout[(size_t)b * no + o];
+        }
+    }
+    free(zm);
+    free(vin);
+    free(vout);
+    return NULL;
+}
+
+#define THREADS_MAX 16
+
+/* Resamples one mass-level variable BUF (nz * cols) into OUT on the output grid, on up to
+ * THREADS_MAX threads.  False (logged) when out of memory. */
+static bool resample_var(const struct columns *c, const float *buf, const struct grid3 *g,
                          float outside, float *out, struct wrf_stats *stats)
 {
-    int no = g->n[2];
-    float *tmp = c->col + c->nz;
-    for (size_t col = 0; col < c->cols; col++) {
-        column_heights(c, col);
-        for (int k = 0; k < c->nz; k++)
-            c->col[k] = buf[(size_t)k * c->cols + col];
-        int below = 0;
-        int outn = wrf_resample_column(c->zm, c->col, c->nz, c->zw[col],
-                                       c->zw[(size_t)c->nz * c->cols + col], g->origin[2],
-                                       g->spacing[2], no, outside, tmp, &below);
-        if (stats) {
-            stats->below_terrain += (size_t)below;
-            stats->above_top += (size_t)(outn - below);
+    long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+    size_t blocks = (c->cols + BLOCK - 1) / BLOCK;
+    int n = cpus < 1 ? 1 : cpus > THREADS_MAX ? THREADS_MAX : (int)cpus;
+    if ((size_t)n > blocks / 16 + 1)
+        n = (int)(blocks / 16 + 1); /* small grids: not worth a thread */
+    struct resample_job jobs[THREADS_MAX];
+    size_t per = (blocks + (size_t)n - 1) / (size_t)n * BLOCK;
+    int started = 0;
+    for (int t = 0; t < n; t++) {
+        size_t begin = per * (size_t)t, end = begin + per < c->cols ? begin + per : c->cols;
+        jobs[t] = (struct resample_job){.c = c, .buf = buf, .g = g, .outside = outside,
+                                        .out = out, .begin = begin, .end = end};
+        if (begin >= end) {
+            jobs[t].ok = true;
+            continue;
         }
-        for (int o = 0; o < no; o++)
-            out[col + c->cols * (size_t)o] = tmp[o];
+        if (t == n - 1 || pthread_create(&jobs[t].thread, NULL, resample_range, &jobs[t]) != 0)
+            resample_range(&jobs[t]); /* the last share (or a failed start) on this thread */
+        else
+            started |= 1 << t;
     }
+    bool ok = true;
+    for (int t = 0; t < n; t++) {
+        if (started & (1 << t))
+            pthread_join(jobs[t].thread, NULL);
+        ok = ok && jobs[t].ok;
+        if (stats) {
+            stats->below_terrain += jobs[t].below;
+            stats->above_top += jobs[t].above;
+        }
+    }
+    if (!ok)
+        log_error("out of memory resampling a %d-level column", c->nz);
+    return ok;
 }
 
 bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct field_volume *out,
@@ -792,10 +883,9 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     bool ok = false;
     c.zw = malloc(c.cols * (size_t)c.nzs * sizeof(float));
     c.zm = malloc((size_t)c.nz * sizeof(double));
-    c.col = malloc((size_t)(c.nz + s.nz + s.levels) * sizeof(float));
     buf = malloc(c.cols * (size_t)c.nz * sizeof(float));
     buf2 = malloc(c.cols * (size_t)c.nz * sizeof(float));
-    if (!c.zw || !c.zm || !c.col || !buf || !buf2) {
+    if (!c.zw || !c.zm || !buf || !buf2) {
         log_error("%s: out of memory reading time step %d", path, step);
         goto done;
     }
@@ -830,7 +920,7 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         goto unlock;
     double top = 0.0;
     for (size_t col = 0; col < c.cols; col++) {
-        if (!column_heights(&c, col)) {
+        if (!column_heights(&c, col, c.zm)) {
             log_error("%s: variables PH, PHB, time %d: heights do not increase upward in column "
                       "(%zu, %zu)",
                       path, w->steps[step].index, s.x0 + (col % s.nx) * s.sx,
@@ -879,7 +969,8 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         sanitize(w, step, (enum wrf_var)v, buf, c.cols * (size_t)c.nz, 0.0f, &stats->var[v]);
         if (!report(w, step, (enum wrf_var)v, &stats->var[v]))
             goto unlock;
-        resample_var(&c, buf, g, 0.0f, dst, counted ? NULL : stats);
+        if (!resample_var(&c, buf, g, 0.0f, dst, counted ? NULL : stats))
+            goto unlock;
         counted = true;
     }
 
@@ -908,7 +999,8 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
             log_error("%s: out of memory for air density", path);
             goto unlock;
         }
-        resample_var(&c, buf, g, NAN, out->rho_air, NULL);
+        if (!resample_var(&c, buf, g, NAN, out->rho_air, NULL))
+            goto unlock;
         /* Below the ground, above the top, or where P/PB/T were bad: standard atmosphere. */
         for (int k = 0; k < g->n[2]; k++) {
             double z = g->origin[2] + (k + 0.5) * g->spacing[2];
@@ -927,7 +1019,6 @@ unlock:
 done:
     free(c.zw);
     free(c.zm);
-    free(c.col);
     free(buf);
     free(buf2);
     if (!ok)

@@ -148,8 +148,11 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     if (!prog)
         return false;
 
-    mat4 vp, inv;
-    glm_mat4_mul((vec4 *)view->proj, (vec4 *)view->view, vp);
+    /* cglm's SIMD code needs aligned matrices; the caller's need not be. */
+    mat4 proj, viewm, vp, inv;
+    memcpy(proj, view->proj, sizeof(proj));
+    memcpy(viewm, view->view, sizeof(viewm));
+    glm_mat4_mul(proj, viewm, vp);
     glm_mat4_inv(vp, inv);
     const struct grid3 *g = &r->grid;
     float box_min[3], box_size[3];

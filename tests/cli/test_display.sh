@@ -44,7 +44,7 @@ check "names the missing file" stderr_has "none.cfg"
 "$anvil" render --quiet "$src/configs/empty.cfg" -o "$tmp/probe.png" 2>"$tmp/err"
 if [ $? -eq 3 ]; then echo "no OpenGL context: skipping the rest"; exit 77; fi
 
-small="--set scene.size=[32,32,16] --set render.height=48"
+small="--set scene.size=[32,32,16] --set render.height=48 --set lightmap.resolution=[32,32,32]"
 expect_exit 0 "render --display cave4.cfg" "$anvil" render "$src/configs/default.cfg" $small \
     --display "$src/displays/cave4.cfg" -o "$tmp/cave4/" --stats "$tmp/cave4.json"
 for wall in front left right floor; do

@@ -51,13 +51,14 @@ static void test_empty_scene_is_background(void **state)
     }
     image_finish(&img);
 
-    /* With the ground: below the horizon each pixel is albedo (sun sin(elevation) + sky). */
+    /* With the ground: below the horizon each pixel is albedo (4 sun sin(elevation) + sky),
+     * a Lambertian surface under a sun of irradiance 4 pi sun and a uniform sky. */
     const char *sets2[] = {"scene.kind=empty", "scene.size=[16,16,8]", "render.width=64",
                            "render.height=48", "render.sky=[0.25,0.5,0.75]",
                            "render.ground=[0.5,0.5,0.5]", "light.elevation=30",
                            "light.color=[1,1,1]", "light.intensity=2"};
     render_config(&cfg, sets2, 9, &img);
-    float ground = 0.5f * (2.0f * sinf(30.0f * (float)M_PI / 180.0f) + 0.25f);
+    float ground = 0.5f * (4.0f * 2.0f * sinf(30.0f * (float)M_PI / 180.0f) + 0.25f);
     int bottom = 2 * 4; /* lower-left pixel looks at the ground from the default camera */
     assert_float_equal(img.rgba[bottom], ground, 1e-5);
     /* Top row looks at the sky. */

@@ -115,7 +115,7 @@ static void test_defaults(void **state)
     assert_int_equal(cfg.render.height, 480);
     assert_true(cfg.render.step_m == 0.0);
     assert_true(cfg.render.sky[2] == 0.75);
-    assert_true(cfg.render.ground[0] == 0.08);
+    assert_true(cfg.render.ground[0] == 0.05);
     assert_true(cfg.render.ground_on);
     assert_true(cfg.render.termination == 0.001);
     assert_int_equal(cfg.lightmap.mode, LIGHTMAP_DENSE);

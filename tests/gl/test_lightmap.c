@@ -1,0 +1,357 @@
+/* The deep light map on EGL/llvmpipe: the GPU build against the CPU reference, compressed
+ * against dense, one build for many views, and the physics one can see in the eye pass. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+
+#include "app/app.h"
+#include "common/log.h"
+#include "gpu/gpu.h"
+#include "light/light.h"
+#include "light/light_gpu.h"
+#include "render/camera.h"
+#include "render/render.h"
+
+/* Largest |GPU - CPU| allowed between the two builds of the same light map (docs/lightmap.md):
+ * both sum the same float32 operations, but the GPU may fuse multiply-adds and its exp()
+ * differs from libm's in the last bits; errors stay far below this after 128 planes. */
+#define GPU_CPU_TOLERANCE 2e-4
+
+static struct gpu_context *ctx;
+static struct renderer *renderer;
+
+static void load(struct config *cfg, const char **sets, int n)
+{
+    config_defaults(cfg);
+    for (int i = 0; i < n; i++)
+        assert_true(config_set(cfg, sets[i]));
+    assert_true(config_validate(cfg));
+}
+
+static void upload(const struct config *cfg, struct ext_volume *vol)
+{
+    assert_true(app_build_volume(cfg, vol));
+    assert_true(renderer_set_volume(renderer, vol));
+    assert_true(renderer_set_optics(renderer, &cfg->optics.params));
+}
+
+static void settings_of(const struct config *cfg, struct light_settings *s)
+{
+    light_settings_defaults(s);
+    memcpy(s->resolution, cfg->lightmap.resolution, sizeof(s->resolution));
+    s->forward = cfg->lightmap.forward;
+    s->peripheral = cfg->lightmap.peripheral;
+    s->epsilon = cfg->lightmap.epsilon;
+    light_settings_set_optics(s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
+}
+
+static double gpu_vs_cpu(const char **sets, int n)
+{
+    struct config cfg;
+    struct ext_volume vol = {0};
+    load(&cfg, sets, n);
+    upload(&cfg, &vol);
+    struct light_settings s;
+    settings_of(&cfg, &s);
+    double sun[3];
+    camera_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
+
+    struct light_gpu *lg = light_gpu_create();
+    assert_non_null(lg);
+    struct light_gpu_source src = {renderer_volume_texture(renderer), renderer_grid(renderer),
+                                   1, 1};
+    bool built = false;
+    assert_true(light_gpu_update(lg, &src, sun, &s, LIGHT_GPU_DENSE, &built));
+    assert_true(built);
+    struct light_map gpu = {0}, cpu = {0};
+    assert_true(light_gpu_read(lg, &gpu));
+    assert_true(light_map_build(&vol, sun, &s, &cpu));
+    assert_memory_equal(gpu.grid.n, cpu.grid.n, sizeof(cpu.grid.n));
+    size_t count = (size_t)cpu.grid.n[0] * cpu.grid.n[1] * cpu.grid.n[2];
+    double worst = 0.0, lo = 1.0;
+    for (size_t i = 0; i < count; i++) {
+        assert_true(isfinite(gpu.light[i]));
+        worst = fmax(worst, fabs((double)gpu.light[i] - cpu.light[i]));
+        lo = fmin(lo, cpu.light[i]);
+    }
+    /* The scene casts a real shadow: a comparison of two all-ones maps proves nothing. */
+    assert_true(lo < 0.5);
+    light_map_finish(&gpu);
+    light_map_finish(&cpu);
+    light_gpu_destroy(lg);
+    ext_volume_finish(&vol);
+    return worst;
+}
+
+static void test_gpu_matches_cpu_sphere(void **state)
+{
+    const char *sets[] = {"scene.kind=sphere", "scene.size=[32,32,32]",
+                          "scene.extent=[10,10,10]", "scene.tau=30", "light.azimuth=60",
+                          "light.elevation=25", "lightmap.resolution=[48,48,64]"};
+    double err = gpu_vs_cpu(sets, 7);
+    print_message("sphere: max |GPU - CPU| = %.3g\n", err);
+    assert_true(err <= GPU_CPU_TOLERANCE);
+}
+
+static void test_gpu_matches_cpu_slab(void **state)
+{
+    const char *sets[] = {"scene.kind=slab", "scene.size=[24,24,12]", "scene.extent=[10,10,2]",
+                          "scene.tau=6", "light.azimuth=200", "light.elevation=40",
+                          "lightmap.resolution=[40,40,48]", "scene.phase=ice"};
+    double err = gpu_vs_cpu(sets, 8);
+    print_message("slab: max |GPU - CPU| = %.3g\n", err);
+    assert_true(err <= GPU_CPU_TOLERANCE);
+}
+
+static void test_gpu_matches_cpu_storm(void **state)
+{
+    const char *sets[] = {"scene.size=[64,64,32]", "lightmap.resolution=[64,64,64]"};
+    double err = gpu_vs_cpu(sets, 2);
+    print_message("storm: max |GPU - CPU| = %.3g\n", err);
+    assert_true(err <= GPU_CPU_TOLERANCE);
+}
+
+/* Renders the config's camera (or VIEW when given) with the light map the config asks for;
+ * the number of builds goes to *BUILDS. */
+static void render(const struct config *cfg, struct app_light *al, struct app_stats *st,
+                   const struct render_view *view, struct image *img)
+{
+    struct render_settings rs;
+    app_render_settings(cfg, &rs);
+    struct render_view v;
+    if (view)
+        v = *view;
+    else
+        app_camera_view(cfg, cfg->render.width, cfg->render.height, &v);
+    assert_true(app_light_update(al, cfg, renderer, st));
+    struct gpu_texture out = {0};
+    assert_true(renderer_draw(renderer, &rs, &v, &out));
+    assert_true(renderer_read(&out, img));
+    gpu_texture_finish(&out);
+}
+
+static void test_compressed_within_epsilon_of_dense(void **state)
+{
+    struct config cfg;
+    struct ext_volume vol = {0};
+    const char *sets[] = {"scene.size=[48,48,24]", "render.width=80", "render.height=60",
+                          "lightmap.resolution=[48,48,48]", "lightmap.epsilon=0.02",
+                          "render.sky=[0,0,0]", "render.ground_on=false"};
+    load(&cfg, sets, 7);
+    upload(&cfg, &vol);
+    struct app_light al;
+    struct app_stats st = {0};
+    struct image dense, comp;
+    assert_true(app_light_init(&al, &cfg));
+    render(&cfg, &al, &st, NULL, &dense);
+    cfg.lightmap.mode = LIGHTMAP_COMPRESSED;
+    render(&cfg, &al, &st, NULL, &comp);
+    assert_int_equal(st.light_builds, 2);
+    assert_true(st.light_bytes_compressed > 0 &&
+                st.light_bytes_compressed < st.light_bytes_dense);
+    /* Each light value differs by at most epsilon, so a pixel by at most epsilon times the
+     * single scattering it gathers: sum T (1 - T_s) P_v L_sun <= max(P_v) L_sun. */
+    float table[2 * 64];
+    optics_eye_phase_table(&cfg.optics.params, 64, table);
+    float pmax = 0.0f;
+    for (int i = 0; i < 128; i++)
+        pmax = fmaxf(pmax, table[i]);
+    double bound = cfg.lightmap.epsilon * pmax * cfg.light.intensity + 1e-4;
+    double worst = 0.0, signal = 0.0;
+    for (int i = 0; i < dense.width * dense.height * 4; i += 4) {
+        worst = fmax(worst, fabs(dense.rgba[i] - comp.rgba[i]));
+        signal = fmax(signal, dense.rgba[i]);
+    }
+    print_message("compressed vs dense: max pixel difference %.3g (bound %.3g)\n", worst, bound);
+    assert_true(signal > 0.1);
+    assert_true(worst <= bound);
+    image_finish(&dense);
+    image_finish(&comp);
+    app_light_finish(&al);
+    ext_volume_finish(&vol);
+}
+
+static void test_twelve_views_one_build(void **state)
+{
+    struct config cfg;
+    struct ext_volume vol = {0};
+    const char *sets[] = {"scene.size=[32,32,16]", "lightmap.resolution=[32,32,32]",
+                          "render.width=32", "render.height=24"};
+    load(&cfg, sets, 4);
+    upload(&cfg, &vol);
+    struct app_light al;
+    struct app_stats st = {0};
+    assert_true(app_light_init(&al, &cfg));
+    for (int i = 0; i < 12; i++) {
+        struct camera_orbit o = {{30e3, 30e3, 6e3}, 30.0 * i, 10.0 + i, 50e3};
+        double eye[3];
+        camera_orbit_eye(&o, eye);
+        struct render_view v;
+        double up[3] = {0, 0, 1};
+        camera_look_at(eye, o.target, up, 50.0, 10.0, 1e6, 32, 24, &v);
+        struct image img;
+        render(&cfg, &al, &st, &v, &img);
+        image_finish(&img);
+    }
+    assert_int_equal(st.light_builds, 1);
+    /* Moving the sun is a change: exactly one more build. */
+    cfg.light.azimuth_deg += 10.0;
+    struct image img;
+    render(&cfg, &al, &st, NULL, &img);
+    render(&cfg, &al, &st, NULL, &img);
+    assert_int_equal(st.light_builds, 2);
+    image_finish(&img);
+    app_light_finish(&al);
+    ext_volume_finish(&vol);
+}
+
+/* Mean of channel 0 over pixels whose distance from the image centre, in units of R pixels,
+ * lies in [A, B). */
+static double ring_mean(const struct image *img, double r, double a, double b)
+{
+    double sum = 0.0;
+    int n = 0;
+    for (int y = 0; y < img->height; y++) {
+        for (int x = 0; x < img->width; x++) {
+            double d = hypot(x + 0.5 - img->width / 2.0, y + 0.5 - img->height / 2.0) / r;
+            if (d >= a && d < b) {
+                sum += img->rgba[4 * (y * img->width + x)];
+                n++;
+            }
+        }
+    }
+    assert_true(n > 0);
+    return sum / n;
+}
+
+static void test_silver_lining(void **state)
+{
+    /* A thick sphere between the eye and the sun: its rim glows, its centre is dark. */
+    struct config cfg;
+    struct ext_volume vol = {0};
+    const char *sets[] = {"scene.kind=sphere", "scene.size=[40,40,40]",
+                          "scene.extent=[10,10,10]", "scene.tau=40", "light.azimuth=0",
+                          "light.elevation=10", "render.sky=[0,0,0]", "render.ground_on=false",
+                          "camera.position=[5,-40,-2.05]", "camera.target=[5,5,5]",
+                          "camera.fov=16", "render.width=96", "render.height=96",
+                          "lightmap.resolution=[64,64,96]"};
+    load(&cfg, sets, 14);
+    upload(&cfg, &vol);
+    struct app_light al;
+    struct image img;
+    assert_true(app_light_init(&al, &cfg));
+    render(&cfg, &al, NULL, NULL, &img);
+    /* The sphere's radius in pixels: 5 km at 45.5 km with a 16 degree field of view. */
+    double r = 5.0 / 45.55 / tan(8.0 * M_PI / 180.0) * 48.0;
+    double centre = ring_mean(&img, r, 0.0, 0.3);
+    double rim = ring_mean(&img, r, 0.85, 1.0);
+    print_message("silver lining: rim %.4g, centre %.4g\n", rim, centre);
+    assert_true(rim > 3.0 * centre);
+    assert_true(rim > 0.01);
+    image_finish(&img);
+    app_light_finish(&al);
+    ext_volume_finish(&vol);
+}
+
+static double sphere_mean(const char *forward)
+{
+    struct config cfg;
+    struct ext_volume vol = {0};
+    const char *sets[] = {"scene.kind=sphere", "scene.size=[32,32,32]",
+                          "scene.extent=[10,10,10]", "scene.tau=20", "light.azimuth=90",
+                          "light.elevation=0", "render.sky=[0,0,0]", "render.ground_on=false",
+                          "camera.position=[5,-40,5]", "camera.target=[5,5,5]",
+                          "camera.fov=16", "render.width=64", "render.height=64",
+                          "lightmap.resolution=[48,48,64]", forward};
+    load(&cfg, sets, 15);
+    upload(&cfg, &vol);
+    struct app_light al;
+    struct image img;
+    assert_true(app_light_init(&al, &cfg));
+    render(&cfg, &al, NULL, NULL, &img);
+    double r = 5.0 / 45.0 / tan(8.0 * M_PI / 180.0) * 32.0;
+    double m = ring_mean(&img, r, 0.0, 0.9);
+    image_finish(&img);
+    app_light_finish(&al);
+    ext_volume_finish(&vol);
+    return m;
+}
+
+static void test_forward_scattering_brightens_interior(void **state)
+{
+    /* Seen from the side, light carried into the sphere by forward scattering brightens it;
+     * with forward scattering off only the sunlit surface shines (Nes Fig. 5.4). */
+    double on = sphere_mean("lightmap.forward=true");
+    double off = sphere_mean("lightmap.forward=false");
+    print_message("sphere seen from the side: forward on %.4g, off %.4g\n", on, off);
+    assert_true(on > 1.2 * off);
+}
+
+static double ground_under(const char *mode, double x_km, double y_km)
+{
+    struct config cfg;
+    struct ext_volume vol = {0};
+    const char *sets[] = {"scene.kind=sphere", "scene.size=[32,32,32]",
+                          "scene.extent=[10,10,10]", "scene.tau=30", "light.azimuth=90",
+                          "light.elevation=45", "render.sky=[0,0,0]", "render.width=16",
+                          "render.height=16", "lightmap.resolution=[48,48,64]", mode};
+    load(&cfg, sets, 11);
+    upload(&cfg, &vol);
+    /* Straight down at (x, y) on the ground from outside the volume. */
+    double eye[3] = {x_km * 1e3, y_km * 1e3, 30e3}, target[3] = {x_km * 1e3, y_km * 1e3, 0};
+    double up[3] = {0, 1, 0};
+    struct render_view v;
+    camera_look_at(eye, target, up, 2.0, 10.0, 1e6, 16, 16, &v);
+    struct app_light al;
+    struct image img;
+    assert_true(app_light_init(&al, &cfg));
+    render(&cfg, &al, NULL, &v, &img);
+    double value = img.rgba[4 * (8 * 16 + 8)];
+    image_finish(&img);
+    app_light_finish(&al);
+    ext_volume_finish(&vol);
+    return value;
+}
+
+static void test_cloud_shadows_the_ground(void **state)
+{
+    /* Sun in the east at 45 degrees: the sphere (centre 5, 5, 5 km, radius 5 km) shadows the
+     * ground at (-3, 5) km, west of the box, where the ray to the sun passes 3 km from its
+     * centre; (-3, -6) km stays in the sun.  Both lie outside the box, so the camera's ray
+     * straight down meets only the ground. */
+    double shadow = ground_under("lightmap.mode=dense", -3.0, 5.0);
+    double lit = ground_under("lightmap.mode=dense", -3.0, -6.0);
+    double unshadowed = ground_under("lightmap.mode=off", -3.0, 5.0);
+    double compressed = ground_under("lightmap.mode=compressed", -3.0, 5.0);
+    print_message("ground: shadow %.4g, lit %.4g, without light map %.4g\n", shadow, lit,
+                  unshadowed);
+    assert_true(lit > 0.0);
+    assert_true(shadow < 0.3 * lit);
+    assert_float_equal(unshadowed, lit, 1e-6);
+    assert_true(compressed < 0.3 * lit);
+}
+
+int main(void)
+{
+    log_set_level(LOG_WARN);
+    ctx = test_gl_context_or_skip();
+    renderer = renderer_create();
+    if (!renderer)
+        return 1;
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_gpu_matches_cpu_sphere),
+        cmocka_unit_test(test_gpu_matches_cpu_slab),
+        cmocka_unit_test(test_gpu_matches_cpu_storm),
+        cmocka_unit_test(test_compressed_within_epsilon_of_dense),
+        cmocka_unit_test(test_twelve_views_one_build),
+        cmocka_unit_test(test_silver_lining),
+        cmocka_unit_test(test_forward_scattering_brightens_interior),
+        cmocka_unit_test(test_cloud_shadows_the_ground),
+    };
+    int rc = cmocka_run_group_tests(tests, NULL, NULL);
+    renderer_destroy(renderer);
+    gpu_context_destroy(ctx);
+    return rc;
+}
