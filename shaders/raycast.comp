@@ -3,6 +3,8 @@
 //   L = T(0,e) L_bg + sum_s T(0,s) (1 - T_s) P_v(psi) L_l(s)
 // Variants (#define): LIGHTMAP 0 = unshadowed sunlight; 1 = dense light volume;
 // 2 = compressed deep light map.  GROUND_SHADOW 1 = the ground reads the light map too.
+// OPAQUE 1 = opaque geometry was drawn first (render/opaque.c): rays stop at its distance and
+// it is the background there.
 
 #include "common.glsl"
 #include "lightmap_lookup.glsl"
@@ -26,6 +28,14 @@ uniform vec3 sky_radiance;
 uniform vec3 ground_albedo;
 uniform int ground_on;
 uniform float phase_size;    // entries in phase_tex
+
+#ifndef OPAQUE
+#define OPAQUE 0
+#endif
+#if OPAQUE
+layout(binding = 3) uniform sampler2D opaque_color;    // radiance of the opaque geometry
+layout(binding = 4) uniform sampler2D opaque_distance; // along the ray from the near plane
+#endif
 
 vec2 eye_phase(float cos_psi)
 {
@@ -51,9 +61,14 @@ void main()
     if (ground_on != 0 && dir.z < 0.0 && origin.z > 0.0)
         t_ground = -origin.z / dir.z;
 
+    float t_opaque = 1e30;
+#if OPAQUE
+    t_opaque = texelFetch(opaque_distance, pix, 0).r;
+#endif
+
     vec2 t = ray_box(origin, dir, box_min, box_min + box_size);
     float t0 = max(t.x, 0.0);
-    float t1 = min(t.y, t_ground);
+    float t1 = min(t.y, min(t_ground, t_opaque));
 
     vec3 radiance = vec3(0.0);
     float trans = 1.0;
@@ -82,6 +97,11 @@ void main()
     }
 
     vec3 background;
+#if OPAQUE
+    if (t_opaque < 1e29 && t_opaque <= t_ground) {
+        background = texelFetch(opaque_color, pix, 0).rgb;
+    } else
+#endif
     if (t_ground < 1e29) {
         vec3 g = origin + dir * t_ground;
         // Lambertian ground.  sun_radiance is E / (4 pi) for a sun of irradiance E (so that

@@ -52,8 +52,8 @@ static void print_range(const char *name, const struct wrf_var_stats *s)
     printf("    %-7s %12.5g .. %-12.5g", name, s->min, s->max);
     size_t bad = wrf_var_stats_bad(s);
     if (bad)
-        printf("  bad: %zu (NaN %zu, Inf %zu, fill %zu, negative %zu, >1 %zu)", bad, s->nan,
-               s->inf, s->fill, s->negative, s->absurd);
+        printf("  bad: %zu (NaN %zu, Inf %zu, fill %zu, negative %zu, >1 %zu)", bad, s->nan, s->inf,
+               s->fill, s->negative, s->absurd);
     printf("\n");
 }
 
@@ -64,8 +64,8 @@ static int info_extinction(const char *path)
         return EXIT_BAD_INPUT;
     const struct grid3 *g = extfile_grid(f);
     printf("%s: extinction volumes (CF NetCDF)\n", path);
-    printf("  grid        %d x %d x %d voxels of %.4g x %.4g x %.4g m\n", g->n[0], g->n[1],
-           g->n[2], g->spacing[0], g->spacing[1], g->spacing[2]);
+    printf("  grid        %d x %d x %d voxels of %.4g x %.4g x %.4g m\n", g->n[0], g->n[1], g->n[2],
+           g->spacing[0], g->spacing[1], g->spacing[2]);
     printf("  extent      %.4g x %.4g x %.4g km from (%.4g, %.4g, %.4g) km\n",
            g->n[0] * g->spacing[0] / 1e3, g->n[1] * g->spacing[1] / 1e3,
            g->n[2] * g->spacing[2] / 1e3, g->origin[0] / 1e3, g->origin[1] / 1e3,
@@ -109,11 +109,11 @@ static int info_wrf(char **paths, int count)
     printf("  grid        %d x %d columns x %d mass levels (west_east x south_north x "
            "bottom_top), DX %.6g m, DY %.6g m\n",
            m->nx, m->ny, m->nz, m->dx, m->dy);
-    printf("  projection  MAP_PROJ %d, CEN_LAT %.4f, CEN_LON %.4f, MP_PHYSICS %d\n",
-           m->map_proj, m->cen_lat, m->cen_lon, m->mp_physics);
+    printf("  projection  MAP_PROJ %d, CEN_LAT %.4f, CEN_LON %.4f, MP_PHYSICS %d\n", m->map_proj,
+           m->cen_lat, m->cen_lon, m->mp_physics);
     if (isfinite(m->lat_min))
-        printf("  lat/lon     %.3f to %.3f N, %.3f to %.3f E\n", m->lat_min, m->lat_max,
-               m->lon_min, m->lon_max);
+        printf("  lat/lon     %.3f to %.3f N, %.3f to %.3f E\n", m->lat_min, m->lat_max, m->lon_min,
+               m->lon_max);
     printf("  species     present:");
     for (int f = 0; f < SPECIES_COUNT; f++)
         if (m->has_species[f])
@@ -220,8 +220,8 @@ static void date_add(const char *start, double seconds, char out[32])
     long long d = doy - (153 * mp + 2) / 5 + 1;
     long long m = mp + (mp < 10 ? 3 : -9);
     y += m <= 2;
-    snprintf(out, 32, "%04d-%02d-%02d_%02d:%02d:%02d", (int)(y % 10000), (int)m % 100,
-             (int)d % 100, (int)(rem / 3600) % 100, (int)(rem / 60 % 60), (int)(rem % 60));
+    snprintf(out, 32, "%04d-%02d-%02d_%02d:%02d:%02d", (int)(y % 10000), (int)m % 100, (int)d % 100,
+             (int)(rem / 3600) % 100, (int)(rem / 60 % 60), (int)(rem % 60));
 }
 
 int cmd_synth(int argc, char **argv)
@@ -324,8 +324,8 @@ int cmd_synth(int argc, char **argv)
     }
     if (!wrf_writer_finish(w))
         return EXIT_FAILED;
-    log_info("synth: %s: %d x %d x %d, %d steps in %.1f s", out, size[0], size[1], size[2],
-             steps, (time_now_ms() - t0) / 1000.0);
+    log_info("synth: %s: %d x %d x %d, %d steps in %.1f s", out, size[0], size[1], size[2], steps,
+             (time_now_ms() - t0) / 1000.0);
     return EXIT_OK;
 }
 
@@ -436,15 +436,15 @@ int cmd_convert(int argc, char **argv)
      * change). */
     char source[4096] = "", history[4096] = "", species[512] = "";
     for (int i = 0; i < sd.file_count; i++)
-        snprintf(source + strlen(source), sizeof(source) - strlen(source), "%s%s",
-                 i ? " " : "", sd.files[i]);
+        snprintf(source + strlen(source), sizeof(source) - strlen(source), "%s%s", i ? " " : "",
+                 sd.files[i]);
     for (int i = 0; i < argc; i++)
         snprintf(history + strlen(history), sizeof(history) - strlen(history), "%s%s",
                  i ? " " : "anvil ", argv[i]);
     for (int f = 0; f < SPECIES_COUNT; f++)
         snprintf(species + strlen(species), sizeof(species) - strlen(species), "%s%s %s x%g",
-                 f ? ", " : "", species_name((enum species)f),
-                 sd.select.enabled[f] ? "on" : "off", sd.select.scale[f]);
+                 f ? ", " : "", species_name((enum species)f), sd.select.enabled[f] ? "on" : "off",
+                 sd.select.scale[f]);
 
     int rc = EXIT_OK;
     struct extfile_writer *w = NULL;

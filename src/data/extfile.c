@@ -37,8 +37,8 @@ bool extfile_parse_date(const char *date, double *seconds)
     char sep;
     if (!date || sscanf(date, "%4d-%2d-%2d%c%2d:%2d:%2d", &y, &mo, &d, &sep, &h, &mi, &s) != 7)
         return false;
-    if ((sep != '_' && sep != ' ' && sep != 'T') || mo < 1 || mo > 12 || d < 1 || d > 31 ||
-        h < 0 || h > 24 || mi < 0 || mi > 59 || s < 0 || s > 60)
+    if ((sep != '_' && sep != ' ' && sep != 'T') || mo < 1 || mo > 12 || d < 1 || d > 31 || h < 0 ||
+        h > 24 || mi < 0 || mi > 59 || s < 0 || s > 60)
         return false;
     *seconds = (double)days_from_civil(y, mo, d) * 86400.0 + h * 3600.0 + mi * 60.0 + s;
     return true;
@@ -53,7 +53,7 @@ struct extfile_writer {
     int ncid;
     bool defined, failed;
     int steps;
-    bool dated;     /* the time coordinate counts from the first step's date */
+    bool dated; /* the time coordinate counts from the first step's date */
     double t0;
     int var_time, var_times, var_beta[2];
     float *layer;
@@ -150,8 +150,7 @@ static bool define(struct extfile_writer *w, const char *date)
         int bd[2] = {dax[a], dnv};
         if (!nc_ok(nc_def_var(nc, axis_names[a], NC_DOUBLE, 1, &dax[a], &vax[a]), p,
                    axis_names[a]) ||
-            !nc_ok(nc_def_var(nc, bnds_names[a], NC_DOUBLE, 2, bd, &vbnds[a]), p,
-                   bnds_names[a]))
+            !nc_ok(nc_def_var(nc, bnds_names[a], NC_DOUBLE, 2, bd, &vbnds[a]), p, bnds_names[a]))
             return false;
         put_text(nc, vax[a], "units", "m");
         put_text(nc, vax[a], "axis", axis_attr[a]);
@@ -180,8 +179,7 @@ static bool define(struct extfile_writer *w, const char *date)
     for (int b = 0; b < 2; b++) {
         if (!nc_ok(nc_def_var(nc, beta_names[b], NC_FLOAT, 4, d4, &w->var_beta[b]), p,
                    beta_names[b]) ||
-            !nc_ok(nc_def_var_chunking(nc, w->var_beta[b], NC_CHUNKED, chunk), p,
-                   beta_names[b]) ||
+            !nc_ok(nc_def_var_chunking(nc, w->var_beta[b], NC_CHUNKED, chunk), p, beta_names[b]) ||
             !nc_ok(nc_def_var_deflate(nc, w->var_beta[b], 1, 1, 1), p, beta_names[b]))
             return false;
         put_text(nc, w->var_beta[b], "units", "m-1");
@@ -236,9 +234,11 @@ bool extfile_writer_add(struct extfile_writer *w, const struct ext_volume *v, co
     if (w->failed)
         return false;
     if (!same_grid(&w->grid, &v->grid)) {
-        log_error("%s: step %d has a %d x %d x %d grid, the file %d x %d x %d", w->path, w->steps,
-                  v->grid.n[0], v->grid.n[1], v->grid.n[2], w->grid.n[0], w->grid.n[1],
-                  w->grid.n[2]);
+        log_error("%s: step %d's grid (%d x %d x %d voxels of %g x %g x %g m) differs from the "
+                  "first step's (%d x %d x %d of %g x %g x %g m)",
+                  w->path, w->steps, v->grid.n[0], v->grid.n[1], v->grid.n[2], v->grid.spacing[0],
+                  v->grid.spacing[1], v->grid.spacing[2], w->grid.n[0], w->grid.n[1], w->grid.n[2],
+                  w->grid.spacing[0], w->grid.spacing[1], w->grid.spacing[2]);
         w->failed = true;
         return false;
     }
@@ -355,8 +355,7 @@ static bool read_axis(struct extfile *f, int a, int dimid)
     double b[2];
     size_t s[2] = {0, 0}, c[2] = {1, 2};
     if (nc_inq_varid(f->ncid, bnds_names[a], &vb) != NC_NOERR ||
-        nc_get_vara_double(f->ncid, vb, s, c, b) != NC_NOERR || !(b[1] > b[0]) ||
-        !isfinite(b[0])) {
+        nc_get_vara_double(f->ncid, vb, s, c, b) != NC_NOERR || !(b[1] > b[0]) || !isfinite(b[0])) {
         log_error("%s: variable %s: missing or not increasing cell bounds (metres)", f->path,
                   bnds_names[a]);
         return false;

@@ -21,15 +21,15 @@
 #define ISABEL_LAND 1.0e35f
 
 struct isabel_desc {
-    const char *dir;     /* folder holding the bricks */
-    int n[3];            /* voxels; 0 = 500 x 500 x 100 */
-    double extent_m[3];  /* box size, m; 0 = 2000 km x 2000 km x 20 km */
+    const char *dir;    /* folder holding the bricks */
+    int n[3];           /* voxels; 0 = 500 x 500 x 100 */
+    double extent_m[3]; /* box size, m; 0 = 2000 km x 2000 km x 20 km */
 };
 
 struct isabel_stats {
-    size_t land;                     /* 1.0e35 */
+    size_t land; /* 1.0e35 */
     size_t nan, inf, negative, absurd;
-    bool present[SPECIES_COUNT];     /* a brick was found for the species */
+    bool present[SPECIES_COUNT]; /* a brick was found for the species */
 };
 
 /* Number of consecutive steps (from f01) for which at least one species brick exists; 0 when

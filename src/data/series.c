@@ -33,8 +33,8 @@ struct series {
 
     pthread_t thread;
     pthread_mutex_t lock;
-    pthread_cond_t work;  /* worker: something to do or quit */
-    pthread_cond_t done;  /* render loop: a load finished */
+    pthread_cond_t work; /* worker: something to do or quit */
+    pthread_cond_t done; /* render loop: a load finished */
     bool quit;
     struct series_stats stats;
 };

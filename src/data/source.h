@@ -21,8 +21,8 @@ struct data_source_desc {
     const char *const *files; /* WRF: files or glob patterns; Isabel: the folder (files[0]);
                                  extinction: one file (files[0]) */
     int file_count;
-    struct wrf_desc wrf;       /* WRF reading (call wrf_desc_defaults) */
-    struct isabel_desc isabel; /* Isabel sizes (dir is taken from files[0]) */
+    struct wrf_desc wrf;          /* WRF reading (call wrf_desc_defaults) */
+    struct isabel_desc isabel;    /* Isabel sizes (dir is taken from files[0]) */
     struct optics_params optics;  /* mass ratio -> extinction (WRF, Isabel) */
     struct species_select select; /* per-species toggles and scales (WRF, Isabel) */
 };

@@ -40,7 +40,8 @@ struct wrf {
     struct wrf_step *steps;
     int step_count;
     struct wrf_meta meta;
-    int nzs; /* bottom_top_stag */
+    int nzs;         /* bottom_top_stag */
+    double auto_top; /* the highest model top of the first step, m: data.top = 0 */
 };
 
 const char *wrf_var_name(enum wrf_var v)
@@ -98,8 +99,8 @@ static bool check_var(const char *path, int ncid, const char *name, int varid, c
         return false;
     }
     if (type != NC_FLOAT && type != NC_DOUBLE) {
-        log_error("%s: variable %s: expected float or double values, found type %d", path,
-                  name, (int)type);
+        log_error("%s: variable %s: expected float or double values, found type %d", path, name,
+                  (int)type);
         return false;
     }
     if (ndims != 4) {
@@ -113,8 +114,8 @@ static bool check_var(const char *path, int ncid, const char *name, int varid, c
             char dname[NC_MAX_NAME + 1] = "?", want[NC_MAX_NAME + 1] = "?";
             nc_inq_dimname(ncid, vdims[i], dname);
             nc_inq_dimname(ncid, dims[i], want);
-            log_error("%s: variable %s: dimension %d is %s, expected %s", path, name, i + 1,
-                      dname, want);
+            log_error("%s: variable %s: dimension %d is %s, expected %s", path, name, i + 1, dname,
+                      want);
             return false;
         }
     }
@@ -136,8 +137,8 @@ static bool read_times(const char *path, int ncid, int time_dim, int ntimes, str
     }
     nc_type type;
     int ndims, dims[NC_MAX_VAR_DIMS];
-    if (nc_inq_var(ncid, varid, NULL, &type, &ndims, dims, NULL) != NC_NOERR ||
-        type != NC_CHAR || ndims != 2 || dims[0] != time_dim) {
+    if (nc_inq_var(ncid, varid, NULL, &type, &ndims, dims, NULL) != NC_NOERR || type != NC_CHAR ||
+        ndims != 2 || dims[0] != time_dim) {
         log_error("%s: variable Times: expected char Times(Time, <string length>)", path);
         return false;
     }
@@ -162,8 +163,7 @@ static bool read_times(const char *path, int ncid, int time_dim, int ntimes, str
         memcpy(out[t].date, buf + (size_t)t * len, n);
         out[t].date[n] = '\0';
         /* Strip trailing NULs/spaces some writers pad with. */
-        for (int i = (int)n - 1; i >= 0 && (out[t].date[i] == ' ' || out[t].date[i] == '\0');
-             i--)
+        for (int i = (int)n - 1; i >= 0 && (out[t].date[i] == ' ' || out[t].date[i] == '\0'); i--)
             out[t].date[i] = '\0';
     }
     free(buf);
@@ -191,8 +191,7 @@ static double global_double(int ncid, const char *name, double fallback)
 
 /* Reads a 2-D field (south_north, west_east), with or without a leading Time dimension (first
  * time then), into a new array.  Absent → *out NULL, true.  Wrong shape → logged, false. */
-static bool read_meta_2d(const char *path, int ncid, const char *name, int nx, int ny,
-                         float **out)
+static bool read_meta_2d(const char *path, int ncid, const char *name, int nx, int ny, float **out)
 {
     *out = NULL;
     int varid, ndims, dims[NC_MAX_VAR_DIMS];
@@ -211,8 +210,8 @@ static bool read_meta_2d(const char *path, int ncid, const char *name, int nx, i
     nc_inq_dimlen(ncid, dims[ndims - 2], &ylen);
     nc_inq_dimlen(ncid, dims[ndims - 1], &xlen);
     if ((int)ylen != ny || (int)xlen != nx) {
-        log_error("%s: variable %s: expected %d x %d columns, found %zu x %zu", path, name, nx,
-                  ny, xlen, ylen);
+        log_error("%s: variable %s: expected %d x %d columns, found %zu x %zu", path, name, nx, ny,
+                  xlen, ylen);
         return false;
     }
     float *buf = malloc((size_t)nx * ny * sizeof(float));
@@ -229,6 +228,45 @@ static bool read_meta_2d(const char *path, int ncid, const char *name, int nx, i
         return false;
     }
     *out = buf;
+    return true;
+}
+
+/* The height grid's automatic top: the highest model top (last staggered level) over all
+ * columns of the first step in time order.  Fixed for the series so that every step has the
+ * same grid. */
+static bool compute_auto_top(struct wrf *w)
+{
+    const struct wrf_file *f = &w->files[w->steps[0].file];
+    size_t plane = (size_t)w->meta.nx * w->meta.ny;
+    float *a = malloc(plane * sizeof(float)), *b = malloc(plane * sizeof(float));
+    if (!a || !b) {
+        free(a);
+        free(b);
+        log_error("%s: out of memory", f->path);
+        return false;
+    }
+    size_t start[4] = {(size_t)w->steps[0].index, (size_t)w->nzs - 1, 0, 0};
+    size_t count[4] = {1, 1, (size_t)w->meta.ny, (size_t)w->meta.nx};
+    int st = nc_get_vara_float(f->ncid, f->varid[WRF_PH], start, count, a);
+    if (st == NC_NOERR)
+        st = nc_get_vara_float(f->ncid, f->varid[WRF_PHB], start, count, b);
+    double top = 0.0;
+    for (size_t i = 0; st == NC_NOERR && i < plane; i++) {
+        double z = ((double)a[i] + (double)b[i]) / WRF_G;
+        if (isfinite(z) && fabs(z) < 1e6 && z > top)
+            top = z;
+    }
+    free(a);
+    free(b);
+    if (st != NC_NOERR) {
+        log_error("%s: variables PH, PHB: cannot read the model top: %s", f->path, nc_strerror(st));
+        return false;
+    }
+    if (!(top > 0.0)) {
+        log_error("%s: variables PH, PHB: no usable model top height in the first step", f->path);
+        return false;
+    }
+    w->auto_top = top;
     return true;
 }
 
@@ -304,8 +342,7 @@ static bool open_file(struct wrf_file *f, const struct wrf *ref_w, const struct 
     dstag[2] = dims[2];
     dstag[3] = dims[3];
     if (lzs != lz + 1) {
-        log_error("%s: bottom_top_stag is %d, expected bottom_top + 1 = %d", f->path, lzs,
-                  lz + 1);
+        log_error("%s: bottom_top_stag is %d, expected bottom_top + 1 = %d", f->path, lzs, lz + 1);
         return false;
     }
     if (ref_w && (lx != *nx || ly != *ny || lz != *nz)) {
@@ -479,7 +516,7 @@ struct wrf *wrf_open(const char *const *paths, int count)
             }
         }
     }
-    if (!read_meta(w))
+    if (!read_meta(w) || !compute_auto_top(w))
         goto error;
     data_nc_unlock();
     return w;
@@ -643,8 +680,8 @@ static void sanitize(const struct wrf *w, int step, enum wrf_var v, float *buf, 
     st->count = n;
     double lo = INFINITY, hi = -INFINITY;
     /* Fast path for the usual good mass ratio (NaN fails both comparisons). */
-    bool fast = mass && !(has_fv && fv >= 0.0f && fv <= 1.0f) &&
-                !(has_mv && mv >= 0.0f && mv <= 1.0f);
+    bool fast =
+        mass && !(has_fv && fv >= 0.0f && fv <= 1.0f) && !(has_mv && mv >= 0.0f && mv <= 1.0f);
     float flo = INFINITY, fhi = -INFINITY;
     for (size_t i = 0; i < n; i++) {
         float x = buf[i];
@@ -691,11 +728,17 @@ static bool report(const struct wrf *w, int step, enum wrf_var v, const struct w
         return false;
     }
     if (wrf_var_stats_bad(st) > 0) {
-        log_warn("%s: variable %s, time %d: %zu NaN, %zu Inf, %zu fill, %zu negative, %zu above "
-                 "1 kg/kg (of %zu) %s",
-                 path, var_names[v], w->steps[step].index, st->nan, st->inf, st->fill,
-                 st->negative, st->absurd, st->count,
-                 is_mass_ratio(v) ? "set to zero" : "ignored");
+        char what[160] = "";
+        const size_t counts[5] = {st->nan, st->inf, st->fill, st->negative, st->absurd};
+        static const char *labels[5] = {"NaN", "Inf", "fill", "negative", "above 1 kg/kg"};
+        for (int i = 0; i < 5; i++) {
+            if (counts[i])
+                snprintf(what + strlen(what), sizeof(what) - strlen(what), "%s%zu %s",
+                         what[0] ? ", " : "", counts[i], labels[i]);
+        }
+        log_warn("%s: variable %s, time %d: %s (of %zu values) %s", path, var_names[v],
+                 w->steps[step].index, what, st->count,
+                 is_mass_ratio(v) ? "set to zero" : "replaced by the standard atmosphere");
     }
     return true;
 }
@@ -790,10 +833,9 @@ static void *resample_range(void *arg)
             double *z = zm + (size_t)b * nz;
             column_heights(c, col, z);
             int below = 0;
-            int outn = wrf_resample_column(z, vin + (size_t)b * nz, nz, c->zw[col],
-                                           c->zw[(size_t)nz * c->cols + col], j->g->origin[2],
-                                           j->g->spacing[2], no, j->outside,
-                                           vout + (size_t)b * no, &below);
+            int outn = wrf_resample_column(
+                z, vin + (size_t)b * nz, nz, c->zw[col], c->zw[(size_t)nz * c->cols + col],
+                j->g->origin[2], j->g->spacing[2], no, j->outside, vout + (size_t)b * no, &below);
             j->below += (size_t)below;
             j->above += (size_t)(outn - below);
         }
@@ -826,8 +868,8 @@ static bool resample_var(const struct columns *c, const float *buf, const struct
     int started = 0;
     for (int t = 0; t < n; t++) {
         size_t begin = per * (size_t)t, end = begin + per < c->cols ? begin + per : c->cols;
-        jobs[t] = (struct resample_job){.c = c, .buf = buf, .g = g, .outside = outside,
-                                        .out = out, .begin = begin, .end = end};
+        jobs[t] = (struct resample_job){
+            .c = c, .buf = buf, .g = g, .outside = outside, .out = out, .begin = begin, .end = end};
         if (begin >= end) {
             jobs[t].ok = true;
             continue;
@@ -897,8 +939,8 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         log_error("%s: out of memory reading time step %d", path, step);
         goto unlock;
     }
-    bool hok = read_var(w, step, WRF_PH, &s, c.nzs, c.zw) &&
-               read_var(w, step, WRF_PHB, &s, c.nzs, phb);
+    bool hok =
+        read_var(w, step, WRF_PH, &s, c.nzs, c.zw) && read_var(w, step, WRF_PHB, &s, c.nzs, phb);
     if (hok) {
         size_t n = c.cols * (size_t)c.nzs;
         sanitize(w, step, WRF_PH, c.zw, n, NAN, &stats->var[WRF_PH]);
@@ -918,7 +960,6 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     free(phb);
     if (!hok)
         goto unlock;
-    double top = 0.0;
     for (size_t col = 0; col < c.cols; col++) {
         if (!column_heights(&c, col, c.zm)) {
             log_error("%s: variables PH, PHB, time %d: heights do not increase upward in column "
@@ -927,13 +968,11 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
                       s.y0 + (col / s.nx) * s.sy);
             goto unlock;
         }
-        top = fmax(top, c.zw[(size_t)c.nz * c.cols + col]);
     }
 
     /* The output grid. */
     double bottom = d->bottom_m;
-    if (d->top_m > 0)
-        top = d->top_m;
+    double top = d->top_m > 0 ? d->top_m : w->auto_top;
     if (!(top > bottom)) {
         log_error("%s: height grid top %.0f m is not above its bottom %.0f m", path, top, bottom);
         goto unlock;

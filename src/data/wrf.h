@@ -32,7 +32,8 @@
 struct wrf_desc {
     int levels;       /* regular height levels; 0 = as many as the file's mass levels */
     double top_m;     /* top of the height grid above sea level, m; 0 = the highest model top
-                         (staggered top level) over all columns of the step */
+                         (staggered top level) over all columns of the first time step, so
+                         that every step of the series has the same grid */
     double bottom_m;  /* bottom of the height grid, m (default 0 = sea level) */
     int stride[3];    /* keep every stride-th column along x, y and every stride-th output
                          level along z; 0 or 1 = all */
@@ -66,13 +67,13 @@ const char *wrf_var_name(enum wrf_var v);
 
 /* Bad-value counts and the range of the good values of one variable in one step. */
 struct wrf_var_stats {
-    bool read;         /* the variable was read for this step */
-    size_t count;      /* values read */
-    size_t nan, inf;   /* not finite */
-    size_t fill;       /* NetCDF default fill, _FillValue or missing_value */
-    size_t negative;   /* mass ratios only: below zero */
-    size_t absurd;     /* mass ratios only: above 1 kg/kg (and not a fill value) */
-    double min, max;   /* of the good values; 0 when there are none */
+    bool read;       /* the variable was read for this step */
+    size_t count;    /* values read */
+    size_t nan, inf; /* not finite */
+    size_t fill;     /* NetCDF default fill, _FillValue or missing_value */
+    size_t negative; /* mass ratios only: below zero */
+    size_t absurd;   /* mass ratios only: above 1 kg/kg (and not a fill value) */
+    double min, max; /* of the good values; 0 when there are none */
 };
 
 struct wrf_stats {
@@ -87,16 +88,16 @@ size_t wrf_var_stats_bad(const struct wrf_var_stats *s);
 /* What does not change from step to step.  Arrays are nx * ny, west_east fastest, taken from
  * the first time of the first file in time order. */
 struct wrf_meta {
-    int nx, ny, nz;          /* mass grid: west_east, south_north, bottom_top */
-    double dx, dy;           /* global DX, DY, m */
-    int map_proj;            /* MAP_PROJ: 1 Lambert, 2 polar, 3 Mercator, 6 lat-lon; 0 unknown */
-    int mp_physics;          /* MP_PHYSICS; -1 unknown */
+    int nx, ny, nz; /* mass grid: west_east, south_north, bottom_top */
+    double dx, dy;  /* global DX, DY, m */
+    int map_proj;   /* MAP_PROJ: 1 Lambert, 2 polar, 3 Mercator, 6 lat-lon; 0 unknown */
+    int mp_physics; /* MP_PHYSICS; -1 unknown */
     double cen_lat, cen_lon, truelat1, truelat2, stand_lon; /* NAN when absent */
     bool has_species[SPECIES_COUNT];
     bool has_qvapor;
-    float *xlat, *xlong;     /* degrees north / east; NULL when absent */
-    float *hgt;              /* terrain height, m; NULL when absent */
-    float *landmask;         /* 1 land, 0 water; NULL when absent */
+    float *xlat, *xlong;                       /* degrees north / east; NULL when absent */
+    float *hgt;                                /* terrain height, m; NULL when absent */
+    float *landmask;                           /* 1 land, 0 water; NULL when absent */
     double lat_min, lat_max, lon_min, lon_max; /* NAN when XLAT/XLONG are absent */
 };
 

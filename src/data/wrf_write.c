@@ -20,8 +20,21 @@
 #define PI 3.14159265358979323846
 #define DEG (PI / 180.0)
 
-enum { V_Q0 = 0, V_QVAPOR = SPECIES_COUNT, V_P, V_PB, V_T, V_PH, V_PHB, V_HGT, V_LANDMASK,
-       V_XLAT, V_XLONG, V_TIMES, V_COUNT };
+enum {
+    V_Q0 = 0,
+    V_QVAPOR = SPECIES_COUNT,
+    V_P,
+    V_PB,
+    V_T,
+    V_PH,
+    V_PHB,
+    V_HGT,
+    V_LANDMASK,
+    V_XLAT,
+    V_XLONG,
+    V_TIMES,
+    V_COUNT
+};
 
 struct wrf_writer {
     char *path, *tmp;
@@ -111,9 +124,9 @@ static void text_att(int nc, int var, const char *name, const char *value)
     nc_put_att_text(nc, var, name, strlen(value), value);
 }
 
-static bool def_field(struct wrf_writer *w, int slot, const char *name, int ndims,
-                      const int *dims, const char *order, const char *description,
-                      const char *units, const char *stagger, nc_type type)
+static bool def_field(struct wrf_writer *w, int slot, const char *name, int ndims, const int *dims,
+                      const char *order, const char *description, const char *units,
+                      const char *stagger, nc_type type)
 {
     int st = nc_def_var(w->ncid, name, type, ndims, dims, &w->var[slot]);
     if (st != NC_NOERR) {
@@ -146,8 +159,8 @@ static void int_att(int nc, const char *name, int value)
 }
 
 static const char *species_description[SPECIES_COUNT] = {
-    "Cloud water mixing ratio", "Rain water mixing ratio", "Ice mixing ratio",
-    "Snow mixing ratio", "Graupel mixing ratio"};
+    "Cloud water mixing ratio", "Rain water mixing ratio", "Ice mixing ratio", "Snow mixing ratio",
+    "Graupel mixing ratio"};
 
 static bool define(struct wrf_writer *w, const struct field_volume *v, const char *date)
 {
@@ -181,20 +194,20 @@ static bool define(struct wrf_writer *w, const struct field_volume *v, const cha
               def_field(w, V_XLONG, "XLONG", 3, d2, "XY ", "LONGITUDE, WEST IS NEGATIVE",
                         "degree_east", "", NC_FLOAT) &&
               def_field(w, V_HGT, "HGT", 3, d2, "XY ", "Terrain Height", "m", "", NC_FLOAT) &&
-              def_field(w, V_LANDMASK, "LANDMASK", 3, d2, "XY ", "LAND MASK (1 FOR LAND, 0 FOR "
-                        "WATER)", "", "", NC_FLOAT) &&
-              def_field(w, V_PH, "PH", 4, d3s, "XYZ", "perturbation geopotential", "m2 s-2",
-                        "Z", NC_FLOAT) &&
-              def_field(w, V_PHB, "PHB", 4, d3s, "XYZ", "base-state geopotential", "m2 s-2",
-                        "Z", NC_FLOAT) &&
-              def_field(w, V_T, "T", 4, d3, "XYZ",
-                        "perturbation potential temperature (theta-t0)", "K", "", NC_FLOAT) &&
-              def_field(w, V_P, "P", 4, d3, "XYZ", "perturbation pressure", "Pa", "",
+              def_field(w, V_LANDMASK, "LANDMASK", 3, d2, "XY ",
+                        "LAND MASK (1 FOR LAND, 0 FOR "
+                        "WATER)",
+                        "", "", NC_FLOAT) &&
+              def_field(w, V_PH, "PH", 4, d3s, "XYZ", "perturbation geopotential", "m2 s-2", "Z",
                         NC_FLOAT) &&
-              def_field(w, V_PB, "PB", 4, d3, "XYZ", "BASE STATE PRESSURE", "Pa", "",
+              def_field(w, V_PHB, "PHB", 4, d3s, "XYZ", "base-state geopotential", "m2 s-2", "Z",
                         NC_FLOAT) &&
-              def_field(w, V_QVAPOR, "QVAPOR", 4, d3, "XYZ", "Water vapor mixing ratio",
-                        "kg kg-1", "", NC_FLOAT);
+              def_field(w, V_T, "T", 4, d3, "XYZ", "perturbation potential temperature (theta-t0)",
+                        "K", "", NC_FLOAT) &&
+              def_field(w, V_P, "P", 4, d3, "XYZ", "perturbation pressure", "Pa", "", NC_FLOAT) &&
+              def_field(w, V_PB, "PB", 4, d3, "XYZ", "BASE STATE PRESSURE", "Pa", "", NC_FLOAT) &&
+              def_field(w, V_QVAPOR, "QVAPOR", 4, d3, "XYZ", "Water vapor mixing ratio", "kg kg-1",
+                        "", NC_FLOAT);
     for (int f = 0; f < SPECIES_COUNT && ok; f++) {
         if (w->has[f])
             ok = def_field(w, V_Q0 + f, species_wrf_name((enum species)f), 4, d3, "XYZ",

@@ -327,17 +327,17 @@ static void log_compile_errors(const struct source *s, const char *name, const c
     }
 }
 
-bool gpu_program_init(struct gpu_program *prog, const char *name, const char *defines)
+/* Compiles one stage of shaders/NAME with DEFINES; 0 (logged) on failure. */
+static GLuint compile_stage(const char *name, const char *defines, GLenum type)
 {
-    memset(prog, 0, sizeof(*prog));
     struct source s = {0};
     bool ok = appendf(&s, "#version 450 core\n") &&
               (!defines || append(&s, defines, strlen(defines))) && load_file(&s, name, 0);
     if (!ok) {
         free(s.text);
-        return false;
+        return 0;
     }
-    GLuint sh = glCreateShader(GL_COMPUTE_SHADER);
+    GLuint sh = glCreateShader(type);
     const GLchar *src = s.text;
     glShaderSource(sh, 1, &src, NULL);
     glCompileShader(sh);
@@ -348,14 +348,22 @@ bool gpu_program_init(struct gpu_program *prog, const char *name, const char *de
         glGetShaderInfoLog(sh, sizeof(log), NULL, log);
         log_compile_errors(&s, name, log);
         glDeleteShader(sh);
-        free(s.text);
-        return false;
+        sh = 0;
     }
     free(s.text);
+    return sh;
+}
+
+static bool link_program(struct gpu_program *prog, const char *name, const GLuint *stages,
+                         int n)
+{
     prog->id = glCreateProgram();
-    glAttachShader(prog->id, sh);
+    for (int i = 0; i < n; i++)
+        glAttachShader(prog->id, stages[i]);
     glLinkProgram(prog->id);
-    glDeleteShader(sh);
+    for (int i = 0; i < n; i++)
+        glDeleteShader(stages[i]);
+    GLint status = 0;
     glGetProgramiv(prog->id, GL_LINK_STATUS, &status);
     if (!status) {
         char log[4096];
@@ -365,8 +373,33 @@ bool gpu_program_init(struct gpu_program *prog, const char *name, const char *de
         prog->id = 0;
         return false;
     }
+    return true;
+}
+
+bool gpu_program_init(struct gpu_program *prog, const char *name, const char *defines)
+{
+    memset(prog, 0, sizeof(*prog));
+    GLuint sh = compile_stage(name, defines, GL_COMPUTE_SHADER);
+    if (!sh || !link_program(prog, name, &sh, 1))
+        return false;
     glGetProgramiv(prog->id, GL_COMPUTE_WORK_GROUP_SIZE, prog->local_size);
     return true;
+}
+
+bool gpu_program_init_graphics(struct gpu_program *prog, const char *vertex,
+                               const char *fragment, const char *defines)
+{
+    memset(prog, 0, sizeof(*prog));
+    GLuint st[2];
+    st[0] = compile_stage(vertex, defines, GL_VERTEX_SHADER);
+    if (!st[0])
+        return false;
+    st[1] = compile_stage(fragment, defines, GL_FRAGMENT_SHADER);
+    if (!st[1]) {
+        glDeleteShader(st[0]);
+        return false;
+    }
+    return link_program(prog, fragment, st, 2);
 }
 
 void gpu_program_finish(struct gpu_program *prog)

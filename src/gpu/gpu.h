@@ -103,6 +103,10 @@ struct gpu_program {
  * and link errors are logged with the file name and line.  The shader directory is
  * $ANVIL_SHADER_DIR if set, else the source tree's shaders/. */
 bool gpu_program_init(struct gpu_program *prog, const char *name, const char *defines);
+/* A vertex + fragment program from shaders/VERTEX and shaders/FRAGMENT, loaded like compute
+ * programs (same #include and DEFINES handling). */
+bool gpu_program_init_graphics(struct gpu_program *prog, const char *vertex,
+                               const char *fragment, const char *defines);
 void gpu_program_finish(struct gpu_program *prog);
 void gpu_program_use(const struct gpu_program *prog);
 
@@ -123,6 +127,40 @@ void gpu_dispatch(const struct gpu_program *prog, int w, int h, int d);
 
 /* Waits for all GL work. */
 void gpu_finish(void);
+
+/* ---- meshes and render targets (graphics.c) ------------------------------------------ */
+
+/* Interleaved float vertices: ATTRIB_SIZES[i] floats for attribute location i. */
+struct gpu_mesh {
+    unsigned vao, vbo, ibo;
+    int index_count;
+    bool lines; /* GL_LINES instead of GL_TRIANGLES */
+    size_t bytes;
+};
+
+bool gpu_mesh_init(struct gpu_mesh *mesh, const float *vertices, int vertex_count,
+                   const int *attrib_sizes, int attrib_count, const uint32_t *indices,
+                   int index_count, bool lines);
+void gpu_mesh_finish(struct gpu_mesh *mesh);
+/* Draws MESH with PROG into the bound target (depth-tested, no blending). */
+void gpu_mesh_draw(const struct gpu_mesh *mesh, const struct gpu_program *prog);
+
+/* An offscreen target: two float colour attachments (location 0: RGBA32F, location 1: R32F)
+ * and a depth buffer. */
+struct gpu_target {
+    unsigned fbo, depth;
+    struct gpu_texture color, value;
+    int width, height;
+};
+
+/* Creates or resizes T.  Returns false (logged) on failure. */
+bool gpu_target_ensure(struct gpu_target *t, int width, int height);
+void gpu_target_finish(struct gpu_target *t);
+/* Binds T for drawing, clears colour to CLEAR_COLOR, the R32F value to CLEAR_VALUE, depth to 1.
+ * gpu_target_end binds the default framebuffer again and makes the writes visible to compute
+ * shaders and texture fetches. */
+void gpu_target_begin(struct gpu_target *t, const float clear_color[4], float clear_value);
+void gpu_target_end(struct gpu_target *t);
 
 /* ---- presenting to a window ---------------------------------------------------------- */
 

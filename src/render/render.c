@@ -9,7 +9,15 @@
 #include "common/log.h"
 
 #define PHASE_TABLE_SIZE 512
-#define MAX_VARIANTS 8
+#define MAX_VARIANTS 16
+#define MAX_MESHES 64
+
+struct render_mesh {
+    struct gpu_mesh mesh;
+    float model[16];
+    bool emissive, visible;
+    const struct gpu_texture *texture;
+};
 
 struct variant {
     char defines[256];
@@ -25,6 +33,12 @@ struct renderer {
     struct variant variants[MAX_VARIANTS];
     int n_variants;
     const struct render_light *light;
+    struct render_mesh *meshes[MAX_MESHES];
+    int n_meshes;
+    struct gpu_program opaque[MAX_VARIANTS]; /* per light map variant */
+    char opaque_defines[MAX_VARIANTS][256];
+    int n_opaque;
+    struct gpu_target target;
     struct gpu_timer timer;
     struct render_stats stats;
 };
@@ -78,6 +92,9 @@ void renderer_destroy(struct renderer *r)
     gpu_program_finish(&r->tonemap);
     for (int i = 0; i < r->n_variants; i++)
         gpu_program_finish(&r->variants[i].prog);
+    for (int i = 0; i < r->n_opaque; i++)
+        gpu_program_finish(&r->opaque[i]);
+    gpu_target_finish(&r->target);
     gpu_timer_finish(&r->timer);
     free(r);
 }
@@ -135,6 +152,56 @@ static bool ensure_texture(struct gpu_texture *t, int w, int h, enum gpu_format 
     return gpu_texture_init(t, 2, size, f, NULL);
 }
 
+static const struct gpu_program *opaque_program(struct renderer *r, const char *defines)
+{
+    for (int i = 0; i < r->n_opaque; i++) {
+        if (strcmp(r->opaque_defines[i], defines) == 0)
+            return &r->opaque[i];
+    }
+    if (r->n_opaque == MAX_VARIANTS) {
+        log_error("too many opaque shader variants");
+        return NULL;
+    }
+    if (!gpu_program_init_graphics(&r->opaque[r->n_opaque], "opaque.vert", "opaque.frag",
+                                   defines))
+        return NULL;
+    snprintf(r->opaque_defines[r->n_opaque], 256, "%s", defines);
+    return &r->opaque[r->n_opaque++];
+}
+
+/* Draws the visible meshes into the renderer's target: radiance and ray distance. */
+static bool draw_opaque(struct renderer *r, const struct render_settings *s,
+                        const struct render_view *view, mat4 vp, mat4 inv, const char *defines)
+{
+    const struct gpu_program *p = opaque_program(r, defines);
+    if (!p || !gpu_target_ensure(&r->target, view->width, view->height))
+        return false;
+    int size[2] = {view->width, view->height};
+    gpu_uniform_mat4(p, "view_proj", (const float *)vp);
+    gpu_uniform_mat4(p, "inv_view_proj", (const float *)inv);
+    gpu_uniform_ivec2(p, "image_size", size);
+    gpu_uniform_vec3(p, "sun_dir", s->sun_dir);
+    gpu_uniform_vec3(p, "sun_radiance", s->sun_radiance);
+    gpu_uniform_vec3(p, "sky_radiance", s->sky);
+    if (r->light && r->light->bind)
+        r->light->bind(r->light, p);
+    const float clear[4] = {0, 0, 0, 0};
+    gpu_target_begin(&r->target, clear, 1e30f);
+    for (int i = 0; i < r->n_meshes; i++) {
+        const struct render_mesh *m = r->meshes[i];
+        if (!m->visible)
+            continue;
+        gpu_uniform_mat4(p, "model", m->model);
+        gpu_uniform_int(p, "emissive", m->emissive ? 1 : 0);
+        gpu_uniform_int(p, "textured", m->texture ? 1 : 0);
+        if (m->texture)
+            gpu_texture_bind(m->texture, 5);
+        gpu_mesh_draw(&m->mesh, p);
+    }
+    gpu_target_end(&r->target);
+    return true;
+}
+
 bool renderer_draw(struct renderer *r, const struct render_settings *s,
                    const struct render_view *view, struct gpu_texture *out)
 {
@@ -144,7 +211,13 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     }
     if (!ensure_texture(out, view->width, view->height, GPU_RGBA32F))
         return false;
-    const struct gpu_program *prog = variant(r, r->light ? r->light->defines : NULL);
+    const char *light_defines = r->light ? r->light->defines : "";
+    bool opaque = false;
+    for (int i = 0; i < r->n_meshes; i++)
+        opaque |= r->meshes[i]->visible;
+    char defines[300];
+    snprintf(defines, sizeof(defines), "%s%s", light_defines, opaque ? "#define OPAQUE 1\n" : "");
+    const struct gpu_program *prog = variant(r, defines);
     if (!prog)
         return false;
 
@@ -187,6 +260,12 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
         r->light->bind(r->light, prog);
 
     gpu_timer_begin(&r->timer);
+    if (opaque) {
+        if (!draw_opaque(r, s, view, vp, inv, light_defines))
+            return false;
+        gpu_texture_bind(&r->target.color, 3);
+        gpu_texture_bind(&r->target.value, 4);
+    }
     gpu_dispatch(prog, view->width, view->height, 1);
     gpu_timer_end(&r->timer);
     r->stats.views++;
@@ -218,4 +297,74 @@ bool renderer_read(const struct gpu_texture *tex, struct image *img)
 const struct render_stats *renderer_stats(const struct renderer *r)
 {
     return &r->stats;
+}
+
+struct render_mesh *render_mesh_create(const struct render_vertex *vertices, int vertex_count,
+                                       const uint32_t *indices, int index_count, bool lines,
+                                       bool emissive)
+{
+    struct render_mesh *m = calloc(1, sizeof(*m));
+    if (!m) {
+        log_error("out of memory for a mesh");
+        return NULL;
+    }
+    static const int attribs[4] = {3, 3, 4, 2};
+    if (!gpu_mesh_init(&m->mesh, (const float *)vertices, vertex_count, attribs, 4, indices,
+                       index_count, lines)) {
+        free(m);
+        return NULL;
+    }
+    glm_mat4_identity((vec4 *)m->model);
+    m->emissive = emissive;
+    m->visible = true;
+    return m;
+}
+
+void render_mesh_destroy(struct render_mesh *m)
+{
+    if (!m)
+        return;
+    gpu_mesh_finish(&m->mesh);
+    free(m);
+}
+
+void render_mesh_set_model(struct render_mesh *m, const float model[16])
+{
+    memcpy(m->model, model, sizeof(m->model));
+}
+
+void render_mesh_set_texture(struct render_mesh *m, const struct gpu_texture *texture)
+{
+    m->texture = texture;
+}
+
+void render_mesh_set_visible(struct render_mesh *m, bool visible)
+{
+    m->visible = visible;
+}
+
+bool renderer_add_mesh(struct renderer *r, struct render_mesh *m)
+{
+    for (int i = 0; i < r->n_meshes; i++) {
+        if (r->meshes[i] == m)
+            return true;
+    }
+    if (r->n_meshes == MAX_MESHES) {
+        log_error("too many opaque meshes (at most %d)", MAX_MESHES);
+        return false;
+    }
+    r->meshes[r->n_meshes++] = m;
+    return true;
+}
+
+void renderer_remove_mesh(struct renderer *r, struct render_mesh *m)
+{
+    for (int i = 0; i < r->n_meshes; i++) {
+        if (r->meshes[i] == m) {
+            memmove(&r->meshes[i], &r->meshes[i + 1],
+                    sizeof(r->meshes[0]) * (size_t)(r->n_meshes - i - 1));
+            r->n_meshes--;
+            return;
+        }
+    }
 }

@@ -83,4 +83,34 @@ bool renderer_read(const struct gpu_texture *tex, struct image *img);
 
 const struct render_stats *renderer_stats(const struct renderer *r);
 
+/* ---- opaque geometry -----------------------------------------------------------------
+ * Meshes drawn in every view before the ray cast: each view's rays stop at their distance and
+ * see their colour as the background (ground, terrain, coastlines, the menu, the wand). */
+
+struct render_vertex {
+    float pos[3];    /* world metres (before the mesh's model matrix) */
+    float normal[3]; /* lit meshes: for the sun term */
+    float color[4];  /* linear RGB albedo (lit) or radiance (emissive); alpha < 0.5 cuts */
+    float uv[2];     /* texture coordinate (textured meshes) */
+};
+
+struct render_mesh;
+
+/* Uploads a mesh (triangles, or line pairs when LINES).  EMISSIVE meshes show their colour
+ * as radiance; the others are Lambertian, lit by the sun through the light map and by the
+ * sky.  Returns NULL (logged) on failure.  Needs the GL context. */
+struct render_mesh *render_mesh_create(const struct render_vertex *vertices, int vertex_count,
+                                       const uint32_t *indices, int index_count, bool lines,
+                                       bool emissive);
+void render_mesh_destroy(struct render_mesh *m);
+/* Column-major model matrix (default identity). */
+void render_mesh_set_model(struct render_mesh *m, const float model[16]);
+/* An RGBA8 texture multiplied into the colour (text); borrowed, NULL for none. */
+void render_mesh_set_texture(struct render_mesh *m, const struct gpu_texture *texture);
+void render_mesh_set_visible(struct render_mesh *m, bool visible);
+
+/* Draws M in every following view until removed; the renderer borrows M. */
+bool renderer_add_mesh(struct renderer *r, struct render_mesh *m);
+void renderer_remove_mesh(struct renderer *r, struct render_mesh *m);
+
 #endif

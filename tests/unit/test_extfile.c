@@ -8,13 +8,14 @@
 
 #include <netcdf.h>
 
+#include "app/cmd_data.h"
 #include "common/log.h"
 #include "data/extfile.h"
 
 static void make_volume(struct ext_volume *v, int step)
 {
-    struct grid3 g = {.n = {5, 4, 3}, .spacing = {2000.0, 1500.0, 250.0},
-                      .origin = {1000.0, -3000.0, 0.0}};
+    struct grid3 g = {
+        .n = {5, 4, 3}, .spacing = {2000.0, 1500.0, 250.0}, .origin = {1000.0, -3000.0, 0.0}};
     assert_true(ext_volume_init(v, &g));
     size_t n = grid3_count(&g);
     for (size_t i = 0; i < n; i++) {
@@ -40,9 +41,9 @@ static void test_round_trip(void **state)
     struct ext_volume v[3];
     for (int s = 0; s < 3; s++)
         make_volume(&v[s], s);
-    struct extfile_writer *w = extfile_writer_create(path, &v[0].grid, "storm.nc",
-                                                     "anvil convert storm.nc -o ext.nc",
-                                                     "cloud rain ice snow graupel, scale 1");
+    struct extfile_writer *w =
+        extfile_writer_create(path, &v[0].grid, "storm.nc", "anvil convert storm.nc -o ext.nc",
+                              "cloud rain ice snow graupel, scale 1");
     assert_non_null(w);
     assert_true(extfile_writer_add(w, &v[0], "2005-08-28_12:00:00"));
     assert_true(extfile_writer_add(w, &v[1], "2005-08-28_15:00:00"));
@@ -166,8 +167,7 @@ static void test_bad_values_and_layout(void **state)
     assert_int_equal(st.negative, 1);
     assert_int_equal(st.inf, 1);
     assert_int_equal(st.fill, 1);
-    assert_true(r.beta[0] == 0.0f && r.beta[3] == 0.0f && r.beta[5] == 0.0f &&
-                r.beta[7] == 0.0f);
+    assert_true(r.beta[0] == 0.0f && r.beta[3] == 0.0f && r.beta[5] == 0.0f && r.beta[7] == 0.0f);
     assert_true(r.beta[1] == a.beta[1]);
     ext_volume_finish(&r);
     extfile_close(f);
@@ -207,6 +207,65 @@ static void test_dates(void **state)
     assert_false(extfile_parse_date("2005-13-28_12:00:00", &s));
 }
 
+/* The commands: synth writes a WRF series, convert turns it (and the Katrina sample) into
+ * extinction files, info describes both; bad input and usage give exit codes 1 and 2. */
+static void test_commands(void **state)
+{
+    char synth[512], ext[512], kat[512];
+    snprintf(synth, sizeof(synth), "%s", test_tmp_path("cmd-synth.nc"));
+    snprintf(ext, sizeof(ext), "%s", test_tmp_path("cmd-ext.nc"));
+    snprintf(kat, sizeof(kat), "%s", test_tmp_path("cmd-katrina.nc"));
+    char *synth_argv[] = {"synth", "-o",       synth,      "--size", "20x16x10", "--steps",
+                          "3",     "--extent", "30x24x12", "--seed", "5"};
+    assert_int_equal(cmd_synth(11, synth_argv), 0);
+    char *convert_argv[] = {"convert", synth, "-o", ext};
+    assert_int_equal(cmd_convert(4, convert_argv), 0);
+    struct extfile *f = extfile_open(ext);
+    assert_non_null(f);
+    assert_int_equal(extfile_step_count(f), 3);
+    assert_string_equal(extfile_step_date(f, 2), "2000-01-01_00:20:00");
+    assert_int_equal(extfile_grid(f)->n[0], 20);
+    assert_float_equal(extfile_grid(f)->spacing[2], 1200.0, 1e-3);
+    struct ext_volume v;
+    assert_true(extfile_read_step(f, 1, &v, NULL));
+    assert_true(ext_volume_max_beta(&v) > 0.0);
+    ext_volume_finish(&v);
+    extfile_close(f);
+
+    /* Katrina: cloud and rain only, so the ice-phase volume is empty. */
+    char *kat_argv[] = {"convert", (char *)test_shared_data("wrf/katrina_2005_mercator_wsm3.nc"),
+                        "-o", kat};
+    assert_int_equal(cmd_convert(4, kat_argv), 0);
+    f = extfile_open(kat);
+    assert_non_null(f);
+    assert_int_equal(extfile_step_count(f), 4);
+    assert_true(extfile_read_step(f, 0, &v, NULL));
+    double ice = 0.0, water = 0.0;
+    for (size_t i = 0; i < grid3_count(&v.grid); i++) {
+        ice = fmax(ice, v.beta[2 * i]);
+        water = fmax(water, v.beta[2 * i + 1]);
+    }
+    assert_float_equal(ice, 0.0, 0.0);
+    assert_true(water > 0.01);
+    ext_volume_finish(&v);
+    extfile_close(f);
+
+    char *info_argv[] = {"info", synth};
+    assert_int_equal(cmd_info(2, info_argv), 0);
+    char *info_ext[] = {"info", ext};
+    assert_int_equal(cmd_info(2, info_ext), 0);
+    char *info_bad[] = {"info", (char *)test_write_file("junk.nc", "junk")};
+    assert_int_equal(cmd_info(2, info_bad), 1);
+    char *info_none[] = {"info"};
+    assert_int_equal(cmd_info(1, info_none), 2);
+    char *synth_bad[] = {"synth", "-o", synth, "--size", "20x16"};
+    assert_int_equal(cmd_synth(5, synth_bad), 2);
+    char *synth_noout[] = {"synth", "--steps", "2"};
+    assert_int_equal(cmd_synth(3, synth_noout), 2);
+    char *convert_noout[] = {"convert", synth};
+    assert_int_equal(cmd_convert(2, convert_noout), 2);
+}
+
 int main(void)
 {
     log_set_level(LOG_ERROR);
@@ -215,6 +274,7 @@ int main(void)
         cmocka_unit_test(test_failed_write_keeps_old_file),
         cmocka_unit_test(test_bad_values_and_layout),
         cmocka_unit_test(test_dates),
+        cmocka_unit_test(test_commands),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -109,7 +109,9 @@ static void test_budget_and_lru(void **state)
 {
     struct fake f = {.fail_step = -1};
     /* Room for three volumes. */
-    struct series_desc d = {.step_count = 10, .load = fake_load, .user = &f,
+    struct series_desc d = {.step_count = 10,
+                            .load = fake_load,
+                            .user = &f,
                             .memory_mb = 3.5 * VOLUME_BYTES / 1048576.0};
     struct series *s = series_create(&d);
     for (int step = 0; step < 10; step++) {
@@ -145,8 +147,8 @@ static void test_budget_and_lru(void **state)
 static void test_try_acquire_never_blocks(void **state)
 {
     struct fake f = {.fail_step = -1};
-    struct series_desc d = {.step_count = 4, .load = fake_load, .user = &f, .delay_ms = 50,
-                            .wrap = true};
+    struct series_desc d = {
+        .step_count = 4, .load = fake_load, .user = &f, .delay_ms = 50, .wrap = true};
     struct series *s = series_create(&d);
     double t0 = time_now_ms();
     assert_null(series_try_acquire(s, 2)); /* not there yet: asked for, no wait */
@@ -195,8 +197,8 @@ static void test_wrf_series(void **state)
 {
     char path[512];
     snprintf(path, sizeof(path), "%s", test_tmp_path("series.nc"));
-    struct synth_desc sd = {.kind = SYNTH_STORM, .n = {24, 20, 12},
-                            .extent_m = {30e3, 25e3, 12e3}, .seed = 3};
+    struct synth_desc sd = {
+        .kind = SYNTH_STORM, .n = {24, 20, 12}, .extent_m = {30e3, 25e3, 12e3}, .seed = 3};
     struct wrf_writer *w = NULL;
     for (int step = 0; step < 3; step++) {
         struct field_volume fv;

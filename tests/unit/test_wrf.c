@@ -131,6 +131,14 @@ static void test_katrina_step(void **state)
     /* Air density near the ground (the lowest level) is physical everywhere. */
     for (size_t c = 0; c < cols; c++)
         assert_true(v.rho_air[c] > 0.5f && v.rho_air[c] < 1.4f);
+
+    /* Every step of the series lands on the same grid (the model top moves with time). */
+    for (int s = 1; s < 4; s++) {
+        struct field_volume u;
+        assert_true(wrf_read_step(w, s, &d, &u, NULL));
+        assert_memory_equal(&u.grid, &v.grid, sizeof(v.grid));
+        field_volume_finish(&u);
+    }
     field_volume_finish(&v);
     wrf_close(w);
 }
@@ -585,8 +593,8 @@ static void test_synth_round_trip(void **state)
 {
     char path[512];
     snprintf(path, sizeof(path), "%s", test_tmp_path("synth.nc"));
-    struct synth_desc sd = {.kind = SYNTH_STORM, .n = {40, 30, 20},
-                            .extent_m = {60000.0, 45000.0, 16000.0}, .seed = 7};
+    struct synth_desc sd = {
+        .kind = SYNTH_STORM, .n = {40, 30, 20}, .extent_m = {60000.0, 45000.0, 16000.0}, .seed = 7};
     struct wrf_write_desc wd = {.cen_lat = 25.0, .cen_lon = -89.0};
     struct field_volume in[3];
     struct wrf_writer *ww = NULL;

@@ -1,0 +1,49 @@
+// Opaque geometry: its radiance (lit by the sun through the light map and by the sky, or
+// emissive) and its distance along the pixel's view ray, measured from the near plane the
+// way shaders/raycast.comp measures it, so the ray stops exactly there.
+
+#include "common.glsl"
+#include "lightmap_lookup.glsl"
+
+in vec3 v_world;
+in vec3 v_normal;
+in vec4 v_color;
+in vec2 v_uv;
+
+layout(location = 0) out vec4 out_color;
+layout(location = 1) out float out_distance;
+
+layout(binding = 5) uniform sampler2D mesh_texture;
+
+uniform mat4 inv_view_proj;
+uniform ivec2 image_size;
+uniform vec3 sun_dir;
+uniform vec3 sun_radiance;
+uniform vec3 sky_radiance;
+uniform int emissive; // 1: colour as is (menu, labels); 0: Lambertian, sun and sky
+uniform int textured; // 1: colour times mesh_texture (text)
+
+void main()
+{
+    vec4 c = v_color;
+    if (textured != 0)
+        c *= texture(mesh_texture, v_uv);
+    if (c.a < 0.5)
+        discard;
+    vec3 radiance;
+    if (emissive != 0) {
+        radiance = c.rgb;
+    } else {
+        // As the ground in raycast.comp: rho (4 L_sun cos L_l + L_sky).
+        vec3 n = normalize(v_normal);
+        float cos_sun = max(dot(n, sun_dir), 0.0);
+        radiance = c.rgb * (4.0 * sun_radiance * cos_sun * ground_light(v_world) + sky_radiance);
+    }
+    vec2 ndc = gl_FragCoord.xy / vec2(image_size) * 2.0 - 1.0;
+    vec4 pn = inv_view_proj * vec4(ndc, -1.0, 1.0);
+    vec4 pf = inv_view_proj * vec4(ndc, 1.0, 1.0);
+    vec3 origin = pn.xyz / pn.w;
+    vec3 dir = normalize(pf.xyz / pf.w - origin);
+    out_distance = dot(v_world - origin, dir);
+    out_color = vec4(radiance, 1.0);
+}
