@@ -332,7 +332,8 @@ static GLuint compile_stage(const char *name, const char *defines, GLenum type)
 {
     struct source s = {0};
     bool ok = appendf(&s, "#version 450 core\n") &&
-              (!defines || append(&s, defines, strlen(defines))) && load_file(&s, name, 0);
+              (!defines || append(&s, defines, strlen(defines))) && append(&s, "\n", 1) &&
+              load_file(&s, name, 0);
     if (!ok) {
         free(s.text);
         return 0;
