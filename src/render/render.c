@@ -211,7 +211,7 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     }
     if (!ensure_texture(out, view->width, view->height, GPU_RGBA32F))
         return false;
-    const char *light_defines = r->light ? r->light->defines : "";
+    const char *light_defines = r->light && r->light->defines ? r->light->defines : "";
     bool opaque = false;
     for (int i = 0; i < r->n_meshes; i++)
         opaque |= r->meshes[i]->visible;
