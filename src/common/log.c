@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static pthread_mutex_t log_lock = PTHREAD_MUTEX_INITIALIZER;
@@ -117,6 +118,11 @@ bool file_write_atomic(const char *path, const void *data, size_t len)
         free(tmp);
         return false;
     }
+    /* mkstemp makes the file 0600: give it what a plain create would (0666 less umask). */
+    mode_t mask = umask(0);
+    umask(mask);
+    if (fchmod(fd, 0666 & ~mask) != 0)
+        log_warn("%s: cannot set the file's permissions: %s", path, strerror(errno));
     const char *p = data;
     size_t left = len;
     while (left > 0) {

@@ -50,7 +50,8 @@ double light_gpu_last_build_ms(const struct light_gpu *lg);
 void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed);
 
 /* Reads the dense light volume back into MAP (initialised here, finish with
- * light_map_finish): the same layout as the CPU reference. */
+ * light_map_finish): the same layout as the CPU reference.  Dense mode only: compressed mode
+ * frees the dense volume once its columns are compressed. */
 bool light_gpu_read(const struct light_gpu *lg, struct light_map *map);
 
 #endif
