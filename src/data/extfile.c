@@ -88,22 +88,14 @@ struct extfile_writer *extfile_writer_create(const char *path, const struct grid
         goto error_oom;
     w->ncid = -1;
     w->grid = *grid;
-    size_t len = strlen(path) + 32;
     w->path = strdup(path);
-    w->tmp = malloc(len);
     w->source = dup_or_empty(source);
     w->history = dup_or_empty(history);
     w->species = dup_or_empty(species_note);
     w->layer = malloc((size_t)grid->n[0] * grid->n[1] * sizeof(float));
-    if (!w->path || !w->tmp || !w->source || !w->history || !w->species || !w->layer)
+    if (!w->path || !w->source || !w->history || !w->species || !w->layer)
         goto error_oom;
-    snprintf(w->tmp, len, "%s.tmp%ld", path, (long)getpid());
-    data_nc_lock();
-    int st = nc_create(w->tmp, NC_CLOBBER | NC_NETCDF4, &w->ncid);
-    data_nc_unlock();
-    if (st != NC_NOERR) {
-        w->ncid = -1;
-        log_error("%s: cannot create: %s", w->tmp, nc_strerror(st));
+    if (!data_nc_create_beside(path, NC_CLOBBER | NC_NETCDF4, &w->tmp, &w->ncid)) {
         extfile_writer_destroy(w);
         return NULL;
     }
@@ -290,22 +282,7 @@ bool extfile_writer_finish(struct extfile_writer *w)
         log_error("%s: no time steps to write", w->path);
         ok = false;
     }
-    data_nc_lock();
-    int st = nc_close(w->ncid);
-    data_nc_unlock();
-    w->ncid = -1;
-    if (ok && st != NC_NOERR) {
-        log_error("%s: cannot finish writing: %s", w->tmp, nc_strerror(st));
-        ok = false;
-    }
-    if (ok && rename(w->tmp, w->path) != 0) {
-        log_error("%s: cannot move %s into place", w->path, w->tmp);
-        ok = false;
-    }
-    if (ok) {
-        free(w->tmp);
-        w->tmp = NULL;
-    }
+    ok = data_nc_finish_beside(w->path, &w->tmp, &w->ncid, ok);
     extfile_writer_destroy(w);
     return ok;
 }
@@ -314,15 +291,8 @@ void extfile_writer_destroy(struct extfile_writer *w)
 {
     if (!w)
         return;
-    if (w->ncid >= 0) {
-        data_nc_lock();
-        nc_close(w->ncid);
-        data_nc_unlock();
-    }
-    if (w->tmp)
-        remove(w->tmp);
+    data_nc_abandon(&w->tmp, &w->ncid);
     free(w->path);
-    free(w->tmp);
     free(w->source);
     free(w->history);
     free(w->species);

@@ -1,6 +1,14 @@
 #include "data/nclock.h"
 
 #include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <netcdf.h>
+
+#include "common/log.h"
 
 static pthread_once_t once = PTHREAD_ONCE_INIT;
 static pthread_mutex_t lock;
@@ -23,4 +31,61 @@ void data_nc_lock(void)
 void data_nc_unlock(void)
 {
     pthread_mutex_unlock(&lock);
+}
+
+bool data_nc_create_beside(const char *path, int cmode, char **tmp, int *ncid)
+{
+    *ncid = -1;
+    size_t len = strlen(path) + 32;
+    *tmp = malloc(len);
+    if (!*tmp) {
+        log_error("%s: out of memory", path);
+        return false;
+    }
+    snprintf(*tmp, len, "%s.tmp%ld", path, (long)getpid());
+    data_nc_lock();
+    int st = nc_create(*tmp, cmode, ncid);
+    data_nc_unlock();
+    if (st != NC_NOERR) {
+        *ncid = -1;
+        log_error("%s: cannot create: %s", *tmp, nc_strerror(st));
+        return false;
+    }
+    return true;
+}
+
+bool data_nc_finish_beside(const char *path, char **tmp, int *ncid, bool ok)
+{
+    data_nc_lock();
+    int st = *ncid >= 0 ? nc_close(*ncid) : NC_NOERR;
+    data_nc_unlock();
+    *ncid = -1;
+    if (ok && st != NC_NOERR) {
+        log_error("%s: cannot finish writing: %s", *tmp, nc_strerror(st));
+        ok = false;
+    }
+    if (ok && rename(*tmp, path) != 0) {
+        log_error("%s: cannot move %s into place", path, *tmp);
+        ok = false;
+    }
+    if (ok) {
+        free(*tmp);
+        *tmp = NULL;
+    }
+    return ok;
+}
+
+void data_nc_abandon(char **tmp, int *ncid)
+{
+    if (*ncid >= 0) {
+        data_nc_lock();
+        nc_close(*ncid);
+        data_nc_unlock();
+        *ncid = -1;
+    }
+    if (*tmp) {
+        remove(*tmp);
+        free(*tmp);
+        *tmp = NULL;
+    }
 }

@@ -6,7 +6,22 @@
 #ifndef ANVIL_DATA_NCLOCK_H
 #define ANVIL_DATA_NCLOCK_H
 
+#include <stdbool.h>
+
 void data_nc_lock(void);
 void data_nc_unlock(void);
+
+/* NetCDF files written atomically: created as a temporary sibling of PATH and moved onto PATH
+ * only when complete, so a failed write never leaves a half-written file nor loses the old
+ * one.  Each takes the lock itself and logs its failures. */
+
+/* Creates the temporary sibling (*TMP, allocated here) with nc_create mode CMODE; *NCID is -1
+ * on failure. */
+bool data_nc_create_beside(const char *path, int cmode, char **tmp, int *ncid);
+/* Closes *NCID and, when OK, renames *TMP onto PATH (then frees *TMP and sets it NULL).
+ * Returns whether the file is in place. */
+bool data_nc_finish_beside(const char *path, char **tmp, int *ncid, bool ok);
+/* Closes *NCID if it is open and removes and frees *TMP if it is still there. */
+void data_nc_abandon(char **tmp, int *ncid);
 
 #endif

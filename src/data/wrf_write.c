@@ -95,27 +95,20 @@ struct wrf_writer *wrf_writer_create(const char *path, const struct grid3 *grid,
     snprintf(w->title, sizeof(w->title), " %s",
              (d && d->title) ? d->title : "OUTPUT FROM ANVIL SYNTH");
     w->desc.title = NULL;
-    size_t len = strlen(path) + 32;
     w->path = strdup(path);
-    w->tmp = malloc(len);
     w->plane = malloc((size_t)grid->n[0] * grid->n[1] * 2 * sizeof(float));
-    if (!w->path || !w->tmp || !w->plane) {
+    if (!w->path || !w->plane) {
         log_error("%s: out of memory", path);
         wrf_writer_destroy(w);
         return NULL;
     }
-    snprintf(w->tmp, len, "%s.tmp%ld", path, (long)getpid());
-    data_nc_lock();
-    int st = nc_create(w->tmp, NC_CLOBBER | NC_64BIT_OFFSET, &w->ncid);
-    if (st == NC_NOERR)
-        nc_set_fill(w->ncid, NC_NOFILL, NULL);
-    data_nc_unlock();
-    if (st != NC_NOERR) {
-        w->ncid = -1;
-        log_error("%s: cannot create: %s", w->tmp, nc_strerror(st));
+    if (!data_nc_create_beside(path, NC_CLOBBER | NC_64BIT_OFFSET, &w->tmp, &w->ncid)) {
         wrf_writer_destroy(w);
         return NULL;
     }
+    data_nc_lock();
+    nc_set_fill(w->ncid, NC_NOFILL, NULL);
+    data_nc_unlock();
     return w;
 }
 
@@ -401,22 +394,7 @@ bool wrf_writer_finish(struct wrf_writer *w)
         log_error("%s: no time steps to write", w->path);
         ok = false;
     }
-    data_nc_lock();
-    int st = nc_close(w->ncid);
-    data_nc_unlock();
-    w->ncid = -1;
-    if (ok && st != NC_NOERR) {
-        log_error("%s: cannot finish writing: %s", w->tmp, nc_strerror(st));
-        ok = false;
-    }
-    if (ok && rename(w->tmp, w->path) != 0) {
-        log_error("%s: cannot move %s into place", w->path, w->tmp);
-        ok = false;
-    }
-    if (ok) {
-        free(w->tmp);
-        w->tmp = NULL;
-    }
+    ok = data_nc_finish_beside(w->path, &w->tmp, &w->ncid, ok);
     wrf_writer_destroy(w);
     return ok;
 }
@@ -425,15 +403,8 @@ void wrf_writer_destroy(struct wrf_writer *w)
 {
     if (!w)
         return;
-    if (w->ncid >= 0) {
-        data_nc_lock();
-        nc_close(w->ncid);
-        data_nc_unlock();
-    }
-    if (w->tmp)
-        remove(w->tmp);
+    data_nc_abandon(&w->tmp, &w->ncid);
     free(w->path);
-    free(w->tmp);
     free(w->plane);
     free(w);
 }
