@@ -192,24 +192,6 @@ error:
     return false;
 }
 
-/* Texture coordinate -> column coordinate clamped to [0, n - 1], lower index and weight
- * (the same rule as light_map_sample). */
-static int tex_column(float tex, int n, float *t)
-{
-    float x = tex * (float)n - 0.5f;
-    if (!(x > 0.0f)) {
-        *t = 0.0f;
-        return 0;
-    }
-    if (x >= (float)(n - 1)) {
-        *t = 1.0f;
-        return n - 2;
-    }
-    int i = (int)x;
-    *t = x - (float)i;
-    return i;
-}
-
 static float column_at(const struct light_compressed *c, int i, int j, float depth)
 {
     size_t col = (size_t)i + (size_t)c->grid.n[0] * j;
@@ -220,8 +202,8 @@ static float column_at(const struct light_compressed *c, int i, int j, float dep
 float light_compressed_sample(const struct light_compressed *c, const float tex[3])
 {
     float tx, ty;
-    int i = tex_column(tex[0], c->grid.n[0], &tx);
-    int j = tex_column(tex[1], c->grid.n[1], &ty);
+    int i = light_tex_node(tex[0], c->grid.n[0], &tx);
+    int j = light_tex_node(tex[1], c->grid.n[1], &ty);
     float depth =
         fminf(fmaxf(tex[2] * (float)c->grid.n[2] - 0.5f, 0.0f), (float)(c->grid.n[2] - 1));
     float v00 = column_at(c, i, j, depth), v10 = column_at(c, i + 1, j, depth);

@@ -129,6 +129,9 @@ static inline float light_map_node(const struct light_map *m, int i, int j, int 
 
 /* Trilinear lookup at texture coordinates TEX (as from world_to_tex), clamped to the edge
  * nodes: what a GL_LINEAR, CLAMP_TO_EDGE sampler3D returns (up to its weight precision). */
+/* Texture coordinate TEX on an axis of N nodes -> lower node index, with *T the weight of the
+ * next node; clamped to [0, n - 1] like GL_LINEAR with CLAMP_TO_EDGE. */
+int light_tex_node(float tex, int n, float *t);
 float light_map_sample(const struct light_map *m, const float tex[3]);
 
 /* Bytes of the dense map as a float32 3D texture. */

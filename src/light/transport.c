@@ -241,8 +241,7 @@ size_t light_map_bytes(const struct light_map *m)
     return (size_t)m->grid.n[0] * m->grid.n[1] * m->grid.n[2] * sizeof(float);
 }
 
-/* Texture coordinate -> node coordinate clamped to [0, n - 1], lower index and weight. */
-static int tex_node(float tex, int n, float *t)
+int light_tex_node(float tex, int n, float *t)
 {
     float x = tex * (float)n - 0.5f;
     if (!(x > 0.0f)) {
@@ -264,7 +263,7 @@ float light_map_sample(const struct light_map *m, const float tex[3])
     int i[3];
     float t[3];
     for (int a = 0; a < 3; a++)
-        i[a] = tex_node(tex[a], n[a], &t[a]);
+        i[a] = light_tex_node(tex[a], n[a], &t[a]);
     float c[2][2];
     for (int dk = 0; dk < 2; dk++) {
         for (int dj = 0; dj < 2; dj++) {
