@@ -1,8 +1,21 @@
 // Deep light map, dense: one node plane of the light-space grid per dispatch, swept from the
 // sun (Nes §5.2.3, Riley §4.4).  Mirrors light_map_build() in src/light/transport.c operation
 // for operation in float32; see docs/lightmap.md for the grid and what a node stores.
+// Variants (#define, effects that are off are compiled out): FORWARD 0 = shadow only;
+// PERIPHERAL 0 = no peripheral ring; PHASE_MIX 0 = both phases' CP are equal (one phase), so
+// the ice share is not computed.
 
 #include "common.glsl"
+
+#ifndef FORWARD
+#define FORWARD 1
+#endif
+#ifndef PERIPHERAL
+#define PERIPHERAL 1
+#endif
+#ifndef PHASE_MIX
+#define PHASE_MIX 1
+#endif
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -17,8 +30,6 @@ uniform vec3 g_origin, g_du, g_dv, g_dw;
 uniform int plane;       // k
 uniform int substeps;
 uniform float dsub;      // metres per substep
-uniform int forward;     // central (and peripheral) forward scattering on
-uniform int peripheral;
 uniform vec4 cp;         // water_ctr, ice_ctr, water_per, ice_per
 uniform vec2 per_offset; // peripheral offset in node units along u and v
 
@@ -114,17 +125,25 @@ void main()
     float l_in = imageLoad(light_img, ivec3(ij, k - 1)).r;
     float t = exp(-beta * dsub);
     float l = l_in * t; // Nes eq. 5.8
-    if (forward != 0 && beta > 0.0) {
+#if FORWARD
+    if (beta > 0.0) {
+#if PHASE_MIX
         float f_ice = b.x / beta;
+        float cp_ctr = cp.x + f_ice * (cp.y - cp.x);
+        float cp_per = cp.z + f_ice * (cp.w - cp.z);
+#else
+        float cp_ctr = cp.x, cp_per = cp.z;
+#endif
         float scat = 1.0 - t;
-        l += l_in * scat * (cp.x + f_ice * (cp.y - cp.x)); // Nes eq. 5.9
-        if (peripheral != 0) {
-            float l_per = 0.25 * (plane_tap(fi + per_offset.x, fj, k - 1) +
-                                  plane_tap(fi - per_offset.x, fj, k - 1) +
-                                  plane_tap(fi, fj + per_offset.y, k - 1) +
-                                  plane_tap(fi, fj - per_offset.y, k - 1));
-            l += l_per * scat * (cp.z + f_ice * (cp.w - cp.z)); // Nes eq. 5.10
-        }
+        l += l_in * scat * cp_ctr; // Nes eq. 5.9
+#if PERIPHERAL
+        float l_per = 0.25 * (plane_tap(fi + per_offset.x, fj, k - 1) +
+                              plane_tap(fi - per_offset.x, fj, k - 1) +
+                              plane_tap(fi, fj + per_offset.y, k - 1) +
+                              plane_tap(fi, fj - per_offset.y, k - 1));
+        l += l_per * scat * cp_per; // Nes eq. 5.10
+#endif
     }
+#endif
     imageStore(light_img, ivec3(ij, k), vec4(clamp(l, 0.0, 1.0))); // Nes eq. 5.11
 }

@@ -45,5 +45,9 @@ void main()
     vec3 origin = pn.xyz / pn.w;
     vec3 dir = normalize(pf.xyz / pf.w - origin);
     out_distance = dot(v_world - origin, dir);
+    // Depth linear in the distance: a window depth of (f+n)/(f-n) - 2fn/((f-n)z) with a 10 m
+    // near plane resolves only ~1 km at 500 km, and lines on the terrain would fight with it;
+    // float depth d / 1e9 m keeps ~7 digits relative at any distance.
+    gl_FragDepth = clamp(out_distance * 1e-9, 0.0, 1.0);
     out_color = vec4(radiance, 1.0);
 }

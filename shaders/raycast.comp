@@ -4,10 +4,16 @@
 // Variants (#define): LIGHTMAP 0 = unshadowed sunlight; 1 = dense light volume;
 // 2 = compressed deep light map.  GROUND_SHADOW 1 = the ground reads the light map too.
 // OPAQUE 1 = opaque geometry was drawn first (render/opaque.c): rays stop at its distance and
-// it is the background there.
+// it is the background there.  PHASE_MIX 0 = one phase for every species (PHASE_ICE 1 the ice
+// phase, 0 the water phase) instead of the beta-weighted mix (effects.phase off).
+// TINT 1 = the scattered light takes a per-voxel colour (species tints, transfer functions).
 
 #include "common.glsl"
 #include "lightmap_lookup.glsl"
+
+#ifndef PHASE_MIX
+#define PHASE_MIX 1
+#endif
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -31,6 +37,12 @@ uniform float phase_size;    // entries in phase_tex
 
 #ifndef OPAQUE
 #define OPAQUE 0
+#endif
+#ifndef TINT
+#define TINT 0
+#endif
+#if TINT
+layout(binding = 6) uniform sampler3D tint_tex; // rgb: colour of the scattered light
 #endif
 #if OPAQUE
 layout(binding = 3) uniform sampler2D opaque_color;    // radiance of the opaque geometry
@@ -81,13 +93,27 @@ void main()
         for (int i = 0; i < n; i++) {
             vec3 p = origin + dir * (t0 + (float(i) + 0.5) * ds);
             vec2 b = texture(beta_tex, (p - box_min) / box_size).rg;
+            // NaN and negative read as empty, infinity as the largest float, as in the light
+            // pass (docs/stability.md).
+            b = vec2(b.x >= 0.0 ? min(b.x, 1e30) : 0.0, b.y >= 0.0 ? min(b.y, 1e30) : 0.0);
             float beta = b.r + b.g;
             if (beta <= 0.0)
                 continue;
             float ts = transmittance(beta * ds);
+#if PHASE_MIX
             float pv = (b.r * phase.r + b.g * phase.g) / beta; // Nes eq. 5.12
+#elif PHASE_ICE
+            float pv = phase.r;
+#else
+            float pv = phase.g;
+#endif
             float light = lightmap_light(p);
+#if TINT
+            vec3 tint = texture(tint_tex, (p - box_min) / box_size).rgb;
+            radiance += trans * (1.0 - ts) * pv * light * sun_radiance * tint;
+#else
             radiance += trans * (1.0 - ts) * pv * light * sun_radiance;
+#endif
             trans *= ts;
             if (trans < termination) {
                 trans = 0.0;

@@ -10,6 +10,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "app/effects.h"
 #include "config/config.h"
 #include "data/volume.h"
 #include "render/render.h"
@@ -28,6 +29,14 @@ bool app_load_config(const char *config_path, char **sets, int n_sets, struct co
 
 /* Builds the volume the config describes as extinction. */
 bool app_build_volume(const struct config *cfg, struct ext_volume *out);
+
+/* Time steps the config's scene has: 1 for synthetic scenes, the data files' count for data
+ * (0 when they cannot be opened; the reason is logged). */
+int app_time_steps(const struct config *cfg);
+
+/* The sun's transmittance through a clear atmosphere at ELEVATION_DEG, per R, G, B, relative to
+ * the sun overhead (light.atmosphere; an approximation, docs/terrain.md). */
+void app_sun_transmittance(double elevation_deg, double rgb[3]);
 
 /* Lighting and background from the config. */
 void app_render_settings(const struct config *cfg, struct render_settings *s);
@@ -49,6 +58,15 @@ struct app_stats {
     size_t gpu_bytes;
     size_t nonfinite_pixels;
     double volume_ms, upload_ms, total_ms;
+    /* Playback (anvil run, app/interact.h): the time series cache and the frames. */
+    unsigned frames;          /* frames drawn */
+    int time_step;            /* the time step on screen at the end */
+    unsigned cache_hits, cache_misses, cache_loads;
+    unsigned frames_waited;   /* frames that blocked on a load (only a scripted run's end) */
+    unsigned frames_stale;    /* frames that showed an older step: the wanted one was loading */
+    unsigned volume_uploads;  /* volumes uploaded after the first */
+    double load_ms, convert_ms, wait_ms, upload_ms_total;
+    double frame_ms_max;      /* longest frame of the loop */
 };
 
 void app_stats_add_view(struct app_stats *st, double ms);
@@ -60,11 +78,15 @@ bool app_stats_write(const struct app_stats *st, const char *path);
  * Needs the GL context current. */
 struct light_gpu;
 struct app_light {
-    struct light_gpu *gpu; /* NULL when lightmap.mode = "off" */
+    struct light_gpu *gpu; /* NULL when effects.shadows = "off" */
     uint64_t generation;   /* bump when the volume on the GPU changes */
+    struct effects effects; /* valid when have_effects (app_light_set_effects) */
+    bool have_effects;
 };
 
 bool app_light_init(struct app_light *al, const struct config *cfg);
+/* Uses the decisions E (copied) from now on; without them every auto effect is on. */
+void app_light_set_effects(struct app_light *al, const struct effects *e);
 /* Builds when stale and points the renderer at the light map; counts builds in ST. */
 bool app_light_update(struct app_light *al, const struct config *cfg, struct renderer *r,
                       struct app_stats *st);

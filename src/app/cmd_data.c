@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "app/app.h"
+#include "app/effects.h"
 #include "common/log.h"
 #include "data/extfile.h"
 #include "data/synth.h"
@@ -41,6 +42,20 @@ void cmd_data_source_desc(const struct config *cfg, const char **file_ptrs,
         out->select.enabled[f] = cfg->optics.enabled[f];
         out->select.scale[f] = cfg->optics.scale[f];
     }
+    cmd_data_detail_desc(cfg, &out->detail);
+    out->height_scale = cfg->scene.height_exaggeration;
+}
+
+void cmd_data_detail_desc(const struct config *cfg, struct detail_desc *out)
+{
+    memset(out, 0, sizeof(*out));
+    struct effects e;
+    effects_decide(cfg, NULL, &e); /* detail depends on no measured fact */
+    out->on = e.on[EFFECT_DETAIL];
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        out->amount[f] = cfg->detail.amount[f];
+    out->scale_m = cfg->detail.scale_km * 1000.0;
+    out->seed = cfg->detail.seed;
 }
 
 /* ---- anvil info ------------------------------------------------------------------------- */
@@ -426,6 +441,7 @@ int cmd_convert(int argc, char **argv)
     const char *ptrs[CONFIG_MAX_FILES];
     struct data_source_desc sd;
     cmd_data_source_desc(cfg, ptrs, &sd);
+    sd.height_scale = 1.0; /* a file keeps physical heights; detail, like species, is baked */
     struct data_source *src = data_source_open(&sd);
     if (!src) {
         free(cfg);

@@ -15,9 +15,12 @@ int cmd_synth(int argc, char **argv);
 int cmd_convert(int argc, char **argv);
 
 /* Fills OUT from CFG: format, files (pointers into CFG, which must outlive OUT), WRF reading
- * (data.levels, data.top, data.stride, data.crop, data.memory), Isabel sizes, optics and the
- * species toggles. */
+ * (data.levels, data.top, data.stride, data.crop, data.memory), Isabel sizes, optics, the
+ * species toggles, procedural detail and the height exaggeration. */
 void cmd_data_source_desc(const struct config *cfg, const char **file_ptrs,
                           struct data_source_desc *out);
+
+/* The procedural detail CFG asks for (effects.detail, detail.*). */
+void cmd_data_detail_desc(const struct config *cfg, struct detail_desc *out);
 
 #endif

@@ -8,6 +8,8 @@
 #include <GLFW/glfw3.h>
 
 #include "app/app.h"
+#include "app/interact.h"
+#include "app/map.h"
 #include "common/log.h"
 #include "config/display_config.h"
 #include "display/display.h"
@@ -22,6 +24,10 @@ struct render_options {
     int n_sets;
     const char *display; /* --display FILE: views from a display config */
     double time;         /* --time SECONDS: where on a scripted head path (with --display) */
+    const char *input;     /* --input SCRIPT: scripted wand and keys (docs/menu.md) */
+    const char *transfers; /* --transfers DIR: where the menu saves transfer functions */
+    const char *wand;      /* --wand NAME: an OpenHMD controller as the wand ("null") */
+    bool menu;             /* --menu: start with the menu shown (render) */
 };
 
 static int parse_options(int argc, char **argv, struct render_options *o, bool need_output)
@@ -33,6 +39,10 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         {"quiet", no_argument, NULL, 'q'},
         {"display", required_argument, NULL, 'D'},
         {"time", required_argument, NULL, 'T'},
+        {"input", required_argument, NULL, 'I'},
+        {"transfers", required_argument, NULL, 'F'},
+        {"wand", required_argument, NULL, 'W'},
+        {"menu", no_argument, NULL, 'M'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -69,6 +79,18 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
             }
             break;
         }
+        case 'I':
+            o->input = optarg;
+            break;
+        case 'F':
+            o->transfers = optarg;
+            break;
+        case 'W':
+            o->wand = optarg;
+            break;
+        case 'M':
+            o->menu = true;
+            break;
         case 'h':
             return -1;
         default:
@@ -97,7 +119,28 @@ struct session {
     struct render_settings settings;
     struct app_stats stats;
     struct app_light light;
+    struct effects_facts facts; /* measured by session_start, views added by session_effects */
+    struct effects effects;
+    struct app_map *map; /* terrain, coastlines, graticule (app/map.h) */
+    struct app_interact *interact; /* menu, input, playback (app/interact.h), or NULL */
+    struct display_navigation nav_home; /* --display: the navigation a reset goes back to */
 };
+
+/* Decides the effects once the views are known (N of them; VIEWS NULL: they change while
+ * running, so the ground counts as seen) and hands them to the light map and the eye pass. */
+static void session_effects(struct session *s, const struct render_view *views, int n)
+{
+    s->facts.views_known = views != NULL;
+    s->facts.ground_visible = false;
+    for (int i = 0; views && i < n; i++)
+        s->facts.ground_visible |= s->cfg.render.ground_on && effects_view_sees_ground(&views[i]);
+    effects_decide(&s->cfg, &s->facts, &s->effects);
+    for (int e = 0; e < EFFECT_COUNT; e++)
+        log_debug("effect %s: %s (%s)", effects_name(e), s->effects.on[e] ? "on" : "off",
+                  s->effects.reason[e]);
+    app_light_set_effects(&s->light, &s->effects);
+    effects_apply_render(&s->effects, &s->settings);
+}
 
 /* Builds the light map if the sun, volume or settings changed since the last build. */
 static bool session_light(struct session *s)
@@ -107,7 +150,11 @@ static bool session_light(struct session *s)
 
 static void session_finish(struct session *s)
 {
+    app_interact_destroy(s->interact); /* its meshes leave the renderer */
+    s->interact = NULL;
     app_light_finish(&s->light);
+    app_map_destroy(s->map, s->renderer);
+    s->map = NULL;
     renderer_destroy(s->renderer);
     s->renderer = NULL;
 }
@@ -119,6 +166,14 @@ static int session_start(struct session *s, const struct render_options *o)
     if (!app_build_volume(&s->cfg, &vol))
         return EXIT_BAD_INPUT;
     s->stats.volume_ms = time_now_ms() - t;
+    double sun[3];
+    camera_direction(s->cfg.light.azimuth_deg, s->cfg.light.elevation_deg, sun);
+    effects_facts_init(&s->facts);
+    s->facts.time_steps = app_time_steps(&s->cfg);
+    if (!effects_measure_volume(&vol, sun, &s->facts)) {
+        ext_volume_finish(&vol);
+        return EXIT_BAD_INPUT;
+    }
     log_info("volume %dx%dx%d (%.1f x %.1f x %.1f km) built in %.0f ms", vol.grid.n[0],
              vol.grid.n[1], vol.grid.n[2], vol.grid.n[0] * vol.grid.spacing[0] / 1000.0,
              vol.grid.n[1] * vol.grid.spacing[1] / 1000.0,
@@ -136,7 +191,11 @@ static int session_start(struct session *s, const struct render_options *o)
     s->stats.upload_ms = renderer_stats(s->renderer)->upload_ms;
     if (!app_light_init(&s->light, &s->cfg))
         return EXIT_FAILED;
+    s->map = app_map_create(&s->cfg, s->renderer);
+    if (!s->map)
+        return EXIT_FAILED;
     app_render_settings(&s->cfg, &s->settings);
+    app_map_apply_settings(s->map, &s->settings);
     s->stats.device = gpu_renderer_name();
     return EXIT_OK;
 }
@@ -174,6 +233,10 @@ static int display_start(struct session *s, const struct render_options *o, bool
     struct display_config dcfg;
     if (!display_config_load(o->display, &dcfg))
         return EXIT_BAD_INPUT;
+    /* effects.distortion on or off overrides the display's hmd.warp; auto follows it. */
+    enum effect_mode distortion = s->cfg.effects.mode[EFFECT_DISTORTION];
+    if (distortion != EFFECT_AUTO)
+        dcfg.hmd.warp = distortion == EFFECT_ON;
     struct display *d = display_create(&dcfg, &(struct display_desc){
         .offscreen = offscreen,
         .height = s->cfg.render.height,
@@ -186,6 +249,16 @@ static int display_start(struct session *s, const struct render_options *o, bool
         return rc;
     if (!display_update(d, o->time))
         return EXIT_FAILED;
+    s->facts.hmd = dcfg.type == DISPLAY_TYPE_HMD;
+    s->facts.hmd_warp = dcfg.hmd.warp;
+    struct render_view views[DISPLAY_MAX_VIEWS];
+    int n = 0;
+    for (int i = 0; i < display_view_count(d); i++) {
+        if (display_view(d, i)->visible)
+            views[n++] = display_view(d, i)->rv;
+    }
+    /* A moving head may bring the ground into view later. */
+    session_effects(s, dcfg.head.source == DISPLAY_HEAD_FIXED ? views : NULL, n);
     log_info("display %s (%s): %d views", o->display, display_type_name(dcfg.type),
              display_view_count(d));
     return EXIT_OK;
@@ -206,10 +279,122 @@ static bool display_frame(struct session *s, struct display *d)
     return display_present(d, s->renderer, (float)s->cfg.render.exposure);
 }
 
+/* ---- the menu, input and playback (app/interact.h) ---------------------------------- */
+
+static int session_interact(struct session *s, const struct render_options *o, bool tracker,
+                            void *window)
+{
+    s->interact = app_interact_create(&s->cfg, s->renderer, &s->light, &s->stats,
+                                      &(struct app_interact_desc){
+                                          .script = o->input,
+                                          .transfers_dir = o->transfers,
+                                          .tracker_space = tracker,
+                                          .window = window,
+                                          .wand = o->wand,
+                                          .show_menu = window ? !o->input || o->menu : o->menu,
+                                          .wait_for_volumes = !window,
+                                      });
+    return s->interact ? EXIT_OK : EXIT_BAD_INPUT;
+}
+
+/* Wall-clock seconds since the last call, or the script's frame time. */
+static double frame_dt(struct session *s, double *last_ms)
+{
+    double now = time_now_ms(), dt = (now - *last_ms) * 1e-3;
+    *last_ms = now;
+    double script = s->interact ? app_interact_script_dt(s->interact) : 0.0;
+    if (s->stats.frame_ms_max < dt * 1e3 && s->stats.frames > 1)
+        s->stats.frame_ms_max = dt * 1e3;
+    return script > 0.0 ? script : dt;
+}
+
+/* Input and menu for a display (tracker space); DIRTY is set when the views must be drawn. */
+static bool display_interact(struct session *s, struct display *d, double dt, bool *dirty)
+{
+    if (!s->interact)
+        return true;
+    const struct display_config *dc = display_get_config(d);
+    struct app_interact_frame f = {
+        .dt = dt,
+        .nav = display_navigation(d),
+        .nav_home = &s->nav_home,
+        .head = {(float)dc->head.position[0], (float)dc->head.position[1],
+                 (float)dc->head.position[2]},
+    };
+    const struct view *v0 = display_view(d, 0);
+    if (v0 && (dc->type == DISPLAY_TYPE_DESKTOP || dc->type == DISPLAY_TYPE_STEREO)) {
+        f.have_camera = true;
+        memcpy(f.view, v0->rv.view, sizeof(f.view));
+        memcpy(f.proj, v0->rv.proj, sizeof(f.proj));
+        f.width = v0->rv.width;
+        f.height = v0->rv.height;
+    }
+    bool redraw = false, nav = false;
+    if (!app_interact_frame(s->interact, &f, &s->settings, &redraw, &nav))
+        return false;
+    *dirty = *dirty || redraw || nav;
+    return true;
+}
+
+/* anvil render --display --input: every frame of the script, then the settled result. */
+static bool display_script(struct session *s, struct display *d, double time)
+{
+    double last = time_now_ms();
+    for (long n = 0; !app_interact_script_done(s->interact); n++) {
+        bool dirty = false;
+        s->stats.frames++;
+        if (n > 1000000 || !display_interact(s, d, frame_dt(s, &last), &dirty) ||
+            !display_update(d, time) || !display_frame(s, d))
+            return false;
+    }
+    bool dirty = false;
+    return app_interact_settle(s->interact) && display_interact(s, d, 0.0, &dirty) &&
+           display_update(d, time);
+}
+
+/* anvil render --input without --display: the script's frames on the config's camera (a
+ * world-space menu), each drawn, then the settled result. */
+static int view_script(struct session *s, const struct render_options *o,
+                       const struct render_view *view, struct gpu_texture *target)
+{
+    int rc = session_interact(s, o, false, NULL);
+    if (rc != EXIT_OK)
+        return rc;
+    struct app_interact_frame f = {.have_camera = true, .width = view->width,
+                                   .height = view->height};
+    memcpy(f.view, view->view, sizeof(f.view));
+    memcpy(f.proj, view->proj, sizeof(f.proj));
+    double last = time_now_ms();
+    bool redraw, nav;
+    for (long n = 0; o->input && !app_interact_script_done(s->interact); n++) {
+        f.dt = frame_dt(s, &last);
+        s->stats.frames++;
+        if (n > 1000000 || !app_interact_frame(s->interact, &f, &s->settings, &redraw, &nav) ||
+            !session_light(s) || !renderer_draw(s->renderer, &s->settings, view, target))
+            return EXIT_FAILED;
+    }
+    f.dt = 0.0;
+    if ((o->input && !app_interact_settle(s->interact)) ||
+        !app_interact_frame(s->interact, &f, &s->settings, &redraw, &nav))
+        return EXIT_FAILED;
+    return EXIT_OK;
+}
+
 static int render_display(struct session *s, const struct render_options *o, double start)
 {
     struct display *d = NULL;
     int rc = display_start(s, o, true, &d);
+    if (rc == EXIT_OK && (o->input || o->menu)) {
+        s->nav_home = *display_navigation(d);
+        rc = session_interact(s, o, true, NULL);
+        if (rc == EXIT_OK && o->input && !display_script(s, d, o->time))
+            rc = EXIT_FAILED;
+        if (rc == EXIT_OK && !o->input) {
+            bool dirty = false;
+            if (!display_interact(s, d, 0.0, &dirty) || !display_update(d, o->time))
+                rc = EXIT_FAILED;
+        }
+    }
     if (rc == EXIT_OK) {
         rc = EXIT_FAILED;
         if (display_frame(s, d) &&
@@ -234,15 +419,24 @@ static int run_display(struct session *s, const struct render_options *o, double
 {
     struct display *d = NULL;
     int rc = display_start(s, o, false, &d);
+    if (rc == EXIT_OK) {
+        s->nav_home = *display_navigation(d);
+        rc = session_interact(s, o, true, gpu_context_window(display_context(d)));
+    }
     const char *frames_env = getenv("ANVIL_RUN_FRAMES"); /* for automated runs */
     long frames_left = frames_env ? strtol(frames_env, NULL, 10) : -1;
     bool moving = d && display_get_config(d)->head.source != DISPLAY_HEAD_FIXED;
-    double t0 = time_now_ms();
+    double t0 = time_now_ms(), last = t0;
     bool dirty = true;
     while (rc == EXIT_OK && !display_should_close(d) && frames_left != 0) {
         if (display_navigation_changed(d))
             dirty = true;
+        if (!display_interact(s, d, frame_dt(s, &last), &dirty)) {
+            rc = EXIT_FAILED;
+            break;
+        }
         if (dirty || moving || frames_left > 0) {
+            s->stats.frames++;
             if (!display_update(d, o->time + (time_now_ms() - t0) * 1e-3) ||
                 !display_frame(s, d)) {
                 rc = EXIT_FAILED;
@@ -252,7 +446,7 @@ static int run_display(struct session *s, const struct render_options *o, double
             if (frames_left > 0)
                 frames_left--;
         }
-        display_poll(d, moving || frames_left > 0 ? 0.0 : 0.1);
+        display_poll(d, moving || frames_left > 0 || dirty ? 0.0 : 0.03);
     }
     if (d) {
         s->stats.gpu_bytes = gpu_bytes_allocated();
@@ -293,8 +487,11 @@ int cmd_render(int argc, char **argv)
 
     struct render_view view;
     app_camera_view(&s.cfg, s.cfg.render.width, s.cfg.render.height, &view);
+    session_effects(&s, &view, 1);
     struct gpu_texture target = {0};
     struct image img = {0};
+    if ((o.input || o.menu) && (rc = view_script(&s, &o, &view, &target)) != EXIT_OK)
+        goto done_target;
     rc = EXIT_FAILED;
     if (!session_light(&s) || !renderer_draw(s.renderer, &s.settings, &view, &target))
         goto done_target;
@@ -468,6 +665,8 @@ int cmd_run(int argc, char **argv)
     rc = session_start(&s, &o);
     if (rc != EXIT_OK)
         goto done;
+    s.facts.sun_moves = true; /* the keys move the sun */
+    session_effects(&s, NULL, 0);
 
     struct run_state st = {.dirty = true};
     double eye[3], target[3];
@@ -485,27 +684,45 @@ int cmd_run(int argc, char **argv)
     glfwSetMouseButtonCallback(win, on_button);
     glfwSetCursorPosCallback(win, on_cursor);
     glfwSetKeyCallback(win, on_key);
+    rc = session_interact(&s, &o, false, win); /* chains the callbacks above */
+    if (rc != EXIT_OK)
+        goto done;
     const char *frames_env = getenv("ANVIL_RUN_FRAMES"); /* for automated runs */
     long frames_left = frames_env ? strtol(frames_env, NULL, 10) : -1;
 
     struct gpu_texture hdr = {0}, ldr = {0};
+    double last = time_now_ms();
     rc = EXIT_OK;
     while (!glfwWindowShouldClose(win) && frames_left != 0) {
         if (st.sun_dirty) {
             s.cfg.light.azimuth_deg = st.sun_az;
             s.cfg.light.elevation_deg = st.sun_el;
             app_render_settings(&s.cfg, &s.settings);
+            app_map_apply_settings(s.map, &s.settings);
+            effects_apply_render(&s.effects, &s.settings);
             st.sun_dirty = false;
         }
         int w, h;
         gpu_context_size(ctx, &w, &h);
         if (frames_left > 0)
             st.dirty = true; /* automated runs draw every frame */
+        struct render_view view;
+        camera_orbit_eye(&st.orbit, eye);
+        camera_look_at(eye, st.orbit.target, s.cfg.camera.up, s.cfg.camera.fov_deg,
+                       s.cfg.camera.near_m, s.cfg.camera.far_km * 1000.0, w > 0 ? w : 1,
+                       h > 0 ? h : 1, &view);
+        struct app_interact_frame f = {.dt = frame_dt(&s, &last), .have_camera = true,
+                                       .width = w, .height = h};
+        memcpy(f.view, view.view, sizeof(f.view));
+        memcpy(f.proj, view.proj, sizeof(f.proj));
+        bool redraw = false, nav = false;
+        if (!app_interact_frame(s.interact, &f, &s.settings, &redraw, &nav)) {
+            rc = EXIT_FAILED;
+            break;
+        }
+        st.dirty = st.dirty || redraw;
         if (st.dirty && w > 0 && h > 0) {
-            struct render_view view;
-            camera_orbit_eye(&st.orbit, eye);
-            camera_look_at(eye, st.orbit.target, s.cfg.camera.up, s.cfg.camera.fov_deg,
-                           s.cfg.camera.near_m, s.cfg.camera.far_km * 1000.0, w, h, &view);
+            s.stats.frames++;
             double before = renderer_stats(s.renderer)->view_ms_total;
             if (!session_light(&s)) {
                 rc = EXIT_FAILED;
@@ -523,10 +740,10 @@ int cmd_run(int argc, char **argv)
             if (frames_left > 0)
                 frames_left--;
         }
-        if (frames_left > 0)
+        if (frames_left > 0 || redraw)
             glfwPollEvents();
         else
-            glfwWaitEventsTimeout(0.1);
+            glfwWaitEventsTimeout(0.03);
     }
     gpu_texture_finish(&hdr);
     gpu_texture_finish(&ldr);

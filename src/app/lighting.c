@@ -1,4 +1,4 @@
-/* The session's deep light map: config -> light settings -> GPU build when stale. */
+/* The session's deep light map: config and effects -> light settings -> GPU build when stale. */
 #include <string.h>
 
 #include "app/app.h"
@@ -9,32 +9,33 @@
 bool app_light_init(struct app_light *al, const struct config *cfg)
 {
     memset(al, 0, sizeof(*al));
-    if (cfg->lightmap.mode == LIGHTMAP_OFF)
+    if (cfg->effects.mode[EFFECT_SHADOWS] == EFFECT_OFF)
         return true;
     al->gpu = light_gpu_create();
     return al->gpu != NULL;
 }
 
-static void light_settings_from_config(const struct config *cfg, struct light_settings *s)
+void app_light_set_effects(struct app_light *al, const struct effects *e)
 {
-    light_settings_defaults(s);
-    for (int a = 0; a < 3; a++)
-        s->resolution[a] = cfg->lightmap.resolution[a] < 2 ? 2 : cfg->lightmap.resolution[a];
-    s->forward = cfg->lightmap.forward;
-    s->peripheral = cfg->lightmap.peripheral;
-    s->epsilon = cfg->lightmap.epsilon;
-    light_settings_set_optics(s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
+    al->effects = *e;
+    al->have_effects = true;
 }
 
 bool app_light_update(struct app_light *al, const struct config *cfg, struct renderer *r,
                       struct app_stats *st)
 {
-    if (!al->gpu) {
+    struct effects decided;
+    const struct effects *e = &al->effects;
+    if (!al->have_effects) {
+        effects_decide(cfg, NULL, &decided);
+        e = &decided;
+    }
+    if (!al->gpu || !e->on[EFFECT_SHADOWS]) {
         renderer_set_light(r, NULL);
         return true;
     }
     struct light_settings s;
-    light_settings_from_config(cfg, &s);
+    effects_light_settings(cfg, e, &s);
     double sun[3];
     camera_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
     struct light_gpu_source src = {
@@ -58,9 +59,12 @@ bool app_light_update(struct app_light *al, const struct config *cfg, struct ren
             st->light_bytes_dense = (double)dense;
             st->light_bytes_compressed = (double)compressed;
         }
-        log_info("light map %dx%dx%d built in %.1f ms (%s%s)", s.resolution[0],
-                 s.resolution[1], s.resolution[2], ms, mode == LIGHT_GPU_DENSE ? "dense" :
-                 "compressed", "");
+        log_info("light map %dx%dx%d built in %.1f ms (%s%s%s)", s.resolution[0],
+                 s.resolution[1], s.resolution[2], ms,
+                 mode == LIGHT_GPU_DENSE ? "dense" : "compressed",
+                 s.forward ? (s.peripheral ? ", forward and peripheral" : ", forward")
+                           : ", shadow only",
+                 e->on[EFFECT_PHASE] ? "" : ", one phase");
     }
     renderer_set_light(r, light_gpu_render_light(al->gpu));
     return true;

@@ -21,6 +21,8 @@ static const struct command commands[] = {
     {"synth", cmd_synth, "write the procedural storm as a WRF-convention NetCDF time series"},
     {"convert", cmd_convert, "precompute ice and water extinction volumes into a NetCDF file"},
     {"reference", cmd_reference, "Monte Carlo reference image and its standard error (CPU)"},
+    {"effects", cmd_effects, "which effects a config simulates, and why"},
+    {"bench", cmd_bench, "what accuracy costs in time: views and quality benchmarks"},
 };
 
 static void usage(FILE *out)

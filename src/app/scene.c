@@ -6,6 +6,7 @@
 #include "app/app.h"
 #include "app/cmd_data.h"
 #include "common/log.h"
+#include "data/detail.h"
 #include "data/source.h"
 #include "data/synth.h"
 #include "render/camera.h"
@@ -78,8 +79,16 @@ bool app_build_volume(const struct config *cfg, struct ext_volume *out)
     d.ice_phase = sc->phase == PHASE_ICE;
     d.seed = sc->seed;
     d.time = sc->time;
-    if (d.kind != SYNTH_STORM)
-        return synth_extinction(&d, &cfg->optics.params, out);
+    /* Detail and height exaggeration as data sources apply them (data_source_load). */
+    struct detail_desc detail;
+    cmd_data_detail_desc(cfg, &detail);
+    if (d.kind != SYNTH_STORM) {
+        if (!synth_extinction(&d, &cfg->optics.params, out))
+            return false;
+        detail_apply_ext(&detail, out);
+        ext_volume_stretch_height(out, cfg->scene.height_exaggeration);
+        return true;
+    }
 
     /* The storm goes through the species selection like real data does. */
     struct field_volume fields = {0};
@@ -90,9 +99,41 @@ bool app_build_volume(const struct config *cfg, struct ext_volume *out)
         sel.enabled[f] = cfg->optics.enabled[f];
         sel.scale[f] = cfg->optics.scale[f];
     }
+    detail_apply_fields(&detail, &fields);
     bool ok = ext_volume_from_fields(&fields, &cfg->optics.params, &sel, out);
     field_volume_finish(&fields);
+    if (ok)
+        ext_volume_stretch_height(out, cfg->scene.height_exaggeration);
     return ok;
+}
+
+/* Sunlight through the air (light.atmosphere): Rayleigh optical depths at the wavelengths we
+ * take for R, G, B (680, 550, 440 nm) plus a little aerosol, times the air mass of the path
+ * (Kasten and Young's formula, finite at the horizon).  Normalised to the sun overhead, so that
+ * light.color stays the noon colour.  An approximation: no ozone, no multiple scattering, one
+ * standard clear atmosphere. */
+void app_sun_transmittance(double elevation_deg, double rgb[3])
+{
+    static const double tau[3] = {0.036 + 0.05, 0.097 + 0.06, 0.236 + 0.07};
+    double el = fmax(elevation_deg, 0.0);
+    double air_mass = 1.0 / (sin(el * M_PI / 180.0) + 0.50572 * pow(el + 6.07995, -1.6364));
+    for (int c = 0; c < 3; c++)
+        rgb[c] = exp(-tau[c] * (air_mass - 1.0));
+}
+
+int app_time_steps(const struct config *cfg)
+{
+    if (cfg->scene.kind != SCENE_DATA)
+        return 1;
+    const char *files[CONFIG_MAX_FILES];
+    struct data_source_desc desc;
+    cmd_data_source_desc(cfg, files, &desc);
+    struct data_source *src = data_source_open(&desc);
+    if (!src)
+        return 0;
+    int steps = data_source_step_count(src);
+    data_source_close(src);
+    return steps;
 }
 
 void app_render_settings(const struct config *cfg, struct render_settings *s)
@@ -100,9 +141,13 @@ void app_render_settings(const struct config *cfg, struct render_settings *s)
     memset(s, 0, sizeof(*s));
     double sun[3];
     camera_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
+    double air[3];
+    app_sun_transmittance(cfg->light.elevation_deg, air);
     for (int i = 0; i < 3; i++) {
         s->sun_dir[i] = (float)sun[i];
         s->sun_radiance[i] = (float)(cfg->light.intensity * cfg->light.color[i]);
+        if (cfg->light.atmosphere)
+            s->sun_radiance[i] *= (float)air[i];
         s->sky[i] = (float)cfg->render.sky[i];
         s->ground[i] = (float)cfg->render.ground[i];
     }
@@ -171,6 +216,16 @@ bool app_stats_write(const struct app_stats *st, const char *path)
     fprintf(f, "  \"light_map_bytes_compressed\": %.0f,\n", st->light_bytes_compressed);
     fprintf(f, "  \"gpu_bytes\": %zu,\n  \"nonfinite_pixels\": %zu,\n", st->gpu_bytes,
             st->nonfinite_pixels);
+    fprintf(f, "  \"frames\": %u,\n  \"time_step\": %d,\n", st->frames, st->time_step);
+    fprintf(f, "  \"cache_hits\": %u,\n  \"cache_misses\": %u,\n", st->cache_hits,
+            st->cache_misses);
+    fprintf(f, "  \"cache_loads\": %u,\n  \"frames_waited\": %u,\n  \"frames_stale\": %u,\n",
+            st->cache_loads, st->frames_waited, st->frames_stale);
+    fprintf(f, "  \"volume_uploads\": %u,\n  \"load_ms\": %.3f,\n  \"convert_ms\": %.3f,\n",
+            st->volume_uploads, st->load_ms, st->convert_ms);
+    fprintf(f, "  \"wait_ms\": %.3f,\n  \"upload_ms_total\": %.3f,\n", st->wait_ms,
+            st->upload_ms_total);
+    fprintf(f, "  \"frame_ms_max\": %.3f,\n", st->frame_ms_max);
     fprintf(f, "  \"volume_ms\": %.3f,\n  \"upload_ms\": %.3f,\n  \"total_ms\": %.3f\n}\n",
             st->volume_ms, st->upload_ms, st->total_ms);
     fclose(f);

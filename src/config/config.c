@@ -30,6 +30,8 @@ static_assert(sizeof(enum scene_kind) == sizeof(int), "enum size");
 static_assert(sizeof(enum data_format) == sizeof(int), "enum size");
 static_assert(sizeof(enum lightmap_mode) == sizeof(int), "enum size");
 static_assert(sizeof(enum phase_choice) == sizeof(int), "enum size");
+static_assert(sizeof(enum effect_mode) == sizeof(int), "enum size");
+static_assert(sizeof(enum coast_resolution) == sizeof(int), "enum size");
 
 #define INCLUDE_DEPTH_MAX 16
 #define NAME_MAX_LEN 256
@@ -71,8 +73,10 @@ static const char *const scene_kind_names[] = {
     "storm", "slab", "sphere", "empty", "voxel", "data", NULL,
 };
 static const char *const data_format_names[] = {"wrf", "isabel", "extinction", NULL};
-static const char *const lightmap_mode_names[] = {"off", "dense", "compressed", NULL};
+static const char *const lightmap_mode_names[] = {"dense", "compressed", NULL};
+static const char *const effect_mode_names[] = {"auto", "on", "off", NULL};
 static const char *const phase_names[] = {"water", "ice", NULL};
+static const char *const coast_res_names[] = {"crude", "low", "intermediate", NULL};
 
 /* clang-format off */
 #define OFF(member) offsetof(struct config, member)
@@ -93,6 +97,9 @@ static const char *const phase_names[] = {"water", "ice", NULL};
      .flags = fl, .def = {d0, d1, d2}, .help = h}
 #define ENUM(p, m, nm, d, h) \
     {.path = p, .type = T_ENUM, .n = 1, .offset = OFF(m), .names = nm, .def = {d}, .help = h}
+#define EFFECT(p, e, h)                                                                      \
+    {.path = p, .type = T_ENUM, .n = 1, .offset = OFF(effects.mode[e]),                      \
+     .names = effect_mode_names, .def = {EFFECT_AUTO}, .help = h}
 #define OPTICS(p, m, lo, hi, fl, sc, h)                                                      \
     {.path = p, .type = T_DOUBLE, .n = 1, .offset = OFF(m), .stride = sizeof(double),       \
      .min = lo, .max = hi, .flags = F_OPTICS_DEFAULT | (fl), .scale = sc, .help = h}
@@ -111,6 +118,9 @@ static const struct setting settings[] = {
     {.path = "scene.seed", .type = T_UINT, .n = 1, .offset = OFF(scene.seed), .min = 0,
      .max = 4294967295.0, .def = {1}, .help = "random seed of the procedural storm"},
     DBL("scene.time", scene.time, 0, 1, 0, 0.5, "evolution time of the procedural storm"),
+    DBL("scene.height_exaggeration", scene.height_exaggeration, 0, 100, F_MIN_OPEN, 1.0,
+        "stretches heights (volume, light map, terrain, map) by this factor; extinction is "
+        "divided by it so every column keeps its optical depth"),
 
     ENUM("data.format", data.format, data_format_names, DATA_WRF,
          "kind of the input files: WRF NetCDF output, Isabel raw bricks or extinction volumes"),
@@ -129,6 +139,10 @@ static const struct setting settings[] = {
              "first / to the last"},
     DBL("data.memory", data.memory_mb, 0, 1048576, F_MIN_OPEN, 4096.0,
         "memory budget for one time step, MiB"),
+    DBL("data.cache_memory", data.cache_memory_mb, 0, 1048576, F_MIN_OPEN, 1024.0,
+        "memory budget of the time series cache (all cached steps), MiB"),
+    INT("data.prefetch", data.prefetch, 0, 16, 1,
+        "time steps loaded in the background ahead of and behind the one shown"),
     INT3("data.isabel_size", data.isabel_size, 1, 4096, 500, 500, 100,
          "voxels [nx, ny, nz] of an Isabel brick"),
     DBL3("data.isabel_extent", data.isabel_extent_km, 0, 1e5, F_MIN_OPEN, 2000.0, 2000.0, 19.8,
@@ -157,6 +171,8 @@ static const struct setting settings[] = {
         "sun elevation above the horizon, degrees"),
     DBL("light.intensity", light.intensity, 0, 1e6, 0, 6.0, "sun radiance scale"),
     DBL3("light.color", light.color, 0, 1e6, 0, 1.0, 0.97, 0.92, "sun colour, linear RGB"),
+    BOOL("light.atmosphere", light.atmosphere, 0,
+         "redden the sun by the air it crosses (Rayleigh, approximate; docs/terrain.md)"),
 
     DBL3("camera.position", camera.position_km, -1e5, 1e5, 0, 2.0, -14.0, 4.0,
          "eye position [x, y, z], km"),
@@ -182,15 +198,63 @@ static const struct setting settings[] = {
         "stop a ray when its transmittance falls below this"),
 
     ENUM("lightmap.mode", lightmap.mode, lightmap_mode_names, LIGHTMAP_DENSE,
-         "deep light map: off, dense, or compressed"),
+         "deep light map storage: a dense light volume or compressed light columns"),
     INT3("lightmap.resolution", lightmap.resolution, 1, 2048, 128, 128, 128,
          "light map cells [across x, across y, along the light]"),
     DBL("lightmap.epsilon", lightmap.epsilon, 0, 1, F_MIN_OPEN, 0.01,
         "error bound of the compressed light map"),
     DBL("lightmap.forward_angle", lightmap.forward_angle_deg, 0, 180, F_MIN_OPEN, 20.0,
         "forward scattering cone angle theta, degrees"),
-    BOOL("lightmap.forward", lightmap.forward, 1, "forward scattering on/off"),
-    BOOL("lightmap.peripheral", lightmap.peripheral, 1, "peripheral scattering on/off"),
+
+    DBL("playback.speed", playback.speed, 0, 1000, F_MIN_OPEN, 2.0,
+        "playback speed, time steps per second"),
+    BOOL("playback.loop", playback.loop, 1, "after the last time step, play from the first"),
+
+    EFFECT("effects.shadows", EFFECT_SHADOWS,
+           "self-shadowing (the deep light map); auto: on unless nothing casts a shadow"),
+    EFFECT("effects.forward", EFFECT_FORWARD,
+           "central forward scattering in the light map; auto: off when optically thin "
+           "along the light"),
+    EFFECT("effects.peripheral", EFFECT_PERIPHERAL,
+           "peripheral forward scattering; auto: as effects.forward"),
+    EFFECT("effects.phase", EFFECT_PHASE,
+           "per-species phase (ice vs water); auto: off (one phase) when one kind is absent"),
+    EFFECT("effects.ground_shadow", EFFECT_GROUND_SHADOW,
+           "clouds shadow the ground; auto: off when no view sees the ground"),
+    EFFECT("effects.detail", EFFECT_DETAIL,
+           "procedural detail (Riley §4.5, detail.*); auto: off"),
+    EFFECT("effects.temporal", EFFECT_TEMPORAL,
+           "interpolation between time steps (not implemented yet: auto and on mean off)"),
+    EFFECT("effects.distortion", EFFECT_DISTORTION,
+           "HMD lens pre-distortion; auto: on for an HMD display"),
+
+    BOOL("map.terrain", map.terrain, 1,
+         "ground mesh from the data's HGT, LANDMASK, LU_INDEX (else the flat ground plane)"),
+    BOOL("map.coastlines", map.coastlines, 1, "GSHHG coastlines where the data is placed"),
+    ENUM("map.coastline_resolution", map.coast_res, coast_res_names, COAST_INTERMEDIATE,
+         "GSHHG resolution (files of Debian's gmt-gshhg-low)"),
+    BOOL("map.graticule", map.graticule, 0, "latitude/longitude lines"),
+    DBL("map.graticule_step", map.graticule_step_deg, 0, 90, 0, 0.0,
+        "degrees between graticule lines; 0 = automatic"),
+    BOOL("map.labels", map.labels, 1, "label the graticule lines"),
+    DBL("map.margin", map.margin_km, 0, 1e4, 0, 300.0,
+        "how far coastlines and graticule reach beyond the data, km"),
+    {.path = "map.offset", .type = T_DOUBLE, .n = 2, .offset = OFF(map.offset_km),
+     .min = -1e4, .max = 1e4, .def = {0, 0},
+     .help = "moves the data [east, north] on the map, km (for data whose lat/lon are off)"},
+    BOOL("map.use_origin", map.use_origin, 0,
+         "place data without XLAT/XLONG (synthetic, Isabel, extinction) at map.origin"),
+    {.path = "map.origin", .type = T_DOUBLE, .n = 2, .offset = OFF(map.origin_deg),
+     .min = -360, .max = 360, .def = {25.0, -80.0},
+     .help = "[latitude, longitude] of the volume frame's origin (x = y = 0), degrees"},
+
+    {.path = "detail.*", .type = T_DOUBLE, .n = 1, .offset = OFF(detail.amount),
+     .stride = sizeof(double), .min = 0, .max = 1, .flags = F_SPECIES, .def = {0.5},
+     .help = "share of this species' extinction modulated by noise when effects.detail is on"},
+    DBL("detail.scale", detail.scale_km, 0, 1e4, F_MIN_OPEN, 3.0,
+        "wavelength of the coarsest noise octave, km"),
+    {.path = "detail.seed", .type = T_UINT, .n = 1, .offset = OFF(detail.seed), .min = 0,
+     .max = 4294967295.0, .def = {1}, .help = "random seed of the procedural detail"},
 };
 /* clang-format on */
 

@@ -29,7 +29,24 @@ enum scene_kind {
 
 enum data_format { DATA_WRF, DATA_ISABEL, DATA_EXTINCTION };
 
-enum lightmap_mode { LIGHTMAP_OFF, LIGHTMAP_DENSE, LIGHTMAP_COMPRESSED };
+/* How the light map is stored; whether there is one at all is effects.shadows. */
+enum lightmap_mode { LIGHTMAP_DENSE, LIGHTMAP_COMPRESSED };
+
+/* What the renderer simulates (docs/effects.md).  Each is on, off, or decided from the scene
+ * (app/effects.h); an effect that is off is compiled out of the shaders. */
+enum effect {
+    EFFECT_SHADOWS,       /* effects.shadows: self-shadowing through the deep light map */
+    EFFECT_FORWARD,       /* effects.forward: central forward scattering in the light map */
+    EFFECT_PERIPHERAL,    /* effects.peripheral: peripheral forward scattering */
+    EFFECT_PHASE,         /* effects.phase: per-species phase (off: one phase for all) */
+    EFFECT_GROUND_SHADOW, /* effects.ground_shadow: the ground reads the light map */
+    EFFECT_DETAIL,        /* effects.detail: procedural detail (not implemented yet) */
+    EFFECT_TEMPORAL,      /* effects.temporal: interpolation between time steps (not yet) */
+    EFFECT_DISTORTION,    /* effects.distortion: HMD lens pre-distortion */
+    EFFECT_COUNT
+};
+
+enum effect_mode { EFFECT_AUTO, EFFECT_ON, EFFECT_OFF };
 
 enum phase_choice { PHASE_WATER, PHASE_ICE };
 
@@ -41,6 +58,8 @@ struct config_scene {
     enum phase_choice phase;    /* scene.phase: phase of the test scenes' medium */
     unsigned seed;              /* scene.seed: procedural storm seed */
     double time;                /* scene.time: storm evolution time in [0, 1] */
+    double height_exaggeration; /* scene.height_exaggeration: z scale of volume, light map,
+                                   terrain and map (Nes Fig. 5.18) */
 };
 
 struct config_data {
@@ -53,6 +72,8 @@ struct config_data {
     int stride[3];                            /* data.stride: subsampling per axis */
     int crop[6];                              /* data.crop: [x0, x1, y0, y1, z0, z1], -1 = all */
     double memory_mb;                         /* data.memory: budget for one step, MiB */
+    double cache_memory_mb;                   /* data.cache_memory: time series cache, MiB */
+    int prefetch;                             /* data.prefetch: steps loaded ahead and behind */
     int isabel_size[3];                       /* data.isabel_size */
     double isabel_extent_km[3];               /* data.isabel_extent */
 };
@@ -69,6 +90,7 @@ struct config_light {
     double elevation_deg; /* light.elevation: sun elevation above the horizon, degrees */
     double intensity;     /* light.intensity: sun radiance scale */
     double color[3];      /* light.color: linear RGB */
+    bool atmosphere;      /* light.atmosphere: redden the sun near the horizon */
 };
 
 struct config_camera {
@@ -91,12 +113,42 @@ struct config_render {
 };
 
 struct config_lightmap {
-    enum lightmap_mode mode; /* lightmap.mode: "off" | "dense" | "compressed" */
+    enum lightmap_mode mode; /* lightmap.mode: "dense" | "compressed" */
     int resolution[3];       /* lightmap.resolution: [across x, across y, along the light] */
     double epsilon;          /* lightmap.epsilon: compression error bound */
     double forward_angle_deg;/* lightmap.forward_angle: theta */
-    bool forward;            /* lightmap.forward: forward scattering on/off */
-    bool peripheral;         /* lightmap.peripheral: peripheral scattering on/off */
+};
+
+enum coast_resolution { COAST_CRUDE, COAST_LOW, COAST_INTERMEDIATE };
+
+/* The storm in its place (docs/terrain.md). */
+struct config_map {
+    bool terrain;                   /* map.terrain: ground mesh from HGT / LANDMASK / LU_INDEX */
+    bool coastlines;                /* map.coastlines: GSHHG shorelines */
+    enum coast_resolution coast_res; /* map.coastline_resolution */
+    bool graticule;                 /* map.graticule: latitude/longitude lines */
+    double graticule_step_deg;      /* map.graticule_step: degrees; 0 = automatic */
+    bool labels;                    /* map.labels: label the graticule lines */
+    double margin_km;               /* map.margin: how far the map reaches beyond the data */
+    double offset_km[2];            /* map.offset: moves the data east/north on the map */
+    bool use_origin;                /* map.use_origin: place data without XLAT/XLONG ... */
+    double origin_deg[2];           /* map.origin: ... with its frame origin at [lat, lon] */
+};
+
+/* Procedural detail (Riley §4.5); whether it is on is effects.detail. */
+struct config_detail {
+    double amount[SPECIES_COUNT]; /* detail.<species>: share of the field modulated, [0, 1] */
+    double scale_km;              /* detail.scale: wavelength of the coarsest octave, km */
+    unsigned seed;                /* detail.seed */
+};
+
+struct config_playback {
+    double speed; /* playback.speed: time steps per second */
+    bool loop;    /* playback.loop: after the last step comes the first */
+};
+
+struct config_effects {
+    enum effect_mode mode[EFFECT_COUNT]; /* effects.<name>: "auto" | "on" | "off" */
 };
 
 struct config {
@@ -108,6 +160,10 @@ struct config {
     struct config_camera camera;
     struct config_render render;
     struct config_lightmap lightmap;
+    struct config_effects effects;
+    struct config_playback playback;
+    struct config_map map;
+    struct config_detail detail;
 };
 
 /* Fills every setting with its default: the built-in procedural storm seen from the south-west

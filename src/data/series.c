@@ -26,6 +26,7 @@ struct series {
     int current; /* -1 before the first acquire */
     int demand;  /* the step series_acquire is waiting for, or -1 */
     uint64_t clock;
+    uint64_t generation; /* bumped by series_invalidate: loads begun before are dropped */
 
     /* Steps the worker should load, most urgent first. */
     int wanted[WANTED_MAX];
@@ -122,6 +123,7 @@ static void *worker(void *arg)
             break;
         struct entry *e = &s->entries[step];
         e->state = ENTRY_LOADING;
+        uint64_t generation = s->generation;
         pthread_mutex_unlock(&s->lock);
 
         double t0 = time_now_ms();
@@ -135,9 +137,12 @@ static void *worker(void *arg)
         s->stats.loads++;
         s->stats.load_ms += load_ms;
         s->stats.convert_ms += convert_ms;
-        if (ok) {
+        if (generation != s->generation) {
+            ext_volume_finish(&vol); /* invalidated while loading: load again */
+            e->state = ENTRY_EMPTY;
+        } else if (ok) {
             e->vol = vol;
-            e->bytes = grid3_count(&vol.grid) * 2 * sizeof(float);
+            e->bytes = grid3_count(&vol.grid) * (2 * sizeof(float) + (vol.tint ? 4 : 0));
             e->state = ENTRY_READY;
             e->last_used = ++s->clock;
             s->stats.cached_bytes += e->bytes;
@@ -307,6 +312,26 @@ const struct ext_volume *series_try_acquire(struct series *s, int step)
     }
     pthread_mutex_unlock(&s->lock);
     return v;
+}
+
+void series_invalidate(struct series *s)
+{
+    pthread_mutex_lock(&s->lock);
+    s->generation++;
+    for (int i = 0; i < s->desc.step_count; i++) {
+        struct entry *e = &s->entries[i];
+        if (e->state == ENTRY_READY) {
+            ext_volume_finish(&e->vol);
+            s->stats.cached_bytes -= e->bytes;
+            s->stats.cached_steps--;
+            e->bytes = 0;
+        }
+        if (e->state != ENTRY_LOADING)
+            e->state = ENTRY_EMPTY;
+    }
+    if (s->current >= 0)
+        set_window(s, s->current, true);
+    pthread_mutex_unlock(&s->lock);
 }
 
 bool series_ready(struct series *s, int step)

@@ -65,6 +65,12 @@ const struct ext_volume *series_acquire(struct series *s, int step);
  * after asking the background thread for it; the previous volume stays valid. */
 const struct ext_volume *series_try_acquire(struct series *s, int step);
 
+/* Drops every cached step and any load in progress (its result is thrown away), because
+ * what the loader produces has changed (species, tints, transfer function); the current step
+ * and its neighbours are loaded again in the background.  Pointers returned before are
+ * invalid afterwards. */
+void series_invalidate(struct series *s);
+
 /* Whether STEP is in memory now. */
 bool series_ready(struct series *s, int step);
 

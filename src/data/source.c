@@ -111,10 +111,18 @@ bool data_source_load(struct data_source *s, int step, struct ext_volume *out, d
     double t0 = time_now_ms();
     if (convert_ms)
         *convert_ms = 0.0;
+    double k = s->desc.height_scale > 0.0 ? s->desc.height_scale : 1.0;
     if (s->ext) {
         bool ok = extfile_read_step(s->ext, step, out, NULL);
         if (load_ms)
             *load_ms = time_now_ms() - t0;
+        if (ok) {
+            double t1 = time_now_ms();
+            detail_apply_ext(&s->desc.detail, out);
+            ext_volume_stretch_height(out, k);
+            if (convert_ms)
+                *convert_ms = time_now_ms() - t1;
+        }
         return ok;
     }
     struct field_volume fv;
@@ -126,8 +134,11 @@ bool data_source_load(struct data_source *s, int step, struct ext_volume *out, d
         memset(out, 0, sizeof(*out));
         return false;
     }
+    detail_apply_fields(&s->desc.detail, &fv);
     ok = ext_volume_from_fields(&fv, &s->desc.optics, &s->desc.select, out);
     field_volume_finish(&fv);
+    if (ok)
+        ext_volume_stretch_height(out, k);
     if (convert_ms)
         *convert_ms = time_now_ms() - t1;
     return ok;

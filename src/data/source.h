@@ -10,6 +10,7 @@
 
 #include <stdbool.h>
 
+#include "data/detail.h"
 #include "data/isabel.h"
 #include "data/volume.h"
 #include "data/wrf.h"
@@ -25,6 +26,8 @@ struct data_source_desc {
     struct isabel_desc isabel;    /* Isabel sizes (dir is taken from files[0]) */
     struct optics_params optics;  /* mass ratio -> extinction (WRF, Isabel) */
     struct species_select select; /* per-species toggles and scales (WRF, Isabel) */
+    struct detail_desc detail;    /* procedural detail (zero: off) */
+    double height_scale;          /* height exaggeration (ext_volume_stretch_height); 0 = 1 */
 };
 
 struct data_source;
@@ -37,7 +40,7 @@ void data_source_close(struct data_source *s); /* NULL is fine */
 int data_source_step_count(const struct data_source *s);
 const char *data_source_step_date(const struct data_source *s, int step); /* "" if unknown */
 
-/* Loads STEP as extinction into OUT (initialised here; the caller finishes it).  LOAD_MS and
+/* Loads STEP as extinction into OUT, with the description's detail and height scale applied (initialised here; the caller finishes it).  LOAD_MS and
  * CONVERT_MS (may be NULL) receive the milliseconds spent reading and converting.  Not to be
  * called from two threads at once on one source. */
 bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,

@@ -12,6 +12,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "optics/optics.h"
 
@@ -45,6 +46,8 @@ struct field_volume {
 struct ext_volume {
     struct grid3 grid;
     float *beta;
+    uint8_t *tint; /* NULL (white), or RGBA8 per voxel: the colour the scattered light takes
+                      (the beta-weighted species tints, or a transfer function's colour) */
 };
 
 /* Frees the arrays and zeroes the struct; NULL and zeroed structs are fine. */
@@ -67,6 +70,34 @@ void species_select_defaults(struct species_select *s); /* all on, scale 1 */
  * OUT is initialised here (caller finishes it). */
 bool ext_volume_from_fields(const struct field_volume *in, const struct optics_params *optics,
                             const struct species_select *sel, struct ext_volume *out);
+
+/* Per-species tints (linear RGB in [0, 1]); white everywhere means no tint. */
+struct species_tint {
+    float rgb[SPECIES_COUNT][3];
+};
+void species_tint_defaults(struct species_tint *t); /* all white */
+bool species_tint_is_white(const struct species_tint *t);
+
+/* Adds OUT->tint (allocated here): per voxel the beta-weighted mean of the tints of the
+ * species that IN holds, with the same selection and scales as ext_volume_from_fields.
+ * White tints leave OUT->tint NULL.  Returns false (logged) when out of memory. */
+bool ext_volume_tint_from_fields(const struct field_volume *in,
+                                 const struct optics_params *optics,
+                                 const struct species_select *sel,
+                                 const struct species_tint *tint, struct ext_volume *out);
+
+/* Classic transfer-function mode: the scalar field SCALAR (grid3_count values on IN's grid,
+ * e.g. fields->qvapor) through LUT, a table of N RGBA entries over [LO, HI], becomes
+ * extinction alpha * DENSITY (1/m, scattering with the water phase) and tint RGB.  OUT is
+ * initialised here. */
+bool ext_volume_from_scalar(const struct grid3 *grid, const float *scalar, const float *lut,
+                            int n, double lo, double hi, double density,
+                            struct ext_volume *out);
+
+/* Height exaggeration (Nes §5.5.2): multiplies the z origin and spacing by K (> 0) and divides
+ * the extinction by K, so the volume is K times taller and every vertical column keeps its
+ * optical depth (the stretch moves the medium, it does not add any).  K = 1 leaves V as is. */
+void ext_volume_stretch_height(struct ext_volume *v, double k);
 
 /* Largest extinction (sum of both phases) in the volume, 1/m. */
 double ext_volume_max_beta(const struct ext_volume *v);

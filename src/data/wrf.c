@@ -296,8 +296,16 @@ static bool read_meta(struct wrf *w)
     if (!read_meta_2d(f->path, ncid, "XLAT", m->nx, m->ny, &m->xlat) ||
         !read_meta_2d(f->path, ncid, "XLONG", m->nx, m->ny, &m->xlong) ||
         !read_meta_2d(f->path, ncid, "HGT", m->nx, m->ny, &m->hgt) ||
-        !read_meta_2d(f->path, ncid, "LANDMASK", m->nx, m->ny, &m->landmask))
+        !read_meta_2d(f->path, ncid, "LANDMASK", m->nx, m->ny, &m->landmask) ||
+        !read_meta_2d(f->path, ncid, "LU_INDEX", m->nx, m->ny, &m->lu_index))
         return false;
+    size_t lu_len = 0;
+    if (nc_inq_attlen(ncid, NC_GLOBAL, "MMINLU", &lu_len) == NC_NOERR &&
+        lu_len < sizeof(m->land_use) &&
+        nc_get_att_text(ncid, NC_GLOBAL, "MMINLU", m->land_use) == NC_NOERR)
+        m->land_use[lu_len] = '\0';
+    else
+        m->land_use[0] = '\0';
     m->lat_min = m->lat_max = m->lon_min = m->lon_max = NAN;
     if (m->xlat && m->xlong) {
         double a = INFINITY, b = -INFINITY, c = INFINITY, d = -INFINITY;
@@ -544,6 +552,7 @@ void wrf_close(struct wrf *w)
     free(w->meta.xlong);
     free(w->meta.hgt);
     free(w->meta.landmask);
+    free(w->meta.lu_index);
     free(w);
 }
 

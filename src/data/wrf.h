@@ -98,6 +98,8 @@ struct wrf_meta {
     float *xlat, *xlong;                       /* degrees north / east; NULL when absent */
     float *hgt;                                /* terrain height, m; NULL when absent */
     float *landmask;                           /* 1 land, 0 water; NULL when absent */
+    float *lu_index;                           /* land use category; NULL when absent */
+    char land_use[32];                         /* MMINLU: the categories ("USGS", "MODIS...") */
     double lat_min, lat_max, lon_min, lon_max; /* NAN when XLAT/XLONG are absent */
 };
 

@@ -304,6 +304,11 @@ bool display_should_close(const struct display *d)
     return d->should_close;
 }
 
+struct display_navigation *display_navigation(struct display *d)
+{
+    return &d->cfg.navigation;
+}
+
 bool display_navigation_changed(struct display *d)
 {
     bool changed = d->nav_changed;

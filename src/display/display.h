@@ -166,6 +166,9 @@ bool display_should_close(const struct display *d);
 /* Keyboard flying in the windows moves the navigation; true once since the last call when it
  * did (the next display_update uses it). */
 bool display_navigation_changed(struct display *d);
+/* The navigation the views use, for the wand to change (fly, grab, reset); the next
+ * display_update applies it.  Valid until display_destroy. */
+struct display_navigation *display_navigation(struct display *d);
 
 /* Writes every drawn view as DIR/NAME.png, every composed output likewise, and a contact
  * sheet DIR/contact.png of all views (walls across, eyes down).  Creates DIR.  Returns false

@@ -9,7 +9,9 @@
 
 struct light_gpu {
     struct render_light hook; /* first: the renderer's bind callback gets it back */
-    struct gpu_program build;
+    /* Build programs by variant: bit 0 FORWARD, bit 1 PERIPHERAL, bit 2 PHASE_MIX (made on
+     * first use: an effect that is off is compiled out). */
+    struct gpu_program build[8];
     struct gpu_texture light; /* R32F node volume */
     struct gpu_buffer columns, nodes;
     struct light_grid grid;
@@ -36,12 +38,33 @@ static void bind(const struct render_light *light, const struct gpu_program *pro
     }
 }
 
+static const struct gpu_program *build_program(struct light_gpu *lg, int v)
+{
+    if (lg->build[v].id)
+        return &lg->build[v];
+    char defines[96];
+    snprintf(defines, sizeof(defines), "#define FORWARD %d\n#define PERIPHERAL %d\n"
+             "#define PHASE_MIX %d\n", v & 1, (v >> 1) & 1, (v >> 2) & 1);
+    if (!gpu_program_init(&lg->build[v], "light_build.comp", defines))
+        return NULL;
+    return &lg->build[v];
+}
+
+/* The variant of settings S: forward scattering, the peripheral ring, and the ice/water mix
+ * (compiled out when both phases' cumulative phases are equal: the mix is then exact). */
+static int build_variant(const struct light_settings *s)
+{
+    bool mix = s->cp.ice_ctr != s->cp.water_ctr || s->cp.ice_per != s->cp.water_per;
+    return (s->forward ? 1 : 0) | (s->forward && s->peripheral ? 2 : 0) |
+           (s->forward && mix ? 4 : 0);
+}
+
 struct light_gpu *light_gpu_create(void)
 {
     struct light_gpu *lg = calloc(1, sizeof(*lg));
     if (!lg)
         return NULL;
-    if (!gpu_program_init(&lg->build, "light_build.comp", NULL)) {
+    if (!build_program(lg, 7)) {
         free(lg);
         return NULL;
     }
@@ -56,7 +79,8 @@ void light_gpu_destroy(struct light_gpu *lg)
 {
     if (!lg)
         return;
-    gpu_program_finish(&lg->build);
+    for (int v = 0; v < 8; v++)
+        gpu_program_finish(&lg->build[v]);
     gpu_texture_finish(&lg->light);
     gpu_buffer_finish(&lg->columns);
     gpu_buffer_finish(&lg->nodes);
@@ -73,7 +97,9 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
         if (!gpu_texture_init(&lg->light, 3, g->n, GPU_R32F, NULL))
             return false;
     }
-    const struct gpu_program *p = &lg->build;
+    const struct gpu_program *p = build_program(lg, build_variant(s));
+    if (!p)
+        return false;
     int substeps = s->substeps > 0 ? s->substeps : light_auto_substeps(g, src->grid);
     float vol_origin[3], inv_spacing[3];
     for (int a = 0; a < 3; a++) {
@@ -94,8 +120,6 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
     gpu_uniform_vec3(p, "g_dw", g->dw);
     gpu_uniform_int(p, "substeps", substeps);
     gpu_uniform_float(p, "dsub", (float)(g->step[2] / substeps));
-    gpu_uniform_int(p, "forward", s->forward ? 1 : 0);
-    gpu_uniform_int(p, "peripheral", s->forward && s->peripheral ? 1 : 0);
     gpu_uniform_vec4(p, "cp", cp);
     gpu_uniform_vec2(p, "per_offset", per);
     gpu_texture_bind(src->beta, 0);

@@ -26,6 +26,8 @@ struct variant {
 
 struct renderer {
     struct gpu_texture beta;
+    struct gpu_texture tint; /* RGBA8 3D, only while the volume has tints (TINT 1) */
+    bool have_tint;
     struct grid3 grid;
     bool have_volume;
     struct gpu_texture phase;
@@ -88,6 +90,7 @@ void renderer_destroy(struct renderer *r)
     if (!r)
         return;
     gpu_texture_finish(&r->beta);
+    gpu_texture_finish(&r->tint);
     gpu_texture_finish(&r->phase);
     gpu_program_finish(&r->tonemap);
     for (int i = 0; i < r->n_variants; i++)
@@ -109,6 +112,16 @@ bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
         gpu_texture_finish(&r->beta);
         if (!gpu_texture_init(&r->beta, 3, n, GPU_RG32F, vol->beta))
             return false;
+    }
+    r->have_tint = vol->tint != NULL;
+    if (vol->tint && r->tint.id && memcmp(r->tint.size, n, sizeof(int) * 3) == 0) {
+        gpu_texture_upload(&r->tint, vol->tint);
+    } else if (vol->tint) {
+        gpu_texture_finish(&r->tint);
+        if (!gpu_texture_init(&r->tint, 3, n, GPU_RGBA8, vol->tint))
+            return false;
+    } else {
+        gpu_texture_finish(&r->tint);
     }
     r->grid = vol->grid;
     r->have_volume = true;
@@ -215,8 +228,15 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     bool opaque = false;
     for (int i = 0; i < r->n_meshes; i++)
         opaque |= r->meshes[i]->visible;
-    char defines[300];
-    snprintf(defines, sizeof(defines), "%s%s", light_defines, opaque ? "#define OPAQUE 1\n" : "");
+    char defines[320];
+    /* Effects that are off are compiled out (app/effects.h). */
+    const char *phase = !s->single_phase    ? ""
+                        : s->single_phase_ice ? "#define PHASE_MIX 0\n#define PHASE_ICE 1\n"
+                                              : "#define PHASE_MIX 0\n#define PHASE_ICE 0\n";
+    snprintf(defines, sizeof(defines), "%s%s%s%s%s", light_defines,
+             opaque ? "#define OPAQUE 1\n" : "", phase,
+             s->no_ground_shadow ? "#define GROUND_SHADOW 0\n" : "",
+             r->have_tint ? "#define TINT 1\n" : "");
     const struct gpu_program *prog = variant(r, defines);
     if (!prog)
         return false;
@@ -255,6 +275,8 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     gpu_uniform_ivec2(prog, "pixel_offset", zero);
     gpu_texture_bind(&r->beta, 0);
     gpu_texture_bind(&r->phase, 1);
+    if (r->have_tint)
+        gpu_texture_bind(&r->tint, 6);
     gpu_image_bind(out, 0, true);
     if (r->light && r->light->bind)
         r->light->bind(r->light, prog);

@@ -25,6 +25,10 @@ struct render_settings {
     bool ground_on;
     float step_m;          /* ray step; 0 = half the smallest voxel side */
     float termination;     /* stop rays below this transmittance */
+    /* Effects compiled out of the eye pass (app/effects.h); zero = simulated. */
+    bool single_phase;     /* one phase for every species: PHASE_MIX 0 */
+    bool single_phase_ice; /* ... the ice phase (else the water phase) */
+    bool no_ground_shadow; /* the ground sees the full sun: GROUND_SHADOW 0 */
 };
 
 /* One view: camera matrices (column-major, world metres) and image size. */

@@ -41,8 +41,8 @@ static void settings_of(const struct config *cfg, struct light_settings *s)
 {
     light_settings_defaults(s);
     memcpy(s->resolution, cfg->lightmap.resolution, sizeof(s->resolution));
-    s->forward = cfg->lightmap.forward;
-    s->peripheral = cfg->lightmap.peripheral;
+    s->forward = cfg->effects.mode[EFFECT_FORWARD] != EFFECT_OFF;
+    s->peripheral = cfg->effects.mode[EFFECT_PERIPHERAL] != EFFECT_OFF;
     s->epsilon = cfg->lightmap.epsilon;
     light_settings_set_optics(s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
 }
@@ -283,8 +283,8 @@ static void test_forward_scattering_brightens_interior(void **state)
 {
     /* Seen from the side, light carried into the sphere by forward scattering brightens it;
      * with forward scattering off only the sunlit surface shines (Nes Fig. 5.4). */
-    double on = sphere_mean("lightmap.forward=true");
-    double off = sphere_mean("lightmap.forward=false");
+    double on = sphere_mean("effects.forward=on");
+    double off = sphere_mean("effects.forward=off");
     print_message("sphere seen from the side: forward on %.4g, off %.4g\n", on, off);
     assert_true(on > 1.2 * off);
 }
@@ -323,7 +323,7 @@ static void test_cloud_shadows_the_ground(void **state)
      * straight down meets only the ground. */
     double shadow = ground_under("lightmap.mode=dense", -3.0, 5.0);
     double lit = ground_under("lightmap.mode=dense", -3.0, -6.0);
-    double unshadowed = ground_under("lightmap.mode=off", -3.0, 5.0);
+    double unshadowed = ground_under("effects.shadows=off", -3.0, 5.0);
     double compressed = ground_under("lightmap.mode=compressed", -3.0, 5.0);
     print_message("ground: shadow %.4g, lit %.4g, without light map %.4g\n", shadow, lit,
                   unshadowed);

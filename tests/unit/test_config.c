@@ -122,7 +122,8 @@ static void test_defaults(void **state)
     assert_int_equal(cfg.lightmap.resolution[2], 128);
     assert_true(cfg.lightmap.epsilon == 0.01);
     assert_true(cfg.lightmap.forward_angle_deg == 20.0);
-    assert_true(cfg.lightmap.forward && cfg.lightmap.peripheral);
+    for (int e = 0; e < EFFECT_COUNT; e++)
+        assert_int_equal(cfg.effects.mode[e], EFFECT_AUTO);
     assert_true(config_validate(&cfg));
 }
 
@@ -266,7 +267,7 @@ static void test_file_errors(void **state)
     EXPECT_LOAD_ERROR("config/range.cfg", "range.cfg:12: light.elevation: "
                                           "expected a number in [-90, 90], got 120.0");
     EXPECT_LOAD_ERROR("config/bad_enum.cfg", "bad_enum.cfg:2:", "lightmap.mode",
-                      "expected one of \"off\", \"dense\", \"compressed\"", "\"sparse\"");
+                      "expected one of \"dense\", \"compressed\"", "\"sparse\"");
     EXPECT_LOAD_ERROR("config/bad_vector.cfg", "bad_vector.cfg:2:", "scene.size",
                       "expected an array of 3 integers in [1, 500]", "got 2 elements");
     /* The line of the bad element, not of the array. */
@@ -371,8 +372,11 @@ static void test_set_each_type(void **state)
     assert_int_equal(cfg.lightmap.mode, LIGHTMAP_DENSE);
     assert_true(config_set(&cfg, "lightmap.mode=\"compressed\""));
     assert_int_equal(cfg.lightmap.mode, LIGHTMAP_COMPRESSED);
-    assert_true(config_set(&cfg, "lightmap.mode=off"));
-    assert_int_equal(cfg.lightmap.mode, LIGHTMAP_OFF);
+    assert_false(config_set(&cfg, "lightmap.mode=off")); /* effects.shadows=off now */
+    assert_true(config_set(&cfg, "effects.shadows=off"));
+    assert_int_equal(cfg.effects.mode[EFFECT_SHADOWS], EFFECT_OFF);
+    assert_true(config_set(&cfg, "effects.ground_shadow=\"on\""));
+    assert_int_equal(cfg.effects.mode[EFFECT_GROUND_SHADOW], EFFECT_ON);
     assert_true(config_set(&cfg, "render.ground_on=false"));
     assert_false(cfg.render.ground_on);
     assert_true(config_set(&cfg, "render.ground_on=yes"));
@@ -419,8 +423,10 @@ static void test_set_errors(void **state)
     EXPECT_SET_ERROR("render.width=0", "expected an integer in [1, 16384], got 0");
     EXPECT_SET_ERROR("camera.fov=179", "expected a number in (1, 179)");
     EXPECT_SET_ERROR("render.ground_on=maybe", "expected true or false", "\"maybe\"");
-    EXPECT_SET_ERROR("lightmap.mode=sparse", "expected one of \"off\", \"dense\", "
+    EXPECT_SET_ERROR("lightmap.mode=sparse", "expected one of \"dense\", "
                                              "\"compressed\", got \"sparse\"");
+    EXPECT_SET_ERROR("effects.forward=maybe", "expected one of \"auto\", \"on\", \"off\", "
+                                              "got \"maybe\"");
     EXPECT_SET_ERROR("scene.size=[64,64]", "scene.size", "expected an array of 3 integers",
                      "got 2 elements");
     EXPECT_SET_ERROR("scene.size=[64,64,32,1]", "got 4 elements");
@@ -545,13 +551,15 @@ static void test_reference(void **state)
     assert_non_null(strstr(table, "| `light.elevation` | float | `35.0` | [-90, 90] |"));
     assert_non_null(strstr(table, "| `scene.size` | int[3] | `[128, 128, 64]` | [1, 500] |"));
     assert_non_null(strstr(table, "| `lightmap.mode` | string | `\"dense\"` | "
-                                  "\"off\", \"dense\", \"compressed\" |"));
+                                  "\"dense\", \"compressed\" |"));
+    assert_non_null(strstr(table, "| `effects.phase` | string | `\"auto\"` | "
+                                  "\"auto\", \"on\", \"off\" |"));
     assert_non_null(strstr(table, "| `optics.radius_mm.rain` | float | `1.0` |"));
     assert_non_null(strstr(table, "| `optics.radius_mm.cloud` | float | `0.01` |"));
     assert_non_null(strstr(table, "| `species.graupel.enabled` | bool | `true` |"));
     assert_non_null(strstr(table, "| `data.files` | list of strings | `[]` |"));
 
-    /* Every row's setting can be set from the command line; header + rule + 64 rows. */
+    /* Every row's setting can be set from the command line; header + rule + 93 rows. */
     int rows = 0;
     for (const char *line = table; *line; line = strchr(line, '\n') + 1) {
         rows++;
@@ -574,7 +582,7 @@ static void test_reference(void **state)
         if (strncmp(path, "optics.radius_mm.", 17) != 0) /* mm to m may round differently */
             assert_memory_equal(&cfg, &before, sizeof(cfg));
     }
-    assert_int_equal(rows, 2 + 64);
+    assert_int_equal(rows, 2 + 93);
 
     /* docs/config-reference.md holds the current table. */
     char doc_path[1024];

@@ -1,0 +1,479 @@
+/* anvil bench: the views benchmark and the quality sweep (bench/bench.h), written as CSV,
+ * markdown and PNG. */
+#include <errno.h>
+#include <getopt.h>
+#include <libgen.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "app/app.h"
+#include "app/cmd_bench.h"
+#include "app/effects.h"
+#include "bench/bench.h"
+#include "common/log.h"
+#include "gpu/gpu.h"
+#include "light/light_gpu.h"
+#include "render/camera.h"
+
+#define MAX_VARIANTS 32
+#define MAX_SCENES 3
+
+struct bench_options {
+    bool quick, views, quality;
+    const char *out;
+    char cache[PATH_MAX];
+    int spp;
+    const char *scenes[MAX_SCENES];
+    int n_scenes;
+};
+
+static int usage(FILE *out)
+{
+    fprintf(out,
+            "usage: anvil bench [--quick] [--views-only | --quality-only] [-o DIR] [--cache DIR]\n"
+            "                   [--spp N] [--scene sphere|storm|katrina]... [--quiet]\n"
+            "What accuracy costs in time (docs/accuracy.md):\n"
+            "  views    frame cost of 1, 2, 8 and 12 views sharing one light map against the\n"
+            "           same views each rebuilding it\n"
+            "  quality  each quality knob swept around the defaults on named scenes: GPU ms per\n"
+            "           light build and per view, error against the Monte Carlo reference\n"
+            "  -o DIR       where views.md, accuracy.csv, accuracy.md and accuracy.png go\n"
+            "               (default docs/bench)\n"
+            "  --cache DIR  Monte Carlo references are kept here (default: bench-cache beside\n"
+            "               the anvil binary)\n"
+            "  --spp N      reference samples per pixel (default 256, --quick 32)\n"
+            "  --quick      small scenes and images, one repeat: a CI-sized run\n");
+    return EXIT_USAGE;
+}
+
+static int parse(int argc, char **argv, struct bench_options *o)
+{
+    static const struct option longopts[] = {
+        {"quick", no_argument, NULL, 'Q'},          {"views-only", no_argument, NULL, 'V'},
+        {"quality-only", no_argument, NULL, 'A'},   {"output", required_argument, NULL, 'o'},
+        {"cache", required_argument, NULL, 'c'},    {"spp", required_argument, NULL, 'n'},
+        {"scene", required_argument, NULL, 's'},    {"quiet", no_argument, NULL, 'q'},
+        {"help", no_argument, NULL, 'h'},           {NULL, 0, NULL, 0},
+    };
+    memset(o, 0, sizeof(*o));
+    o->views = o->quality = true;
+    o->out = "docs/bench";
+    optind = 1;
+    int c;
+    char *end;
+    while ((c = getopt_long(argc, argv, "o:qh", longopts, NULL)) != -1) {
+        switch (c) {
+        case 'Q':
+            o->quick = true;
+            break;
+        case 'V':
+            o->quality = false;
+            break;
+        case 'A':
+            o->views = false;
+            break;
+        case 'o':
+            o->out = optarg;
+            break;
+        case 'c':
+            snprintf(o->cache, sizeof(o->cache), "%s", optarg);
+            break;
+        case 'n':
+            errno = 0;
+            o->spp = (int)strtol(optarg, &end, 10);
+            if (errno || *end || o->spp < 2 || o->spp > 1 << 20) {
+                log_error("bench: --spp: expected an integer in [2, 1048576], got \"%s\"",
+                          optarg);
+                return EXIT_BAD_INPUT;
+            }
+            break;
+        case 's':
+            if (strcmp(optarg, "sphere") && strcmp(optarg, "storm") && strcmp(optarg, "katrina")) {
+                log_error("bench: --scene: expected sphere, storm or katrina, got \"%s\"", optarg);
+                return EXIT_BAD_INPUT;
+            }
+            if (o->n_scenes < MAX_SCENES)
+                o->scenes[o->n_scenes++] = optarg;
+            break;
+        case 'q':
+            log_set_level(LOG_ERROR);
+            break;
+        case 'h':
+            return -1;
+        default:
+            return EXIT_USAGE;
+        }
+    }
+    if (optind < argc) {
+        log_error("bench: unexpected argument \"%s\"", argv[optind]);
+        return EXIT_USAGE;
+    }
+    if (!o->views && !o->quality) {
+        log_error("bench: --views-only and --quality-only exclude each other");
+        return EXIT_USAGE;
+    }
+    if (!o->spp)
+        o->spp = o->quick ? 32 : 256;
+    if (!o->cache[0]) {
+        char exe[PATH_MAX];
+        ssize_t len = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+        if (len > 0) {
+            exe[len] = '\0';
+            snprintf(o->cache, sizeof(o->cache), "%s/bench-cache", dirname(exe));
+        } else {
+            snprintf(o->cache, sizeof(o->cache), "bench-cache");
+        }
+    }
+    if (o->n_scenes == 0) {
+        o->scenes[0] = "sphere";
+        o->scenes[1] = "storm";
+        o->scenes[2] = "katrina";
+        o->n_scenes = 3;
+    }
+    return EXIT_OK;
+}
+
+/* A named scene's config: its file, then SETS. */
+static bool scene_config(const char *name, bool quick, const char **extra, int n_extra,
+                         struct config *cfg)
+{
+    char path[PATH_MAX];
+    const char *file = NULL;
+    if (strcmp(name, "sphere") == 0)
+        file = "sphere.cfg";
+    else if (strcmp(name, "katrina") == 0)
+        file = "katrina.cfg";
+    if (file)
+        snprintf(path, sizeof(path), "%s/configs/%s", ANVIL_SOURCE_DIR, file);
+    char *sets[16];
+    int n = 0;
+    static char quick_size[] = "scene.size=[48,48,24]";
+    static char quick_light[] = "lightmap.resolution=[64,64,64]";
+    if (quick && strcmp(name, "storm") == 0) {
+        sets[n++] = quick_size;
+        sets[n++] = quick_light;
+    }
+    for (int i = 0; i < n_extra && n < 16; i++)
+        sets[n++] = (char *)extra[i];
+    return app_load_config(file ? path : NULL, sets, n, cfg);
+}
+
+/* The scene as anvil render draws it (effects decided from the scene), at W x H. */
+static bool scene_prepare(const char *name, const struct config *cfg, int w, int h,
+                          struct ext_volume *vol, struct bench_scene *sc)
+{
+    memset(sc, 0, sizeof(*sc));
+    snprintf(sc->name, sizeof(sc->name), "%s", name);
+    if (!app_build_volume(cfg, vol))
+        return false;
+    camera_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sc->sun);
+    app_camera_view(cfg, w, h, &sc->view);
+    struct effects_facts facts;
+    effects_facts_init(&facts);
+    if (!effects_measure_volume(vol, sc->sun, &facts))
+        return false;
+    facts.time_steps = 1;
+    facts.views_known = true;
+    facts.ground_visible = cfg->render.ground_on && effects_view_sees_ground(&sc->view);
+    struct effects e;
+    effects_decide(cfg, &facts, &e);
+    app_render_settings(cfg, &sc->settings);
+    effects_apply_render(&e, &sc->settings);
+    effects_light_settings(cfg, &e, &sc->light);
+    sc->shadows = e.on[EFFECT_SHADOWS];
+    sc->mode = cfg->lightmap.mode == LIGHTMAP_COMPRESSED ? LIGHT_GPU_COMPRESSED : LIGHT_GPU_DENSE;
+    sc->optics = cfg->optics.params;
+    sc->vol = vol;
+    return true;
+}
+
+static bool write_text(const char *dir, const char *name, char *buf, size_t len)
+{
+    char path[PATH_MAX];
+    snprintf(path, sizeof(path), "%s/%s", dir, name);
+    bool ok = file_write_atomic(path, buf, len);
+    if (ok)
+        printf("wrote %s\n", path);
+    return ok;
+}
+
+static bool make_dir(const char *dir)
+{
+    char tmp[PATH_MAX];
+    snprintf(tmp, sizeof(tmp), "%s", dir);
+    for (char *p = tmp + 1; *p; p++) {
+        if (*p == '/') {
+            *p = '\0';
+            mkdir(tmp, 0777);
+            *p = '/';
+        }
+    }
+    if (mkdir(tmp, 0777) != 0 && errno != EEXIST) {
+        log_error("%s: cannot create the folder: %s", dir, strerror(errno));
+        return false;
+    }
+    return true;
+}
+
+/* ---- views ----------------------------------------------------------------------------- */
+
+static bool run_views(const struct bench_options *o, const char *device, struct renderer *r,
+                      struct light_gpu *lg)
+{
+    struct config cfg;
+    const char *extra[] = {"render.ground_on=false"};
+    if (!scene_config("storm", o->quick, extra, 1, &cfg))
+        return false;
+    int w = o->quick ? 64 : 160, h = o->quick ? 48 : 120, repeats = o->quick ? 1 : 3;
+    struct ext_volume vol = {0};
+    struct bench_scene sc;
+    bool ok = scene_prepare("storm", &cfg, w, h, &vol, &sc) &&
+              renderer_set_optics(r, &cfg.optics.params) && renderer_set_volume(r, &vol);
+    static const int counts[] = {1, 2, 8, 12};
+    struct bench_views_row rows[4];
+    ok = ok && bench_views(r, lg, &sc, counts, 4, w, h, repeats, rows);
+    if (!ok) {
+        ext_volume_finish(&vol);
+        return false;
+    }
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    fprintf(f, "<!-- generated by `anvil bench%s --views-only`; do not edit by hand -->\n",
+            o->quick ? " --quick" : "");
+    fprintf(f, "| views | shared light map: frame after a change, ms | shared: frame without a "
+               "change, ms | a build per view, ms | per-view build ÷ shared | one build, ms | "
+               "one view, ms |\n|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (int i = 0; i < 4; i++)
+        fprintf(f, "| %d | %.0f | %.0f | %.0f | %.2f | %.0f | %.1f |\n", rows[i].views,
+                rows[i].shared_ms, rows[i].static_ms, rows[i].rebuild_ms,
+                rows[i].rebuild_ms / rows[i].shared_ms, rows[i].build_ms, rows[i].view_ms);
+    fprintf(f, "\nScene: the procedural storm %dx%dx%d, light map %dx%dx%d (%s), views %dx%d "
+               "orbiting the storm, medians of %d frame%s.  Device: %s.\n",
+            vol.grid.n[0], vol.grid.n[1], vol.grid.n[2], sc.light.resolution[0],
+            sc.light.resolution[1], sc.light.resolution[2],
+            sc.mode == LIGHT_GPU_DENSE ? "dense" : "compressed", w, h, repeats,
+            repeats > 1 ? "s" : "", device);
+    fclose(f);
+    ok = write_text(o->out, "views-table.md", buf, len);
+    free(buf);
+    printf("views (%s):\n", device);
+    for (int i = 0; i < 4; i++)
+        printf("  %2d views: shared %.0f ms (%.0f without a change), a build per view %.0f ms: "
+               "%.2fx\n", rows[i].views, rows[i].shared_ms, rows[i].static_ms,
+               rows[i].rebuild_ms, rows[i].rebuild_ms / rows[i].shared_ms);
+    ext_volume_finish(&vol);
+    return ok;
+}
+
+/* ---- quality --------------------------------------------------------------------------- */
+
+struct scene_results {
+    char name[32];
+    struct bench_result res[MAX_VARIANTS];
+    int n;
+    double sigma; /* the reference's RMS standard error */
+};
+
+static bool run_scene(const struct bench_options *o, const char *name, struct renderer *r,
+                      struct light_gpu *lg, struct scene_results *out)
+{
+    struct config cfg;
+    /* The renderer lights the cloud with the sun only, so the comparison does too: no sky
+     * (the reference would add sky light scattered by the cloud) and no ground. */
+    const char *extra[] = {"render.sky=[0,0,0]", "render.ground_on=false"};
+    if (!scene_config(name, o->quick, extra, 2, &cfg))
+        return false;
+    int w = o->quick ? 48 : 96, h = o->quick ? 36 : 72;
+    struct ext_volume vol = {0};
+    struct bench_scene sc;
+    struct image ref = {0}, err = {0}, self = {0};
+    bool ok = false;
+    if (!scene_prepare(name, &cfg, w, h, &vol, &sc))
+        goto done;
+    bool cached = false;
+    if (!bench_reference(&sc, o->spp, o->cache, &ref, &err, &cached))
+        goto done;
+    double noise = 0.0;
+    for (int i = 0; i < w * h; i++)
+        for (int c = 0; c < 3; c++)
+            noise += (double)err.rgba[4 * i + c] * err.rgba[4 * i + c];
+    out->sigma = sqrt(noise / (3.0 * w * h));
+    if (!renderer_set_optics(r, &cfg.optics.params) || !renderer_set_volume(r, &vol))
+        goto done;
+    struct bench_variant variants[MAX_VARIANTS];
+    int n = bench_variants(&sc, o->quick, variants, MAX_VARIANTS);
+    /* The renderer's own model converged: finest ray step and light map, default knobs. */
+    struct bench_variant fine = variants[0];
+    float voxel = (float)fmin(vol.grid.spacing[0], fmin(vol.grid.spacing[1], vol.grid.spacing[2]));
+    fine.step_m = 0.125f * voxel;
+    fine.mode = LIGHT_GPU_DENSE;
+    for (int a = 0; a < 3; a++)
+        fine.light.resolution[a] = o->quick ? 128 : 256;
+    if (!bench_render(r, lg, &sc, &fine, &self))
+        goto done;
+    snprintf(out->name, sizeof(out->name), "%s", name);
+    out->n = 0;
+    for (int i = 0; i < n; i++) {
+        if (!bench_measure(r, lg, &sc, &variants[i], &ref, &err, &self, o->quick ? 1 : 3,
+                           o->quick ? 1 : 5, &out->res[out->n]))
+            goto done;
+        log_info("bench: %s %s %s: build %.1f ms, view %.1f ms, RMSE %.4g (%.2f sigma)", name,
+                 variants[i].knob, variants[i].value, out->res[out->n].build_ms,
+                 out->res[out->n].view_ms, out->res[out->n].rmse, out->res[out->n].rmse_rel);
+        out->n++;
+    }
+    bench_pool_builds(out->res, out->n);
+    bench_pareto(out->res, out->n);
+    ok = true;
+done:
+    image_finish(&ref);
+    image_finish(&err);
+    image_finish(&self);
+    ext_volume_finish(&vol);
+    return ok;
+}
+
+static void verdict(FILE *f, const struct scene_results *s, bool self)
+{
+    const struct bench_result *def = NULL;
+    for (int i = 0; i < s->n; i++) {
+        if (s->res[i].v.is_default)
+            def = &s->res[i];
+    }
+    if (!def)
+        return;
+    const char *against = self ? "against the converged renderer" : "against Monte Carlo";
+    if (self ? def->pareto_self : def->pareto) {
+        fprintf(f, "- **%s**, %s: the default is on the Pareto front.\n", s->name, against);
+        return;
+    }
+    fprintf(f, "- **%s**, %s: the default is *not* on the Pareto front; beaten by", s->name,
+            against);
+    double td = def->build_ms + def->view_ms, ed = self ? def->self_rmse : def->rmse;
+    for (int i = 0; i < s->n; i++) {
+        const struct bench_result *r = &s->res[i];
+        double t = r->build_ms + r->view_ms, e = self ? r->self_rmse : r->rmse;
+        if (r != def && t <= td * (1.0 + BENCH_TIME_NOISE) && e <= ed * (1.0 + BENCH_ERROR_NOISE) &&
+            (t * (1.0 + BENCH_TIME_NOISE) < td || e * (1.0 + BENCH_ERROR_NOISE) < ed))
+            fprintf(f, " %s %s (%.2f× the time, RMSE %.4g vs %.4g);", r->v.knob, r->v.value,
+                    t / td, e, ed);
+    }
+    fprintf(f, "\n");
+}
+
+static bool run_quality(const struct bench_options *o, const char *device, struct renderer *r,
+                        struct light_gpu *lg)
+{
+    static struct scene_results scenes[MAX_SCENES];
+    int n = 0;
+    for (int i = 0; i < o->n_scenes; i++) {
+        if (strcmp(o->scenes[i], "katrina") == 0) {
+            char data[PATH_MAX];
+            snprintf(data, sizeof(data), "%s/../shared/data/wrf/katrina_2005_mercator_wsm3.nc",
+                     ANVIL_SOURCE_DIR);
+            if (access(data, R_OK) != 0) {
+                log_warn("bench: %s not found: the katrina scene is left out", data);
+                continue;
+            }
+        }
+        if (!run_scene(o, o->scenes[i], r, lg, &scenes[n]))
+            return false;
+        n++;
+    }
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    for (int i = 0; i < n; i++)
+        bench_write_csv(f, scenes[i].name, scenes[i].res, scenes[i].n, i == 0);
+    fclose(f);
+    bool ok = write_text(o->out, "accuracy.csv", buf, len);
+    free(buf);
+
+    f = open_memstream(&buf, &len);
+    fprintf(f, "<!-- generated by `anvil bench%s --quality-only`; do not edit by hand -->\n",
+            o->quick ? " --quick" : "");
+    fprintf(f, "Device: %s.%s  Reference: %d samples per pixel, no sky, no ground.  ms are "
+               "medians (± half the range of the repeats).  σ is the reference's own RMS "
+               "standard error per pixel and channel.\n\n", device,
+            strstr(device, "llvmpipe") ? "  **A CPU rasteriser: read the milliseconds as "
+                                        "ratios between rows, not as GPU times.**"
+                                      : "",
+            o->spp);
+    for (int i = 0; i < n; i++) {
+        fprintf(f, "σ(%s) = %.3g\n\n", scenes[i].name, scenes[i].sigma);
+        bench_write_markdown(f, scenes[i].name, scenes[i].res, scenes[i].n);
+        fprintf(f, "\n");
+    }
+    fprintf(f, "Pareto verdict (time = one light build + one view, error = RMSE):\n\n");
+    for (int self = 0; self < 2; self++)
+        for (int i = 0; i < n; i++)
+            verdict(f, &scenes[i], self);
+    fclose(f);
+    ok = write_text(o->out, "accuracy-table.md", buf, len) && ok;
+    printf("%.*s", (int)len, buf);
+    free(buf);
+
+    const char *names[MAX_SCENES];
+    const struct bench_result *res[MAX_SCENES];
+    int counts[MAX_SCENES];
+    for (int i = 0; i < n; i++) {
+        names[i] = scenes[i].name;
+        res[i] = scenes[i].res;
+        counts[i] = scenes[i].n;
+    }
+    for (int self = 0; self < 2; self++) {
+        char path[PATH_MAX], title[256];
+        snprintf(path, sizeof(path), "%s/accuracy%s.png", o->out, self ? "-self" : "");
+        snprintf(title, sizeof(title), "%s vs time (red: Pareto front, blue ring: default)",
+                 self ? "error against the converged renderer" : "error against Monte Carlo");
+        if (bench_plot_png(path, title, n, names, res, counts, self))
+            printf("wrote %s\n", path);
+        else
+            ok = false;
+    }
+    return ok;
+}
+
+int cmd_bench(int argc, char **argv)
+{
+    struct bench_options o;
+    int rc = parse(argc, argv, &o);
+    if (rc < 0) {
+        usage(stdout);
+        return EXIT_OK;
+    }
+    if (rc == EXIT_USAGE)
+        return usage(stderr);
+    if (rc != EXIT_OK)
+        return rc;
+    if (!make_dir(o.out))
+        return EXIT_FAILED;
+    struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){.backend = "egl"});
+    if (!ctx)
+        return EXIT_NO_GPU;
+    const char *device = gpu_renderer_name();
+    struct renderer *r = renderer_create();
+    struct light_gpu *lg = light_gpu_create();
+    rc = EXIT_FAILED;
+    if (!r || !lg)
+        goto done;
+    if (strstr(device, "llvmpipe"))
+        printf("note: %s is a CPU rasteriser; the milliseconds below are only meaningful as "
+               "ratios\n", device);
+    if (o.views && !run_views(&o, device, r, lg))
+        goto done;
+    if (o.quality && !run_quality(&o, device, r, lg))
+        goto done;
+    rc = EXIT_OK;
+done:
+    light_gpu_destroy(lg);
+    renderer_destroy(r);
+    gpu_context_destroy(ctx);
+    return rc;
+}

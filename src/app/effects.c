@@ -1,0 +1,314 @@
+/* Effect decisions: facts about the scene -> on/off per effect, with the reason. */
+#include "app/effects.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <cglm/cglm.h>
+
+#include "common/log.h"
+
+#define MEASURE_COLUMNS_MAX 128
+#define MEASURE_STEPS_MAX 4096
+
+static const char *const names[EFFECT_COUNT] = {
+    "shadows", "forward", "peripheral", "phase", "ground_shadow", "detail", "temporal",
+    "distortion",
+};
+
+const char *effects_name(enum effect e)
+{
+    return e >= 0 && e < EFFECT_COUNT ? names[e] : "?";
+}
+
+void effects_facts_init(struct effects_facts *f)
+{
+    memset(f, 0, sizeof(*f));
+}
+
+bool effects_measure_volume(const struct ext_volume *vol, const double sun[3],
+                            struct effects_facts *f)
+{
+    const struct grid3 *g = &vol->grid;
+    int n[3];
+    for (int a = 0; a < 2; a++) {
+        int most = g->n[0] > g->n[1] ? g->n[0] : g->n[1];
+        n[a] = most < 2 ? 2 : most > MEASURE_COLUMNS_MAX ? MEASURE_COLUMNS_MAX : most;
+    }
+    n[2] = 2;
+    struct light_grid lg;
+    if (!light_grid_init(&lg, sun, g, n))
+        return false;
+    /* March each column along the light in steps of half the shortest distance in which the
+     * light crosses a voxel (the light map's own sub-step rule, halved). */
+    double cross = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (fabs(lg.w[a]) > 1e-12)
+            cross = fmin(cross, g->spacing[a] / fabs(lg.w[a]));
+    }
+    double len = lg.hi[2] - lg.lo[2];
+    int steps = (int)ceil(len / (0.5 * cross));
+    steps = steps < 1 ? 1 : steps > MEASURE_STEPS_MAX ? MEASURE_STEPS_MAX : steps;
+    double ds = len / steps;
+    double max_tau = 0.0;
+    for (int j = 0; j < n[1]; j++) {
+        for (int i = 0; i < n[0]; i++) {
+            double tau = 0.0;
+            for (int k = 0; k < steps; k++) {
+                double kz = (k + 0.5) / steps; /* the last node plane is k = 1 */
+                float p[3], b[2];
+                for (int a = 0; a < 3; a++)
+                    p[a] = (float)(lg.origin[a] + i * (double)lg.du[a] + j * (double)lg.dv[a] +
+                                   kz * (double)lg.dw[a]);
+                light_sample_beta(vol, p, b);
+                tau += ((double)b[0] + b[1]) * ds;
+            }
+            max_tau = fmax(max_tau, tau);
+        }
+    }
+    double ice = 0.0, water = 0.0;
+    size_t count = (size_t)g->n[0] * g->n[1] * g->n[2];
+    for (size_t v = 0; v < count; v++) {
+        float bi = vol->beta[2 * v], bw = vol->beta[2 * v + 1];
+        ice += bi > 0.0f ? bi : 0.0;
+        water += bw > 0.0f ? bw : 0.0;
+    }
+    f->volume_known = true;
+    f->max_tau_light = isfinite(max_tau) ? max_tau : INFINITY;
+    f->beta_ice_sum = ice;
+    f->beta_water_sum = water;
+    return true;
+}
+
+bool effects_view_sees_ground(const struct render_view *view)
+{
+    mat4 proj, viewm, vp, inv;
+    memcpy(proj, view->proj, sizeof(proj));
+    memcpy(viewm, view->view, sizeof(viewm));
+    glm_mat4_mul(proj, viewm, vp);
+    glm_mat4_inv(vp, inv);
+    for (int c = 0; c < 4; c++) {
+        vec4 pn = {c & 1 ? 1.0f : -1.0f, c & 2 ? 1.0f : -1.0f, -1.0f, 1.0f};
+        vec4 pf = {pn[0], pn[1], 1.0f, 1.0f};
+        vec4 wn, wf;
+        glm_mat4_mulv(inv, pn, wn);
+        glm_mat4_mulv(inv, pf, wf);
+        float zn = wn[2] / wn[3], zf = wf[2] / wf[3];
+        if (zn > 0.0f && zf < zn)
+            return true;
+    }
+    return false;
+}
+
+static void say(struct effects *out, enum effect e, bool on, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+static void say(struct effects *out, enum effect e, bool on, const char *fmt, ...)
+{
+    out->on[e] = on;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(out->reason[e], sizeof(out->reason[e]), fmt, ap);
+    va_end(ap);
+}
+
+/* Decides an effect whose mode is on or off, or one that needs another effect that is off.
+ * Returns true when decided; false leaves auto to the caller. */
+static bool decide_fixed(struct effects *out, enum effect e, enum effect_mode mode,
+                         enum effect needs, bool needs_on)
+{
+    if (mode == EFFECT_OFF) {
+        say(out, e, false, "off in the config");
+        return true;
+    }
+    if (!needs_on) {
+        say(out, e, false, "needs effects.%s, which is off", names[needs]);
+        return true;
+    }
+    if (mode == EFFECT_ON) {
+        say(out, e, true, "on in the config");
+        return true;
+    }
+    return false;
+}
+
+/* The largest share of the sun that forward scattering can add to a light map value per unit
+ * optical depth crossed: CP(theta/2) of the more forward phase (docs/effects.md). */
+static double forward_gain(const struct config *cfg)
+{
+    struct light_settings s;
+    light_settings_defaults(&s);
+    light_settings_set_optics(&s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
+    return fmax(s.cp.water_ctr + s.cp.water_per, s.cp.ice_ctr + s.cp.ice_per);
+}
+
+void effects_decide(const struct config *cfg, const struct effects_facts *facts,
+                    struct effects *out)
+{
+    struct effects_facts unknown;
+    if (!facts) {
+        effects_facts_init(&unknown);
+        facts = &unknown;
+    }
+    memset(out, 0, sizeof(*out));
+    const enum effect_mode *mode = cfg->effects.mode;
+    const double tol = EFFECTS_FORWARD_TOLERANCE;
+    double tau = facts->max_tau_light;
+
+    /* Shadows: the light map changes light by 1 - e^-tau <= tau. */
+    if (!decide_fixed(out, EFFECT_SHADOWS, mode[EFFECT_SHADOWS], EFFECT_SHADOWS, true)) {
+        if (!facts->volume_known)
+            say(out, EFFECT_SHADOWS, true, "auto: volume not measured, on");
+        else if (tau <= tol)
+            say(out, EFFECT_SHADOWS, false,
+                "auto: largest optical depth along the light %.3g <= %.3g: shadows change "
+                "no light by more than half a display level",
+                tau, tol);
+        else
+            say(out, EFFECT_SHADOWS, true, "auto: largest optical depth along the light %.3g",
+                tau);
+    }
+
+    /* Forward scattering adds at most CP(theta/2) tau to a light map value. */
+    bool shadows = out->on[EFFECT_SHADOWS];
+    if (!decide_fixed(out, EFFECT_FORWARD, mode[EFFECT_FORWARD], EFFECT_SHADOWS, shadows)) {
+        double gain = forward_gain(cfg);
+        double thin = gain > 0.0 ? tol / gain : INFINITY;
+        if (!facts->volume_known)
+            say(out, EFFECT_FORWARD, true, "auto: volume not measured, on");
+        else if (tau <= thin)
+            say(out, EFFECT_FORWARD, false,
+                "auto: optically thin along the light (largest optical depth %.3g <= %.3g = "
+                "half a display level / CP(theta/2) %.3f)",
+                tau, thin, gain);
+        else
+            say(out, EFFECT_FORWARD, true,
+                "auto: largest optical depth along the light %.3g > %.3g (thin limit)", tau,
+                thin);
+    }
+
+    bool forward = out->on[EFFECT_FORWARD];
+    if (!decide_fixed(out, EFFECT_PERIPHERAL, mode[EFFECT_PERIPHERAL], EFFECT_FORWARD,
+                      forward))
+        say(out, EFFECT_PERIPHERAL, true, "auto: follows effects.forward (on)");
+
+    /* Per-species phase: one phase when one kind of particle is absent. */
+    out->single_phase_ice = facts->volume_known && facts->beta_ice_sum > facts->beta_water_sum;
+    const char *single = out->single_phase_ice ? "ice" : "water";
+    if (mode[EFFECT_PHASE] == EFFECT_OFF) {
+        say(out, EFFECT_PHASE, false, "off in the config: the %s phase for every species%s",
+            single, facts->volume_known ? " (the larger share of the extinction)" : "");
+    } else if (mode[EFFECT_PHASE] == EFFECT_ON) {
+        say(out, EFFECT_PHASE, true, "on in the config");
+    } else if (!facts->volume_known) {
+        say(out, EFFECT_PHASE, true, "auto: volume not measured, on");
+    } else if (facts->beta_ice_sum <= 0.0 && facts->beta_water_sum <= 0.0) {
+        say(out, EFFECT_PHASE, false, "auto: no extinction at all: one phase");
+    } else if (facts->beta_ice_sum <= 0.0) {
+        say(out, EFFECT_PHASE, false, "auto: no ice species (ice, snow, graupel) present: the "
+            "water phase for all");
+    } else if (facts->beta_water_sum <= 0.0) {
+        say(out, EFFECT_PHASE, false, "auto: no water species (cloud, rain) present: the ice "
+            "phase for all");
+    } else {
+        say(out, EFFECT_PHASE, true, "auto: ice and water species both present (ice share "
+            "%.0f%%)", 100.0 * facts->beta_ice_sum /
+                          (facts->beta_ice_sum + facts->beta_water_sum));
+    }
+
+    /* Ground shadow: only where the ground is drawn and seen. */
+    if (!decide_fixed(out, EFFECT_GROUND_SHADOW, mode[EFFECT_GROUND_SHADOW], EFFECT_SHADOWS,
+                      shadows)) {
+        if (!cfg->render.ground_on)
+            say(out, EFFECT_GROUND_SHADOW, false, "auto: the ground is not drawn "
+                "(render.ground_on = false)");
+        else if (!facts->views_known)
+            say(out, EFFECT_GROUND_SHADOW, true, "auto: views not known, on");
+        else if (!facts->ground_visible)
+            say(out, EFFECT_GROUND_SHADOW, false, "auto: no view sees the ground");
+        else
+            say(out, EFFECT_GROUND_SHADOW, true, "auto: the ground is in view");
+    }
+
+    switch (mode[EFFECT_DETAIL]) {
+    case EFFECT_OFF:
+        say(out, EFFECT_DETAIL, false, "off in the config");
+        break;
+    case EFFECT_ON:
+        say(out, EFFECT_DETAIL, true, "on in the config (detail.*: noise on the CPU when the "
+            "volume is built)");
+        break;
+    case EFFECT_AUTO:
+        say(out, EFFECT_DETAIL, false, "auto: off (detail adds what the data lacks; ask for "
+            "it with effects.detail = \"on\")");
+        break;
+    }
+
+    int steps = facts->time_steps;
+    if (mode[EFFECT_TEMPORAL] == EFFECT_OFF)
+        say(out, EFFECT_TEMPORAL, false, "off in the config");
+    else if (steps == 1)
+        say(out, EFFECT_TEMPORAL, false, "%s: one time step, nothing to interpolate",
+            mode[EFFECT_TEMPORAL] == EFFECT_ON ? "on in the config, but" : "auto");
+    else
+        say(out, EFFECT_TEMPORAL, false, "%s: temporal interpolation is not implemented yet, "
+            "off", mode[EFFECT_TEMPORAL] == EFFECT_ON ? "on in the config" : "auto");
+
+    if (mode[EFFECT_DISTORTION] == EFFECT_OFF)
+        say(out, EFFECT_DISTORTION, false, "off in the config");
+    else if (!facts->hmd)
+        say(out, EFFECT_DISTORTION, false, "%s: not an HMD display, nothing to distort",
+            mode[EFFECT_DISTORTION] == EFFECT_ON ? "on in the config, but" : "auto");
+    else if (mode[EFFECT_DISTORTION] == EFFECT_ON)
+        say(out, EFFECT_DISTORTION, true, "on in the config: HMD lens pre-distortion");
+    else if (!facts->hmd_warp)
+        say(out, EFFECT_DISTORTION, false, "auto: HMD display, but its config turns the lens "
+            "warp off (hmd.warp = false)");
+    else
+        say(out, EFFECT_DISTORTION, true, "auto: HMD display, lens pre-distortion");
+
+    if (!shadows)
+        snprintf(out->light_builds, sizeof(out->light_builds), "no light map (shadows off)");
+    else if (steps == 1 && !facts->sun_moves)
+        snprintf(out->light_builds, sizeof(out->light_builds),
+                 "built once, ever: one time step and a fixed sun (the rebuild-on-change key "
+                 "keeps it for every view and frame)");
+    else if (steps > 1)
+        snprintf(out->light_builds, sizeof(out->light_builds),
+                 "built once per time step shown (%d steps)%s, shared by every view", steps,
+                 facts->sun_moves ? " and whenever the sun moves" : "");
+    else
+        snprintf(out->light_builds, sizeof(out->light_builds),
+                 "built when the sun, the time step or a light map setting changes, shared by "
+                 "every view");
+}
+
+void effects_apply_render(const struct effects *e, struct render_settings *s)
+{
+    s->single_phase = !e->on[EFFECT_PHASE];
+    s->single_phase_ice = e->single_phase_ice;
+    s->no_ground_shadow = !e->on[EFFECT_GROUND_SHADOW];
+}
+
+void effects_light_settings(const struct config *cfg, const struct effects *e,
+                            struct light_settings *s)
+{
+    light_settings_defaults(s);
+    for (int a = 0; a < 3; a++)
+        s->resolution[a] = cfg->lightmap.resolution[a] < 2 ? 2 : cfg->lightmap.resolution[a];
+    s->forward = e->on[EFFECT_FORWARD];
+    s->peripheral = e->on[EFFECT_PERIPHERAL];
+    s->epsilon = cfg->lightmap.epsilon;
+    light_settings_set_optics(s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
+    if (!e->on[EFFECT_PHASE]) {
+        if (e->single_phase_ice) {
+            s->cp.water_ctr = s->cp.ice_ctr;
+            s->cp.water_per = s->cp.ice_per;
+        } else {
+            s->cp.ice_ctr = s->cp.water_ctr;
+            s->cp.ice_per = s->cp.water_per;
+        }
+    }
+}

@@ -1,0 +1,384 @@
+/* Time playback: the cursor (app_playback) and the player over the time series cache. */
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "app/cmd_data.h"
+#include "app/interact.h"
+#include "common/log.h"
+#include "data/detail.h"
+#include "data/series.h"
+#include "data/source.h"
+#include "data/synth.h"
+
+#define LUT_SIZE 256
+#define DATE_LEN 64
+
+void app_playback_init(struct app_playback *pb, int count, int step, double speed, bool loop)
+{
+    memset(pb, 0, sizeof(*pb));
+    pb->count = count > 0 ? count : 1;
+    pb->step = step < 0 ? 0 : step >= pb->count ? pb->count - 1 : step;
+    pb->speed = speed;
+    pb->loop = loop;
+}
+
+bool app_playback_tick(struct app_playback *pb, double dt, bool (*ready)(void *user, int step),
+                       void *user)
+{
+    if (!pb->playing || pb->count < 2 || !(dt > 0.0))
+        return false;
+    pb->acc += dt * pb->speed;
+    bool changed = false;
+    /* The epsilon keeps exact frame times (10 frames of 0.1 s) from falling a hair short. */
+    while (pb->acc >= 1.0 - 1e-9) {
+        int next = pb->step + 1;
+        if (next >= pb->count) {
+            if (!pb->loop) {
+                pb->playing = false; /* the end: stop there */
+                pb->acc = 0.0;
+                break;
+            }
+            next = 0;
+        }
+        if (ready && !ready(user, next)) {
+            pb->stalls++;
+            pb->acc = 1.0; /* wait at the step boundary, do not build up a backlog */
+            break;
+        }
+        pb->step = next;
+        pb->acc -= 1.0;
+        changed = true;
+    }
+    return changed;
+}
+
+/* ---- the player -------------------------------------------------------------------------- */
+
+enum player_kind { PLAYER_STORM, PLAYER_FIELDS, PLAYER_EXTINCTION, PLAYER_TEST_SCENE };
+
+struct app_player {
+    const struct config *cfg;
+    enum player_kind kind;
+    struct series *series;
+    int steps;
+    char (*dates)[DATE_LEN];
+    const char *files[CONFIG_MAX_FILES];
+    struct data_source_desc src_desc;
+    struct data_source *src; /* read by the series' thread only (after create) */
+
+    pthread_mutex_t lock; /* guards look, look_gen, present */
+    struct app_look look;
+    uint64_t look_gen;
+    bool present[SPECIES_COUNT];
+
+    int shown;
+    uint64_t shown_gen;
+    double upload_ms;
+};
+
+void app_look_from_config(const struct config *cfg, struct app_look *look)
+{
+    memset(look, 0, sizeof(*look));
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        look->select.enabled[f] = cfg->optics.enabled[f];
+        look->select.scale[f] = cfg->optics.scale[f];
+    }
+    species_tint_defaults(&look->tint);
+    transfer_defaults(&look->transfer, TRANSFER_FIELD_QVAPOR);
+}
+
+/* The scalar field a transfer function shows, on FV's grid (caller frees). */
+static float *transfer_scalar(const struct field_volume *fv, enum transfer_field field)
+{
+    const struct grid3 *g = &fv->grid;
+    size_t n = grid3_count(g);
+    if (field == TRANSFER_FIELD_QVAPOR && fv->qvapor) {
+        float *s = malloc(n * sizeof(float));
+        if (s)
+            memcpy(s, fv->qvapor, n * sizeof(float));
+        return s;
+    }
+    float *s = calloc(n, sizeof(float));
+    if (!s)
+        return NULL;
+    size_t idx = 0;
+    for (int k = 0; k < g->n[2]; k++) {
+        double z = g->origin[2] + (k + 0.5) * g->spacing[2];
+        /* Without QVAPOR: 10 g/kg at the ground, 2.5 km scale height. */
+        float vapour = (float)(0.010 * exp(-z / 2500.0));
+        for (size_t ij = 0; ij < (size_t)g->n[0] * (size_t)g->n[1]; ij++, idx++) {
+            if (field == TRANSFER_FIELD_QVAPOR) {
+                s[idx] = vapour;
+                continue;
+            }
+            double sum = 0.0;
+            for (int f = 0; f < SPECIES_COUNT; f++) {
+                float q = fv->q[f] ? fv->q[f][idx] : 0.0f;
+                if (isfinite(q) && q > 0.0f)
+                    sum += q;
+            }
+            s[idx] = (float)sum;
+        }
+    }
+    return s;
+}
+
+static void storm_desc(const struct config *cfg, struct synth_desc *d)
+{
+    synth_desc_defaults(d);
+    d->kind = SYNTH_STORM;
+    for (int i = 0; i < 3; i++) {
+        d->n[i] = cfg->scene.size[i];
+        d->extent_m[i] = cfg->scene.extent_km[i] * 1000.0;
+    }
+    d->seed = cfg->scene.seed;
+    d->time = cfg->scene.time;
+}
+
+/* Mass ratios -> extinction with the look (on the series' thread). */
+static bool convert(struct app_player *p, struct field_volume *fv, const struct app_look *look,
+                    struct ext_volume *out)
+{
+    struct detail_desc detail;
+    cmd_data_detail_desc(p->cfg, &detail);
+    detail_apply_fields(&detail, fv);
+    bool ok;
+    if (look->transfer_on) {
+        float lut[4 * LUT_SIZE];
+        const struct transfer_function *tf = &look->transfer;
+        for (int i = 0; i < LUT_SIZE; i++)
+            for (int c = 0; c < TRANSFER_CHANNELS; c++)
+                lut[4 * i + c] = transfer_eval(tf, (enum transfer_channel)c,
+                                               (float)i / (LUT_SIZE - 1));
+        float *scalar = transfer_scalar(fv, tf->field);
+        if (!scalar) {
+            log_error("out of memory for the transfer function's field");
+            return false;
+        }
+        ok = ext_volume_from_scalar(&fv->grid, scalar, lut, LUT_SIZE, tf->lo, tf->hi,
+                                    tf->density, out);
+        free(scalar);
+    } else {
+        ok = ext_volume_from_fields(fv, &p->cfg->optics.params, &look->select, out) &&
+             ext_volume_tint_from_fields(fv, &p->cfg->optics.params, &look->select, &look->tint,
+                                         out);
+    }
+    double k = p->cfg->scene.height_exaggeration;
+    if (ok && k > 0.0)
+        ext_volume_stretch_height(out, k);
+    return ok;
+}
+
+static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
+                 double *convert_ms)
+{
+    struct app_player *p = user;
+    struct app_look *look = malloc(sizeof(*look));
+    if (!look) {
+        log_error("out of memory");
+        return false;
+    }
+    pthread_mutex_lock(&p->lock);
+    *look = p->look;
+    pthread_mutex_unlock(&p->lock);
+    double t0 = time_now_ms();
+    bool ok = false;
+    struct field_volume fv = {0};
+    switch (p->kind) {
+    case PLAYER_TEST_SCENE: {
+        struct config *c = malloc(sizeof(*c));
+        if (c) {
+            *c = *p->cfg;
+            ok = app_build_volume(c, out);
+            free(c);
+        }
+        *load_ms += time_now_ms() - t0;
+        free(look);
+        return ok;
+    }
+    case PLAYER_EXTINCTION:
+        ok = data_source_load(p->src, step, out, load_ms, convert_ms);
+        free(look);
+        return ok;
+    case PLAYER_STORM: {
+        struct synth_desc d;
+        storm_desc(p->cfg, &d);
+        ok = synth_storm_fields(&d, &fv);
+        break;
+    }
+    case PLAYER_FIELDS:
+        ok = data_source_load_fields(p->src, step, &fv);
+        break;
+    }
+    double t1 = time_now_ms();
+    *load_ms += t1 - t0;
+    if (ok) {
+        pthread_mutex_lock(&p->lock);
+        for (int f = 0; f < SPECIES_COUNT; f++)
+            p->present[f] = fv.q[f] != NULL;
+        pthread_mutex_unlock(&p->lock);
+        ok = convert(p, &fv, look, out);
+    }
+    *convert_ms += time_now_ms() - t1;
+    field_volume_finish(&fv);
+    free(look);
+    return ok;
+}
+
+struct app_player *app_player_create(const struct config *cfg, const struct app_player_desc *d)
+{
+    struct app_player *p = calloc(1, sizeof(*p));
+    if (!p) {
+        log_error("out of memory");
+        return NULL;
+    }
+    p->cfg = cfg;
+    p->steps = 1;
+    if (pthread_mutex_init(&p->lock, NULL) != 0) {
+        free(p);
+        return NULL;
+    }
+    app_look_from_config(cfg, &p->look);
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        p->present[f] = true;
+    if (cfg->scene.kind == SCENE_STORM) {
+        p->kind = PLAYER_STORM;
+    } else if (cfg->scene.kind != SCENE_DATA) {
+        p->kind = PLAYER_TEST_SCENE;
+        for (int f = 0; f < SPECIES_COUNT; f++)
+            p->present[f] = false;
+    } else {
+        p->kind = cfg->data.format == DATA_EXTINCTION ? PLAYER_EXTINCTION : PLAYER_FIELDS;
+        cmd_data_source_desc(cfg, p->files, &p->src_desc);
+        p->src_desc.wrf.qvapor = true;
+        p->src = data_source_open(&p->src_desc);
+        if (!p->src)
+            goto error;
+        p->steps = data_source_step_count(p->src);
+    }
+    p->dates = calloc((size_t)p->steps, sizeof(*p->dates));
+    if (!p->dates)
+        goto error;
+    for (int i = 0; i < p->steps && p->src; i++)
+        snprintf(p->dates[i], DATE_LEN, "%s", data_source_step_date(p->src, i));
+    p->shown = cfg->scene.kind == SCENE_DATA ? cfg->data.step : 0;
+    if (p->shown >= p->steps)
+        p->shown = p->steps - 1;
+    struct series_desc sd = {
+        .step_count = p->steps,
+        .load = load,
+        .user = p,
+        .memory_mb = d && d->memory_mb > 0 ? d->memory_mb : cfg->data.cache_memory_mb,
+        .prefetch = d && d->prefetch ? d->prefetch : (cfg->data.prefetch > 0 ? cfg->data.prefetch
+                                                                              : -1),
+        .wrap = cfg->playback.loop,
+        .delay_ms = d ? d->delay_ms : 0.0,
+    };
+    p->series = series_create(&sd);
+    if (!p->series)
+        goto error;
+    /* The step on screen was made by the session; start prefetching around it. */
+    series_try_acquire(p->series, p->shown);
+    return p;
+
+error:
+    app_player_destroy(p);
+    return NULL;
+}
+
+void app_player_destroy(struct app_player *p)
+{
+    if (!p)
+        return;
+    series_destroy(p->series); /* joins the thread before the source goes */
+    data_source_close(p->src);
+    pthread_mutex_destroy(&p->lock);
+    free(p->dates);
+    free(p);
+}
+
+int app_player_step_count(const struct app_player *p)
+{
+    return p->steps;
+}
+
+const char *app_player_step_date(struct app_player *p, int step)
+{
+    return step >= 0 && step < p->steps ? p->dates[step] : "";
+}
+
+bool app_player_ready(struct app_player *p, int step)
+{
+    return series_ready(p->series, step);
+}
+
+bool app_player_has_fields(const struct app_player *p)
+{
+    return p->kind == PLAYER_STORM || p->kind == PLAYER_FIELDS;
+}
+
+void app_player_species_present(const struct app_player *p, bool present[SPECIES_COUNT])
+{
+    pthread_mutex_lock((pthread_mutex_t *)&p->lock);
+    memcpy(present, p->present, sizeof(p->present));
+    pthread_mutex_unlock((pthread_mutex_t *)&p->lock);
+}
+
+void app_player_set_look(struct app_player *p, const struct app_look *look)
+{
+    pthread_mutex_lock(&p->lock);
+    p->look = *look;
+    p->look_gen++;
+    pthread_mutex_unlock(&p->lock);
+    series_invalidate(p->series);
+}
+
+const struct ext_volume *app_player_poll(struct app_player *p, int want, int *shown)
+{
+    const struct ext_volume *v = NULL;
+    if (want != p->shown || p->shown_gen != p->look_gen) {
+        v = series_try_acquire(p->series, want);
+        if (v) {
+            p->shown = want;
+            p->shown_gen = p->look_gen;
+        }
+    }
+    if (shown)
+        *shown = p->shown;
+    return v;
+}
+
+const struct ext_volume *app_player_wait(struct app_player *p, int want, int *shown)
+{
+    const struct ext_volume *v = NULL;
+    if (want != p->shown || p->shown_gen != p->look_gen) {
+        v = series_acquire(p->series, want);
+        if (v) {
+            p->shown = want;
+            p->shown_gen = p->look_gen;
+        }
+    }
+    if (shown)
+        *shown = p->shown;
+    return v;
+}
+
+bool app_player_settled(const struct app_player *p, int want)
+{
+    return want == p->shown && p->shown_gen == p->look_gen;
+}
+
+void app_player_stats(struct app_player *p, struct app_stats *st)
+{
+    struct series_stats ss;
+    series_get_stats(p->series, &ss);
+    st->cache_hits = ss.hits;
+    st->cache_misses = ss.misses;
+    st->cache_loads = ss.loads;
+    st->frames_waited = ss.frame_waits;
+    st->load_ms = ss.load_ms;
+    st->convert_ms = ss.convert_ms;
+    st->wait_ms = ss.wait_ms;
+}

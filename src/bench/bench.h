@@ -1,0 +1,137 @@
+/*
+ * bench: what accuracy costs in time.  Two benchmarks over scenes the caller prepares (app
+ * builds volumes from configs; this part never reads a config):
+ *
+ *  - views: the frame cost of N views sharing one deep light map against the same N views
+ *    each rebuilding it (what a renderer that lights every view on its own pays);
+ *  - quality: one-knob-at-a-time sweeps around the default settings (ray step, light map
+ *    resolution, dense vs compressed and epsilon, forward angle, peripheral and forward
+ *    scattering on/off, no light map at all), each measured in GPU milliseconds per light
+ *    build and per view (timer queries, medians of repeats) and in error against the Monte
+ *    Carlo reference (bench/reference.h), cached on disk.
+ *
+ * Results go to CSV, markdown and PNG plots (error against milliseconds, the Pareto front
+ * marked) through bench_write_*.  Measuring needs the GL context current; the writers and
+ * the Pareto front do not.  Nothing here prints: progress goes to the log.
+ */
+#ifndef ANVIL_BENCH_BENCH_H
+#define ANVIL_BENCH_BENCH_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "data/volume.h"
+#include "light/light.h"
+#include "light/light_gpu.h"
+#include "optics/optics.h"
+#include "render/image.h"
+#include "render/render.h"
+
+/* One scene as the renderer would draw it by default.  VOL is borrowed. */
+struct bench_scene {
+    char name[32];
+    const struct ext_volume *vol;
+    struct render_settings settings; /* the default eye pass (effects applied) */
+    struct render_view view;
+    struct optics_params optics;
+    double sun[3];                   /* toward the sun */
+    struct light_settings light;     /* the default light map (effects applied) */
+    enum light_gpu_mode mode;        /* the default storage */
+    bool shadows;                    /* the default has a light map */
+};
+
+/* One point of the sweep: the default with one knob changed (or a named combination). */
+struct bench_variant {
+    char knob[24];  /* "default", "ray step", "resolution", "compressed", ... */
+    char value[64]; /* the knob's value as written in the table */
+    bool is_default;
+    bool shadows;   /* false: no light map (unshadowed single scattering) */
+    struct light_settings light;
+    enum light_gpu_mode mode;
+    float step_m;   /* eye pass ray step, metres (0: half the smallest voxel side) */
+};
+
+struct bench_result {
+    struct bench_variant v;
+    double build_ms, view_ms;         /* medians over the repeats (build: over every result
+                                         with the same light map, bench_pool_builds) */
+    double build_samples[32];         /* the build times measured for this result */
+    int n_build_samples;
+    double build_spread, view_spread; /* half the range of the repeats: the noise */
+    double rmse, max_err;             /* linear radiance, over pixels and RGB channels */
+    double rmse_rel, max_rel;         /* both over the reference's RMS standard error */
+    double self_rmse;                 /* against the renderer's own converged image (finest
+                                         ray step and light map, the default model) */
+    bool pareto;                      /* on the Pareto front of its scene (rmse) */
+    bool pareto_self;                 /* ... with self_rmse as the error */
+};
+
+/* The sweep around SC's defaults into OUT (at most MAX); QUICK leaves out the costliest
+ * points.  Returns the count. */
+int bench_variants(const struct bench_scene *sc, bool quick, struct bench_variant *out, int max);
+
+/* The Monte Carlo reference of SC at SPP samples per pixel (all threads), read from
+ * CACHE_DIR when an earlier run left it there (the file name holds a hash of everything it
+ * depends on), else rendered and stored.  MEAN and ERR are initialised here; *CACHED (may be
+ * NULL) says whether it was read.  No GL. */
+bool bench_reference(const struct bench_scene *sc, int spp, const char *cache_dir,
+                     struct image *mean, struct image *err, bool *cached);
+
+/* Measures V on SC: light builds (BUILD_REPEATS, each forced) and eye passes (VIEW_REPEATS)
+ * after one untimed draw whose image is compared with REF (mean) and REF_ERR (both NULL: no
+ * error measured) and with SELF_REF (may be NULL).  R must hold SC's volume and optics.  GL context current. */
+bool bench_measure(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
+                   const struct bench_variant *v, const struct image *ref,
+                   const struct image *ref_err, const struct image *self_ref,
+                   int build_repeats, int view_repeats, struct bench_result *out);
+
+/* Renders V on SC once into OUT (initialised here): e.g. the converged image of the
+ * renderer's own model.  GL context current. */
+bool bench_render(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
+                  const struct bench_variant *v, struct image *out);
+
+/* Results whose light maps are the same (settings and storage) share their build samples:
+ * each one's build_ms becomes the median of all of them (a light build does not depend on
+ * the eye pass's knobs, so this only removes noise). */
+void bench_pool_builds(struct bench_result *res, int n);
+
+/* Marks the results (N of one scene) that no other result beats: another result beats one
+ * when it is no worse in both milliseconds (build + view) and RMSE, and better in one, by
+ * more than the noise: BENCH_TIME_NOISE relative in time, BENCH_ERROR_NOISE relative in
+ * RMSE. */
+#define BENCH_TIME_NOISE 0.10
+#define BENCH_ERROR_NOISE 0.01
+void bench_pareto(struct bench_result *res, int n);
+
+/* ---- views -------------------------------------------------------------------------- */
+
+struct bench_views_row {
+    int views;
+    double shared_ms;  /* one frame after a change: one build, then every view */
+    double static_ms;  /* one frame without a change: every view, no build */
+    double rebuild_ms; /* one frame with a build before every view */
+    double build_ms, view_ms; /* medians of one build and of one view */
+};
+
+/* Frame costs for each of the N_COUNTS view counts, views of W x H orbiting SC's volume,
+ * medians of REPEATS frames.  R must hold SC's volume.  GL context current. */
+bool bench_views(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
+                 const int *counts, int n_counts, int w, int h, int repeats,
+                 struct bench_views_row *out);
+
+/* ---- reports ------------------------------------------------------------------------ */
+
+/* Appends the results of one scene as CSV rows (HEADER: write the header line first). */
+void bench_write_csv(FILE *f, const char *scene, const struct bench_result *res, int n,
+                     bool header);
+
+/* A markdown table of one scene's results. */
+void bench_write_markdown(FILE *f, const char *scene, const struct bench_result *res, int n);
+
+/* A plot of RMSE (SELF: self_rmse) against milliseconds (build + view, both axes logarithmic) per scene, one
+ * panel each, the Pareto front joined and the default ringed, into a PNG at PATH.
+ * RES[s] holds N[s] results of scene NAMES[s].  Returns false (logged) on a failed write. */
+bool bench_plot_png(const char *path, const char *title, int n_scenes, const char *const *names,
+                    const struct bench_result *const *res, const int *n, bool self);
+
+#endif

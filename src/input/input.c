@@ -1,0 +1,306 @@
+/* The event queue, names, the source table's dispatch and the scripted source. */
+#include "input/input.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/log.h"
+#include "input/input_impl.h"
+
+static const char *const button_names[INPUT_BUTTON_COUNT] = {"trigger", "grab", "menu", "reset"};
+static const char *const axis_names[INPUT_AXIS_COUNT] = {"fly", "turn"};
+static const struct {
+    const char *name;
+    enum input_key key;
+} key_names[] = {
+    {"play", INPUT_KEY_PLAY},           {"back", INPUT_KEY_STEP_BACK},
+    {"forward", INPUT_KEY_STEP_FORWARD}, {"menu", INPUT_KEY_MENU},
+    {"next-page", INPUT_KEY_PAGE_NEXT}, {"prev-page", INPUT_KEY_PAGE_PREV},
+};
+
+void input_queue_clear(struct input_queue *q)
+{
+    q->count = 0;
+    q->dropped = 0;
+}
+
+void input_queue_push(struct input_queue *q, const struct input_event *e)
+{
+    if (q->count >= INPUT_QUEUE_MAX) {
+        q->dropped++;
+        return;
+    }
+    q->events[q->count++] = *e;
+}
+
+const char *input_button_name(enum input_button b)
+{
+    return b >= 0 && b < INPUT_BUTTON_COUNT ? button_names[b] : "?";
+}
+
+bool input_button_from_name(const char *name, enum input_button *out)
+{
+    for (int i = 0; i < INPUT_BUTTON_COUNT; i++) {
+        if (strcmp(name, button_names[i]) == 0) {
+            *out = (enum input_button)i;
+            return true;
+        }
+    }
+    return false;
+}
+
+bool input_axis_from_name(const char *name, enum input_axis *out)
+{
+    for (int i = 0; i < INPUT_AXIS_COUNT; i++) {
+        if (strcmp(name, axis_names[i]) == 0) {
+            *out = (enum input_axis)i;
+            return true;
+        }
+    }
+    return false;
+}
+
+bool input_key_from_name(const char *name, enum input_key *out)
+{
+    for (size_t i = 0; i < sizeof(key_names) / sizeof(key_names[0]); i++) {
+        if (strcmp(name, key_names[i].name) == 0) {
+            *out = key_names[i].key;
+            return true;
+        }
+    }
+    return false;
+}
+
+bool input_source_poll(struct input_source *s, const struct input_frame *frame,
+                       struct input_queue *q)
+{
+    return s->impl->poll(s, frame, q);
+}
+
+bool input_source_finished(const struct input_source *s)
+{
+    return s->impl->finished && s->impl->finished(s);
+}
+
+const char *input_source_name(const struct input_source *s)
+{
+    return s->impl->name;
+}
+
+void input_source_destroy(struct input_source *s)
+{
+    if (s)
+        s->impl->destroy(s);
+}
+
+/* ---- scripted input ------------------------------------------------------------------- */
+
+struct timed_event {
+    long frame;
+    struct input_event event;
+};
+
+struct script {
+    struct input_source base;
+    struct timed_event *events;
+    int count, next;
+    double fps;
+};
+
+static bool script_poll(struct input_source *s, const struct input_frame *frame,
+                        struct input_queue *q)
+{
+    struct script *sc = (struct script *)s;
+    while (sc->next < sc->count && sc->events[sc->next].frame <= frame->frame)
+        input_queue_push(q, &sc->events[sc->next++].event);
+    return true;
+}
+
+static bool script_finished(const struct input_source *s)
+{
+    const struct script *sc = (const struct script *)s;
+    return sc->next >= sc->count;
+}
+
+static void script_destroy(struct input_source *s)
+{
+    struct script *sc = (struct script *)s;
+    free(sc->events);
+    free(sc);
+}
+
+static const struct input_source_impl script_impl = {
+    .name = "script",
+    .poll = script_poll,
+    .finished = script_finished,
+    .destroy = script_destroy,
+};
+
+static bool parse_float(const char *tok, float *out)
+{
+    if (!tok)
+        return false;
+    char *end;
+    errno = 0;
+    double v = strtod(tok, &end);
+    if (*end || end == tok || errno || !isfinite(v))
+        return false;
+    *out = (float)v;
+    return true;
+}
+
+/* Parses the words after the frame number into E.  Returns NULL, or what was expected. */
+static const char *parse_event(char **tok, int n, struct input_event *e)
+{
+    memset(e, 0, sizeof(*e));
+    const char *kind = tok[0];
+    if (strcmp(kind, "button") == 0) {
+        e->type = INPUT_BUTTON;
+        if (n != 3 || !input_button_from_name(tok[1], &e->button))
+            return "\"button trigger|grab|menu|reset down|up\"";
+        if (strcmp(tok[2], "down") != 0 && strcmp(tok[2], "up") != 0)
+            return "\"button NAME down\" or \"button NAME up\"";
+        e->down = strcmp(tok[2], "down") == 0;
+        return NULL;
+    }
+    if (strcmp(kind, "key") == 0) {
+        e->type = INPUT_KEY;
+        if (n != 2 || !input_key_from_name(tok[1], &e->key))
+            return "\"key play|back|forward|menu|next-page|prev-page\"";
+        return NULL;
+    }
+    if (strcmp(kind, "axis") == 0) {
+        e->type = INPUT_AXIS;
+        if (n != 3 || !input_axis_from_name(tok[1], &e->axis) || !parse_float(tok[2], &e->value) ||
+            e->value < -1.0f || e->value > 1.0f)
+            return "\"axis fly|turn VALUE\" with VALUE in [-1, 1]";
+        return NULL;
+    }
+    if (strcmp(kind, "aim") == 0) {
+        e->type = INPUT_AIM;
+        e->u = e->v = 0.5f;
+        if ((n != 2 && n != 4) || strlen(tok[1]) >= INPUT_TARGET_MAX ||
+            (n == 4 && (!parse_float(tok[2], &e->u) || !parse_float(tok[3], &e->v))))
+            return "\"aim WIDGET [U V]\" (U, V in [0, 1] on the widget)";
+        snprintf(e->target, sizeof(e->target), "%s", tok[1]);
+        return NULL;
+    }
+    if (strcmp(kind, "pose") == 0) {
+        e->type = INPUT_POSE;
+        if (n != 8 || (strcmp(tok[1], "tracker") != 0 && strcmp(tok[1], "world") != 0))
+            return "\"pose tracker|world X Y Z DX DY DZ\"";
+        e->space = strcmp(tok[1], "world") == 0 ? INPUT_SPACE_WORLD : INPUT_SPACE_TRACKER;
+        for (int i = 0; i < 3; i++) {
+            if (!parse_float(tok[2 + i], &e->position[i]) ||
+                !parse_float(tok[5 + i], &e->direction[i]))
+                return "\"pose tracker|world X Y Z DX DY DZ\" (numbers)";
+        }
+        float len = sqrtf(e->direction[0] * e->direction[0] + e->direction[1] * e->direction[1] +
+                          e->direction[2] * e->direction[2]);
+        if (!(len > 0.0f))
+            return "a direction DX DY DZ that is not zero";
+        for (int i = 0; i < 3; i++)
+            e->direction[i] /= len;
+        return NULL;
+    }
+    return "an event: button, key, axis, aim or pose";
+}
+
+struct input_source *input_script_open(const char *path)
+{
+    char *text = file_read_all(path, NULL);
+    if (!text)
+        return NULL;
+    struct script *sc = calloc(1, sizeof(*sc));
+    if (!sc) {
+        free(text);
+        log_error("%s: out of memory", path);
+        return NULL;
+    }
+    sc->base.impl = &script_impl;
+    sc->fps = 30.0;
+    int cap = 0, line_no = 0;
+    long last = -1;
+    for (char *line = text, *next; line; line = next) {
+        next = strchr(line, '\n');
+        if (next)
+            *next++ = '\0';
+        line_no++;
+        char *hash = strchr(line, '#');
+        if (hash)
+            *hash = '\0';
+        char *tok[10];
+        int n = 0;
+        char *ts = NULL;
+        for (char *t = strtok_r(line, " \t\r", &ts); t && n < 10; t = strtok_r(NULL, " \t\r", &ts))
+            tok[n++] = t;
+        if (n == 0)
+            continue;
+        if (strcmp(tok[0], "fps") == 0) {
+            float fps;
+            if (n != 2 || !parse_float(tok[1], &fps) || !(fps > 0.0f && fps <= 1000.0f)) {
+                log_error("%s:%d: expected \"fps N\" with N in (0, 1000]", path, line_no);
+                goto error;
+            }
+            sc->fps = fps;
+            continue;
+        }
+        char *end;
+        errno = 0;
+        long frame = strtol(tok[0], &end, 10);
+        if (*end || errno || frame < 0) {
+            log_error("%s:%d: expected a frame number (0, 1, ...) first, got \"%s\"", path,
+                      line_no, tok[0]);
+            goto error;
+        }
+        if (frame < last) {
+            log_error("%s:%d: frame %ld comes before frame %ld: frames must ascend", path,
+                      line_no, frame, last);
+            goto error;
+        }
+        if (n < 2) {
+            log_error("%s:%d: expected an event after the frame number", path, line_no);
+            goto error;
+        }
+        struct input_event e;
+        const char *expected = parse_event(tok + 1, n - 1, &e);
+        if (expected) {
+            log_error("%s:%d: expected %s", path, line_no, expected);
+            goto error;
+        }
+        if (sc->count == cap) {
+            cap = cap ? 2 * cap : 64;
+            struct timed_event *grown = realloc(sc->events, sizeof(*grown) * (size_t)cap);
+            if (!grown) {
+                log_error("%s: out of memory", path);
+                goto error;
+            }
+            sc->events = grown;
+        }
+        sc->events[sc->count++] = (struct timed_event){frame, e};
+        last = frame;
+    }
+    free(text);
+    return &sc->base;
+
+error:
+    free(text);
+    script_destroy(&sc->base);
+    return NULL;
+}
+
+double input_script_fps(const struct input_source *s)
+{
+    return s->impl == &script_impl ? ((const struct script *)s)->fps : 30.0;
+}
+
+long input_script_last_frame(const struct input_source *s)
+{
+    if (s->impl != &script_impl)
+        return -1;
+    const struct script *sc = (const struct script *)s;
+    return sc->count ? sc->events[sc->count - 1].frame : -1;
+}

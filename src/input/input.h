@@ -1,0 +1,129 @@
+/*
+ * input: devices turned into input events.  Backends — a scripted file of timed events (tests
+ * and recorded demos), GLFW keyboard and mouse as a desktop wand (the mouse ray through the
+ * pixel), GLFW joysticks, and OpenHMD controllers (the Null controllers in tests) — sit behind
+ * one table and fill one queue per frame.  Whoever consumes the events (the menu, navigation)
+ * never reads a device.  No GL: rays are computed from matrices the caller hands in.
+ *
+ * Spaces: a pose is in tracker metres (CAVE, HMD: the wand as the tracker reports it) or in
+ * world metres (the desktop window, where the mouse ray comes from the camera).
+ */
+#ifndef ANVIL_INPUT_H
+#define ANVIL_INPUT_H
+
+#include <stdbool.h>
+
+enum input_type {
+    INPUT_BUTTON, /* a wand button went down or up */
+    INPUT_POSE,   /* the wand's ray: position and direction */
+    INPUT_AXIS,   /* a joystick axis moved (value in [-1, 1]) */
+    INPUT_KEY,    /* a key was pressed (keyboard shortcuts) */
+    INPUT_AIM,    /* scripted: point the ray at a named menu widget (target, u, v) */
+};
+
+enum input_button {
+    INPUT_BUTTON_TRIGGER, /* chooses in the menu */
+    INPUT_BUTTON_GRAB,    /* held: the world follows the wand */
+    INPUT_BUTTON_MENU,    /* shows or hides the menu */
+    INPUT_BUTTON_RESET,   /* resets the view */
+    INPUT_BUTTON_COUNT
+};
+
+enum input_axis { INPUT_AXIS_FLY, INPUT_AXIS_TURN, INPUT_AXIS_COUNT }; /* fly: forward > 0 */
+
+enum input_space { INPUT_SPACE_TRACKER, INPUT_SPACE_WORLD };
+
+/* Keys the menu and navigation know (backends map their own codes to these). */
+enum input_key {
+    INPUT_KEY_NONE,
+    INPUT_KEY_PLAY,       /* space: play / pause */
+    INPUT_KEY_STEP_BACK,  /* , */
+    INPUT_KEY_STEP_FORWARD, /* . */
+    INPUT_KEY_MENU,       /* tab / m: show or hide the menu */
+    INPUT_KEY_PAGE_NEXT,  /* ] */
+    INPUT_KEY_PAGE_PREV,  /* [ */
+};
+
+#define INPUT_TARGET_MAX 32
+
+struct input_event {
+    enum input_type type;
+    enum input_button button; /* INPUT_BUTTON */
+    bool down;                /* INPUT_BUTTON */
+    enum input_space space;   /* INPUT_POSE */
+    float position[3];        /* INPUT_POSE: ray origin */
+    float direction[3];       /* INPUT_POSE: unit ray direction */
+    enum input_axis axis;     /* INPUT_AXIS */
+    float value;              /* INPUT_AXIS */
+    enum input_key key;       /* INPUT_KEY */
+    char target[INPUT_TARGET_MAX]; /* INPUT_AIM: widget name ("time.play") */
+    float u, v;               /* INPUT_AIM: where on the widget, [0, 1] each (0.5: centre) */
+};
+
+#define INPUT_QUEUE_MAX 256
+
+/* The events of one frame, in order.  Events past INPUT_QUEUE_MAX are dropped (counted). */
+struct input_queue {
+    struct input_event events[INPUT_QUEUE_MAX];
+    int count;
+    int dropped;
+};
+
+void input_queue_clear(struct input_queue *q);
+void input_queue_push(struct input_queue *q, const struct input_event *e);
+
+/* ---- sources --------------------------------------------------------------------------- */
+
+struct input_source;
+
+/* What a frame tells the sources: its number (from 0), its time in seconds, and for the
+ * desktop wand the camera that turns the mouse position into a world ray. */
+struct input_frame {
+    long frame;
+    double time;
+    bool have_camera;
+    float inv_view_proj[16]; /* clip -> world, column-major */
+    int width, height;       /* framebuffer pixels */
+};
+
+/* Appends the events that happened up to FRAME to Q.  False when the source failed (logged). */
+bool input_source_poll(struct input_source *s, const struct input_frame *frame,
+                       struct input_queue *q);
+/* True once a scripted source has delivered its last event (other sources never end). */
+bool input_source_finished(const struct input_source *s);
+const char *input_source_name(const struct input_source *s);
+void input_source_destroy(struct input_source *s); /* NULL is fine */
+
+/* A scripted input file (format in docs/menu.md): one event per line,
+ *   FRAME EVENT ARGS...        e.g.  "30 button trigger down", "31 aim time.play"
+ * with frames counted from 0 and ascending; '#' starts a comment.  Also "fps N" (the frame
+ * rate the script was recorded at, default 30).  On failure logs "FILE:LINE: expected ..."
+ * and returns NULL.  Destroy with input_source_destroy. */
+struct input_source *input_script_open(const char *path);
+/* The script's frame rate: a scripted run advances playback time by 1/fps per frame. */
+double input_script_fps(const struct input_source *s);
+/* The last frame the script names. */
+long input_script_last_frame(const struct input_source *s);
+
+/* The desktop wand: GLFW keyboard and mouse of WINDOW (a GLFWwindow *), the ray through the
+ * pointer (world space), left button = trigger, middle = grab, and the first joystick's
+ * buttons and axes.  Callbacks installed before are chained, except for the left button while
+ * the menu captures it (input_glfw_capture).  Needs GLFW initialised; no GL. */
+struct input_source *input_glfw_create(void *window);
+/* While CAPTURE, left-button events go to the wand only (the pointer is over the menu). */
+void input_glfw_capture(struct input_source *s, bool capture);
+
+/* OpenHMD controllers: the device NAME ("null": OpenHMD's Null controller, chosen by its
+ * OHMD_DEVICE_FLAGS_NULL_DEVICE flag; else a product name, substring, case-insensitive) of
+ * the controller class.  Its pose is the wand (tracker space, plus OFFSET metres: the
+ * tracking origin in the room); its trigger/grip/menu controls become buttons.  NULL
+ * (logged) when no such controller exists. */
+struct input_source *input_ohmd_create(const char *name, const double offset[3]);
+
+/* Names of the buttons, keys ("trigger", "play") for scripts and messages. */
+const char *input_button_name(enum input_button b);
+bool input_button_from_name(const char *name, enum input_button *out);
+bool input_key_from_name(const char *name, enum input_key *out);
+bool input_axis_from_name(const char *name, enum input_axis *out);
+
+#endif

@@ -1,0 +1,169 @@
+/* OpenHMD controllers as the wand: pose (tracker space) and controls as buttons. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include <openhmd.h>
+
+#include "common/log.h"
+#include "input/input_impl.h"
+
+#define CONTROLS_MAX 64
+
+static bool contains_nocase(const char *hay, const char *needle)
+{
+    size_t n = strlen(needle);
+    for (; *hay; hay++)
+        if (strncasecmp(hay, needle, n) == 0)
+            return true;
+    return n == 0;
+}
+
+struct ohmd_input {
+    struct input_source base;
+    ohmd_context *ctx;
+    ohmd_device *device;
+    double offset[3];
+    int control_count;
+    int hints[CONTROLS_MAX];
+    bool pressed[CONTROLS_MAX];
+    float last_pose[6];
+};
+
+/* The wand button an OpenHMD control hint stands for, or -1. */
+static int button_of(int hint)
+{
+    switch (hint) {
+    case OHMD_TRIGGER:
+    case OHMD_TRIGGER_CLICK:
+    case OHMD_BUTTON_A:
+        return INPUT_BUTTON_TRIGGER;
+    case OHMD_SQUEEZE:
+    case OHMD_BUTTON_B:
+        return INPUT_BUTTON_GRAB;
+    case OHMD_MENU:
+    case OHMD_BUTTON_X:
+        return INPUT_BUTTON_MENU;
+    case OHMD_HOME:
+    case OHMD_BUTTON_Y:
+        return INPUT_BUTTON_RESET;
+    default:
+        return -1;
+    }
+}
+
+/* Rotates (0, 0, -1) (OpenHMD's forward) by the quaternion Q (x, y, z, w). */
+static void forward_of(const float q[4], float out[3])
+{
+    float x = q[0], y = q[1], z = q[2], w = q[3];
+    out[0] = -(2.0f * (x * z + w * y));
+    out[1] = -(2.0f * (y * z - w * x));
+    out[2] = -(1.0f - 2.0f * (x * x + y * y));
+}
+
+static bool ohmd_poll(struct input_source *s, const struct input_frame *frame,
+                      struct input_queue *q)
+{
+    struct ohmd_input *h = (struct ohmd_input *)s;
+    ohmd_ctx_update(h->ctx);
+    float rot[4] = {0, 0, 0, 1}, pos[3] = {0, 0, 0};
+    ohmd_device_getf(h->device, OHMD_ROTATION_QUAT, rot);
+    ohmd_device_getf(h->device, OHMD_POSITION_VECTOR, pos);
+    struct input_event e = {.type = INPUT_POSE, .space = INPUT_SPACE_TRACKER};
+    forward_of(rot, e.direction);
+    for (int i = 0; i < 3; i++)
+        e.position[i] = pos[i] + (float)h->offset[i];
+    float pose[6] = {e.position[0], e.position[1], e.position[2],
+                     e.direction[0], e.direction[1], e.direction[2]};
+    if (memcmp(pose, h->last_pose, sizeof(pose)) != 0 || frame->frame == 0) {
+        memcpy(h->last_pose, pose, sizeof(pose));
+        input_queue_push(q, &e);
+    }
+    if (h->control_count > 0) {
+        float state[CONTROLS_MAX] = {0};
+        ohmd_device_getf(h->device, OHMD_CONTROLS_STATE, state);
+        for (int c = 0; c < h->control_count; c++) {
+            int b = button_of(h->hints[c]);
+            bool down = state[c] > 0.5f;
+            if (b < 0 || down == h->pressed[c])
+                continue;
+            h->pressed[c] = down;
+            struct input_event be = {.type = INPUT_BUTTON, .button = (enum input_button)b,
+                                     .down = down};
+            input_queue_push(q, &be);
+        }
+    }
+    return true;
+}
+
+static void ohmd_destroy(struct input_source *s)
+{
+    struct ohmd_input *h = (struct ohmd_input *)s;
+    if (h->ctx)
+        ohmd_ctx_destroy(h->ctx); /* closes its devices */
+    free(h);
+}
+
+static const struct input_source_impl ohmd_impl = {
+    .name = "openhmd",
+    .poll = ohmd_poll,
+    .destroy = ohmd_destroy,
+};
+
+struct input_source *input_ohmd_create(const char *name, const double offset[3])
+{
+    struct ohmd_input *h = calloc(1, sizeof(*h));
+    if (!h) {
+        log_error("OpenHMD controller: out of memory");
+        return NULL;
+    }
+    h->base.impl = &ohmd_impl;
+    for (int i = 0; i < 3 && offset; i++)
+        h->offset[i] = offset[i];
+    h->ctx = ohmd_ctx_create();
+    if (!h->ctx) {
+        log_error("OpenHMD: could not create a context");
+        goto error;
+    }
+    int count = ohmd_ctx_probe(h->ctx);
+    bool want_null = strcasecmp(name, "null") == 0;
+    int found = -1;
+    for (int i = 0; i < count && found < 0; i++) {
+        int flags = 0, cls = -1;
+        ohmd_list_geti(h->ctx, i, OHMD_DEVICE_FLAGS, &flags);
+        ohmd_list_geti(h->ctx, i, OHMD_DEVICE_CLASS, &cls);
+        if (cls != OHMD_DEVICE_CLASS_CONTROLLER)
+            continue;
+        const char *product = ohmd_list_gets(h->ctx, i, OHMD_PRODUCT);
+        bool null_device = (flags & OHMD_DEVICE_FLAGS_NULL_DEVICE) != 0;
+        if (want_null ? null_device : (product && contains_nocase(product, name)))
+            found = i;
+    }
+    if (found < 0) {
+        log_error("OpenHMD: no controller named \"%s\" (\"null\" picks the Null controller)",
+                  name);
+        goto error;
+    }
+    h->device = ohmd_list_open_device(h->ctx, found);
+    if (!h->device) {
+        log_error("OpenHMD: could not open the controller \"%s\": %s",
+                  ohmd_list_gets(h->ctx, found, OHMD_PRODUCT), ohmd_ctx_get_error(h->ctx));
+        goto error;
+    }
+    ohmd_device_geti(h->device, OHMD_CONTROL_COUNT, &h->control_count);
+    if (h->control_count > CONTROLS_MAX)
+        h->control_count = CONTROLS_MAX;
+    if (h->control_count > 0) {
+        int hints[256] = {0};
+        ohmd_device_geti(h->device, OHMD_CONTROLS_HINTS, hints);
+        memcpy(h->hints, hints, sizeof(int) * (size_t)h->control_count);
+    }
+    log_info("OpenHMD: wand \"%s\" (%d controls)", ohmd_list_gets(h->ctx, found, OHMD_PRODUCT),
+             h->control_count);
+    return &h->base;
+
+error:
+    ohmd_destroy(&h->base);
+    return NULL;
+}

@@ -1,0 +1,184 @@
+#include "optics/transfer.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+static const char *const field_names[TRANSFER_FIELD_COUNT] = {"qvapor", "condensate"};
+static const char *const channel_names[TRANSFER_CHANNELS] = {"red", "green", "blue", "alpha"};
+
+const char *transfer_field_name(enum transfer_field f)
+{
+    return f >= 0 && f < TRANSFER_FIELD_COUNT ? field_names[f] : "?";
+}
+
+bool transfer_field_from_name(const char *name, enum transfer_field *out)
+{
+    for (int f = 0; f < TRANSFER_FIELD_COUNT; f++) {
+        if (strcmp(name, field_names[f]) == 0) {
+            *out = (enum transfer_field)f;
+            return true;
+        }
+    }
+    return false;
+}
+
+const char *transfer_channel_name(enum transfer_channel c)
+{
+    return c >= 0 && c < TRANSFER_CHANNELS ? channel_names[c] : "?";
+}
+
+static void set_points(struct transfer_function *tf, int c, int n, const float *xv)
+{
+    tf->count[c] = n;
+    for (int i = 0; i < n; i++)
+        tf->points[c][i] = (struct transfer_point){xv[2 * i], xv[2 * i + 1]};
+}
+
+void transfer_defaults(struct transfer_function *tf, enum transfer_field field)
+{
+    memset(tf, 0, sizeof(*tf));
+    snprintf(tf->name, sizeof(tf->name), "default");
+    tf->field = field;
+    if (field == TRANSFER_FIELD_QVAPOR) {
+        tf->lo = 0.0;
+        tf->hi = 0.012; /* 12 g/kg: a moist boundary layer */
+    } else {
+        tf->lo = 0.0;
+        tf->hi = 0.005;
+    }
+    tf->density = 2e-3; /* 1/m: a 5 km column of alpha 0.1 has optical depth 1 */
+    /* Blue for dry, white for moist; transparent in the lowest 30 % of the range. */
+    set_points(tf, TRANSFER_RED, 2, (const float[]){0.0f, 0.3f, 1.0f, 1.0f});
+    set_points(tf, TRANSFER_GREEN, 2, (const float[]){0.0f, 0.5f, 1.0f, 1.0f});
+    set_points(tf, TRANSFER_BLUE, 1, (const float[]){0.0f, 1.0f});
+    set_points(tf, TRANSFER_ALPHA, 3, (const float[]){0.0f, 0.0f, 0.3f, 0.0f, 1.0f, 0.5f});
+}
+
+float transfer_eval(const struct transfer_function *tf, enum transfer_channel c, float x)
+{
+    int n = tf->count[c];
+    const struct transfer_point *p = tf->points[c];
+    if (n <= 0)
+        return 0.0f;
+    if (!(x > p[0].x)) /* also NaN */
+        return p[0].v;
+    if (x >= p[n - 1].x)
+        return p[n - 1].v;
+    for (int i = 1; i < n; i++) {
+        if (x <= p[i].x) {
+            float w = p[i].x - p[i - 1].x;
+            float t = w > 0.0f ? (x - p[i - 1].x) / w : 1.0f;
+            return p[i - 1].v + t * (p[i].v - p[i - 1].v);
+        }
+    }
+    return p[n - 1].v;
+}
+
+void transfer_eval_rgba(const struct transfer_function *tf, double s, float rgba[4])
+{
+    double span = tf->hi - tf->lo;
+    float x = span > 0.0 ? (float)((s - tf->lo) / span) : 0.0f;
+    for (int c = 0; c < TRANSFER_CHANNELS; c++)
+        rgba[c] = transfer_eval(tf, (enum transfer_channel)c, x);
+}
+
+static float clamp01(float v)
+{
+    return v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v;
+}
+
+/* Moves point I of channel C to its sorted place; returns the new index. */
+static int resort(struct transfer_function *tf, int c, int i)
+{
+    struct transfer_point *p = tf->points[c];
+    while (i > 0 && p[i - 1].x > p[i].x) {
+        struct transfer_point t = p[i - 1];
+        p[i - 1] = p[i];
+        p[i] = t;
+        i--;
+    }
+    while (i + 1 < tf->count[c] && p[i + 1].x < p[i].x) {
+        struct transfer_point t = p[i + 1];
+        p[i + 1] = p[i];
+        p[i] = t;
+        i++;
+    }
+    return i;
+}
+
+int transfer_add_point(struct transfer_function *tf, enum transfer_channel c, float x, float v)
+{
+    if (c < 0 || c >= TRANSFER_CHANNELS || tf->count[c] >= TRANSFER_MAX_POINTS)
+        return -1;
+    int i = tf->count[c]++;
+    tf->points[c][i] = (struct transfer_point){clamp01(x), clamp01(v)};
+    return resort(tf, c, i);
+}
+
+int transfer_move_point(struct transfer_function *tf, enum transfer_channel c, int i, float x,
+                        float v)
+{
+    if (c < 0 || c >= TRANSFER_CHANNELS || i < 0 || i >= tf->count[c])
+        return -1;
+    tf->points[c][i] = (struct transfer_point){clamp01(x), clamp01(v)};
+    return resort(tf, c, i);
+}
+
+bool transfer_delete_point(struct transfer_function *tf, enum transfer_channel c, int i)
+{
+    if (c < 0 || c >= TRANSFER_CHANNELS || i < 0 || i >= tf->count[c] || tf->count[c] <= 1)
+        return false;
+    struct transfer_point *p = tf->points[c];
+    memmove(&p[i], &p[i + 1], sizeof(p[0]) * (size_t)(tf->count[c] - i - 1));
+    tf->count[c]--;
+    return true;
+}
+
+bool transfer_valid(const struct transfer_function *tf, char *why, int why_size)
+{
+    char buf[160];
+    buf[0] = '\0';
+    if (tf->field < 0 || tf->field >= TRANSFER_FIELD_COUNT)
+        snprintf(buf, sizeof(buf), "unknown field");
+    else if (!(tf->lo < tf->hi) || !isfinite(tf->lo) || !isfinite(tf->hi))
+        snprintf(buf, sizeof(buf), "range: expected lo < hi, got [%g, %g]", tf->lo, tf->hi);
+    else if (!(tf->density >= 0.0) || !isfinite(tf->density))
+        snprintf(buf, sizeof(buf), "density: expected a number >= 0, got %g", tf->density);
+    for (int c = 0; c < TRANSFER_CHANNELS && !buf[0]; c++) {
+        int n = tf->count[c];
+        if (n < 1 || n > TRANSFER_MAX_POINTS) {
+            snprintf(buf, sizeof(buf), "%s: expected 1 to %d points, got %d", channel_names[c],
+                     TRANSFER_MAX_POINTS, n);
+            break;
+        }
+        for (int i = 0; i < n && !buf[0]; i++) {
+            const struct transfer_point *p = &tf->points[c][i];
+            if (!(p->x >= 0.0f && p->x <= 1.0f && p->v >= 0.0f && p->v <= 1.0f))
+                snprintf(buf, sizeof(buf), "%s[%d]: expected x and value in [0, 1], got [%g, %g]",
+                         channel_names[c], i, p->x, p->v);
+            else if (i > 0 && p->x < tf->points[c][i - 1].x)
+                snprintf(buf, sizeof(buf), "%s[%d]: points must be in ascending x",
+                         channel_names[c], i);
+        }
+    }
+    if (why && why_size > 0)
+        snprintf(why, (size_t)why_size, "%s", buf);
+    return !buf[0];
+}
+
+bool transfer_equal(const struct transfer_function *a, const struct transfer_function *b)
+{
+    if (strcmp(a->name, b->name) != 0 || a->field != b->field || a->lo != b->lo ||
+        a->hi != b->hi || a->density != b->density)
+        return false;
+    for (int c = 0; c < TRANSFER_CHANNELS; c++) {
+        if (a->count[c] != b->count[c])
+            return false;
+        for (int i = 0; i < a->count[c]; i++) {
+            if (a->points[c][i].x != b->points[c][i].x || a->points[c][i].v != b->points[c][i].v)
+                return false;
+        }
+    }
+    return true;
+}

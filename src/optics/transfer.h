@@ -1,0 +1,67 @@
+/*
+ * optics/transfer: a piecewise-linear RGBA transfer function for scalar fields shown in
+ * classic transfer-function mode (Dye 2007 §4.3): four independent channels of control points
+ * (x in [0, 1] over the field's range [lo, hi], value in [0, 1]), linearly interpolated and
+ * clamped outside their first and last point.  Alpha becomes extinction (alpha times DENSITY,
+ * 1/m), red, green and blue tint the scattered light.  Pure numbers: no files (config/ reads
+ * and writes them), no GL, no volumes.
+ */
+#ifndef ANVIL_OPTICS_TRANSFER_H
+#define ANVIL_OPTICS_TRANSFER_H
+
+#include <stdbool.h>
+
+#define TRANSFER_MAX_POINTS 32
+#define TRANSFER_NAME_MAX 64
+
+enum transfer_channel { TRANSFER_RED, TRANSFER_GREEN, TRANSFER_BLUE, TRANSFER_ALPHA,
+                        TRANSFER_CHANNELS };
+
+/* The scalar fields a transfer function can show. */
+enum transfer_field {
+    TRANSFER_FIELD_QVAPOR,     /* water vapour mixing ratio, kg/kg (the data's QVAPOR, else an
+                                  exponential profile of 10 g/kg and 2.5 km scale height) */
+    TRANSFER_FIELD_CONDENSATE, /* total condensate: the sum of the five species, kg/kg */
+    TRANSFER_FIELD_COUNT
+};
+
+struct transfer_point {
+    float x, v;
+};
+
+struct transfer_function {
+    char name[TRANSFER_NAME_MAX];
+    enum transfer_field field;
+    double lo, hi;    /* field values at x = 0 and x = 1 */
+    double density;   /* extinction at alpha = 1, 1/m */
+    int count[TRANSFER_CHANNELS];
+    struct transfer_point points[TRANSFER_CHANNELS][TRANSFER_MAX_POINTS]; /* x ascending */
+};
+
+/* A default for FIELD: a grey ramp with alpha rising over the upper half of the range. */
+void transfer_defaults(struct transfer_function *tf, enum transfer_field field);
+
+/* "qvapor", "condensate"; transfer_field_from_name returns false for an unknown name. */
+const char *transfer_field_name(enum transfer_field f);
+bool transfer_field_from_name(const char *name, enum transfer_field *out);
+const char *transfer_channel_name(enum transfer_channel c); /* "red", ... "alpha" */
+
+/* Channel C at X in [0, 1] (clamped at the ends; 0 without points). */
+float transfer_eval(const struct transfer_function *tf, enum transfer_channel c, float x);
+/* All four channels for the field value S. */
+void transfer_eval_rgba(const struct transfer_function *tf, double s, float rgba[4]);
+
+/* Editing.  Each keeps the points sorted and returns the point's new index, or -1 when the
+ * edit is refused (channel full; a channel keeps at least one point). */
+int transfer_add_point(struct transfer_function *tf, enum transfer_channel c, float x, float v);
+int transfer_move_point(struct transfer_function *tf, enum transfer_channel c, int i, float x,
+                        float v);
+bool transfer_delete_point(struct transfer_function *tf, enum transfer_channel c, int i);
+
+/* Checks the invariants (counts in range, x ascending in [0, 1], values in [0, 1], lo < hi,
+ * density >= 0).  On failure writes what is wrong into WHY (may be NULL). */
+bool transfer_valid(const struct transfer_function *tf, char *why, int why_size);
+
+bool transfer_equal(const struct transfer_function *a, const struct transfer_function *b);
+
+#endif

@@ -1,0 +1,139 @@
+#!/bin/bash
+# The menu driven by scripted input (docs/menu.md): playback through the time series cache,
+# the transfer function editor (a moved control point changes the image with exactly one light
+# map rebuild), saving and loading named transfer functions, the CAVE and the Null HMD.
+# Arguments: the anvil binary, the source folder, the shared data folder.
+anvil=$1
+src=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+failures=0
+check() {
+    local what=$1
+    shift
+    if "$@"; then
+        echo "ok - $what"
+    else
+        echo "not ok - $what"
+        failures=$((failures + 1))
+    fi
+}
+json() { # json FILE KEY: the number after "KEY":
+    sed -n "s/^ *\"$2\": \([-0-9.]*\),*$/\1/p" "$1"
+}
+small="--set scene.size=[32,32,16] --set render.width=160 --set render.height=120 --set lightmap.resolution=[32,32,32]"
+
+# No GL context: skip like the GL tests.
+if ! "$anvil" render --quiet "$src/configs/empty.cfg" $small -o "$tmp/probe.png" 2>/dev/null; then
+    [ $? -eq 3 ] && { echo "no OpenGL context: skipped"; exit 77; }
+fi
+
+# --- Playback of a synthetic WRF series: 1 step per second, 10 frames per second.
+"$anvil" synth -o "$tmp/series.nc" --steps 6 --size 16x16x8 2>/dev/null
+cat >"$tmp/series.cfg" <<CFG
+scene = { kind = "data"; };
+data = { format = "wrf"; files = ["series.nc"]; prefetch = 2; };
+playback = { speed = 1.0; loop = false; };
+CFG
+printf 'fps 10\n0 key play\n30 key play\n45 key forward\n' >"$tmp/play.txt"
+"$anvil" render --quiet "$tmp/series.cfg" $small --input "$tmp/play.txt" -o "$tmp/play.png" \
+    --stats "$tmp/play.json"
+check "scripted playback exits 0" test $? -eq 0
+# Frames 0..29 play (30 ticks of 0.1 s at 1 step/s), 30 pauses, 45 steps forward once.
+check "played 3 steps, paused, stepped to 4" test "$(json "$tmp/play.json" time_step)" = 4
+check "steps came through the cache" test "$(json "$tmp/play.json" cache_loads)" -ge 4
+check "one light map build per new step" test "$(json "$tmp/play.json" light_map_builds)" -eq \
+    $(($(json "$tmp/play.json" volume_uploads) + 1))
+
+# --- Transfer function editor: the same script with and without moving a control point.
+cat >"$tmp/tf.txt" <<'SCRIPT'
+0 key menu
+0 aim tab.transfer
+1 button trigger down
+2 button trigger up
+3 aim transfer.function
+4 button trigger down
+5 button trigger up
+6 aim transfer.mode
+7 button trigger down
+8 button trigger up
+10 aim transfer.canvas 0.9875 0.5
+40 key menu
+SCRIPT
+# (the menu is hidden again at the end, so only the volume can differ in the images)
+head -n -1 "$tmp/tf.txt" >"$tmp/tfmove.txt"
+cat >>"$tmp/tfmove.txt" <<'SCRIPT'
+11 button trigger down
+12 aim transfer.canvas 0.9 0.2
+13 aim transfer.canvas 0.9875 0.05
+14 button trigger up
+40 key menu
+SCRIPT
+for n in tf tfmove; do
+    "$anvil" render --quiet $small --input "$tmp/$n.txt" -o "$tmp/$n.png" --stats "$tmp/$n.json"
+    check "$n script exits 0" test $? -eq 0
+done
+check "moving a control point changes the image" bash -c "! cmp -s '$tmp/tf.png' '$tmp/tfmove.png'"
+check "moving a control point rebuilds the light map exactly once" test \
+    "$(json "$tmp/tfmove.json" light_map_builds)" -eq $(($(json "$tmp/tf.json" light_map_builds) + 1))
+
+# --- Save into slot 2, then load a corrupt slot 3: refused, the current function kept.
+mkdir "$tmp/tfs"
+head -n -1 "$tmp/tfmove.txt" >"$tmp/save.txt"
+cat >>"$tmp/save.txt" <<'SCRIPT'
+20 aim transfer.slot.2
+21 button trigger down
+22 button trigger up
+23 aim transfer.save
+24 button trigger down
+25 button trigger up
+30 aim transfer.slot.3
+31 button trigger down
+32 button trigger up
+33 aim transfer.load
+34 button trigger down
+35 button trigger up
+40 key menu
+SCRIPT
+printf 'transfer = {\n  field = "qvapor";\n  range = [0.0, 0.01];\n  density = 0.002;\n  red = ([0.0, 2.0]);\n};\n' \
+    >"$tmp/tfs/tf-3.cfg"
+"$anvil" render $small --input "$tmp/save.txt" --transfers "$tmp/tfs" -o "$tmp/save.png" \
+    2>"$tmp/err"
+check "save and failed load exit 0" test $? -eq 0
+check "the saved file exists" test -f "$tmp/tfs/tf-2.cfg"
+check "the saved file names its slot" grep -q 'name = "tf-2"' "$tmp/tfs/tf-2.cfg"
+check "the corrupt file is refused with file:line" grep -q "tf-3.cfg:5: transfer.red\[0\]" "$tmp/err"
+check "the current function is kept (image as before the load)" cmp -s "$tmp/tfmove.png" "$tmp/save.png"
+# A saved file loads back into the same image.
+cp "$tmp/tfs/tf-2.cfg" "$tmp/tfs/tf-4.cfg"
+head -n -1 "$tmp/tf.txt" >"$tmp/reload.txt"
+printf '20 aim transfer.slot.4\n21 button trigger down\n22 button trigger up\n23 aim transfer.load\n24 button trigger down\n25 button trigger up\n40 key menu\n' \
+    >>"$tmp/reload.txt"
+"$anvil" render --quiet $small --input "$tmp/reload.txt" --transfers "$tmp/tfs" -o "$tmp/reload.png"
+check "a loaded function renders as the one saved" cmp -s "$tmp/tfmove.png" "$tmp/reload.png"
+
+# --- A bad script is refused with file:line.
+printf '0 key play\n1 wiggle\n' >"$tmp/bad.txt"
+"$anvil" render --quiet $small --input "$tmp/bad.txt" -o "$tmp/bad.png" 2>"$tmp/err"
+check "a bad script exits 1" test $? -eq 1
+check "a bad script names file:line" grep -q "bad.txt:2:" "$tmp/err"
+
+# --- The CAVE and the Null HMD, offscreen, with the menu shown.
+printf '0 aim tab.light\n1 button trigger down\n2 button trigger up\n' >"$tmp/light.txt"
+"$anvil" render --quiet $small --display "$src/displays/cave4.cfg" --menu \
+    --input "$tmp/light.txt" -o "$tmp/cave/"
+check "cave4 with the menu exits 0" test $? -eq 0
+"$anvil" render --quiet $small --display "$src/displays/hmd.cfg" --menu --input "$tmp/light.txt" \
+    -o "$tmp/hmd/"
+check "the Null HMD with the menu exits 0" test $? -eq 0
+
+# --- A window under Xvfb: the desktop wand and playback for a few frames.
+if command -v xvfb-run >/dev/null; then
+    printf '0 key play\n' >"$tmp/run.txt"
+    ANVIL_RUN_FRAMES=4 timeout 120 xvfb-run -a -s "-screen 0 800x600x24" "$anvil" run --quiet \
+        "$tmp/series.cfg" $small --input "$tmp/run.txt" --stats "$tmp/run.json"
+    check "run with a script in a window exits 0" test $? -eq 0
+    check "run never blocked a frame on a load" test "$(json "$tmp/run.json" frames_waited)" -eq 0
+fi
+
+[ $failures -eq 0 ]

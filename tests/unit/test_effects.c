@@ -1,0 +1,268 @@
+/* Effect decisions (app/effects.h): auto from scene facts, on/off from the config, the
+ * prerequisites, the thin-medium bound, the phase choice, the volume and view measurements. */
+#include <math.h>
+#include <string.h>
+
+#include "testutil.h"
+
+#include "app/effects.h"
+#include "common/log.h"
+#include "data/synth.h"
+#include "light/light.h"
+#include "render/camera.h"
+
+static void known_thick(struct effects_facts *f)
+{
+    effects_facts_init(f);
+    f->volume_known = true;
+    f->max_tau_light = 50.0;
+    f->beta_ice_sum = 1.0;
+    f->beta_water_sum = 3.0;
+    f->views_known = true;
+    f->ground_visible = true;
+    f->time_steps = 1;
+}
+
+static void test_unknown_facts_simulate_everything(void **state)
+{
+    struct config cfg;
+    config_defaults(&cfg);
+    struct effects e;
+    effects_decide(&cfg, NULL, &e);
+    assert_true(e.on[EFFECT_SHADOWS] && e.on[EFFECT_FORWARD] && e.on[EFFECT_PERIPHERAL]);
+    assert_true(e.on[EFFECT_PHASE] && e.on[EFFECT_GROUND_SHADOW]);
+    assert_false(e.on[EFFECT_TEMPORAL]);
+    assert_false(e.on[EFFECT_DISTORTION]);
+    for (int i = 0; i < EFFECT_COUNT; i++)
+        assert_true(strlen(e.reason[i]) > 0);
+    assert_string_equal(effects_name(EFFECT_GROUND_SHADOW), "ground_shadow");
+}
+
+static void test_thin_medium_bound(void **state)
+{
+    /* Forward scattering adds at most CP(theta/2) tau to a light value: auto turns it off
+     * exactly when that stays below the tolerance. */
+    struct config cfg;
+    config_defaults(&cfg);
+    struct light_settings s;
+    light_settings_defaults(&s);
+    light_settings_set_optics(&s, &cfg.optics.params, cfg.lightmap.forward_angle_deg);
+    double gain = fmax(s.cp.water_ctr + s.cp.water_per, s.cp.ice_ctr + s.cp.ice_per);
+    assert_true(gain > 0.0 && gain < 1.0);
+    double thin = EFFECTS_FORWARD_TOLERANCE / gain;
+    struct effects_facts f;
+    known_thick(&f);
+    struct effects e;
+    f.max_tau_light = 0.99 * thin;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_SHADOWS]); /* thin, but tau > tolerance: shadows still show */
+    assert_false(e.on[EFFECT_FORWARD]);
+    assert_false(e.on[EFFECT_PERIPHERAL]);
+    assert_non_null(strstr(e.reason[EFFECT_FORWARD], "thin"));
+    f.max_tau_light = 1.01 * thin;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_FORWARD] && e.on[EFFECT_PERIPHERAL]);
+    /* Nothing in the volume: no shadows, and nothing that needs them. */
+    f.max_tau_light = 0.0;
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_SHADOWS] || e.on[EFFECT_FORWARD] || e.on[EFFECT_GROUND_SHADOW]);
+    assert_non_null(strstr(e.reason[EFFECT_FORWARD], "effects.shadows"));
+    assert_non_null(strstr(e.light_builds, "no light map"));
+}
+
+static void test_thin_bound_holds_in_the_light_map(void **state)
+{
+    /* The bound behind the threshold: forward on minus off <= CP(theta/2) tau, node by node,
+     * on a slab lit along an axis. */
+    struct synth_desc d = {.kind = SYNTH_SLAB, .n = {8, 8, 8}, .extent_m = {1e3, 1e3, 1e3},
+                           .tau = 0.5};
+    struct optics_params optics;
+    optics_params_defaults(&optics);
+    struct ext_volume vol = {0};
+    assert_true(synth_extinction(&d, &optics, &vol));
+    struct light_settings s;
+    light_settings_defaults(&s);
+    s.resolution[0] = s.resolution[1] = s.resolution[2] = 16;
+    light_settings_set_optics(&s, &optics, 20.0);
+    double gain = fmax(s.cp.water_ctr + s.cp.water_per, s.cp.ice_ctr + s.cp.ice_per);
+    double sun[3] = {0, 0, 1};
+    struct light_map on = {0}, off = {0};
+    assert_true(light_map_build(&vol, sun, &s, &on));
+    s.forward = false;
+    assert_true(light_map_build(&vol, sun, &s, &off));
+    size_t count = (size_t)16 * 16 * 16;
+    double worst = 0.0;
+    for (size_t i = 0; i < count; i++) {
+        double diff = on.light[i] - off.light[i];
+        assert_true(diff >= -1e-6);
+        worst = fmax(worst, diff);
+    }
+    assert_true(worst > 0.0);
+    assert_true(worst <= gain * 0.5 * (1.0 + 1e-3));
+    light_map_finish(&on);
+    light_map_finish(&off);
+    ext_volume_finish(&vol);
+}
+
+static void test_config_modes_and_prerequisites(void **state)
+{
+    struct config cfg;
+    config_defaults(&cfg);
+    struct effects_facts f;
+    known_thick(&f);
+    struct effects e;
+    assert_true(config_set(&cfg, "effects.forward=off"));
+    assert_true(config_set(&cfg, "effects.peripheral=on"));
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_FORWARD]);
+    assert_false(e.on[EFFECT_PERIPHERAL]); /* on, but it needs forward */
+    assert_non_null(strstr(e.reason[EFFECT_PERIPHERAL], "effects.forward"));
+    assert_true(config_set(&cfg, "effects.shadows=off"));
+    assert_true(config_set(&cfg, "effects.ground_shadow=on"));
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_SHADOWS] || e.on[EFFECT_GROUND_SHADOW]);
+    /* On wins over a thin medium (thin, but thick enough that shadows stay on). */
+    config_defaults(&cfg);
+    assert_true(config_set(&cfg, "effects.forward=on"));
+    f.max_tau_light = 1.5 * EFFECTS_FORWARD_TOLERANCE;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_FORWARD]);
+    assert_string_equal(e.reason[EFFECT_FORWARD], "on in the config");
+}
+
+static void test_phase(void **state)
+{
+    struct config cfg;
+    config_defaults(&cfg);
+    struct effects_facts f;
+    known_thick(&f);
+    struct effects e;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_PHASE]);
+    f.beta_ice_sum = 0.0;
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_PHASE]);
+    assert_false(e.single_phase_ice);
+    assert_non_null(strstr(e.reason[EFFECT_PHASE], "no ice"));
+    f.beta_ice_sum = 2.0;
+    f.beta_water_sum = 0.0;
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_PHASE]);
+    assert_true(e.single_phase_ice);
+    /* Forced off with both present: the larger share serves all, in both passes. */
+    f.beta_water_sum = 5.0;
+    assert_true(config_set(&cfg, "effects.phase=off"));
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_PHASE]);
+    assert_false(e.single_phase_ice);
+    struct light_settings s;
+    effects_light_settings(&cfg, &e, &s);
+    assert_true(s.cp.ice_ctr == s.cp.water_ctr && s.cp.ice_per == s.cp.water_per);
+    struct render_settings rs = {0};
+    effects_apply_render(&e, &rs);
+    assert_true(rs.single_phase && !rs.single_phase_ice);
+}
+
+static void test_ground_views_display_time(void **state)
+{
+    struct config cfg;
+    config_defaults(&cfg);
+    struct effects_facts f;
+    known_thick(&f);
+    struct effects e;
+    f.ground_visible = false;
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_GROUND_SHADOW]);
+    struct render_settings rs = {0};
+    effects_apply_render(&e, &rs);
+    assert_true(rs.no_ground_shadow);
+    f.ground_visible = true;
+    assert_true(config_set(&cfg, "render.ground_on=false"));
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_GROUND_SHADOW]);
+
+    config_defaults(&cfg);
+    f.hmd = true;
+    f.hmd_warp = true;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_DISTORTION]);
+    f.hmd_warp = false;
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_DISTORTION]);
+    assert_true(config_set(&cfg, "effects.distortion=on"));
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_DISTORTION]);
+    f.hmd = false;
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_DISTORTION]);
+
+    assert_non_null(strstr(e.light_builds, "once, ever"));
+    f.time_steps = 4;
+    effects_decide(&cfg, &f, &e);
+    assert_non_null(strstr(e.light_builds, "4 steps"));
+    f.time_steps = 1;
+    f.sun_moves = true;
+    effects_decide(&cfg, &f, &e);
+    assert_null(strstr(e.light_builds, "once, ever"));
+}
+
+static void test_measure_volume(void **state)
+{
+    /* A slab of vertical optical depth 3 lit from 30 degrees elevation: the longest path
+     * through it along the light is 3 / sin(30) = 6 where it crosses the whole slab (the slab
+     * is wide enough for such columns), up to the midpoint rule at the faces: half a sample
+     * (tau 0.19 here) at each end. */
+    struct synth_desc d = {.kind = SYNTH_SLAB, .n = {32, 32, 16}, .extent_m = {40e3, 40e3, 1e3},
+                           .tau = 3.0, .ice_phase = true};
+    struct optics_params optics;
+    optics_params_defaults(&optics);
+    struct ext_volume vol = {0};
+    assert_true(synth_extinction(&d, &optics, &vol));
+    double sun[3];
+    light_sun_direction(45.0, 30.0, sun);
+    struct effects_facts f;
+    effects_facts_init(&f);
+    assert_true(effects_measure_volume(&vol, sun, &f));
+    assert_true(f.volume_known);
+    assert_true(fabs(f.max_tau_light - 6.0) < 0.4);
+    assert_true(f.beta_ice_sum > 0.0 && f.beta_water_sum == 0.0);
+    ext_volume_finish(&vol);
+
+    /* Empty: zero, exactly. */
+    struct synth_desc empty = {.kind = SYNTH_EMPTY, .n = {8, 8, 8}, .extent_m = {1e3, 1e3, 1e3}};
+    assert_true(synth_extinction(&empty, &optics, &vol));
+    assert_true(effects_measure_volume(&vol, sun, &f));
+    assert_true(f.max_tau_light == 0.0);
+    ext_volume_finish(&vol);
+}
+
+static void test_view_sees_ground(void **state)
+{
+    struct render_view v;
+    double up[3] = {0, 0, 1};
+    double eye[3] = {0, 0, 1000}, down[3] = {100, 0, 0}, sky[3] = {0, 0, 5000};
+    camera_look_at(eye, down, up, 50.0, 1.0, 1e6, 64, 48, &v);
+    assert_true(effects_view_sees_ground(&v));
+    double upy[3] = {0, 1, 0};
+    camera_look_at(eye, sky, upy, 50.0, 1.0, 1e6, 64, 48, &v);
+    assert_false(effects_view_sees_ground(&v));
+    double below[3] = {0, 0, -10}, ahead[3] = {100, 0, -10};
+    camera_look_at(below, ahead, up, 50.0, 1.0, 1e6, 64, 48, &v);
+    assert_false(effects_view_sees_ground(&v)); /* the ground is opaque from above only */
+}
+
+int main(void)
+{
+    log_set_level(LOG_WARN);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_unknown_facts_simulate_everything),
+        cmocka_unit_test(test_thin_medium_bound),
+        cmocka_unit_test(test_thin_bound_holds_in_the_light_map),
+        cmocka_unit_test(test_config_modes_and_prerequisites),
+        cmocka_unit_test(test_phase),
+        cmocka_unit_test(test_ground_views_display_time),
+        cmocka_unit_test(test_measure_volume),
+        cmocka_unit_test(test_view_sees_ground),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
