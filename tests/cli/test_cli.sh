@@ -69,6 +69,21 @@ expect_exit 4 "unknown image extension" "$anvil" render "$src/configs/empty.cfg"
     -o "$tmp/x.jpg"
 check "extension error explains" stderr_has ".png or .pfm"
 
+# Real WRF output: the Katrina sample renders, finite, with one light map build.
+katrina="$3/wrf/katrina_2005_mercator_wsm3.nc"
+if [ -f "$katrina" ]; then
+    expect_exit 0 "render Katrina" "$anvil" render --quiet "$src/configs/katrina.cfg" \
+        --set "data.files=$katrina" --set data.step=2 --set render.width=96 \
+        --set render.height=72 -o "$tmp/katrina.png" --stats "$tmp/katrina.json"
+    check "Katrina: no non-finite pixels" grep -q '"nonfinite_pixels": 0,' "$tmp/katrina.json"
+    check "Katrina: one light map build" grep -q '"light_map_builds": 1,' "$tmp/katrina.json"
+    expect_exit 1 "a time step the file lacks" "$anvil" render "$src/configs/katrina.cfg" \
+        --set "data.files=$katrina" --set data.step=7 -o "$tmp/x.png"
+    check "the message names data.step and the range" stderr_has "data.step: expected a time step in \[0, 3\]"
+else
+    echo "Katrina sample not found beside the repository: not rendered"
+fi
+
 # A failed render or a failed write leaves the old file intact.
 echo "precious" >"$tmp/keep.png"
 "$anvil" render --quiet "$tmp/range.cfg" -o "$tmp/keep.png" 2>/dev/null
