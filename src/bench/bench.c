@@ -323,8 +323,10 @@ static bool same_light_map(const struct bench_variant *a, const struct bench_var
     if (!a->shadows)
         return true;
     const struct light_settings *x = &a->light, *y = &b->light;
-    return a->mode == b->mode && memcmp(x->resolution, y->resolution, sizeof(x->resolution)) == 0 &&
-           x->forward == y->forward && (x->peripheral && x->forward) == (y->peripheral && y->forward) &&
+    bool per_x = x->peripheral && x->forward, per_y = y->peripheral && y->forward;
+    return a->mode == b->mode &&
+           memcmp(x->resolution, y->resolution, sizeof(x->resolution)) == 0 &&
+           x->forward == y->forward && per_x == per_y &&
            x->forward_angle_deg == y->forward_angle_deg && x->substeps == y->substeps &&
            memcmp(&x->cp, &y->cp, sizeof(x->cp)) == 0 &&
            (a->mode == LIGHT_GPU_DENSE || x->epsilon == y->epsilon);
@@ -470,7 +472,8 @@ void bench_write_csv(FILE *f, const char *scene, const struct bench_result *res,
                 v->mode == LIGHT_GPU_DENSE ? "dense" : "compressed", v->light.epsilon,
                 v->light.forward_angle_deg, v->light.forward, v->light.forward &&
                 v->light.peripheral, v->step_m, r->build_ms, r->build_spread, r->view_ms,
-                r->view_spread, r->rmse, r->max_err, r->rmse_rel, r->max_rel, r->pareto, r->self_rmse, r->pareto_self);
+                r->view_spread, r->rmse, r->max_err, r->rmse_rel, r->max_rel, r->pareto,
+                r->self_rmse, r->pareto_self);
     }
 }
 

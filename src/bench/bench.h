@@ -79,7 +79,8 @@ bool bench_reference(const struct bench_scene *sc, int spp, const char *cache_di
 
 /* Measures V on SC: light builds (BUILD_REPEATS, each forced) and eye passes (VIEW_REPEATS)
  * after one untimed draw whose image is compared with REF (mean) and REF_ERR (both NULL: no
- * error measured) and with SELF_REF (may be NULL).  R must hold SC's volume and optics.  GL context current. */
+ * error measured) and with SELF_REF (may be NULL).  R must hold SC's volume and optics.
+ * GL context current. */
 bool bench_measure(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
                    const struct bench_variant *v, const struct image *ref,
                    const struct image *ref_err, const struct image *self_ref,
@@ -128,8 +129,9 @@ void bench_write_csv(FILE *f, const char *scene, const struct bench_result *res,
 /* A markdown table of one scene's results. */
 void bench_write_markdown(FILE *f, const char *scene, const struct bench_result *res, int n);
 
-/* A plot of RMSE (SELF: self_rmse) against milliseconds (build + view, both axes logarithmic) per scene, one
- * panel each, the Pareto front joined and the default ringed, into a PNG at PATH.
+/* A plot of RMSE (SELF: self_rmse) against milliseconds (build + view, both axes
+ * logarithmic), one panel per scene, the Pareto front joined and the default ringed, into a
+ * PNG at PATH.
  * RES[s] holds N[s] results of scene NAMES[s].  Returns false (logged) on a failed write. */
 bool bench_plot_png(const char *path, const char *title, int n_scenes, const char *const *names,
                     const struct bench_result *const *res, const int *n, bool self);

@@ -196,7 +196,8 @@ static void panel(struct canvas *c, int x0, const char *name, const struct bench
     text(c, x0 + (PANEL_W - text_width(name, 2)) / 2, TITLE_H + 6, 2, name, BLACK);
     const char *xl = "ms: light build + one view (log)";
     text(c, (ax.p0 + ax.p1 - text_width(xl, 1)) / 2, ay.p0 + 26, 1, xl, BLACK);
-    text(c, x0 + 6, TITLE_H + 10, 1, self ? "RMSE vs converged renderer (log)" : "RMSE vs Monte Carlo (log)", BLACK);
+    text(c, x0 + 6, TITLE_H + 10, 1,
+         self ? "RMSE vs converged renderer (log)" : "RMSE vs Monte Carlo (log)", BLACK);
 
     const struct bench_result *front[64];
     int nf = 0;
@@ -237,13 +238,14 @@ static void panel(struct canvas *c, int x0, const char *name, const struct bench
         nb++;
     }
     for (int i = 0; i < n; i++) {
-        if (res[i].v.is_default && error_of(&res[i], self) > 0 && isfinite(error_of(&res[i], self))) {
+        double e = error_of(&res[i], self);
+        if (res[i].v.is_default && e > 0 && isfinite(e)) {
             int px = to_pixel(&ax, res[i].build_ms + res[i].view_ms);
             int py = to_pixel(&ay, error_of(&res[i], self));
             ring(c, px, py, 8, BLUE);
             if (!(self ? res[i].pareto_self : res[i].pareto)) {
-                int tx = px + 10 + text_width("default", 1) > ax.p1 ? px - 10 - text_width("default", 1)
-                                                                     : px + 10;
+                int tw = text_width("default", 1);
+                int tx = px + 10 + tw > ax.p1 ? px - 10 - tw : px + 10;
                 text(c, tx, py + 6, 1, "default", BLUE);
             }
         }

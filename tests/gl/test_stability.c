@@ -239,7 +239,8 @@ static void test_axis_and_grazing_sun(void **state)
     static const char *suns[][2] = {
         {"light.elevation=90", "light.azimuth=0"},   {"light.elevation=0", "light.azimuth=90"},
         {"light.elevation=0", "light.azimuth=0"},    {"light.elevation=0.001", "light.azimuth=45"},
-        {"light.elevation=-0.001", "light.azimuth=180"}, {"light.elevation=89.999", "light.azimuth=0"},
+        {"light.elevation=-0.001", "light.azimuth=180"},
+        {"light.elevation=89.999", "light.azimuth=0"},
     };
     for (size_t s = 0; s < sizeof(suns) / sizeof(suns[0]); s++) {
         struct config cfg;
