@@ -199,7 +199,7 @@ static const struct setting settings[] = {
 
     ENUM("lightmap.mode", lightmap.mode, lightmap_mode_names, LIGHTMAP_DENSE,
          "deep light map storage: a dense light volume or compressed light columns"),
-    INT3("lightmap.resolution", lightmap.resolution, 1, 2048, 128, 128, 128,
+    INT3("lightmap.resolution", lightmap.resolution, 2, 2048, 64, 64, 64,
          "light map cells [across x, across y, along the light]"),
     DBL("lightmap.epsilon", lightmap.epsilon, 0, 1, F_MIN_OPEN, 0.01,
         "error bound of the compressed light map"),

@@ -119,7 +119,7 @@ static void test_defaults(void **state)
     assert_true(cfg.render.ground_on);
     assert_true(cfg.render.termination == 0.001);
     assert_int_equal(cfg.lightmap.mode, LIGHTMAP_DENSE);
-    assert_int_equal(cfg.lightmap.resolution[2], 128);
+    assert_int_equal(cfg.lightmap.resolution[2], 64);
     assert_true(cfg.lightmap.epsilon == 0.01);
     assert_true(cfg.lightmap.forward_angle_deg == 20.0);
     for (int e = 0; e < EFFECT_COUNT; e++)
