@@ -310,9 +310,12 @@ struct app_map *app_map_create(const struct config *cfg, struct renderer *r)
                  m->k);
     }
     m->info.placed = m->geo.kind != GEO_NONE;
+    /* Synthetic scenes are unplaced by design and coastlines are on by default: say so for
+     * real data or an explicit graticule, else only with --verbose. */
     if (!m->info.placed && (cfg->map.coastlines || cfg->map.graticule))
-        log_info("map: the data has no XLAT/XLONG and map.use_origin is off: no coastlines "
-                 "or graticule");
+        log_msg(cfg->scene.kind == SCENE_DATA || cfg->map.graticule ? LOG_INFO : LOG_DEBUG,
+                "map: the data has no XLAT/XLONG and map.use_origin is off: no coastlines "
+                "or graticule");
     if (m->info.placed && cfg->map.coastlines)
         build_coastlines(cfg, m);
     if (m->info.placed && cfg->map.graticule)
