@@ -156,11 +156,24 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
     const enum effect_mode *mode = cfg->effects.mode;
     const double tol = EFFECTS_FORWARD_TOLERANCE;
     double tau = facts->max_tau_light;
+    /* The volume facts describe the first time step under the first sun.  When either can
+     * change during the session, what is thin or absent now may not be later: auto keeps
+     * the effect on rather than decide from one moment (effects are compiled into shader
+     * variants, so switching them per step would recompile). */
+    bool changes = facts->time_steps > 1 || facts->sun_moves;
+    char why_changes[96];
+    snprintf(why_changes, sizeof(why_changes), "%s%s%s",
+             facts->time_steps > 1 ? "the data has several time steps" : "",
+             facts->time_steps > 1 && facts->sun_moves ? " and " : "",
+             facts->sun_moves ? "the sun can move" : "");
 
     /* Shadows: the light map changes light by 1 - e^-tau <= tau. */
     if (!decide_fixed(out, EFFECT_SHADOWS, mode[EFFECT_SHADOWS], EFFECT_SHADOWS, true)) {
         if (!facts->volume_known)
             say(out, EFFECT_SHADOWS, true, "auto: volume not measured, on");
+        else if (tau <= tol && changes)
+            say(out, EFFECT_SHADOWS, true, "auto: optically thin now (%.3g) but %s: on", tau,
+                why_changes);
         else if (tau <= tol)
             say(out, EFFECT_SHADOWS, false,
                 "auto: largest optical depth along the light %.3g <= %.3g: shadows change "
@@ -178,6 +191,9 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
         double thin = gain > 0.0 ? tol / gain : INFINITY;
         if (!facts->volume_known)
             say(out, EFFECT_FORWARD, true, "auto: volume not measured, on");
+        else if (tau <= thin && changes)
+            say(out, EFFECT_FORWARD, true, "auto: optically thin now (%.3g) but %s: on", tau,
+                why_changes);
         else if (tau <= thin)
             say(out, EFFECT_FORWARD, false,
                 "auto: optically thin along the light (largest optical depth %.3g <= %.3g = "
@@ -194,7 +210,8 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
                       forward))
         say(out, EFFECT_PERIPHERAL, true, "auto: follows effects.forward (on)");
 
-    /* Per-species phase: one phase when one kind of particle is absent. */
+    /* Per-species phase: one phase when one kind of particle is absent.  Decided from the
+     * first step: a microphysics scheme that writes no ice species (WSM3) never has any. */
     out->single_phase_ice = facts->volume_known && facts->beta_ice_sum > facts->beta_water_sum;
     const char *single = out->single_phase_ice ? "ice" : "water";
     if (mode[EFFECT_PHASE] == EFFECT_OFF) {

@@ -70,6 +70,33 @@ static void test_thin_medium_bound(void **state)
     assert_non_null(strstr(e.light_builds, "no light map"));
 }
 
+static void test_a_changing_scene_keeps_effects_on(void **state)
+{
+    /* A thin (or empty) first step says nothing about later steps or another sun: auto keeps
+     * shadows and forward scattering on, and says why. */
+    struct config cfg;
+    config_defaults(&cfg);
+    struct effects_facts f;
+    struct effects e;
+    known_thick(&f);
+    f.max_tau_light = 0.0;
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_SHADOWS] || e.on[EFFECT_FORWARD]);
+    f.time_steps = 6;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_SHADOWS] && e.on[EFFECT_FORWARD] && e.on[EFFECT_PERIPHERAL]);
+    assert_non_null(strstr(e.reason[EFFECT_SHADOWS], "several time steps"));
+    f.time_steps = 1;
+    f.sun_moves = true;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_SHADOWS] && e.on[EFFECT_FORWARD]);
+    assert_non_null(strstr(e.reason[EFFECT_FORWARD], "the sun can move"));
+    /* "off" in the config still wins. */
+    cfg.effects.mode[EFFECT_SHADOWS] = EFFECT_OFF;
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_SHADOWS] || e.on[EFFECT_FORWARD]);
+}
+
 static void test_thin_bound_holds_in_the_light_map(void **state)
 {
     /* The bound behind the threshold: forward on minus off <= CP(theta/2) tau, node by node,
@@ -257,6 +284,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_unknown_facts_simulate_everything),
         cmocka_unit_test(test_thin_medium_bound),
+        cmocka_unit_test(test_a_changing_scene_keeps_effects_on),
         cmocka_unit_test(test_thin_bound_holds_in_the_light_map),
         cmocka_unit_test(test_config_modes_and_prerequisites),
         cmocka_unit_test(test_phase),
