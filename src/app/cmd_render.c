@@ -109,6 +109,11 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
                              : "render: missing -o FILE.png or -o FILE.pfm");
         return EXIT_USAGE;
     }
+    /* A file name the writers cannot serve is refused before any work is done. */
+    if (need_output && o->output && !o->display && !image_path_supported(o->output)) {
+        log_error("%s: unknown image type: expected a name ending in .png or .pfm", o->output);
+        return EXIT_BAD_INPUT;
+    }
     return EXIT_OK;
 }
 
@@ -467,6 +472,8 @@ int cmd_render(int argc, char **argv)
         usage_render();
         return EXIT_OK;
     }
+    if (rc == EXIT_BAD_INPUT)
+        return rc;
     if (rc != EXIT_OK)
         return usage_render();
     if (o.display && strcmp(o.display, "help") == 0)
@@ -643,6 +650,8 @@ int cmd_run(int argc, char **argv)
         usage_run();
         return EXIT_OK;
     }
+    if (rc == EXIT_BAD_INPUT)
+        return rc;
     if (rc != EXIT_OK)
         return usage_run();
     if (o.display && strcmp(o.display, "help") == 0)

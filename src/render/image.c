@@ -48,6 +48,11 @@ static bool has_suffix(const char *s, const char *suffix)
     return a >= b && strcasecmp(s + a - b, suffix) == 0;
 }
 
+bool image_path_supported(const char *path)
+{
+    return has_suffix(path, ".png") || has_suffix(path, ".pfm");
+}
+
 bool image_write(const struct image *img, const char *path, float exposure)
 {
     if (has_suffix(path, ".png"))

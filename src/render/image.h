@@ -24,6 +24,8 @@ uint8_t image_tonemap(float linear, float exposure);
 /* Writes by extension: ".png" tone-mapped with EXPOSURE, ".pfm" linear RGB.  Anything else
  * is an error naming the path and the accepted extensions. */
 bool image_write(const struct image *img, const char *path, float exposure);
+/* Whether image_write knows PATH's extension. */
+bool image_path_supported(const char *path);
 bool image_write_png(const struct image *img, const char *path, float exposure);
 bool image_write_pfm(const struct image *img, const char *path);
 

@@ -65,7 +65,7 @@ expect_exit 0 "render PFM" "$anvil" render --quiet "$src/configs/default.cfg" $s
 check "PFM header" bash -c "head -c 3 '$tmp/storm.pfm' | grep -q PF"
 check "PFM size" bash -c "[ \$(stat -c %s '$tmp/storm.pfm') -gt \$((160*120*12)) ]"
 check "quiet is quiet" bash -c "[ ! -s '$tmp/err' ]"
-expect_exit 4 "unknown image extension" "$anvil" render "$src/configs/empty.cfg" \
+expect_exit 1 "unknown image extension" "$anvil" render "$src/configs/empty.cfg" \
     -o "$tmp/x.jpg"
 check "extension error explains" stderr_has ".png or .pfm"
 
