@@ -26,7 +26,9 @@ uniform ivec2 image_size;
 uniform ivec2 pixel_offset;  // this view's origin within a larger image (tiles), usually 0
 uniform vec3 box_min;
 uniform vec3 box_size;
-uniform float step_len;      // metres
+uniform float step_len;      // metres; 0 = half the voxel crossing along each ray
+uniform vec3 voxel_size;     // metres
+uniform int max_steps;       // per ray: bounds the work whatever the step
 uniform float termination;   // stop below this transmittance
 uniform vec3 sun_dir;        // unit vector toward the sun
 uniform vec3 sun_radiance;
@@ -88,7 +90,15 @@ void main()
     vec2 phase = eye_phase(cos_psi);
     if (t1 > t0) {
         float len = t1 - t0;
-        int n = max(1, int(ceil(len / step_len)));
+        float step = step_len;
+        if (step <= 0.0) {
+            // Half the shortest distance the ray takes to cross one voxel along any axis: a
+            // horizontal ray through a flat grid (Isabel: 4 km x 4 km x 200 m) takes steps
+            // of the horizontal spacing, a vertical one of the vertical spacing.
+            vec3 cross = voxel_size / max(abs(dir), vec3(1e-6));
+            step = 0.5 * min(cross.x, min(cross.y, cross.z));
+        }
+        int n = clamp(int(ceil(len / step)), 1, max_steps);
         float ds = len / float(n);
         for (int i = 0; i < n; i++) {
             vec3 p = origin + dir * (t0 + (float(i) + 0.5) * ds);

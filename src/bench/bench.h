@@ -48,7 +48,7 @@ struct bench_variant {
     bool shadows;   /* false: no light map (unshadowed single scattering) */
     struct light_settings light;
     enum light_gpu_mode mode;
-    float step_m;   /* eye pass ray step, metres (0: half the smallest voxel side) */
+    float step_m;   /* eye pass ray step, metres (0: half the voxel crossing along each ray) */
 };
 
 struct bench_result {

@@ -104,7 +104,7 @@ struct config_camera {
 
 struct config_render {
     int width, height;     /* render.width, render.height */
-    double step_m;         /* render.step: ray step in metres; 0 = half the smallest voxel side */
+    double step_m;         /* render.step: ray step in metres; 0 = half the voxel crossing along each ray */
     double exposure;       /* render.exposure: multiplies radiance before tone mapping */
     double sky[3];         /* render.sky: background radiance, linear RGB */
     double ground[3];      /* render.ground: ground albedo, linear RGB */

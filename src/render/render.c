@@ -249,20 +249,22 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     glm_mat4_inv(vp, inv);
     const struct grid3 *g = &r->grid;
     float box_min[3], box_size[3];
-    float min_spacing = INFINITY;
+    float voxel[3];
     for (int i = 0; i < 3; i++) {
         box_min[i] = (float)g->origin[i];
         box_size[i] = (float)(g->n[i] * g->spacing[i]);
-        if (g->spacing[i] < min_spacing)
-            min_spacing = (float)g->spacing[i];
+        voxel[i] = (float)g->spacing[i];
     }
-    float step = s->step_m > 0.0f ? s->step_m : 0.5f * min_spacing;
+    /* 0: the shader takes half the voxel crossing along each ray. */
+    float step = s->step_m > 0.0f ? s->step_m : 0.0f;
     int image_size[2] = {view->width, view->height};
 
     gpu_uniform_mat4(prog, "inv_view_proj", (const float *)inv);
     gpu_uniform_vec3(prog, "box_min", box_min);
     gpu_uniform_vec3(prog, "box_size", box_size);
     gpu_uniform_float(prog, "step_len", step);
+    gpu_uniform_vec3(prog, "voxel_size", voxel);
+    gpu_uniform_int(prog, "max_steps", RENDER_MAX_STEPS);
     gpu_uniform_float(prog, "termination", s->termination);
     gpu_uniform_vec3(prog, "sun_dir", s->sun_dir);
     gpu_uniform_vec3(prog, "sun_radiance", s->sun_radiance);

@@ -23,13 +23,17 @@ struct render_settings {
     float sky[3];          /* background radiance */
     float ground[3];       /* ground albedo */
     bool ground_on;
-    float step_m;          /* ray step; 0 = half the smallest voxel side */
+    float step_m;          /* ray step; 0 = half the voxel crossing along each ray */
     float termination;     /* stop rays below this transmittance */
     /* Effects compiled out of the eye pass (app/effects.h); zero = simulated. */
     bool single_phase;     /* one phase for every species: PHASE_MIX 0 */
     bool single_phase_ice; /* ... the ice phase (else the water phase) */
     bool no_ground_shadow; /* the ground sees the full sun: GROUND_SHADOW 0 */
 };
+
+/* Steps one ray may take at most, whatever render.step asks: a bound on the work of a
+ * pixel (a GPU that runs too long is reset by its driver). */
+#define RENDER_MAX_STEPS 16384
 
 /* One view: camera matrices (column-major, world metres) and image size. */
 struct render_view {

@@ -105,6 +105,25 @@ static void test_slab_transmits_exp_minus_tau(void **state)
     image_finish(&img);
 }
 
+static void test_tiny_step_is_bounded_and_exact(void **state)
+{
+    /* A millimetre step through a kilometre of slab would be a million steps a pixel: the
+     * renderer caps the count, and equal steps keep the optical depth exact. */
+    struct config cfg;
+    struct image img;
+    const char *sets[] = {"scene.kind=slab", "scene.size=[8,8,4]", "scene.extent=[10,10,1]",
+                          "scene.tau=2", "light.intensity=0", "render.ground_on=false",
+                          "render.sky=[1,1,1]", "camera.position=[5,5,3]",
+                          "camera.target=[5,5,0]", "camera.up=[0,1,0]", "camera.fov=2",
+                          "render.width=8", "render.height=8", "render.step=0.001"};
+    double start = time_now_ms();
+    render_config(&cfg, sets, 14, &img);
+    print_message("1 mm step: %.0f ms\n", time_now_ms() - start);
+    float got = img.rgba[4 * (4 * 8 + 4)];
+    assert_true(fabs(got - exp(-2.0)) / exp(-2.0) < 1e-3);
+    image_finish(&img);
+}
+
 static void test_storm_is_finite_and_not_blank(void **state)
 {
     struct config cfg;
@@ -150,6 +169,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_empty_scene_is_background),
         cmocka_unit_test(test_slab_transmits_exp_minus_tau),
+        cmocka_unit_test(test_tiny_step_is_bounded_and_exact),
         cmocka_unit_test(test_storm_is_finite_and_not_blank),
         cmocka_unit_test(test_sun_along_axis_is_finite),
     };
