@@ -9,6 +9,7 @@
 #include "common/log.h"
 #include "config/display_config.h"
 #include "display/display.h"
+#include "light/light.h"
 #include "render/camera.h"
 
 #define MAX_SETS 64
@@ -92,7 +93,7 @@ int cmd_effects(int argc, char **argv)
     struct effects_facts facts;
     effects_facts_init(&facts);
     double sun[3];
-    camera_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
+    light_sun_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
     bool ok = effects_measure_volume(&vol, sun, &facts);
     ext_volume_finish(&vol);
     if (!ok)

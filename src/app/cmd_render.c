@@ -14,6 +14,7 @@
 #include "config/display_config.h"
 #include "display/display.h"
 #include "gpu/gpu.h"
+#include "light/light.h"
 #include "render/camera.h"
 
 struct render_options {
@@ -172,7 +173,7 @@ static int session_start(struct session *s, const struct render_options *o)
         return EXIT_BAD_INPUT;
     s->stats.volume_ms = time_now_ms() - t;
     double sun[3];
-    camera_direction(s->cfg.light.azimuth_deg, s->cfg.light.elevation_deg, sun);
+    light_sun_direction(s->cfg.light.azimuth_deg, s->cfg.light.elevation_deg, sun);
     effects_facts_init(&s->facts);
     s->facts.time_steps = app_time_steps(&s->cfg);
     if (!effects_measure_volume(&vol, sun, &s->facts)) {

@@ -37,7 +37,7 @@ bool app_light_update(struct app_light *al, const struct config *cfg, struct ren
     struct light_settings s;
     effects_light_settings(cfg, e, &s);
     double sun[3];
-    camera_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
+    light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
     struct light_gpu_source src = {
         .beta = renderer_volume_texture(r),
         .grid = renderer_grid(r),

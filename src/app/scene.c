@@ -9,6 +9,7 @@
 #include "data/detail.h"
 #include "data/source.h"
 #include "data/synth.h"
+#include "light/light.h"
 #include "render/camera.h"
 
 bool app_load_config(const char *config_path, char **sets, int n_sets, struct config *cfg)
@@ -140,7 +141,7 @@ void app_render_settings(const struct config *cfg, struct render_settings *s)
 {
     memset(s, 0, sizeof(*s));
     double sun[3];
-    camera_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
+    light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
     double air[3];
     app_sun_transmittance(cfg->light.elevation_deg, air);
     for (int i = 0; i < 3; i++) {

@@ -56,7 +56,7 @@ static double gpu_vs_cpu(const char **sets, int n)
     struct light_settings s;
     settings_of(&cfg, &s);
     double sun[3];
-    camera_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
+    light_sun_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
 
     struct light_gpu *lg = light_gpu_create();
     assert_non_null(lg);

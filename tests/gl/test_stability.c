@@ -100,7 +100,7 @@ static void gpu_light_map(const struct config *cfg, bool forward, struct light_m
     s.forward = forward;
     light_settings_set_optics(&s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
     double sun[3];
-    camera_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
+    light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
     struct light_gpu *lg = light_gpu_create();
     assert_non_null(lg);
     struct light_gpu_source src = {renderer_volume_texture(renderer), renderer_grid(renderer),
@@ -472,7 +472,7 @@ static void test_extreme_aspect(void **state)
     memcpy(s.resolution, cfg.lightmap.resolution, sizeof(s.resolution));
     light_settings_set_optics(&s, &cfg.optics.params, cfg.lightmap.forward_angle_deg);
     double sun[3];
-    camera_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
+    light_sun_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
     assert_true(light_map_build(&vol, sun, &s, &cpu));
     size_t count = (size_t)32 * 32 * 32;
     double worst = 0.0, lo = 1.0;
