@@ -189,6 +189,8 @@ static int session_start(struct session *s, const struct render_options *o)
         ext_volume_finish(&vol);
         return EXIT_FAILED;
     }
+    /* An interactive run times its views only when they are reported. */
+    renderer_set_timing(s->renderer, o->stats || strcmp(s->stats.command, "run") != 0);
     bool ok = renderer_set_optics(s->renderer, &s->cfg.optics.params) &&
               renderer_set_volume(s->renderer, &vol);
     ext_volume_finish(&vol);

@@ -42,6 +42,7 @@ struct renderer {
     int n_opaque;
     struct gpu_target target;
     struct gpu_timer timer;
+    bool timing; /* time each view (waits for it to finish) */
     struct render_stats stats;
 };
 
@@ -82,6 +83,7 @@ struct renderer *renderer_create(void)
         return NULL;
     }
     gpu_timer_init(&r->timer);
+    r->timing = true;
     return r;
 }
 
@@ -283,7 +285,8 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     if (r->light && r->light->bind)
         r->light->bind(r->light, prog);
 
-    gpu_timer_begin(&r->timer);
+    if (r->timing)
+        gpu_timer_begin(&r->timer);
     if (opaque) {
         if (!draw_opaque(r, s, view, vp, inv, light_defines))
             return false;
@@ -291,9 +294,11 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
         gpu_texture_bind(&r->target.value, 4);
     }
     gpu_dispatch(prog, view->width, view->height, 1);
-    gpu_timer_end(&r->timer);
     r->stats.views++;
-    r->stats.view_ms_total += gpu_timer_ms(&r->timer);
+    if (r->timing) {
+        gpu_timer_end(&r->timer);
+        r->stats.view_ms_total += gpu_timer_ms(&r->timer);
+    }
     return true;
 }
 
@@ -391,4 +396,9 @@ void renderer_remove_mesh(struct renderer *r, struct render_mesh *m)
             return;
         }
     }
+}
+
+void renderer_set_timing(struct renderer *r, bool on)
+{
+    r->timing = on;
 }

@@ -91,6 +91,11 @@ bool renderer_read(const struct gpu_texture *tex, struct image *img);
 
 const struct render_stats *renderer_stats(const struct renderer *r);
 
+/* Times every view (on by default) for render_stats.view_ms_total.  Reading a GPU timer
+ * waits for the view to finish, so interactive loops that report nothing turn it off and let
+ * the views of a frame queue up. */
+void renderer_set_timing(struct renderer *r, bool on);
+
 /* ---- opaque geometry -----------------------------------------------------------------
  * Meshes drawn in every view before the ray cast: each view's rays stop at their distance and
  * see their colour as the background (ground, terrain, coastlines, the menu, the wand). */
