@@ -1,9 +1,12 @@
 #include "data/nclock.h"
 
+#include <errno.h>
+#include <fcntl.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <netcdf.h>
@@ -42,7 +45,16 @@ bool data_nc_create_beside(const char *path, int cmode, char **tmp, int *ncid)
         log_error("%s: out of memory", path);
         return false;
     }
-    snprintf(*tmp, len, "%s.tmp%ld", path, (long)getpid());
+    /* A name no other writer can take: mkstemp reserves it, nc_create then clobbers it. */
+    snprintf(*tmp, len, "%s.tmpXXXXXX", path);
+    int fd = mkstemp(*tmp);
+    if (fd < 0) {
+        log_error("%s: cannot create a temporary file beside it: %s", path, strerror(errno));
+        free(*tmp);
+        *tmp = NULL;
+        return false;
+    }
+    close(fd);
     data_nc_lock();
     int st = nc_create(*tmp, cmode, ncid);
     data_nc_unlock();
@@ -64,8 +76,21 @@ bool data_nc_finish_beside(const char *path, char **tmp, int *ncid, bool ok)
         log_error("%s: cannot finish writing: %s", *tmp, nc_strerror(st));
         ok = false;
     }
+    if (ok) {
+        /* On disk before it replaces the old file. */
+        int fd = open(*tmp, O_RDONLY);
+        if (fd < 0 || fsync(fd) != 0) {
+            log_error("%s: cannot flush to disk: %s", *tmp, strerror(errno));
+            ok = false;
+        }
+        if (fd >= 0)
+            close(fd);
+        mode_t mask = umask(0);
+        umask(mask);
+        chmod(*tmp, 0666 & ~mask);
+    }
     if (ok && rename(*tmp, path) != 0) {
-        log_error("%s: cannot move %s into place", path, *tmp);
+        log_error("%s: cannot move %s into place: %s", path, *tmp, strerror(errno));
         ok = false;
     }
     if (ok) {
