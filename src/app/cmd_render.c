@@ -38,6 +38,7 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         {"set", required_argument, NULL, 's'},
         {"stats", required_argument, NULL, 'S'},
         {"quiet", no_argument, NULL, 'q'},
+        {"verbose", no_argument, NULL, 'v'},
         {"display", required_argument, NULL, 'D'},
         {"time", required_argument, NULL, 'T'},
         {"input", required_argument, NULL, 'I'},
@@ -67,6 +68,9 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
             break;
         case 'q':
             log_set_level(LOG_ERROR);
+            break;
+        case 'v':
+            log_set_level(LOG_DEBUG);
             break;
         case 'D':
             o->display = optarg;

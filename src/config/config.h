@@ -40,7 +40,7 @@ enum effect {
     EFFECT_PERIPHERAL,    /* effects.peripheral: peripheral forward scattering */
     EFFECT_PHASE,         /* effects.phase: per-species phase (off: one phase for all) */
     EFFECT_GROUND_SHADOW, /* effects.ground_shadow: the ground reads the light map */
-    EFFECT_DETAIL,        /* effects.detail: procedural detail (not implemented yet) */
+    EFFECT_DETAIL,        /* effects.detail: procedural detail (docs/terrain.md) */
     EFFECT_TEMPORAL,      /* effects.temporal: interpolation between time steps (not yet) */
     EFFECT_DISTORTION,    /* effects.distortion: HMD lens pre-distortion */
     EFFECT_COUNT
@@ -167,7 +167,7 @@ struct config {
 };
 
 /* Fills every setting with its default: the built-in procedural storm seen from the south-west
- * with the sun in the south-east. */
+ * with the sun in the south-south-west, behind the camera. */
 void config_defaults(struct config *cfg);
 
 /* Reads PATH (with @include resolved relative to the including file) on top of the
