@@ -126,8 +126,8 @@ static const struct setting settings[] = {
          "kind of the input files: WRF NetCDF output, Isabel raw bricks or extinction volumes"),
     {.path = "data.files", .type = T_FILES, .n = 1, .offset = OFF(data.files),
      .max = CONFIG_MAX_FILES,
-     .help = "input files, relative to the config file that names them; glob patterns are "
-             "expanded and sorted"},
+     .help = "input files, relative to the config file that names them; a glob pattern "
+             "must match a file and is expanded by the reader (WRF steps ordered by Times)"},
     INT("data.step", data.step, 0, 1000000, 0, "time step to show, counted over all files"),
     INT("data.levels", data.levels, 0, 4096, 0,
         "regular height levels to resample to; 0 = as many as the model has"),
@@ -586,11 +586,6 @@ static bool join_path(const char *dir, const char *name, char *buf, size_t size)
     return n >= 0 && (size_t)n < size;
 }
 
-static int compare_strings(const void *a, const void *b)
-{
-    return strcmp(*(char *const *)a, *(char *const *)b);
-}
-
 typedef char file_list[CONFIG_MAX_FILES][CONFIG_PATH_MAX];
 
 /* Resolves one entry of data.files against BASE_DIR and appends what it names to LIST. */
@@ -623,19 +618,13 @@ static bool add_files(const struct raw *r, const char *path, const char *base_di
         globfree(&g);
         return false;
     }
-    qsort(g.gl_pathv, g.gl_pathc, sizeof(char *), compare_strings);
-    for (size_t i = 0; i < g.gl_pathc; i++) {
-        if (*count >= CONFIG_MAX_FILES) {
-            globfree(&g);
-            goto error_too_many;
-        }
-        if (strlen(g.gl_pathv[i]) >= CONFIG_PATH_MAX) {
-            report(&r->where, path, "path longer than %d characters", CONFIG_PATH_MAX - 1);
-            globfree(&g);
-            return false;
-        }
-        snprintf(list[(*count)++], CONFIG_PATH_MAX, "%s", g.gl_pathv[i]);
+    /* The pattern stays one entry: the data reader expands it (and orders the files by
+     * their time steps), so a glob may match any number of files. */
+    if (*count >= CONFIG_MAX_FILES) {
+        globfree(&g);
+        goto error_too_many;
     }
+    memcpy(list[(*count)++], full, sizeof(full));
     globfree(&g);
     return true;
 

@@ -312,16 +312,14 @@ static void test_data_files_glob(void **state)
                                     "\"late.nc\"]; };\nscene = { kind = \"data\"; };\n");
     struct config cfg;
     assert_true(config_load(path, &cfg));
-    assert_int_equal(cfg.data.file_count, 4);
+    /* A pattern stays one entry, resolved against the config's folder: the data reader
+     * expands it, so a glob may match more files than data.files has entries. */
+    assert_int_equal(cfg.data.file_count, 2);
     char want[1024];
-    snprintf(want, sizeof(want), "%s/frames/f1.nc", test_tmpdir());
+    snprintf(want, sizeof(want), "%s/frames/f*.nc", test_tmpdir());
     assert_string_equal(cfg.data.files[0], want);
-    snprintf(want, sizeof(want), "%s/frames/f10.nc", test_tmpdir());
-    assert_string_equal(cfg.data.files[1], want);
-    snprintf(want, sizeof(want), "%s/frames/f2.nc", test_tmpdir());
-    assert_string_equal(cfg.data.files[2], want);
     snprintf(want, sizeof(want), "%s/late.nc", test_tmpdir());
-    assert_string_equal(cfg.data.files[3], want);
+    assert_string_equal(cfg.data.files[1], want);
     assert_true(config_validate(&cfg));
 
     /* A single string is a list of one. */
