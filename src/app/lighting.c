@@ -47,8 +47,12 @@ bool app_light_update(struct app_light *al, const struct config *cfg, struct ren
     enum light_gpu_mode mode =
         cfg->lightmap.mode == LIGHTMAP_COMPRESSED ? LIGHT_GPU_COMPRESSED : LIGHT_GPU_DENSE;
     bool built = false;
-    if (!light_gpu_update(al->gpu, &src, sun, &s, mode, &built))
+    if (!light_gpu_update(al->gpu, &src, sun, &s, mode, &built)) {
+        log_error("lightmap.resolution [%d, %d, %d]: the light map could not be built (see "
+                  "above); a smaller resolution needs less GPU memory",
+                  s.resolution[0], s.resolution[1], s.resolution[2]);
         return false;
+    }
     if (built) {
         double ms = light_gpu_last_build_ms(al->gpu);
         if (st)

@@ -80,6 +80,17 @@ bool app_build_volume(const struct config *cfg, struct ext_volume *out)
     d.ice_phase = sc->phase == PHASE_ICE;
     d.seed = sc->seed;
     d.time = sc->time;
+    /* The same memory budget as data: the storm holds five mass ratios and the extinction
+     * (7 floats a voxel), the test scenes the extinction alone. */
+    double voxels = (double)d.n[0] * d.n[1] * d.n[2];
+    double mib = voxels * (d.kind == SYNTH_STORM ? 7.0 : 2.0) * sizeof(float) / 1048576.0;
+    if (mib > cfg->data.memory_mb) {
+        log_error("%s%sscene.size [%d, %d, %d] needs %.0f MiB, more than data.memory (%.0f "
+                  "MiB): lower scene.size or raise data.memory",
+                  cfg->path, cfg->path[0] ? ": " : "", d.n[0], d.n[1], d.n[2], mib,
+                  cfg->data.memory_mb);
+        return false;
+    }
     /* Detail and height exaggeration as data sources apply them (data_source_load). */
     struct detail_desc detail;
     cmd_data_detail_desc(cfg, &detail);

@@ -47,6 +47,10 @@ expect_exit 1 "bad --set" "$anvil" render "$src/configs/default.cfg" --set light
     -o "$tmp/x.png"
 check "--set error names the setting" stderr_has "light.elevaton"
 
+expect_exit 1 "a synthetic scene over the memory budget" "$anvil" render \
+    --set scene.size=[500,500,100] --set data.memory=100 -o "$tmp/x.png"
+check "the message names the settings that fix it" stderr_has "lower scene.size or raise data.memory"
+
 # GL from here on.
 "$anvil" render --quiet "$src/configs/empty.cfg" -o "$tmp/probe.png" 2>"$tmp/err"
 if [ $? -eq 3 ]; then echo "no OpenGL context: skipping the rest"; exit 77; fi
