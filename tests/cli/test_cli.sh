@@ -2,26 +2,7 @@
 # The command line as a user meets it: help, version, exit codes, messages with file:line,
 # PNG/PFM/stats output, nothing half-written on failure, and a real window under Xvfb.
 # Arguments: ANVIL_BINARY SOURCE_DIR SHARED_DATA_DIR.  Exits 77 when no GL context exists.
-set -u
-anvil=$1
-src=$2
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail=0
-check() { # description, then a command that must succeed
-    local what=$1
-    shift
-    if "$@"; then echo "ok: $what"; else echo "FAIL: $what"; fail=1; fi
-}
-expect_exit() { # code, description, command...
-    local code=$1 what=$2
-    shift 2
-    "$@" >"$tmp/out" 2>"$tmp/err"
-    local rc=$?
-    if [ "$rc" -eq "$code" ]; then echo "ok: $what (exit $rc)"; else
-        echo "FAIL: $what: exit $rc, expected $code"; cat "$tmp/err"; fail=1; fi
-}
-stderr_has() { grep -q -- "$1" "$tmp/err" || { echo "  stderr lacks \"$1\":"; cat "$tmp/err"; return 1; }; }
+. "$(dirname "$0")/lib.sh"
 
 expect_exit 0 "--help" "$anvil" --help
 check "--help lists render and run" grep -q "render" "$tmp/out"
@@ -52,8 +33,7 @@ expect_exit 1 "a synthetic scene over the memory budget" "$anvil" render \
 check "the message names the settings that fix it" stderr_has "lower scene.size or raise data.memory"
 
 # GL from here on.
-"$anvil" render --quiet "$src/configs/empty.cfg" -o "$tmp/probe.png" 2>"$tmp/err"
-if [ $? -eq 3 ]; then echo "no OpenGL context: skipping the rest"; exit 77; fi
+require_gl
 
 small="--set scene.size=[48,48,24] --set render.width=160 --set render.height=120"
 expect_exit 0 "render PNG with stats" "$anvil" render "$src/configs/default.cfg" $small \
@@ -117,5 +97,4 @@ else
     echo "xvfb-run not installed: window test not run"
 fi
 
-[ $fail -eq 0 ] && echo "all CLI checks passed"
-exit $fail
+finish

@@ -2,28 +2,7 @@
 # anvil render/run --display: one image per wall and eye plus a contact sheet, --stats counts
 # every view, bad display configs exit 1 naming file:line, and real windows under Xvfb.
 # Arguments: ANVIL_BINARY SOURCE_DIR SHARED_DATA_DIR.  Exits 77 when no GL context exists.
-set -u
-anvil=$1
-src=$2
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail=0
-check() { # description, then a command that must succeed
-    local what=$1
-    shift
-    if "$@"; then echo "ok: $what"; else echo "FAIL: $what"; fail=1; fi
-}
-expect_exit() { # code, description, command...
-    local code=$1 what=$2
-    shift 2
-    "$@" >"$tmp/out" 2>"$tmp/err"
-    local rc=$?
-    if [ "$rc" -eq "$code" ]; then echo "ok: $what (exit $rc)"; else
-        echo "FAIL: $what: exit $rc, expected $code"; cat "$tmp/err"; fail=1; fi
-}
-stderr_has() {
-    grep -q -- "$1" "$tmp/err" || { echo "  stderr lacks \"$1\":"; cat "$tmp/err"; return 1; }
-}
+. "$(dirname "$0")/lib.sh"
 is_png() { head -c 8 "$1" | od -c | grep -q 'P   N   G'; }
 png_size() { od -An -tu1 -j16 -N8 "$1" | awk '{print $3*256+$4 "x" $7*256+$8}'; }
 
@@ -41,8 +20,7 @@ expect_exit 1 "missing display config" "$anvil" render --display "$tmp/none.cfg"
 check "names the missing file" stderr_has "none.cfg"
 
 # GL from here on.
-"$anvil" render --quiet "$src/configs/empty.cfg" -o "$tmp/probe.png" 2>"$tmp/err"
-if [ $? -eq 3 ]; then echo "no OpenGL context: skipping the rest"; exit 77; fi
+require_gl
 
 small="--set scene.size=[32,32,16] --set render.height=48 --set lightmap.resolution=[32,32,32]"
 expect_exit 0 "render --display cave4.cfg" "$anvil" render "$src/configs/default.cfg" $small \
@@ -117,5 +95,4 @@ else
     echo "xvfb-run not installed: window tests not run"
 fi
 
-[ $fail -eq 0 ] && echo "all display CLI checks passed"
-exit $fail
+finish

@@ -3,30 +3,14 @@
 # the transfer function editor (a moved control point changes the image with exactly one light
 # map rebuild), saving and loading named transfer functions, the CAVE and the Null HMD.
 # Arguments: the anvil binary, the source folder, the shared data folder.
-anvil=$1
-src=$2
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-failures=0
-check() {
-    local what=$1
-    shift
-    if "$@"; then
-        echo "ok - $what"
-    else
-        echo "not ok - $what"
-        failures=$((failures + 1))
-    fi
-}
+. "$(dirname "$0")/lib.sh"
 json() { # json FILE KEY: the number after "KEY":
     sed -n "s/^ *\"$2\": \([-0-9.]*\),*$/\1/p" "$1"
 }
 small="--set scene.size=[32,32,16] --set render.width=160 --set render.height=120 --set lightmap.resolution=[32,32,32]"
 
 # No GL context: skip like the GL tests.
-if ! "$anvil" render --quiet "$src/configs/empty.cfg" $small -o "$tmp/probe.png" 2>/dev/null; then
-    [ $? -eq 3 ] && { echo "no OpenGL context: skipped"; exit 77; }
-fi
+require_gl
 
 # --- Playback of a synthetic WRF series: 1 step per second, 10 frames per second.
 "$anvil" synth -o "$tmp/series.nc" --steps 6 --size 16x16x8 2>/dev/null
@@ -136,4 +120,4 @@ if command -v xvfb-run >/dev/null; then
     check "run never blocked a frame on a load" test "$(json "$tmp/run.json" frames_waited)" -eq 0
 fi
 
-[ $failures -eq 0 ]
+finish
