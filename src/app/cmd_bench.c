@@ -5,10 +5,12 @@
 #include <libgen.h>
 #include <limits.h>
 #include <math.h>
+#include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "app/app.h"
@@ -16,15 +18,18 @@
 #include "app/effects.h"
 #include "bench/bench.h"
 #include "common/log.h"
+#include "data/extfile.h"
 #include "gpu/gpu.h"
 #include "light/light_gpu.h"
 #include "render/camera.h"
+
+extern char **environ;
 
 #define MAX_VARIANTS 32
 #define MAX_SCENES 3
 
 struct bench_options {
-    bool quick, views, quality;
+    bool quick, views, quality, paraview;
     const char *out;
     char cache[PATH_MAX];
     int spp;
@@ -36,7 +41,7 @@ static int usage(FILE *out)
 {
     fprintf(out,
             "usage: anvil bench [--quick] [--views-only | --quality-only] [-o DIR] [--cache DIR]\n"
-            "                   [--spp N] [--scene sphere|storm|katrina]... [--quiet]\n"
+            "                   [--spp N] [--scene sphere|storm|katrina]... [--paraview] [--quiet]\n"
             "What accuracy costs in time (docs/accuracy.md):\n"
             "  views    frame cost of 1, 2, 8 and 12 views sharing one light map against the\n"
             "           same views each rebuilding it\n"
@@ -47,7 +52,11 @@ static int usage(FILE *out)
             "  --cache DIR  Monte Carlo references are kept here (default: bench-cache beside\n"
             "               the anvil binary)\n"
             "  --spp N      reference samples per pixel (default 256, --quick 32)\n"
-            "  --quick      small scenes and images, one repeat: a CI-sized run\n");
+            "  --quick      small scenes and images, one repeat: a CI-sized run\n"
+            "  --paraview   also time ParaView's shadowed volume rendering of the same volume and\n"
+            "               views (src/bench/paraview_views.py through pvbatch, under xvfb-run\n"
+            "               without a display) into views-paraview.md; skipped with \"ParaView\n"
+            "               not available\" when pvbatch is not on PATH\n");
     return EXIT_USAGE;
 }
 
@@ -58,7 +67,8 @@ static int parse(int argc, char **argv, struct bench_options *o)
         {"quality-only", no_argument, NULL, 'A'},   {"output", required_argument, NULL, 'o'},
         {"cache", required_argument, NULL, 'c'},    {"spp", required_argument, NULL, 'n'},
         {"scene", required_argument, NULL, 's'},    {"quiet", no_argument, NULL, 'q'},
-        {"help", no_argument, NULL, 'h'},           {NULL, 0, NULL, 0},
+        {"paraview", no_argument, NULL, 'P'},       {"help", no_argument, NULL, 'h'},
+        {NULL, 0, NULL, 0},
     };
     memset(o, 0, sizeof(*o));
     o->views = o->quality = true;
@@ -103,6 +113,9 @@ static int parse(int argc, char **argv, struct bench_options *o)
         case 'q':
             log_set_level(LOG_ERROR);
             break;
+        case 'P':
+            o->paraview = true;
+            break;
         case 'h':
             return -1;
         default:
@@ -115,6 +128,10 @@ static int parse(int argc, char **argv, struct bench_options *o)
     }
     if (!o->views && !o->quality) {
         log_error("bench: --views-only and --quality-only exclude each other");
+        return EXIT_USAGE;
+    }
+    if (o->paraview && !o->views) {
+        log_error("bench: --paraview compares the views benchmark; it excludes --quality-only");
         return EXIT_USAGE;
     }
     if (!o->spp)
@@ -222,6 +239,75 @@ static bool make_dir(const char *dir)
 
 /* ---- views ----------------------------------------------------------------------------- */
 
+/* Whether NAME is an executable on PATH. */
+static bool on_path(const char *name)
+{
+    const char *path = getenv("PATH");
+    while (path && *path) {
+        size_t len = strcspn(path, ":");
+        char file[PATH_MAX];
+        snprintf(file, sizeof(file), "%.*s/%s", len ? (int)len : 1, len ? path : ".", name);
+        if (access(file, X_OK) == 0)
+            return true;
+        path += len + (path[len] == ':');
+    }
+    return false;
+}
+
+/* The ParaView side of the views benchmark: VOL goes to an extinction file in the cache, and
+ * src/bench/paraview_views.py (pvbatch) renders the same views of it with VTK's volumetric
+ * shadows, and writes views-paraview.md beside anvil's numbers ROWS.  Missing ParaView is not
+ * an error. */
+static bool run_paraview(const struct bench_options *o, const struct config *cfg,
+                         const struct ext_volume *vol, const struct bench_views_row *rows, int n,
+                         int w, int h, int repeats)
+{
+    if (!on_path("pvbatch")) {
+        printf("ParaView not available (no pvbatch on PATH): the comparison with ParaView is "
+               "skipped\n");
+        return true;
+    }
+    char volume[PATH_MAX + 32], script[PATH_MAX], sun[64], size[32], reps[16], anvil[1024];
+    if (!make_dir(o->cache))
+        return false;
+    snprintf(volume, sizeof(volume), "%s/paraview-storm.nc", o->cache);
+    struct extfile_writer *ew = extfile_writer_create(volume, &vol->grid, "anvil bench",
+                                                      "anvil bench --paraview", NULL);
+    if (!ew || !extfile_writer_add(ew, vol, "") || !extfile_writer_finish(ew)) {
+        extfile_writer_destroy(ew);
+        return false;
+    }
+    snprintf(script, sizeof(script), "%s/src/bench/paraview_views.py", ANVIL_SOURCE_DIR);
+    snprintf(sun, sizeof(sun), "%g,%g", cfg->light.azimuth_deg, cfg->light.elevation_deg);
+    snprintf(size, sizeof(size), "%dx%d", w, h);
+    snprintf(reps, sizeof(reps), "%d", repeats);
+    size_t len = 0;
+    for (int i = 0; i < n && len < sizeof(anvil); i++)
+        len += (size_t)snprintf(anvil + len, sizeof(anvil) - len, "%s%d:%.3f:%.3f:%.3f:%.3f",
+                                i ? "," : "", rows[i].views, rows[i].shared_ms,
+                                rows[i].static_ms, rows[i].rebuild_ms, rows[i].view_ms);
+    /* pvbatch in Debian needs an X display (GLX); xvfb-run gives it one. */
+    bool xvfb = !getenv("DISPLAY") && on_path("xvfb-run");
+    char *argv[] = {"xvfb-run", "-a", "pvbatch", script, "--volume", volume, "--sun", sun,
+                    "--size", size, "--repeats", reps, "--anvil", anvil, "--out",
+                    (char *)o->out, NULL};
+    char **args = xvfb ? argv : argv + 2;
+    printf("running %s%s (ParaView)\n", xvfb ? "xvfb-run -a " : "", "pvbatch");
+    fflush(stdout);
+    pid_t pid;
+    int err = posix_spawnp(&pid, args[0], NULL, NULL, args, environ);
+    if (err) {
+        log_error("bench: cannot run %s: %s", args[0], strerror(err));
+        return false;
+    }
+    int status;
+    if (waitpid(pid, &status, 0) < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        log_error("bench: %s failed (ParaView side of the views benchmark)", script);
+        return false;
+    }
+    return true;
+}
+
 static bool run_views(const struct bench_options *o, const char *device, struct renderer *r,
                       struct light_gpu *lg)
 {
@@ -267,6 +353,8 @@ static bool run_views(const struct bench_options *o, const char *device, struct 
         printf("  %2d views: shared %.0f ms (%.0f without a change), a build per view %.0f ms: "
                "%.2fx\n", rows[i].views, rows[i].shared_ms, rows[i].static_ms,
                rows[i].rebuild_ms, rows[i].rebuild_ms / rows[i].shared_ms);
+    if (ok && o->paraview)
+        ok = run_paraview(o, &cfg, &vol, rows, 4, w, h, repeats);
     ext_volume_finish(&vol);
     return ok;
 }
