@@ -447,8 +447,7 @@ static void verdict(FILE *f, const struct scene_results *s, bool self)
     for (int i = 0; i < s->n; i++) {
         const struct bench_result *r = &s->res[i];
         double t = r->build_ms + r->view_ms, e = self ? r->self_rmse : r->rmse;
-        if (r != def && t <= td * (1.0 + BENCH_TIME_NOISE) && e <= ed * (1.0 + BENCH_ERROR_NOISE) &&
-            (t * (1.0 + BENCH_TIME_NOISE) < td || e * (1.0 + BENCH_ERROR_NOISE) < ed))
+        if (r != def && bench_beats(r, def, self))
             fprintf(f, " %s %s (%.2f× the time, RMSE %.4g vs %.4g);", r->v.knob, r->v.value,
                     t / td, e, ed);
     }

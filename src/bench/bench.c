@@ -348,14 +348,22 @@ void bench_pool_builds(struct bench_result *res, int n)
     }
 }
 
-/* Whether B beats A by more than the noise. */
-static bool beats(const struct bench_result *b, const struct bench_result *a, bool self)
+/* The relative timing noise of R: half the range of its repeats over its time. */
+static double time_noise(const struct bench_result *r)
+{
+    double t = r->build_ms + r->view_ms;
+    return t > 0.0 ? (r->build_spread + r->view_spread) / t : 0.0;
+}
+
+bool bench_beats(const struct bench_result *b, const struct bench_result *a, bool self)
 {
     double ta = a->build_ms + a->view_ms, tb = b->build_ms + b->view_ms;
     double ea = self ? a->self_rmse : a->rmse, eb = self ? b->self_rmse : b->rmse;
-    bool no_slower = tb <= ta * (1.0 + BENCH_TIME_NOISE);
+    /* Times differ only beyond the larger of the floor and what the repeats scattered. */
+    double tn = fmax(BENCH_TIME_NOISE, fmax(time_noise(a), time_noise(b)));
+    bool no_slower = tb <= ta * (1.0 + tn);
     bool no_worse = eb <= ea * (1.0 + BENCH_ERROR_NOISE);
-    bool faster = tb * (1.0 + BENCH_TIME_NOISE) < ta;
+    bool faster = tb * (1.0 + tn) < ta;
     bool better = eb * (1.0 + BENCH_ERROR_NOISE) < ea;
     return no_slower && no_worse && (faster || better);
 }
@@ -365,9 +373,9 @@ void bench_pareto(struct bench_result *res, int n)
     for (int i = 0; i < n; i++) {
         res[i].pareto = res[i].pareto_self = true;
         for (int j = 0; j < n; j++) {
-            if (j != i && beats(&res[j], &res[i], false))
+            if (j != i && bench_beats(&res[j], &res[i], false))
                 res[i].pareto = false;
-            if (j != i && beats(&res[j], &res[i], true))
+            if (j != i && bench_beats(&res[j], &res[i], true))
                 res[i].pareto_self = false;
         }
     }

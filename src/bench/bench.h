@@ -102,6 +102,11 @@ void bench_pool_builds(struct bench_result *res, int n);
  * RMSE. */
 #define BENCH_TIME_NOISE 0.10
 #define BENCH_ERROR_NOISE 0.01
+
+/* Whether B beats A: no slower and no worse beyond the noise, and faster or better beyond
+ * it.  The time noise is the larger of BENCH_TIME_NOISE and the relative spread of either's
+ * repeats (a shared machine scatters far more than a quiet GPU). */
+bool bench_beats(const struct bench_result *b, const struct bench_result *a, bool self);
 void bench_pareto(struct bench_result *res, int n);
 
 /* ---- views -------------------------------------------------------------------------- */
