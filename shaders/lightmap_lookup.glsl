@@ -5,12 +5,24 @@
 //   LIGHTMAP 2: compressed deep light map: per light column a list of (depth, light) nodes,
 //               binary search and linear interpolation, bilinear across columns.
 //   GROUND_SHADOW 1: the ground reads the light map too (else it sees the full sun).
+//   LIGHTMAP_PAIR 1 (effects.temporal): two maps, of steps k and k + 1, bound side by side
+//               (the second at texture unit 8 or buffers 2 and 3, uniforms *_next); the light
+//               is mix(L_k, L_k+1, temporal_f).
 
 #ifndef LIGHTMAP
 #define LIGHTMAP 0
 #endif
 #ifndef GROUND_SHADOW
 #define GROUND_SHADOW 1
+#endif
+#ifndef TEMPORAL
+#define TEMPORAL 0
+#endif
+#ifndef LIGHTMAP_PAIR
+#define LIGHTMAP_PAIR 0
+#endif
+#if TEMPORAL || LIGHTMAP_PAIR
+uniform float temporal_f; // blend of step k + 1 into step k, in [0, 1]
 #endif
 
 #if LIGHTMAP == 0
@@ -30,19 +42,41 @@ bool outside_light_columns(vec3 tex)
     return tex.x < 0.0 || tex.x > 1.0 || tex.y < 0.0 || tex.y > 1.0;
 }
 
+#if LIGHTMAP_PAIR
+uniform mat4 light_world_to_tex_next;
+uniform ivec3 light_n_next;
+#endif
+
 #if LIGHTMAP == 1
 layout(binding = 2) uniform sampler3D light_tex;
+#if LIGHTMAP_PAIR
+layout(binding = 8) uniform sampler3D light_tex_next;
+#endif
 
 float lightmap_light(vec3 p)
 {
     vec3 tex = (light_world_to_tex * vec4(p, 1.0)).xyz;
-    if (outside_light_columns(tex))
-        return 1.0;
-    return texture(light_tex, tex).r;
+    float l = outside_light_columns(tex) ? 1.0 : texture(light_tex, tex).r;
+#if LIGHTMAP_PAIR
+    vec3 tn = (light_world_to_tex_next * vec4(p, 1.0)).xyz;
+    float ln = outside_light_columns(tn) ? 1.0 : texture(light_tex_next, tn).r;
+    l = mix(l, ln, temporal_f);
+#endif
+    return l;
 }
 #else
 layout(std430, binding = 0) readonly buffer light_columns { uint columns[]; }; // first, count
 layout(std430, binding = 1) readonly buffer light_nodes { float nodes[]; };    // depth, light
+#if LIGHTMAP_PAIR
+layout(std430, binding = 2) readonly buffer light_columns_next { uint columns_next[]; };
+layout(std430, binding = 3) readonly buffer light_nodes_next { float nodes_next[]; };
+// Map M's words: 0 the map of step k, 1 that of step k + 1.
+#define COLUMN_WORD(M, I) ((M) == 0 ? columns[I] : columns_next[I])
+#define NODE_WORD(M, I) ((M) == 0 ? nodes[I] : nodes_next[I])
+#else
+#define COLUMN_WORD(M, I) columns[I]
+#define NODE_WORD(M, I) nodes[I]
+#endif
 
 int tex_column(float tex, int n, out float t)
 {
@@ -60,47 +94,57 @@ int tex_column(float tex, int n, out float t)
     return i;
 }
 
-float column_eval(int i, int j, float depth)
+float column_eval(int m, ivec3 n, int i, int j, float depth)
 {
-    uint col = uint(i + light_n.x * j);
-    uint first = columns[2u * col], count = columns[2u * col + 1u];
+    uint col = uint(i + n.x * j);
+    uint first = COLUMN_WORD(m, 2u * col), count = COLUMN_WORD(m, 2u * col + 1u);
     if (count == 0u)
         return 1.0;
     float v;
-    if (!(depth > nodes[2u * first])) {
-        v = nodes[2u * first + 1u];
-    } else if (depth >= nodes[2u * (first + count - 1u)]) {
-        v = nodes[2u * (first + count - 1u) + 1u];
+    if (!(depth > NODE_WORD(m, 2u * first))) {
+        v = NODE_WORD(m, 2u * first + 1u);
+    } else if (depth >= NODE_WORD(m, 2u * (first + count - 1u))) {
+        v = NODE_WORD(m, 2u * (first + count - 1u) + 1u);
     } else {
         uint a = 0u, b = count - 1u; // nodes[a].depth <= depth < nodes[b].depth
         while (b - a > 1u) {
             uint mid = a + (b - a) / 2u;
-            if (nodes[2u * (first + mid)] <= depth)
+            if (NODE_WORD(m, 2u * (first + mid)) <= depth)
                 a = mid;
             else
                 b = mid;
         }
-        float d0 = nodes[2u * (first + a)], d1 = nodes[2u * (first + b)];
-        float v0 = nodes[2u * (first + a) + 1u], v1 = nodes[2u * (first + b) + 1u];
+        float d0 = NODE_WORD(m, 2u * (first + a)), d1 = NODE_WORD(m, 2u * (first + b));
+        float v0 = NODE_WORD(m, 2u * (first + a) + 1u), v1 = NODE_WORD(m, 2u * (first + b) + 1u);
         v = v0 + (v1 - v0) * ((depth - d0) / (d1 - d0));
     }
     return clamp(v, 0.0, 1.0);
 }
 
-float lightmap_light(vec3 p)
+// Map M (grid N, world -> texture W) at P: bilinear across columns, linear along them.
+float compressed_light(int m, mat4 w, ivec3 n, vec3 p)
 {
-    vec3 tex = (light_world_to_tex * vec4(p, 1.0)).xyz;
+    vec3 tex = (w * vec4(p, 1.0)).xyz;
     if (outside_light_columns(tex))
         return 1.0;
     float tx, ty;
-    int i = tex_column(tex.x, light_n.x, tx);
-    int j = tex_column(tex.y, light_n.y, ty);
-    float depth = clamp(tex.z * float(light_n.z) - 0.5, 0.0, float(light_n.z - 1));
-    float v00 = column_eval(i, j, depth), v10 = column_eval(i + 1, j, depth);
-    float v01 = column_eval(i, j + 1, depth), v11 = column_eval(i + 1, j + 1, depth);
+    int i = tex_column(tex.x, n.x, tx);
+    int j = tex_column(tex.y, n.y, ty);
+    float depth = clamp(tex.z * float(n.z) - 0.5, 0.0, float(n.z - 1));
+    float v00 = column_eval(m, n, i, j, depth), v10 = column_eval(m, n, i + 1, j, depth);
+    float v01 = column_eval(m, n, i, j + 1, depth), v11 = column_eval(m, n, i + 1, j + 1, depth);
     float r0 = v00 + tx * (v10 - v00);
     float r1 = v01 + tx * (v11 - v01);
     return r0 + ty * (r1 - r0);
+}
+
+float lightmap_light(vec3 p)
+{
+    float l = compressed_light(0, light_world_to_tex, light_n, p);
+#if LIGHTMAP_PAIR
+    l = mix(l, compressed_light(1, light_world_to_tex_next, light_n_next, p), temporal_f);
+#endif
+    return l;
 }
 #endif
 #endif

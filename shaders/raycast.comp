@@ -7,6 +7,8 @@
 // it is the background there.  PHASE_MIX 0 = one phase for every species (PHASE_ICE 1 the ice
 // phase, 0 the water phase) instead of the beta-weighted mix (effects.phase off).
 // TINT 1 = the scattered light takes a per-voxel colour (species tints, transfer functions).
+// TEMPORAL 1 = temporal interpolation (effects.temporal): beta = mix(beta_k, beta_k+1,
+// temporal_f) from a second extinction texture (the light map pair is LIGHTMAP_PAIR).
 
 #include "common.glsl"
 #include "lightmap_lookup.glsl"
@@ -45,6 +47,9 @@ uniform float phase_size;    // entries in phase_tex
 #endif
 #if TINT
 layout(binding = 6) uniform sampler3D tint_tex; // rgb: colour of the scattered light
+#endif
+#if TEMPORAL
+layout(binding = 7) uniform sampler3D beta_next_tex; // step k + 1, as beta_tex
 #endif
 #if OPAQUE
 layout(binding = 3) uniform sampler2D opaque_color;    // radiance of the opaque geometry
@@ -106,6 +111,11 @@ void main()
             // NaN and negative read as empty, infinity as the largest float, as in the light
             // pass (docs/stability.md).
             b = vec2(b.x >= 0.0 ? min(b.x, 1e30) : 0.0, b.y >= 0.0 ? min(b.y, 1e30) : 0.0);
+#if TEMPORAL
+            vec2 bn = texture(beta_next_tex, (p - box_min) / box_size).rg;
+            bn = vec2(bn.x >= 0.0 ? min(bn.x, 1e30) : 0.0, bn.y >= 0.0 ? min(bn.y, 1e30) : 0.0);
+            b = mix(b, bn, temporal_f);
+#endif
             float beta = b.r + b.g;
             if (beta <= 0.0)
                 continue;

@@ -64,7 +64,8 @@ struct app_stats {
     unsigned cache_hits, cache_misses, cache_loads;
     unsigned frames_waited;   /* frames that blocked on a load (only a scripted run's end) */
     unsigned frames_stale;    /* frames that showed an older step: the wanted one was loading */
-    unsigned volume_uploads;  /* volumes uploaded after the first */
+    unsigned volume_uploads;  /* volumes uploaded after the first (with effects.temporal
+                                 also each next step's, into the second texture) */
     double load_ms, convert_ms, wait_ms, upload_ms_total;
     double frame_ms_max;      /* longest frame of the loop */
 };
@@ -82,7 +83,21 @@ struct app_light {
     uint64_t generation;   /* bump when the volume on the GPU changes */
     struct effects effects; /* valid when have_effects (app_light_set_effects) */
     bool have_effects;
+    /* effects.temporal, set by app/interact.c each frame: the time steps in the renderer's
+     * volume and next volume (app_light_step_id; 0: none, the plain single map).  A light map
+     * is built per step and kept keyed by it in a ring of two (gpu, spare), so a step change
+     * builds only the new next step's; the eye pass blends the pair (LIGHTMAP_PAIR). */
+    bool temporal;
+    uint64_t step_id, next_id;
+    struct light_gpu *spare; /* the second map of the ring (made on first use) */
+    uint64_t held[2];        /* the step each of gpu, spare was last built for */
+    int pair_first;          /* which of them holds step_id while the pair is bound */
+    struct render_light pair; /* the hook that binds both */
+    char pair_defines[64];
 };
+
+/* The identity of time step STEP made with look generation GEN (never 0). */
+uint64_t app_light_step_id(int step, uint64_t gen);
 
 bool app_light_init(struct app_light *al, const struct config *cfg);
 /* Uses the decisions E (copied) from now on; without them every auto effect is on. */

@@ -17,11 +17,12 @@
 static int usage(FILE *out)
 {
     fprintf(out, "usage: anvil effects [CONFIG] [--display DISPLAY.cfg] [--run] "
-                 "[--set PATH=VALUE]... [--quiet]\n"
+                 "[--input SCRIPT] [--set PATH=VALUE]... [--quiet]\n"
                  "Prints each effect (effects.* in the config) as on or off with the reason,\n"
                  "decided from the scene as anvil render would (docs/effects.md).\n"
                  "  --display FILE  decide for these views (ground in view, HMD lens warp)\n"
-                 "  --run           decide for anvil run: the sun can move, the view changes\n");
+                 "  --run           decide for anvil run: the sun can move, the view changes\n"
+                 "  --input SCRIPT  decide for a scripted render (time may play)\n");
     return EXIT_USAGE;
 }
 
@@ -46,12 +47,14 @@ int cmd_effects(int argc, char **argv)
     static const struct option longopts[] = {
         {"set", required_argument, NULL, 's'},     {"display", required_argument, NULL, 'D'},
         {"run", no_argument, NULL, 'r'},           {"quiet", no_argument, NULL, 'q'},
+        {"input", required_argument, NULL, 'i'},
         {"help", no_argument, NULL, 'h'},          {NULL, 0, NULL, 0},
     };
     char *sets[MAX_SETS];
     int n_sets = 0;
     const char *display = NULL;
     bool run = false;
+    const char *input = NULL;
     optind = 1;
     int c;
     while ((c = getopt_long(argc, argv, "qh", longopts, NULL)) != -1) {
@@ -68,6 +71,9 @@ int cmd_effects(int argc, char **argv)
             break;
         case 'r':
             run = true;
+            break;
+        case 'i':
+            input = optarg;
             break;
         case 'q':
             log_set_level(LOG_ERROR);
@@ -100,6 +106,7 @@ int cmd_effects(int argc, char **argv)
         return EXIT_BAD_INPUT;
     facts.time_steps = app_time_steps(&cfg);
     facts.sun_moves = run && !display;
+    facts.playback = run || input;
 
     static struct view_set set;
     struct render_view views[DISPLAY_MAX_VIEWS];

@@ -180,6 +180,8 @@ static int session_start(struct session *s, const struct render_options *o)
     light_sun_direction(s->cfg.light.azimuth_deg, s->cfg.light.elevation_deg, sun);
     effects_facts_init(&s->facts);
     s->facts.time_steps = app_time_steps(&s->cfg);
+    /* anvil run plays time; a render plays only when a script drives it. */
+    s->facts.playback = strcmp(s->stats.command, "run") == 0 || o->input != NULL;
     if (!effects_measure_volume(&vol, sun, &s->facts)) {
         ext_volume_finish(&vol);
         return EXIT_BAD_INPUT;

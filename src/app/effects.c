@@ -263,15 +263,24 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
         break;
     }
 
+    /* Temporal interpolation: blends step k and k + 1 during playback (two volumes and two
+     * light maps on the GPU).  Nothing to blend with one step or a still render. */
     int steps = facts->time_steps;
+    const char *temporal_on = mode[EFFECT_TEMPORAL] == EFFECT_ON ? "on in the config" : "auto";
     if (mode[EFFECT_TEMPORAL] == EFFECT_OFF)
         say(out, EFFECT_TEMPORAL, false, "off in the config");
     else if (steps == 1)
-        say(out, EFFECT_TEMPORAL, false, "%s: one time step, nothing to interpolate",
-            mode[EFFECT_TEMPORAL] == EFFECT_ON ? "on in the config, but" : "auto");
+        say(out, EFFECT_TEMPORAL, false, "%s%s one time step, nothing to interpolate",
+            temporal_on, mode[EFFECT_TEMPORAL] == EFFECT_ON ? ", but" : ":");
+    else if (!facts->playback)
+        say(out, EFFECT_TEMPORAL, false, "%s%s a still render shows one step, nothing plays",
+            temporal_on, mode[EFFECT_TEMPORAL] == EFFECT_ON ? ", but" : ":");
+    else if (steps > 1)
+        say(out, EFFECT_TEMPORAL, true, "%s: %d time steps and playback can run: steps k and "
+            "k + 1 are blended (two volumes, one light map per step)", temporal_on, steps);
     else
-        say(out, EFFECT_TEMPORAL, false, "%s: temporal interpolation is not implemented yet, "
-            "off", mode[EFFECT_TEMPORAL] == EFFECT_ON ? "on in the config" : "auto");
+        say(out, EFFECT_TEMPORAL, true, "%s: time steps not known and playback can run, on",
+            temporal_on);
 
     if (mode[EFFECT_DISTORTION] == EFFECT_OFF)
         say(out, EFFECT_DISTORTION, false, "off in the config");
@@ -294,8 +303,9 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
                  "keeps it for every view and frame)");
     else if (steps > 1)
         snprintf(out->light_builds, sizeof(out->light_builds),
-                 "built once per time step shown (%d steps)%s, shared by every view", steps,
-                 facts->sun_moves ? " and whenever the sun moves" : "");
+                 "built once per time step shown (%d steps)%s%s, shared by every view",
+                 steps, facts->sun_moves ? " and whenever the sun moves" : "",
+                 out->on[EFFECT_TEMPORAL] ? " (temporal: two held, blended)" : "");
     else
         snprintf(out->light_builds, sizeof(out->light_builds),
                  "built when the sun, the time step or a light map setting changes, shared by "

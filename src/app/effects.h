@@ -35,6 +35,8 @@ struct effects_facts {
     bool ground_visible;      /* some view sees the ground plane (and render.ground_on) */
     int time_steps;           /* time steps the session can show; 0 = unknown */
     bool sun_moves;           /* the sun can change during the session (anvil run's keys) */
+    bool playback;            /* time can play during the session: anvil run, or a scripted
+                                 render (--input) whose events may press play */
     bool hmd;                 /* the display is an HMD */
     bool hmd_warp;            /* ... and its display config asks for the lens warp (hmd.warp) */
 };

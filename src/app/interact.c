@@ -366,6 +366,37 @@ static bool upload(struct app_interact *ia, const struct ext_volume *v)
     return true;
 }
 
+/* effects.temporal: keeps step k + 1 in the renderer's next volume and asks the eye pass to
+ * blend it in at the playback position's fraction f (the light map pair follows: app_light).
+ * Until k + 1 is on the GPU (or while step k itself is still loading) f is 0: step k. */
+static bool temporal_frame(struct app_interact *ia, struct render_settings *s, bool *redraw)
+{
+    const struct app_playback *pb = &ia->playback;
+    int next = -1;
+    if (pb->count > 1 && ia->shown == pb->step) {
+        next = pb->step + 1;
+        if (next >= pb->count)
+            next = pb->loop ? 0 : -1;
+    }
+    int held = -1;
+    const struct ext_volume *v =
+        app_player_poll_next(ia->player, next, ia->desc.wait_for_volumes, &held);
+    if (v) {
+        if (!renderer_set_next_volume(ia->renderer, v))
+            return false;
+        ia->stats->volume_uploads++;
+        *redraw = true;
+    }
+    uint64_t next_id = next >= 0 && held == next ? app_player_step_id(ia->player, true) : 0;
+    ia->light->temporal = true;
+    ia->light->step_id = app_player_step_id(ia->player, false);
+    ia->light->next_id = next_id;
+    double f = pb->acc < 0.0 ? 0.0 : pb->acc > 1.0 ? 1.0 : pb->acc;
+    s->temporal = next_id != 0;
+    s->temporal_f = next_id != 0 ? (float)f : 0.0f;
+    return true;
+}
+
 static bool ready(void *user, int step)
 {
     return app_player_ready(user, step);
@@ -452,6 +483,9 @@ bool app_interact_frame(struct app_interact *ia, const struct app_interact_frame
     } else if (!app_player_settled(ia->player, ia->playback.step)) {
         ia->stats->frames_stale++;
     }
+    if (ia->light->have_effects && ia->light->effects.on[EFFECT_TEMPORAL] &&
+        !temporal_frame(ia, s, redraw))
+        return false;
     app_player_stats(ia->player, ia->stats);
     ia->stats->time_step = ia->shown;
 

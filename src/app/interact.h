@@ -84,6 +84,14 @@ const struct ext_volume *app_player_poll(struct app_player *p, int want, int *sh
 const struct ext_volume *app_player_wait(struct app_player *p, int want, int *shown);
 /* Whether the step on screen is WANT with the current look. */
 bool app_player_settled(const struct app_player *p, int want);
+/* effects.temporal: the next volume, tracked apart from the one shown.  As app_player_poll
+ * (or with WAIT as app_player_wait) for step WANT (-1: none wanted); *HELD is the step the
+ * caller's next volume holds, -1 none. */
+const struct ext_volume *app_player_poll_next(struct app_player *p, int want, bool wait,
+                                              int *held);
+/* The identity (app_light_step_id) of the volume shown, or with NEXT of the next volume (0
+ * when it is none, or made with an older look). */
+uint64_t app_player_step_id(const struct app_player *p, bool next);
 
 void app_player_stats(struct app_player *p, struct app_stats *st);
 

@@ -1,4 +1,6 @@
 /* The session's deep light map: config and effects -> light settings -> GPU build when stale. */
+#include <stddef.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "app/app.h"
@@ -21,6 +23,104 @@ void app_light_set_effects(struct app_light *al, const struct effects *e)
     al->have_effects = true;
 }
 
+/* The generation of every temporal map's key: step ids never meet the plain map's keys. */
+#define TEMPORAL_GENERATION (UINT64_C(1) << 63)
+
+uint64_t app_light_step_id(int step, uint64_t gen)
+{
+    return (gen << 32) ^ (uint64_t)(step + 1);
+}
+
+/* The temporal pair's hook: step k's map as the light map, step k + 1's as the second. */
+static void bind_pair(const struct render_light *light, const struct gpu_program *prog)
+{
+    const struct app_light *al =
+        (const struct app_light *)((const char *)light - offsetof(struct app_light, pair));
+    const struct light_gpu *maps[2] = {al->gpu, al->spare};
+    light_gpu_bind(maps[al->pair_first], prog, false);
+    light_gpu_bind(maps[1 - al->pair_first], prog, true);
+}
+
+/* Builds LG for SRC when stale; logs and counts a build. */
+static bool build(struct light_gpu *lg, const struct light_gpu_source *src, const double sun[3],
+                  const struct light_settings *s, enum light_gpu_mode mode,
+                  const struct effects *e, struct app_stats *st)
+{
+    bool built = false;
+    if (!light_gpu_update(lg, src, sun, s, mode, &built)) {
+        log_error("lightmap.resolution [%d, %d, %d]: the light map could not be built (see "
+                  "above); a smaller resolution needs less GPU memory",
+                  s->resolution[0], s->resolution[1], s->resolution[2]);
+        return false;
+    }
+    if (!built)
+        return true;
+    double ms = light_gpu_last_build_ms(lg);
+    if (st)
+        app_stats_add_build(st, ms);
+    size_t dense, compressed;
+    light_gpu_bytes(lg, &dense, &compressed);
+    if (st) {
+        st->light_bytes_dense = (double)dense;
+        st->light_bytes_compressed = (double)compressed;
+    }
+    log_info("light map %dx%dx%d built in %.1f ms (%s%s%s)", s->resolution[0], s->resolution[1],
+             s->resolution[2], ms, mode == LIGHT_GPU_DENSE ? "dense" : "compressed",
+             s->forward ? (s->peripheral ? ", forward and peripheral" : ", forward")
+                        : ", shadow only",
+             e->on[EFFECT_PHASE] ? "" : ", one phase");
+    return true;
+}
+
+/* effects.temporal: one map per step in the ring {gpu, spare}.  The map that already holds
+ * step k (or else the one not holding k + 1) serves k, the other k + 1: advancing a step finds
+ * the new k built as the old next and builds only the new next. */
+static bool update_temporal(struct app_light *al, struct renderer *r, const double sun[3],
+                            const struct light_settings *s, enum light_gpu_mode mode,
+                            const struct effects *e, struct app_stats *st)
+{
+    bool pair = al->next_id != 0 && renderer_has_next(r);
+    if (pair && !al->spare && !(al->spare = light_gpu_create()))
+        return false;
+    int cur = 0;
+    if (al->spare && al->held[1] == al->step_id)
+        cur = 1;
+    else if (al->held[0] != al->step_id && al->spare && pair && al->held[0] == al->next_id)
+        cur = 1;
+    struct light_gpu *maps[2] = {al->gpu, al->spare};
+    struct light_gpu_source src = {
+        .beta = renderer_volume_texture(r),
+        .grid = renderer_grid(r),
+        .volume_id = al->step_id,
+        .generation = TEMPORAL_GENERATION,
+    };
+    al->held[cur] = 0;
+    if (!build(maps[cur], &src, sun, s, mode, e, st))
+        return false;
+    al->held[cur] = al->step_id;
+    if (!pair) {
+        renderer_set_light(r, light_gpu_render_light(maps[cur]));
+        return true;
+    }
+    struct light_gpu_source next = {
+        .beta = renderer_next_texture(r),
+        .grid = renderer_next_grid(r),
+        .volume_id = al->next_id,
+        .generation = TEMPORAL_GENERATION,
+    };
+    al->held[1 - cur] = 0;
+    if (!build(maps[1 - cur], &next, sun, s, mode, e, st))
+        return false;
+    al->held[1 - cur] = al->next_id;
+    al->pair_first = cur;
+    snprintf(al->pair_defines, sizeof(al->pair_defines),
+             "#define LIGHTMAP %d\n#define LIGHTMAP_PAIR 1\n", light_gpu_variant(maps[cur]));
+    al->pair.defines = al->pair_defines;
+    al->pair.bind = bind_pair;
+    renderer_set_light(r, &al->pair);
+    return true;
+}
+
 bool app_light_update(struct app_light *al, const struct config *cfg, struct renderer *r,
                       struct app_stats *st)
 {
@@ -38,38 +138,19 @@ bool app_light_update(struct app_light *al, const struct config *cfg, struct ren
     effects_light_settings(cfg, e, &s);
     double sun[3];
     light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
+    enum light_gpu_mode mode =
+        cfg->lightmap.mode == LIGHTMAP_COMPRESSED ? LIGHT_GPU_COMPRESSED : LIGHT_GPU_DENSE;
+    if (al->temporal && al->step_id != 0)
+        return update_temporal(al, r, sun, &s, mode, e, st);
     struct light_gpu_source src = {
         .beta = renderer_volume_texture(r),
         .grid = renderer_grid(r),
         .volume_id = 1,
         .generation = al->generation,
     };
-    enum light_gpu_mode mode =
-        cfg->lightmap.mode == LIGHTMAP_COMPRESSED ? LIGHT_GPU_COMPRESSED : LIGHT_GPU_DENSE;
-    bool built = false;
-    if (!light_gpu_update(al->gpu, &src, sun, &s, mode, &built)) {
-        log_error("lightmap.resolution [%d, %d, %d]: the light map could not be built (see "
-                  "above); a smaller resolution needs less GPU memory",
-                  s.resolution[0], s.resolution[1], s.resolution[2]);
+    al->held[0] = 0;
+    if (!build(al->gpu, &src, sun, &s, mode, e, st))
         return false;
-    }
-    if (built) {
-        double ms = light_gpu_last_build_ms(al->gpu);
-        if (st)
-            app_stats_add_build(st, ms);
-        size_t dense, compressed;
-        light_gpu_bytes(al->gpu, &dense, &compressed);
-        if (st) {
-            st->light_bytes_dense = (double)dense;
-            st->light_bytes_compressed = (double)compressed;
-        }
-        log_info("light map %dx%dx%d built in %.1f ms (%s%s%s)", s.resolution[0],
-                 s.resolution[1], s.resolution[2], ms,
-                 mode == LIGHT_GPU_DENSE ? "dense" : "compressed",
-                 s.forward ? (s.peripheral ? ", forward and peripheral" : ", forward")
-                           : ", shadow only",
-                 e->on[EFFECT_PHASE] ? "" : ", one phase");
-    }
     renderer_set_light(r, light_gpu_render_light(al->gpu));
     return true;
 }
@@ -77,5 +158,7 @@ bool app_light_update(struct app_light *al, const struct config *cfg, struct ren
 void app_light_finish(struct app_light *al)
 {
     light_gpu_destroy(al->gpu);
+    light_gpu_destroy(al->spare);
     al->gpu = NULL;
+    al->spare = NULL;
 }

@@ -11,6 +11,7 @@
 #include "data/series.h"
 #include "data/source.h"
 #include "data/synth.h"
+#include "data/wrf_write.h"
 
 #define LUT_SIZE 256
 #define DATE_LEN 64
@@ -75,6 +76,9 @@ struct app_player {
 
     int shown;
     uint64_t shown_gen;
+    int next_shown; /* effects.temporal: the step in the renderer's next volume, -1 none */
+    uint64_t next_gen;
+    bool wind_warned; /* the series' thread only */
     double upload_ms;
 };
 
@@ -94,10 +98,14 @@ static float *transfer_scalar(const struct field_volume *fv, enum transfer_field
 {
     const struct grid3 *g = &fv->grid;
     size_t n = grid3_count(g);
-    if (field == TRANSFER_FIELD_QVAPOR && fv->qvapor) {
+    const float *have = field == TRANSFER_FIELD_QVAPOR        ? fv->qvapor
+                        : field == TRANSFER_FIELD_TEMPERATURE ? fv->temperature
+                        : field == TRANSFER_FIELD_WIND        ? fv->wind
+                                                              : NULL;
+    if (have) {
         float *s = malloc(n * sizeof(float));
         if (s)
-            memcpy(s, fv->qvapor, n * sizeof(float));
+            memcpy(s, have, n * sizeof(float));
         return s;
     }
     float *s = calloc(n, sizeof(float));
@@ -108,9 +116,15 @@ static float *transfer_scalar(const struct field_volume *fv, enum transfer_field
         double z = g->origin[2] + (k + 0.5) * g->spacing[2];
         /* Without QVAPOR: 10 g/kg at the ground, 2.5 km scale height. */
         float vapour = (float)(0.010 * exp(-z / 2500.0));
+        /* Without P, PB, T: the standard atmosphere.  Without U, V: no wind (zero). */
+        double temp, pressure;
+        wrf_std_atmosphere(z, &temp, &pressure);
         for (size_t ij = 0; ij < (size_t)g->n[0] * (size_t)g->n[1]; ij++, idx++) {
-            if (field == TRANSFER_FIELD_QVAPOR) {
-                s[idx] = vapour;
+            if (field == TRANSFER_FIELD_QVAPOR || field == TRANSFER_FIELD_TEMPERATURE ||
+                field == TRANSFER_FIELD_WIND) {
+                s[idx] = field == TRANSFER_FIELD_QVAPOR        ? vapour
+                         : field == TRANSFER_FIELD_TEMPERATURE ? (float)temp
+                                                               : 0.0f;
                 continue;
             }
             double sum = 0.0;
@@ -152,6 +166,11 @@ static bool convert(struct app_player *p, struct field_volume *fv, const struct 
             for (int c = 0; c < TRANSFER_CHANNELS; c++)
                 lut[4 * i + c] = transfer_eval(tf, (enum transfer_channel)c,
                                                (float)i / (LUT_SIZE - 1));
+        if (tf->field == TRANSFER_FIELD_WIND && !fv->wind && !p->wind_warned) {
+            log_warn("transfer function: wind speed is unavailable (the data has no U and V): "
+                     "the field shows as zero");
+            p->wind_warned = true;
+        }
         float *scalar = transfer_scalar(fv, tf->field);
         if (!scalar) {
             log_error("out of memory for the transfer function's field");
@@ -208,9 +227,13 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
         ok = synth_storm_fields(&d, &fv);
         break;
     }
-    case PLAYER_FIELDS:
-        ok = data_source_load_fields(p->src, step, &fv);
+    case PLAYER_FIELDS: {
+        enum transfer_field tff = look->transfer.field;
+        ok = data_source_load_fields_extra(
+            p->src, step, look->transfer_on && tff == TRANSFER_FIELD_TEMPERATURE,
+            look->transfer_on && tff == TRANSFER_FIELD_WIND, &fv);
         break;
+    }
     }
     double t1 = time_now_ms();
     *load_ms += t1 - t0;
@@ -236,6 +259,7 @@ struct app_player *app_player_create(const struct config *cfg, const struct app_
     }
     p->cfg = cfg;
     p->steps = 1;
+    p->next_shown = -1;
     if (pthread_mutex_init(&p->lock, NULL) != 0) {
         free(p);
         return NULL;
@@ -363,6 +387,31 @@ const struct ext_volume *app_player_wait(struct app_player *p, int want, int *sh
     if (shown)
         *shown = p->shown;
     return v;
+}
+
+const struct ext_volume *app_player_poll_next(struct app_player *p, int want, bool wait,
+                                              int *held)
+{
+    const struct ext_volume *v = NULL;
+    if (want >= 0 && (want != p->next_shown || p->next_gen != p->look_gen)) {
+        v = wait ? series_acquire(p->series, want) : series_try_acquire(p->series, want);
+        if (v) {
+            p->next_shown = want;
+            p->next_gen = p->look_gen;
+        }
+    }
+    if (held)
+        *held = p->next_shown;
+    return v;
+}
+
+uint64_t app_player_step_id(const struct app_player *p, bool next)
+{
+    if (next)
+        return p->next_shown < 0 || p->next_gen != p->look_gen
+                   ? 0
+                   : app_light_step_id(p->next_shown, p->next_gen);
+    return app_light_step_id(p->shown, p->shown_gen);
 }
 
 bool app_player_settled(const struct app_player *p, int want)

@@ -224,7 +224,9 @@ static const struct setting settings[] = {
     EFFECT("effects.detail", EFFECT_DETAIL,
            "procedural detail (Riley §4.5, detail.*); auto: off"),
     EFFECT("effects.temporal", EFFECT_TEMPORAL,
-           "interpolation between time steps (not implemented yet: auto and on mean off)"),
+           "blend time steps k and k + 1 during playback (docs/effects.md); auto: on with "
+           "several steps when time can play (anvil run, a scripted render), off for one step "
+           "or a still render"),
     EFFECT("effects.distortion", EFFECT_DISTORTION,
            "HMD lens pre-distortion; auto: on for an HMD display"),
 

@@ -100,7 +100,8 @@ static bool read_group(const char *path, const config_setting_t *g, struct trans
     s = config_setting_get_member(g, "field");
     const char *field = s ? config_setting_get_string(s) : NULL;
     if (!field || !transfer_field_from_name(field, &tf->field)) {
-        fail(path, s ? s : g, "transfer.field", "expected \"qvapor\" or \"condensate\"");
+        fail(path, s ? s : g, "transfer.field",
+             "expected \"qvapor\", \"condensate\", \"temperature\" or \"wind\"");
         return false;
     }
     s = config_setting_get_member(g, "range");

@@ -3,7 +3,7 @@
  *
  *   transfer = {
  *       name = "moist";
- *       field = "qvapor";          # qvapor | condensate
+ *       field = "qvapor";          # qvapor | condensate | temperature | wind
  *       range = [0.0, 0.02];       # field values at x = 0 and x = 1
  *       density = 0.002;           # extinction at alpha = 1, 1/m
  *       red = ([0.0, 0.3], [1.0, 1.0]);   # control points [x, value], x ascending

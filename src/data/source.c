@@ -105,6 +105,17 @@ bool data_source_load_fields(struct data_source *s, int step, struct field_volum
     return isabel_read_step(&s->desc.isabel, step, out, NULL);
 }
 
+bool data_source_load_fields_extra(struct data_source *s, int step, bool temperature, bool wind,
+                                   struct field_volume *out)
+{
+    if (!s->wrf)
+        return data_source_load_fields(s, step, out);
+    struct wrf_desc d = s->desc.wrf;
+    d.temperature = d.temperature || temperature;
+    d.wind = d.wind || wind;
+    return wrf_read_step(s->wrf, step, &d, out, NULL);
+}
+
 bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,
                       double *convert_ms)
 {

@@ -48,6 +48,10 @@ bool data_source_load(struct data_source *s, int step, struct ext_volume *out, d
 
 /* Loads STEP's mass ratios (WRF and Isabel only; false and logged for extinction files). */
 bool data_source_load_fields(struct data_source *s, int step, struct field_volume *out);
+/* The same, also computing WRF's absolute temperature and wind speed when asked (other formats
+ * leave them NULL).  Safe to call with the flags changing from call to call. */
+bool data_source_load_fields_extra(struct data_source *s, int step, bool temperature, bool wind,
+                                   struct field_volume *out);
 
 /* The WRF reader behind S, or NULL for other formats (for metadata: lat/lon, terrain). */
 struct wrf *data_source_wrf(struct data_source *s);

@@ -14,6 +14,8 @@ void field_volume_finish(struct field_volume *v)
     for (int f = 0; f < SPECIES_COUNT; f++)
         free(v->q[f]);
     free(v->qvapor);
+    free(v->temperature);
+    free(v->wind);
     free(v->rho_air);
     memset(v, 0, sizeof(*v));
 }

@@ -38,6 +38,8 @@ struct field_volume {
     struct grid3 grid;
     float *q[SPECIES_COUNT]; /* kg/kg, grid3_count values each, or NULL */
     float *qvapor;           /* kg/kg or NULL */
+    float *temperature;      /* absolute air temperature, K, or NULL */
+    float *wind;             /* wind speed |(U, V, W)| at the mass points, m/s, or NULL */
     float *rho_air;          /* kg/m^3 or NULL */
 };
 

@@ -13,9 +13,11 @@
 
 #include "common/log.h"
 #include "data/nclock.h"
+#include "data/wrf_write.h"
 
 static const char *var_names[WRF_VAR_COUNT] = {
     "QCLOUD", "QRAIN", "QICE", "QSNOW", "QGRAUP", "QVAPOR", "P", "PB", "T", "PH", "PHB",
+    "U",      "V",     "W",
 };
 
 /* Variables every file must have: density needs P, PB, T; heights need PH, PHB. */
@@ -66,6 +68,11 @@ static bool is_mass_ratio(enum wrf_var v)
     return v <= WRF_QVAPOR;
 }
 
+static bool is_wind(enum wrf_var v)
+{
+    return v == WRF_U || v == WRF_V || v == WRF_W;
+}
+
 /* ---- opening ---------------------------------------------------------------------------- */
 
 static bool dim_len(const char *path, int ncid, const char *name, int *len, int *dimid_out)
@@ -85,6 +92,17 @@ static bool dim_len(const char *path, int ncid, const char *name, int *len, int 
     *len = (int)n;
     if (dimid_out)
         *dimid_out = dimid;
+    return true;
+}
+
+/* The length and id of dimension NAME, without logging when it is absent. */
+static bool dim_len_quiet(int ncid, const char *name, int *len, int *dimid)
+{
+    size_t n;
+    if (nc_inq_dimid(ncid, name, dimid) != NC_NOERR ||
+        nc_inq_dimlen(ncid, *dimid, &n) != NC_NOERR || n == 0 || n > INT32_MAX)
+        return false;
+    *len = (int)n;
     return true;
 }
 
@@ -292,6 +310,8 @@ static bool read_meta(struct wrf *w)
     for (int s = 0; s < SPECIES_COUNT; s++)
         m->has_species[s] = f->varid[s] >= 0;
     m->has_qvapor = f->varid[WRF_QVAPOR] >= 0;
+    m->has_wind = f->varid[WRF_U] >= 0 && f->varid[WRF_V] >= 0;
+    m->has_w = m->has_wind && f->varid[WRF_W] >= 0;
 
     if (!read_meta_2d(f->path, ncid, "XLAT", m->nx, m->ny, &m->xlat) ||
         !read_meta_2d(f->path, ncid, "XLONG", m->nx, m->ny, &m->xlong) ||
@@ -327,6 +347,42 @@ static bool read_meta(struct wrf *w)
         }
     }
     return true;
+}
+
+/* U, V and W are optional: a wrong shape makes the wind speed unavailable (one log_warn), not
+ * the file unreadable.  DIMS: Time, bottom_top, south_north, west_east; ZSTAG bottom_top_stag. */
+static bool wind_shape_ok(const struct wrf_file *f, enum wrf_var v, const int dims[4], int zstag,
+                          int nx, int ny)
+{
+    static const char *const stag_names[3] = {"west_east_stag", "south_north_stag",
+                                              "bottom_top_stag"};
+    int axis = v - WRF_U; /* 0 x, 1 y, 2 z */
+    int want[4] = {dims[0], dims[1], dims[2], dims[3]}, len = 0;
+    if (axis == 2) {
+        want[1] = zstag;
+    } else {
+        int id;
+        if (!dim_len_quiet(f->ncid, stag_names[axis], &len, &id) ||
+            len != (axis == 0 ? nx : ny) + 1) {
+            log_warn("%s: variable %s present but dimension %s is missing or not %d: wind speed "
+                     "unavailable",
+                     f->path, var_names[v], stag_names[axis], (axis == 0 ? nx : ny) + 1);
+            return false;
+        }
+        want[3 - axis] = id;
+    }
+    nc_type type;
+    int ndims, vdims[NC_MAX_VAR_DIMS];
+    bool ok = nc_inq_var(f->ncid, f->varid[v], NULL, &type, &ndims, vdims, NULL) == NC_NOERR &&
+              (type == NC_FLOAT || type == NC_DOUBLE) && ndims == 4;
+    for (int i = 0; ok && i < 4; i++)
+        ok = vdims[i] == want[i];
+    if (!ok)
+        log_warn("%s: variable %s is not float (Time, %s, %s, %s): wind speed unavailable",
+                 f->path, var_names[v], axis == 2 ? "bottom_top_stag" : "bottom_top",
+                 axis == 1 ? "south_north_stag" : "south_north",
+                 axis == 0 ? "west_east_stag" : "west_east");
+    return ok;
 }
 
 /* Opens one file and checks it against the first (REF NULL for the first). */
@@ -367,6 +423,11 @@ static bool open_file(struct wrf_file *f, const struct wrf *ref_w, const struct 
     for (int v = 0; v < WRF_VAR_COUNT; v++) {
         if (nc_inq_varid(f->ncid, var_names[v], &f->varid[v]) != NC_NOERR) {
             f->varid[v] = -1;
+            continue;
+        }
+        if (is_wind((enum wrf_var)v)) {
+            if (!wind_shape_ok(f, (enum wrf_var)v, dims, dstag[1], lx, ly))
+                f->varid[v] = -1;
             continue;
         }
         bool stag = v == WRF_PH || v == WRF_PHB;
@@ -625,6 +686,8 @@ static size_t arrays_out(const struct wrf *w, const struct wrf_desc *d)
         n++;
     if (!d->no_density)
         n++;
+    n += d->temperature;
+    n += d->wind && w->meta.has_wind;
     return n;
 }
 
@@ -637,14 +700,22 @@ size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d)
     size_t out = arrays_out(w, d) * cols * (size_t)s.nz * sizeof(float);
     /* Scratch: summed geopotential on staggered levels and two mass-level buffers. */
     size_t scratch = cols * ((size_t)w->nzs + 2 * (size_t)w->meta.nz) * sizeof(float);
+    /* Temperature and wind speed: a third mass-level buffer; W on its staggered levels. */
+    if (d->temperature || (d->wind && w->meta.has_wind))
+        scratch += cols * (size_t)w->meta.nz * sizeof(float);
+    if (d->wind && w->meta.has_w)
+        scratch += cols * (size_t)w->nzs * sizeof(float);
     return out + scratch;
 }
 
-static bool read_var(const struct wrf *w, int step, enum wrf_var v, const struct selection *s,
-                     int levels, float *buf)
+/* Reads V over the selection's columns shifted by (OX, OY) points (a staggered variable's
+ * second face). */
+static bool read_var_at(const struct wrf *w, int step, enum wrf_var v, const struct selection *s,
+                        int levels, int ox, int oy, float *buf)
 {
     const struct wrf_file *f = &w->files[w->steps[step].file];
-    size_t start[4] = {(size_t)w->steps[step].index, 0, (size_t)s->y0, (size_t)s->x0};
+    size_t start[4] = {(size_t)w->steps[step].index, 0, (size_t)(s->y0 + oy),
+                       (size_t)(s->x0 + ox)};
     size_t count[4] = {1, (size_t)levels, (size_t)s->ny, (size_t)s->nx};
     ptrdiff_t stride[4] = {1, 1, s->sy, s->sx};
     int st;
@@ -658,6 +729,12 @@ static bool read_var(const struct wrf *w, int step, enum wrf_var v, const struct
         return false;
     }
     return true;
+}
+
+static bool read_var(const struct wrf *w, int step, enum wrf_var v, const struct selection *s,
+                     int levels, float *buf)
+{
+    return read_var_at(w, step, v, s, levels, 0, 0, buf);
 }
 
 /* A fill value attribute of VAR, if any (converted to float). */
@@ -747,7 +824,8 @@ static bool report(const struct wrf *w, int step, enum wrf_var v, const struct w
         }
         log_warn("%s: variable %s, time %d: %s (of %zu values) %s", path, var_names[v],
                  w->steps[step].index, what, st->count,
-                 is_mass_ratio(v) ? "set to zero" : "replaced by the standard atmosphere");
+                 is_mass_ratio(v) || is_wind(v) ? "set to zero"
+                                                : "replaced by the standard atmosphere");
     }
     return true;
 }
@@ -903,6 +981,74 @@ static bool resample_var(const struct columns *c, const float *buf, const struct
     return ok;
 }
 
+/* Reads the staggered V at both faces around the selection's mass points (OX, OY: the shift
+ * of the second face) into A and B, sanitizes (bad values become zero), and leaves their mean
+ * in A. */
+static bool read_faces(const struct wrf *w, int step, enum wrf_var v, const struct selection *s,
+                       int levels, int ox, int oy, float *a, float *b, size_t n,
+                       struct wrf_var_stats *st)
+{
+    struct wrf_var_stats st2;
+    if (!read_var_at(w, step, v, s, levels, 0, 0, a) ||
+        !read_var_at(w, step, v, s, levels, ox, oy, b))
+        return false;
+    sanitize(w, step, v, a, n, 0.0f, st);
+    sanitize(w, step, v, b, n, 0.0f, &st2);
+    if (st2.min < st->min)
+        st->min = st2.min;
+    if (st2.max > st->max)
+        st->max = st2.max;
+    st->count += st2.count;
+    st->nan += st2.nan;
+    st->inf += st2.inf;
+    st->fill += st2.fill;
+    if (!report(w, step, v, st))
+        return false;
+    for (size_t i = 0; i < n; i++)
+        a[i] = 0.5f * (a[i] + b[i]);
+    return true;
+}
+
+/* Wind speed on the mass levels into SPEED (c->cols * c->nz): U averaged over its two
+ * west_east_stag faces, V over its south_north_stag faces, W (when the file has it) over its
+ * bottom_top_stag levels, using BUF and BUF2 as scratch. */
+static bool wind_speed(const struct wrf *w, int step, const struct selection *s,
+                       const struct columns *c, float *buf, float *buf2, float *speed,
+                       struct wrf_stats *stats)
+{
+    size_t n = c->cols * (size_t)c->nz;
+    if (!read_faces(w, step, WRF_U, s, c->nz, 1, 0, buf, buf2, n, &stats->var[WRF_U]))
+        return false;
+    for (size_t i = 0; i < n; i++)
+        speed[i] = buf[i] * buf[i];
+    if (!read_faces(w, step, WRF_V, s, c->nz, 0, 1, buf, buf2, n, &stats->var[WRF_V]))
+        return false;
+    for (size_t i = 0; i < n; i++)
+        speed[i] += buf[i] * buf[i];
+    if (w->files[w->steps[step].file].varid[WRF_W] >= 0) {
+        float *ws = malloc(c->cols * (size_t)c->nzs * sizeof(float));
+        if (!ws) {
+            log_error("out of memory reading W");
+            return false;
+        }
+        bool ok = read_var(w, step, WRF_W, s, c->nzs, ws);
+        if (ok) {
+            sanitize(w, step, WRF_W, ws, c->cols * (size_t)c->nzs, 0.0f, &stats->var[WRF_W]);
+            ok = report(w, step, WRF_W, &stats->var[WRF_W]);
+        }
+        for (size_t i = 0; ok && i < n; i++) {
+            float m = 0.5f * (ws[i] + ws[i + c->cols]);
+            speed[i] += m * m;
+        }
+        free(ws);
+        if (!ok)
+            return false;
+    }
+    for (size_t i = 0; i < n; i++)
+        speed[i] = sqrtf(speed[i]);
+    return true;
+}
+
 bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct field_volume *out,
                    struct wrf_stats *stats)
 {
@@ -930,13 +1076,19 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     }
 
     struct columns c = {.nz = w->meta.nz, .nzs = w->nzs, .cols = (size_t)s.nx * s.ny};
-    float *buf = NULL, *buf2 = NULL;
+    float *buf = NULL, *buf2 = NULL, *buf3 = NULL;
     bool ok = false;
+    const struct wrf_file *sf = &w->files[w->steps[step].file];
+    bool want_wind = d->wind && sf->varid[WRF_U] >= 0 && sf->varid[WRF_V] >= 0;
+    if (d->wind && !want_wind)
+        log_warn("%s: no usable U and V (the staggered wind): wind speed unavailable", path);
     c.zw = malloc(c.cols * (size_t)c.nzs * sizeof(float));
     c.zm = malloc((size_t)c.nz * sizeof(double));
     buf = malloc(c.cols * (size_t)c.nz * sizeof(float));
     buf2 = malloc(c.cols * (size_t)c.nz * sizeof(float));
-    if (!c.zw || !c.zm || !buf || !buf2) {
+    if (d->temperature || want_wind)
+        buf3 = malloc(c.cols * (size_t)c.nz * sizeof(float));
+    if (!c.zw || !c.zm || !buf || !buf2 || ((d->temperature || want_wind) && !buf3)) {
         log_error("%s: out of memory reading time step %d", path, step);
         goto done;
     }
@@ -1022,7 +1174,18 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         counted = true;
     }
 
-    if (!d->no_density) {
+    if (want_wind) {
+        out->wind = malloc(nout * sizeof(float));
+        if (!out->wind) {
+            log_error("%s: out of memory for wind speed", path);
+            goto unlock;
+        }
+        if (!wind_speed(w, step, &s, &c, buf, buf2, buf3, stats) ||
+            !resample_var(&c, buf3, g, 0.0f, out->wind, NULL))
+            goto unlock;
+    }
+
+    if (!d->no_density || d->temperature) {
         size_t n = c.cols * (size_t)c.nz;
         if (!read_var(w, step, WRF_P, &s, c.nz, buf) || !read_var(w, step, WRF_PB, &s, c.nz, buf2))
             goto unlock;
@@ -1038,6 +1201,32 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         sanitize(w, step, WRF_T, buf2, n, NAN, &stats->var[WRF_T]);
         if (!report(w, step, WRF_T, &stats->var[WRF_T]))
             goto unlock;
+        if (d->temperature) {
+            for (size_t i = 0; i < n; i++) {
+                double t = optics_wrf_temperature(buf[i], (double)buf2[i] + WRF_T0);
+                buf3[i] = t > 0.0 ? (float)t : NAN;
+            }
+            out->temperature = malloc(nout * sizeof(float));
+            if (!out->temperature) {
+                log_error("%s: out of memory for temperature", path);
+                goto unlock;
+            }
+            if (!resample_var(&c, buf3, g, NAN, out->temperature, NULL))
+                goto unlock;
+            /* Below the ground, above the top, or where P/PB/T were bad: standard atmosphere. */
+            for (int k = 0; k < g->n[2]; k++) {
+                double z = g->origin[2] + (k + 0.5) * g->spacing[2], std, p;
+                wrf_std_atmosphere(z, &std, &p);
+                float *layer = out->temperature + c.cols * (size_t)k;
+                for (size_t col = 0; col < c.cols; col++) {
+                    if (!isfinite(layer[col]))
+                        layer[col] = (float)std;
+                }
+            }
+        }
+    }
+    if (!d->no_density) {
+        size_t n = c.cols * (size_t)c.nz;
         for (size_t i = 0; i < n; i++) {
             double rho = optics_wrf_air_density(buf[i], (double)buf2[i] + WRF_T0);
             buf[i] = (isfinite(rho) && rho > 0.0) ? (float)rho : NAN;
@@ -1069,6 +1258,7 @@ done:
     free(c.zm);
     free(buf);
     free(buf2);
+    free(buf3);
     if (!ok)
         field_volume_finish(out);
     return ok;

@@ -4,7 +4,8 @@
  * One file with many times or many files (a list or glob patterns) are one time series,
  * ordered by their Times strings.  A step is read into a struct field_volume: the mass ratios
  * of the five hydrometeor species (a species the microphysics scheme did not write stays
- * NULL and reads as zero), optionally QVAPOR, and air density from P, PB and T.  The model's
+ * NULL and reads as zero), optionally QVAPOR, absolute temperature and wind speed, and air
+ * density from P, PB and T.  The model's
  * terrain-following mass levels are resampled per column onto regular heights above sea level
  * (docs/data.md says exactly how).  Bad values (NaN, Inf, negative mass ratios, NetCDF's
  * default fill, _FillValue / missing_value) become zero, are counted in struct wrf_stats and
@@ -42,6 +43,10 @@ struct wrf_desc {
                          the end.  Applied before stride. */
     double memory_mb; /* refuse a step whose arrays need more than this; 0 = no limit */
     bool qvapor;      /* also read QVAPOR (optional in the file) */
+    bool temperature; /* also compute the absolute air temperature from P, PB and T */
+    bool wind;        /* also compute the wind speed from U, V (and W when present), averaged
+                         from their staggered points to the mass points; left NULL with one
+                         log_warn when the file has no U or V */
     bool no_density;  /* leave rho_air NULL (standard atmosphere) instead of reading P/PB/T */
 };
 
@@ -60,6 +65,9 @@ enum wrf_var {
     WRF_T,
     WRF_PH,
     WRF_PHB,
+    WRF_U, /* west_east_stag */
+    WRF_V, /* south_north_stag */
+    WRF_W, /* bottom_top_stag */
     WRF_VAR_COUNT
 };
 
@@ -95,6 +103,8 @@ struct wrf_meta {
     double cen_lat, cen_lon, truelat1, truelat2, stand_lon; /* NAN when absent */
     bool has_species[SPECIES_COUNT];
     bool has_qvapor;
+    bool has_wind; /* U and V with WRF's staggered shapes (W optional: has_w) */
+    bool has_w;
     float *xlat, *xlong;                       /* degrees north / east; NULL when absent */
     float *hgt;                                /* terrain height, m; NULL when absent */
     float *landmask;                           /* 1 land, 0 water; NULL when absent */

@@ -32,6 +32,9 @@ enum {
     V_LANDMASK,
     V_XLAT,
     V_XLONG,
+    V_U,
+    V_V,
+    V_W,
     V_TIMES,
     V_COUNT
 };
@@ -158,7 +161,7 @@ static const char *species_description[SPECIES_COUNT] = {
 static bool define(struct wrf_writer *w, const struct field_volume *v, const char *date)
 {
     const struct grid3 *g = &w->grid;
-    int nc = w->ncid, dt, ds, dx, dy, dz, dzs;
+    int nc = w->ncid, dt, ds, dx, dy, dz, dzs, dxs, dys;
     int st = nc_def_dim(nc, "Time", NC_UNLIMITED, &dt);
     if (st == NC_NOERR)
         st = nc_def_dim(nc, "DateStrLen", DATE_LEN, &ds);
@@ -170,11 +173,16 @@ static bool define(struct wrf_writer *w, const struct field_volume *v, const cha
         st = nc_def_dim(nc, "bottom_top", (size_t)g->n[2], &dz);
     if (st == NC_NOERR)
         st = nc_def_dim(nc, "bottom_top_stag", (size_t)g->n[2] + 1, &dzs);
+    if (st == NC_NOERR)
+        st = nc_def_dim(nc, "west_east_stag", (size_t)g->n[0] + 1, &dxs);
+    if (st == NC_NOERR)
+        st = nc_def_dim(nc, "south_north_stag", (size_t)g->n[1] + 1, &dys);
     if (st != NC_NOERR) {
         log_error("%s: dimensions: %s", w->tmp, nc_strerror(st));
         return false;
     }
     int d3[4] = {dt, dz, dy, dx}, d3s[4] = {dt, dzs, dy, dx}, d2[3] = {dt, dy, dx};
+    int d3u[4] = {dt, dz, dy, dxs}, d3v[4] = {dt, dz, dys, dx};
     int dtimes[2] = {dt, ds};
     bool ice = false;
     for (int f = 0; f < SPECIES_COUNT; f++) {
@@ -200,7 +208,12 @@ static bool define(struct wrf_writer *w, const struct field_volume *v, const cha
               def_field(w, V_P, "P", 4, d3, "XYZ", "perturbation pressure", "Pa", "", NC_FLOAT) &&
               def_field(w, V_PB, "PB", 4, d3, "XYZ", "BASE STATE PRESSURE", "Pa", "", NC_FLOAT) &&
               def_field(w, V_QVAPOR, "QVAPOR", 4, d3, "XYZ", "Water vapor mixing ratio", "kg kg-1",
-                        "", NC_FLOAT);
+                        "", NC_FLOAT) &&
+              def_field(w, V_U, "U", 4, d3u, "XYZ", "x-wind component", "m s-1", "X",
+                        NC_FLOAT) &&
+              def_field(w, V_V, "V", 4, d3v, "XYZ", "y-wind component", "m s-1", "Y",
+                        NC_FLOAT) &&
+              def_field(w, V_W, "W", 4, d3s, "XYZ", "z-wind component", "m s-1", "Z", NC_FLOAT);
     for (int f = 0; f < SPECIES_COUNT && ok; f++) {
         if (w->has[f])
             ok = def_field(w, V_Q0 + f, species_wrf_name((enum species)f), 4, d3, "XYZ",
@@ -274,6 +287,64 @@ static bool write_2d(struct wrf_writer *w, size_t t)
         lon[i] = 0.0f;
     }
     return put(w, V_HGT, s, c, lat) && put(w, V_LANDMASK, s, c, lon);
+}
+
+void wrf_synth_wind(const struct grid3 *g, double x, double y, double z, double *u, double *v,
+                    double *wz)
+{
+    double lx = g->n[0] * g->spacing[0], ly = g->n[1] * g->spacing[1];
+    double top = g->origin[2] + g->n[2] * g->spacing[2];
+    double ex = x - 0.5 * lx, ey = y - 0.5 * ly, r = hypot(ex, ey);
+    double rmax = 0.15 * fmin(lx, ly);
+    double decay = fmax(0.0, 1.0 - z / 15000.0);
+    double vt = 30.0 * decay * (r < rmax ? r / rmax : rmax / r);
+    *u = 5.0 - (r > 0.0 ? vt * ey / r : 0.0);
+    *v = r > 0.0 ? vt * ex / r : 0.0;
+    double h = top > g->origin[2] ? (z - g->origin[2]) / (top - g->origin[2]) : 0.0;
+    *wz = 2.0 * exp(-(r / rmax) * (r / rmax)) * sin(PI * fmin(fmax(h, 0.0), 1.0));
+}
+
+/* U, V, W of wrf_synth_wind on their staggered points. */
+static bool write_wind(struct wrf_writer *w, size_t t)
+{
+    const struct grid3 *g = &w->grid;
+    int nx = g->n[0], ny = g->n[1];
+    float *a = malloc((size_t)(nx + 1) * (size_t)(ny + 1) * sizeof(float));
+    if (!a) {
+        log_error("%s: out of memory", w->tmp);
+        return false;
+    }
+    bool ok = true;
+    for (int k = 0; k <= g->n[2] && ok; k++) {
+        double zm = g->origin[2] + (k + 0.5) * g->spacing[2], zw = g->origin[2] + k * g->spacing[2];
+        double u, v, wz;
+        size_t s1[4] = {t, (size_t)k, 0, 0};
+        if (k < g->n[2]) {
+            for (int j = 0; j < ny; j++)
+                for (int i = 0; i <= nx; i++) {
+                    wrf_synth_wind(g, i * g->spacing[0], (j + 0.5) * g->spacing[1], zm, &u, &v,
+                                   &wz);
+                    a[(size_t)j * (nx + 1) + i] = (float)u;
+                }
+            ok = put(w, V_U, s1, (size_t[4]){1, 1, (size_t)ny, (size_t)nx + 1}, a);
+            for (int j = 0; j <= ny && ok; j++)
+                for (int i = 0; i < nx; i++) {
+                    wrf_synth_wind(g, (i + 0.5) * g->spacing[0], j * g->spacing[1], zm, &u, &v,
+                                   &wz);
+                    a[(size_t)j * nx + i] = (float)v;
+                }
+            ok = ok && put(w, V_V, s1, (size_t[4]){1, 1, (size_t)ny + 1, (size_t)nx}, a);
+        }
+        for (int j = 0; j < ny && ok; j++)
+            for (int i = 0; i < nx; i++) {
+                wrf_synth_wind(g, (i + 0.5) * g->spacing[0], (j + 0.5) * g->spacing[1], zw, &u,
+                               &v, &wz);
+                a[(size_t)j * nx + i] = (float)wz;
+            }
+        ok = ok && put(w, V_W, s1, (size_t[4]){1, 1, (size_t)ny, (size_t)nx}, a);
+    }
+    free(a);
+    return ok;
 }
 
 static bool write_3d(struct wrf_writer *w, const struct field_volume *v, size_t t)
@@ -376,7 +447,7 @@ bool wrf_writer_add(struct wrf_writer *w, const struct field_volume *v, const ch
             ok = false;
         }
     }
-    ok = ok && write_2d(w, t) && write_3d(w, v, t);
+    ok = ok && write_2d(w, t) && write_3d(w, v, t) && write_wind(w, t);
     data_nc_unlock();
     if (ok)
         w->steps++;

@@ -4,10 +4,11 @@
  * tested on them.
  *
  * The file has WRF's dimensions (Time, DateStrLen, west_east, south_north, bottom_top,
- * bottom_top_stag), variables (QCLOUD ... QGRAUP for the species present, QVAPOR, P, PB, T,
- * PH, PHB, HGT, LANDMASK, XLAT, XLONG, Times) with FieldType/MemoryOrder/description/units/
- * stagger attributes, and the global attributes a WRF reader looks for (DX, DY, MAP_PROJ = 3
- * Mercator, CEN_LAT, CEN_LON, TRUELAT1/2, STAND_LON, MP_PHYSICS, *_GRID_DIMENSION).
+ * bottom_top_stag, west_east_stag, south_north_stag), variables (QCLOUD ... QGRAUP for the
+ * species present, QVAPOR, P, PB, T, PH, PHB, U, V, W, HGT, LANDMASK, XLAT, XLONG, Times) with
+ * FieldType/MemoryOrder/description/units/stagger attributes, and the global attributes a WRF
+ * reader looks for (DX, DY, MAP_PROJ = 3 Mercator, CEN_LAT, CEN_LON, TRUELAT1/2, STAND_LON,
+ * MP_PHYSICS, *_GRID_DIMENSION).
  *
  * Vertical levels: the staggered levels are the volume's cell faces, origin_z + k dz, with
  * PHB = g z and PH = 0, so the mass levels sit exactly on the cell centres and reading the file
@@ -15,6 +16,8 @@
  * ratios unchanged.  Pressure and temperature are the 1976 US standard atmosphere (PB = p(z),
  * P = 0); where the volume has rho_air, T is chosen so that P, PB, T give that density.
  * QVAPOR is the volume's or, when absent, 10 g/kg falling off with a 2.5 km scale height.
+ * U, V and W are wrf_synth_wind on WRF's staggered points (U on the west/east cell faces, V on
+ * the south/north faces, W on the staggered levels).
  *
  * No GL, no config.  NetCDF calls hold data_nc_lock.
  */
@@ -53,5 +56,12 @@ void wrf_writer_destroy(struct wrf_writer *w);
 /* 1976 US standard atmosphere temperature [K] and pressure [Pa] at geometric height Z [m]
  * (troposphere and stratosphere; clamped to 0-47 km). */
 void wrf_std_atmosphere(double z, double *temperature, double *pressure);
+
+/* The synthetic wind written as U, V, W, m/s, at X, Y metres from GRID's west/south edge and
+ * height Z (m above sea level): a westerly 5 m/s plus a Rankine vortex around the domain's
+ * centre (30 m/s at a radius of 15 % of the shorter side, fading to zero at 15 km), and an
+ * updraft of up to 2 m/s in its core, zero at the bottom and top of the grid. */
+void wrf_synth_wind(const struct grid3 *grid, double x, double y, double z, double *u,
+                    double *v, double *wz);
 
 #endif

@@ -25,17 +25,29 @@ struct light_gpu {
     char defines[64];
 };
 
+void light_gpu_bind(const struct light_gpu *lg, const struct gpu_program *prog, bool next)
+{
+    gpu_uniform_mat4(prog, next ? "light_world_to_tex_next" : "light_world_to_tex",
+                     lg->grid.world_to_tex);
+    gpu_uniform_ivec3(prog, next ? "light_n_next" : "light_n", lg->grid.n);
+    if (lg->built_mode == LIGHT_GPU_DENSE) {
+        gpu_texture_bind(&lg->light, next ? 8 : 2);
+    } else {
+        gpu_buffer_bind(&lg->columns, next ? 2 : 0);
+        gpu_buffer_bind(&lg->nodes, next ? 3 : 1);
+    }
+}
+
 static void bind(const struct render_light *light, const struct gpu_program *prog)
 {
-    const struct light_gpu *lg = (const struct light_gpu *)light;
-    gpu_uniform_mat4(prog, "light_world_to_tex", lg->grid.world_to_tex);
-    gpu_uniform_ivec3(prog, "light_n", lg->grid.n);
-    if (lg->built_mode == LIGHT_GPU_DENSE) {
-        gpu_texture_bind(&lg->light, 2);
-    } else {
-        gpu_buffer_bind(&lg->columns, 0);
-        gpu_buffer_bind(&lg->nodes, 1);
-    }
+    light_gpu_bind((const struct light_gpu *)light, prog, false);
+}
+
+int light_gpu_variant(const struct light_gpu *lg)
+{
+    if (!lg->have_key_mode)
+        return 0;
+    return lg->built_mode == LIGHT_GPU_DENSE ? 1 : 2;
 }
 
 static const struct gpu_program *build_program(struct light_gpu *lg, int v)

@@ -289,7 +289,8 @@ static void layout(struct menu *m)
                                     "Transfer mode");
             if (wd)
                 wd->selected = md->transfer_on;
-            snprintf(label, sizeof(label), "Field: %s", transfer_field_name(md->transfer.field));
+            snprintf(label, sizeof(label), "Field: %s",
+                     transfer_field_label(md->transfer.field));
             add(m, W_BUTTON, ID_TF_FIELD, 0, "transfer.field", 24 + hw, y, hw, 30, label);
             y += 38;
             int cw = (m->w - 32 - 3 * 6 - 100) / 4;
@@ -441,6 +442,12 @@ static void draw_canvas(struct menu *m, const struct widget *wd)
         if (sel)
             fill(m, (int)px - 3, (int)py - 3, 7, 7, channel_rgb[m->channel]);
     }
+    /* The field's values at the two ends of the x axis. */
+    char lo[32], hi[32];
+    transfer_format_value(tf->field, tf->lo, lo, sizeof(lo));
+    transfer_format_value(tf->field, tf->hi, hi, sizeof(hi));
+    text(m, r[0] + 4, r[1] + 2, lo, c_dim);
+    text(m, r[0] + r[2] - 4 - menu_font_width(m->font, hi), r[1] + 2, hi, c_dim);
 }
 
 static void redraw(struct menu *m)

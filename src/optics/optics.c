@@ -145,6 +145,13 @@ double optics_std_atmosphere_density(double height_m)
 #define WRF_RD 287.0
 #define WRF_CP 1004.5
 
+double optics_wrf_temperature(double p_total_pa, double theta_k)
+{
+    if (!isfinite(p_total_pa) || !isfinite(theta_k) || p_total_pa <= 0.0 || theta_k <= 0.0)
+        return 0.0;
+    return theta_k * pow(p_total_pa / WRF_P0, WRF_RD / WRF_CP);
+}
+
 double optics_wrf_air_density(double p_total_pa, double theta_k)
 {
     if (!isfinite(p_total_pa) || !isfinite(theta_k) || p_total_pa <= 0.0 || theta_k <= 0.0)

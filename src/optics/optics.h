@@ -51,6 +51,9 @@ double optics_std_atmosphere_density(double height_m);
 /* Air density from WRF fields: P_TOTAL = P + PB [Pa], THETA = T + 300 [K] (potential
  * temperature): T_abs = theta (p/p0)^(R_d/c_p), rho = p / (R_d T_abs). */
 double optics_wrf_air_density(double p_total_pa, double theta_k);
+/* Absolute air temperature [K] from the same: theta (p/p0)^(R_d/c_p); 0 when P_TOTAL or THETA
+ * is not positive and finite. */
+double optics_wrf_temperature(double p_total_pa, double theta_k);
 
 /* Phase functions of the scattering angle's cosine MU, in 1/sr, normalised so that the
  * integral over the sphere is 1.  Finite for |g| <= 0.999 in both precisions: the

@@ -4,12 +4,43 @@
 #include <stdio.h>
 #include <string.h>
 
-static const char *const field_names[TRANSFER_FIELD_COUNT] = {"qvapor", "condensate"};
+static const char *const field_names[TRANSFER_FIELD_COUNT] = {"qvapor", "condensate",
+                                                               "temperature", "wind"};
+static const char *const field_labels[TRANSFER_FIELD_COUNT] = {"QVAPOR", "condensate",
+                                                                "temperature", "wind speed"};
+static const char *const field_units[TRANSFER_FIELD_COUNT] = {"kg/kg", "kg/kg", "K", "m/s"};
 static const char *const channel_names[TRANSFER_CHANNELS] = {"red", "green", "blue", "alpha"};
 
 const char *transfer_field_name(enum transfer_field f)
 {
     return f >= 0 && f < TRANSFER_FIELD_COUNT ? field_names[f] : "?";
+}
+
+const char *transfer_field_label(enum transfer_field f)
+{
+    return f >= 0 && f < TRANSFER_FIELD_COUNT ? field_labels[f] : "?";
+}
+
+const char *transfer_field_unit(enum transfer_field f)
+{
+    return f >= 0 && f < TRANSFER_FIELD_COUNT ? field_units[f] : "?";
+}
+
+void transfer_format_value(enum transfer_field f, double v, char *buf, int size)
+{
+    if (size <= 0)
+        return;
+    switch (f) {
+    case TRANSFER_FIELD_TEMPERATURE:
+        snprintf(buf, (size_t)size, "%.1f C", v - 273.15);
+        break;
+    case TRANSFER_FIELD_WIND:
+        snprintf(buf, (size_t)size, "%.3g m/s", v);
+        break;
+    default:
+        snprintf(buf, (size_t)size, "%.3g g/kg", v * 1000.0);
+        break;
+    }
 }
 
 bool transfer_field_from_name(const char *name, enum transfer_field *out)
@@ -43,6 +74,12 @@ void transfer_defaults(struct transfer_function *tf, enum transfer_field field)
     if (field == TRANSFER_FIELD_QVAPOR) {
         tf->lo = 0.0;
         tf->hi = 0.012; /* 12 g/kg: a moist boundary layer */
+    } else if (field == TRANSFER_FIELD_TEMPERATURE) {
+        tf->lo = 200.0; /* K: the tropopause of the tropics */
+        tf->hi = 310.0; /* a hot surface */
+    } else if (field == TRANSFER_FIELD_WIND) {
+        tf->lo = 0.0;
+        tf->hi = 60.0; /* m/s: a major hurricane's eyewall */
     } else {
         tf->lo = 0.0;
         tf->hi = 0.005;

@@ -22,6 +22,10 @@ enum transfer_field {
     TRANSFER_FIELD_QVAPOR,     /* water vapour mixing ratio, kg/kg (the data's QVAPOR, else an
                                   exponential profile of 10 g/kg and 2.5 km scale height) */
     TRANSFER_FIELD_CONDENSATE, /* total condensate: the sum of the five species, kg/kg */
+    TRANSFER_FIELD_TEMPERATURE, /* absolute air temperature, K (the data's P, PB, T, else the
+                                   1976 standard atmosphere) */
+    TRANSFER_FIELD_WIND,        /* wind speed |(U, V, W)|, m/s (zero where the data has no
+                                   U and V) */
     TRANSFER_FIELD_COUNT
 };
 
@@ -41,9 +45,17 @@ struct transfer_function {
 /* A default for FIELD: a grey ramp with alpha rising over the upper half of the range. */
 void transfer_defaults(struct transfer_function *tf, enum transfer_field field);
 
-/* "qvapor", "condensate"; transfer_field_from_name returns false for an unknown name. */
+/* "qvapor", "condensate", "temperature", "wind"; transfer_field_from_name returns false for an
+ * unknown name. */
 const char *transfer_field_name(enum transfer_field f);
 bool transfer_field_from_name(const char *name, enum transfer_field *out);
+/* What the menu shows: "QVAPOR", "condensate", "temperature", "wind speed". */
+const char *transfer_field_label(enum transfer_field f);
+/* The unit of the field's values ("kg/kg", "K", "m/s"). */
+const char *transfer_field_unit(enum transfer_field f);
+/* A value of field F as a label, ASCII: mixing ratios in g/kg ("12 g/kg"), temperature in
+ * degrees Celsius ("-73.2 C"), wind speed in m/s ("60 m/s"). */
+void transfer_format_value(enum transfer_field f, double v, char *buf, int size);
 const char *transfer_channel_name(enum transfer_channel c); /* "red", ... "alpha" */
 
 /* Channel C at X in [0, 1] (clamped at the ends; 0 without points). */

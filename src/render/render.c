@@ -20,7 +20,7 @@ struct render_mesh {
 };
 
 struct variant {
-    char defines[256];
+    char defines[384];
     struct gpu_program prog;
 };
 
@@ -30,6 +30,9 @@ struct renderer {
     bool have_tint;
     struct grid3 grid;
     bool have_volume;
+    struct gpu_texture beta_next; /* effects.temporal: step k + 1 (TEMPORAL 1) */
+    struct grid3 grid_next;
+    bool have_next;
     struct gpu_texture phase;
     struct gpu_program tonemap;
     struct variant variants[MAX_VARIANTS];
@@ -92,6 +95,7 @@ void renderer_destroy(struct renderer *r)
     if (!r)
         return;
     gpu_texture_finish(&r->beta);
+    gpu_texture_finish(&r->beta_next);
     gpu_texture_finish(&r->tint);
     gpu_texture_finish(&r->phase);
     gpu_program_finish(&r->tonemap);
@@ -129,6 +133,42 @@ bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
     r->have_volume = true;
     r->stats.upload_ms = time_now_ms() - start;
     return true;
+}
+
+bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol)
+{
+    if (!vol) {
+        gpu_texture_finish(&r->beta_next);
+        r->have_next = false;
+        return true;
+    }
+    const int *n = vol->grid.n;
+    if (r->beta_next.id && memcmp(r->beta_next.size, n, sizeof(int) * 3) == 0) {
+        gpu_texture_upload(&r->beta_next, vol->beta);
+    } else {
+        gpu_texture_finish(&r->beta_next);
+        r->have_next = false;
+        if (!gpu_texture_init(&r->beta_next, 3, n, GPU_RG32F, vol->beta))
+            return false;
+    }
+    r->grid_next = vol->grid;
+    r->have_next = true;
+    return true;
+}
+
+bool renderer_has_next(const struct renderer *r)
+{
+    return r->have_next;
+}
+
+const struct gpu_texture *renderer_next_texture(const struct renderer *r)
+{
+    return &r->beta_next;
+}
+
+const struct grid3 *renderer_next_grid(const struct renderer *r)
+{
+    return &r->grid_next;
 }
 
 const struct grid3 *renderer_grid(const struct renderer *r)
@@ -198,6 +238,8 @@ static bool draw_opaque(struct renderer *r, const struct render_settings *s,
     gpu_uniform_vec3(p, "sun_dir", s->sun_dir);
     gpu_uniform_vec3(p, "sun_radiance", s->sun_radiance);
     gpu_uniform_vec3(p, "sky_radiance", s->sky);
+    if (s->temporal)
+        gpu_uniform_float(p, "temporal_f", s->temporal_f);
     if (r->light && r->light->bind)
         r->light->bind(r->light, p);
     const float clear[4] = {0, 0, 0, 0};
@@ -230,15 +272,17 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     bool opaque = false;
     for (int i = 0; i < r->n_meshes; i++)
         opaque |= r->meshes[i]->visible;
-    char defines[320];
+    char defines[384];
+    /* Temporal interpolation needs the next volume; without it the pass is the plain one. */
+    bool temporal = s->temporal && r->have_next;
     /* Effects that are off are compiled out (app/effects.h). */
     const char *phase = !s->single_phase    ? ""
                         : s->single_phase_ice ? "#define PHASE_MIX 0\n#define PHASE_ICE 1\n"
                                               : "#define PHASE_MIX 0\n#define PHASE_ICE 0\n";
-    snprintf(defines, sizeof(defines), "%s%s%s%s%s", light_defines,
+    snprintf(defines, sizeof(defines), "%s%s%s%s%s%s", light_defines,
              opaque ? "#define OPAQUE 1\n" : "", phase,
              s->no_ground_shadow ? "#define GROUND_SHADOW 0\n" : "",
-             r->have_tint ? "#define TINT 1\n" : "");
+             r->have_tint ? "#define TINT 1\n" : "", temporal ? "#define TEMPORAL 1\n" : "");
     const struct gpu_program *prog = variant(r, defines);
     if (!prog)
         return false;
@@ -281,6 +325,11 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     gpu_texture_bind(&r->phase, 1);
     if (r->have_tint)
         gpu_texture_bind(&r->tint, 6);
+    if (temporal)
+        gpu_texture_bind(&r->beta_next, 7);
+    /* Also the blend of a light map pair (LIGHTMAP_PAIR), which comes only with temporal. */
+    if (s->temporal)
+        gpu_uniform_float(prog, "temporal_f", s->temporal_f);
     gpu_image_bind(out, 0, true);
     if (r->light && r->light->bind)
         r->light->bind(r->light, prog);

@@ -29,6 +29,10 @@ struct render_settings {
     bool single_phase;     /* one phase for every species: PHASE_MIX 0 */
     bool single_phase_ice; /* ... the ice phase (else the water phase) */
     bool no_ground_shadow; /* the ground sees the full sun: GROUND_SHADOW 0 */
+    /* effects.temporal: with a next volume set (renderer_set_next_volume), the eye pass
+     * blends beta = mix(beta_k, beta_k+1, temporal_f): TEMPORAL 1.  False: compiled out. */
+    bool temporal;
+    float temporal_f;      /* in [0, 1]; also the blend of a light map pair (LIGHTMAP_PAIR) */
 };
 
 /* Steps one ray may take at most, whatever render.step asks: a bound on the work of a
@@ -70,6 +74,14 @@ bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol);
 const struct grid3 *renderer_grid(const struct renderer *r);
 /* The extinction texture (for light map builds).  Valid until the next set_volume. */
 const struct gpu_texture *renderer_volume_texture(const struct renderer *r);
+
+/* effects.temporal: uploads the next time step's extinction into a second RG32F texture
+ * (NULL drops it).  Its tints, if any, are not used: the blend takes step k's. */
+bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol);
+/* Whether a next volume is held, its texture (for its light map build) and grid. */
+bool renderer_has_next(const struct renderer *r);
+const struct gpu_texture *renderer_next_texture(const struct renderer *r);
+const struct grid3 *renderer_next_grid(const struct renderer *r);
 
 /* Tabulates the eye phase functions. */
 bool renderer_set_optics(struct renderer *r, const struct optics_params *optics);

@@ -21,13 +21,31 @@ playback = { speed = 1.0; loop = false; };
 CFG
 printf 'fps 10\n0 key play\n30 key play\n45 key forward\n' >"$tmp/play.txt"
 "$anvil" render --quiet "$tmp/series.cfg" $small --input "$tmp/play.txt" -o "$tmp/play.png" \
-    --stats "$tmp/play.json"
+    --stats "$tmp/play.json" --set 'effects.temporal="off"'
 check "scripted playback exits 0" test $? -eq 0
 # Frames 0..29 play (30 ticks of 0.1 s at 1 step/s), 30 pauses, 45 steps forward once.
 check "played 3 steps, paused, stepped to 4" test "$(json "$tmp/play.json" time_step)" = 4
 check "steps came through the cache" test "$(json "$tmp/play.json" cache_loads)" -ge 4
 check "one light map build per new step" test "$(json "$tmp/play.json" light_map_builds)" -eq \
     $(($(json "$tmp/play.json" volume_uploads) + 1))
+
+# --- The same with temporal interpolation (auto: on for a scripted series).  One light map per
+# step that reached the GPU, never one per frame: steps 0..4 shown and 5 held as the next one.
+"$anvil" effects --quiet "$tmp/series.cfg" --input "$tmp/play.txt" >"$tmp/effects.txt"
+check "temporal is on for scripted playback" grep -q "temporal  *on  *(auto)" "$tmp/effects.txt"
+"$anvil" effects --quiet "$tmp/series.cfg" >"$tmp/effects.txt"
+check "temporal is off for a still render" grep -q "temporal  *off .*still render" \
+    "$tmp/effects.txt"
+for mode in dense compressed; do
+    "$anvil" render --quiet "$tmp/series.cfg" $small --input "$tmp/play.txt" \
+        -o "$tmp/temporal-$mode.png" --stats "$tmp/temporal-$mode.json" \
+        --set "lightmap.mode=\"$mode\""
+    check "temporal playback ($mode) exits 0" test $? -eq 0
+    check "temporal playback ($mode) ends on step 4" \
+        test "$(json "$tmp/temporal-$mode.json" time_step)" = 4
+    check "temporal ($mode): one build per step, 6 over 46 frames" \
+        test "$(json "$tmp/temporal-$mode.json" light_map_builds)" -eq 6
+done
 
 # --- Transfer function editor: the same script with and without moving a control point.
 cat >"$tmp/tf.txt" <<'SCRIPT'

@@ -233,6 +233,55 @@ static void test_ground_views_display_time(void **state)
     assert_null(strstr(e.light_builds, "once, ever"));
 }
 
+/* effects.temporal: auto is on only when there are several steps and time can play. */
+static void test_temporal_auto(void **state)
+{
+    struct config cfg;
+    config_defaults(&cfg);
+    struct effects_facts f;
+    known_thick(&f);
+    struct effects e;
+    /* One step: nothing to blend, even when playback runs or the config asks. */
+    f.playback = true;
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_TEMPORAL]);
+    assert_non_null(strstr(e.reason[EFFECT_TEMPORAL], "one time step"));
+    /* Several steps and playback (anvil run, a script): on. */
+    f.time_steps = 6;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_TEMPORAL]);
+    assert_non_null(strstr(e.reason[EFFECT_TEMPORAL], "auto: 6 time steps"));
+    assert_non_null(strstr(e.light_builds, "two held"));
+    /* A still render of a series: off, and says why. */
+    f.playback = false;
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_TEMPORAL]);
+    assert_non_null(strstr(e.reason[EFFECT_TEMPORAL], "still render"));
+    assert_null(strstr(e.light_builds, "two held"));
+    /* Steps not known but playing: the full simulation. */
+    f.playback = true;
+    f.time_steps = 0;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_TEMPORAL]);
+    /* off always wins; on still needs something to blend. */
+    f.time_steps = 6;
+    assert_true(config_set(&cfg, "effects.temporal=off"));
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_TEMPORAL]);
+    assert_string_equal(e.reason[EFFECT_TEMPORAL], "off in the config");
+    assert_true(config_set(&cfg, "effects.temporal=on"));
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_TEMPORAL]);
+    assert_non_null(strstr(e.reason[EFFECT_TEMPORAL], "on in the config"));
+    f.time_steps = 1;
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_TEMPORAL]);
+    /* Pure: the same inputs give the same decision and reason. */
+    struct effects again;
+    effects_decide(&cfg, &f, &again);
+    assert_string_equal(e.reason[EFFECT_TEMPORAL], again.reason[EFFECT_TEMPORAL]);
+}
+
 static void test_measure_volume(void **state)
 {
     /* A slab of vertical optical depth 3 lit from 30 degrees elevation: the longest path
@@ -289,6 +338,7 @@ int main(void)
         cmocka_unit_test(test_config_modes_and_prerequisites),
         cmocka_unit_test(test_phase),
         cmocka_unit_test(test_ground_views_display_time),
+        cmocka_unit_test(test_temporal_auto),
         cmocka_unit_test(test_measure_volume),
         cmocka_unit_test(test_view_sees_ground),
     };

@@ -103,7 +103,8 @@ static void test_corrupt_refused(void **state)
                    "order.cfg:5: transfer.red[1]: expected x >= 0.5");
     expect_refused("field.cfg",
                    "transfer = {\n field = \"pressure\";\n range = [0.0, 0.02];\n};\n",
-                   "field.cfg:2: transfer.field: expected \"qvapor\" or \"condensate\"");
+                   "field.cfg:2: transfer.field: expected \"qvapor\", \"condensate\", "
+                   "\"temperature\" or \"wind\"");
     expect_refused("range.cfg",
                    "transfer = {\n field = \"qvapor\";\n range = [0.02, 0.0];\n};\n",
                    "range.cfg:3: transfer.range: expected [lo, hi]");

@@ -1,0 +1,311 @@
+/* Temperature and wind speed for classic transfer-function mode: hand-computed values on a
+ * small WRF file made here (staggered U, V, W), the synthetic writer's wind, Katrina, and the
+ * transfer function's field names. */
+#include "testutil.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <netcdf.h>
+
+#include "common/log.h"
+#include "data/synth.h"
+#include "data/wrf.h"
+#include "data/wrf_write.h"
+#include "optics/transfer.h"
+
+#define NX 3
+#define NY 2
+#define NZ 2
+#define CHECK(x) assert_int_equal((x), NC_NOERR)
+
+enum { WITH_WIND = 1, WITH_W = 2, BAD_U = 4 };
+
+/* One time on a 3 x 2 x 2 grid, staggered levels every 100 m (mass levels at 50 and 150 m, so
+ * the regular height grid is the identity).  At mass point (i, j, k):
+ *   P = 100 i + 200 j, PB = 85200 - 10000 k, T = 5 + k;
+ * on the staggered points (i_s, j_s, k_s the staggered index):
+ *   U = 2 i_s + 10 k + j, V = 3 j_s + i, W = k_s + 0.1 i. */
+static const char *make_file(const char *name, unsigned what)
+{
+    char path[512];
+    snprintf(path, sizeof(path), "%s", test_tmp_path(name));
+    int nc, dt, dx, dy, dz, dzs, dxs, dys;
+    CHECK(nc_create(path, NC_CLOBBER | NC_NETCDF4, &nc));
+    CHECK(nc_def_dim(nc, "Time", NC_UNLIMITED, &dt));
+    CHECK(nc_def_dim(nc, "west_east", NX, &dx));
+    CHECK(nc_def_dim(nc, "south_north", NY, &dy));
+    CHECK(nc_def_dim(nc, "bottom_top", NZ, &dz));
+    CHECK(nc_def_dim(nc, "bottom_top_stag", NZ + 1, &dzs));
+    CHECK(nc_def_dim(nc, "west_east_stag", NX + 1, &dxs));
+    CHECK(nc_def_dim(nc, "south_north_stag", NY + 1, &dys));
+    float dxy = 1000.0f;
+    CHECK(nc_put_att_float(nc, NC_GLOBAL, "DX", NC_FLOAT, 1, &dxy));
+    CHECK(nc_put_att_float(nc, NC_GLOBAL, "DY", NC_FLOAT, 1, &dxy));
+    int d4[4] = {dt, dz, dy, dx}, d4s[4] = {dt, dzs, dy, dx};
+    int du[4] = {dt, dz, dy, (what & BAD_U) ? dx : dxs}, dv[4] = {dt, dz, dys, dx};
+    int vp, vpb, vt, vph, vphb, vu = -1, vv = -1, vw = -1;
+    CHECK(nc_def_var(nc, "P", NC_FLOAT, 4, d4, &vp));
+    CHECK(nc_def_var(nc, "PB", NC_FLOAT, 4, d4, &vpb));
+    CHECK(nc_def_var(nc, "T", NC_FLOAT, 4, d4, &vt));
+    CHECK(nc_def_var(nc, "PH", NC_FLOAT, 4, d4s, &vph));
+    CHECK(nc_def_var(nc, "PHB", NC_FLOAT, 4, d4s, &vphb));
+    if (what & WITH_WIND) {
+        CHECK(nc_def_var(nc, "U", NC_FLOAT, 4, du, &vu));
+        CHECK(nc_def_var(nc, "V", NC_FLOAT, 4, dv, &vv));
+    }
+    if (what & WITH_W)
+        CHECK(nc_def_var(nc, "W", NC_FLOAT, 4, d4s, &vw));
+    CHECK(nc_enddef(nc));
+
+    float p[NZ][NY][NX], pb[NZ][NY][NX], t[NZ][NY][NX];
+    float ph[NZ + 1][NY][NX], phb[NZ + 1][NY][NX], w[NZ + 1][NY][NX];
+    float u[NZ][NY][NX + 1], v[NZ][NY + 1][NX];
+    for (int k = 0; k <= NZ; k++)
+        for (int j = 0; j <= NY; j++)
+            for (int i = 0; i <= NX; i++) {
+                if (k < NZ && j < NY && i < NX) {
+                    p[k][j][i] = 100.0f * i + 200.0f * j;
+                    pb[k][j][i] = 85200.0f - 10000.0f * k;
+                    t[k][j][i] = 5.0f + k;
+                }
+                if (j < NY && i < NX) {
+                    ph[k][j][i] = 0.0f;
+                    phb[k][j][i] = 100.0f * k * 9.81f;
+                    w[k][j][i] = k + 0.1f * i;
+                }
+                if (k < NZ && j < NY)
+                    u[k][j][i] = 2.0f * i + 10.0f * k + j;
+                if (k < NZ && i < NX)
+                    v[k][j][i] = 3.0f * j + i;
+            }
+    size_t s[4] = {0, 0, 0, 0};
+    CHECK(nc_put_vara_float(nc, vp, s, (size_t[]){1, NZ, NY, NX}, &p[0][0][0]));
+    CHECK(nc_put_vara_float(nc, vpb, s, (size_t[]){1, NZ, NY, NX}, &pb[0][0][0]));
+    CHECK(nc_put_vara_float(nc, vt, s, (size_t[]){1, NZ, NY, NX}, &t[0][0][0]));
+    CHECK(nc_put_vara_float(nc, vph, s, (size_t[]){1, NZ + 1, NY, NX}, &ph[0][0][0]));
+    CHECK(nc_put_vara_float(nc, vphb, s, (size_t[]){1, NZ + 1, NY, NX}, &phb[0][0][0]));
+    if (vu >= 0) {
+        /* BAD_U: U over west_east (the first NX values of each row). */
+        float ub[NZ][NY][NX];
+        for (int k = 0; k < NZ; k++)
+            for (int j = 0; j < NY; j++)
+                for (int i = 0; i < NX; i++)
+                    ub[k][j][i] = u[k][j][i];
+        CHECK(nc_put_vara_float(nc, vu, s, (size_t[]){1, NZ, NY, (what & BAD_U) ? NX : NX + 1},
+                                (what & BAD_U) ? &ub[0][0][0] : &u[0][0][0]));
+        CHECK(nc_put_vara_float(nc, vv, s, (size_t[]){1, NZ, NY + 1, NX}, &v[0][0][0]));
+    }
+    if (vw >= 0)
+        CHECK(nc_put_vara_float(nc, vw, s, (size_t[]){1, NZ + 1, NY, NX}, &w[0][0][0]));
+    CHECK(nc_close(nc));
+    return test_tmp_path(name);
+}
+
+static bool read_one(const char *path, int stride_x, struct field_volume *out,
+                     struct wrf_meta *meta)
+{
+    struct wrf *w = wrf_open(&path, 1);
+    assert_non_null(w);
+    if (meta)
+        *meta = *wrf_get_meta(w);
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    d.temperature = true;
+    d.wind = true;
+    d.stride[0] = stride_x;
+    bool ok = wrf_read_step(w, 0, &d, out, NULL);
+    if (meta) /* the arrays go with the reader */
+        meta->xlat = meta->xlong = meta->hgt = meta->landmask = meta->lu_index = NULL;
+    wrf_close(w);
+    return ok;
+}
+
+static void test_temperature_by_hand(void **state)
+{
+    struct field_volume v;
+    assert_true(read_one(make_file("tw.nc", WITH_WIND | WITH_W), 1, &v, NULL));
+    assert_non_null(v.temperature);
+    assert_int_equal(v.grid.n[2], NZ);
+    /* (1, 1, 0): p = 300 + 85200 = 85500 Pa, theta = 305 K:
+     * 305 (0.855)^(287 / 1004.5) = 291.6497 K. */
+    assert_float_equal(v.temperature[grid3_index(&v.grid, 1, 1, 0)], 291.6497, 2e-3);
+    /* (1, 1, 1): p = 300 + 75200 = 75500 Pa, theta = 306 K: 282.3899 K. */
+    assert_float_equal(v.temperature[grid3_index(&v.grid, 1, 1, 1)], 282.3899, 2e-3);
+    /* (0, 0, 0): p = 85200 Pa, theta = 305 K. */
+    double t0 = 305.0 * pow(85200.0 / 100000.0, 287.0 / 1004.5);
+    assert_float_equal(v.temperature[grid3_index(&v.grid, 0, 0, 0)], t0, 2e-3);
+    assert_float_equal(optics_wrf_temperature(85500.0, 305.0), 291.6497, 1e-3);
+    field_volume_finish(&v);
+}
+
+static void test_wind_by_hand(void **state)
+{
+    struct field_volume v;
+    assert_true(read_one(make_file("tw.nc", WITH_WIND | WITH_W), 1, &v, NULL));
+    assert_non_null(v.wind);
+    /* (1, 1, 1): U faces 1 and 2: (13 + 15) / 2 = 14; V faces 1 and 2: (4 + 7) / 2 = 5.5;
+     * W levels 1 and 2: (1.1 + 2.1) / 2 = 1.6; |(14, 5.5, 1.6)| = sqrt(228.81) = 15.12647. */
+    assert_float_equal(v.wind[grid3_index(&v.grid, 1, 1, 1)], 15.12647, 1e-4);
+    /* (0, 0, 0): U (0 + 2) / 2 = 1; V (0 + 3) / 2 = 1.5; W (0 + 1) / 2 = 0.5: sqrt(3.5). */
+    assert_float_equal(v.wind[grid3_index(&v.grid, 0, 0, 0)], sqrt(3.5), 1e-5);
+    field_volume_finish(&v);
+
+    /* Without W: the horizontal speed, sqrt(14^2 + 5.5^2) = 15.04161. */
+    assert_true(read_one(make_file("tw2.nc", WITH_WIND), 1, &v, NULL));
+    assert_float_equal(v.wind[grid3_index(&v.grid, 1, 1, 1)], 15.04161, 1e-4);
+    field_volume_finish(&v);
+
+    /* Every second column: output column 1 is the file's column 2, U faces 2 and 3:
+     * (15 + 17) / 2 = 16; V (5 + 8) / 2 = 6.5; W (1.2 + 2.2) / 2 = 1.7: sqrt(301.14). */
+    assert_true(read_one(make_file("tw.nc", WITH_WIND | WITH_W), 2, &v, NULL));
+    assert_int_equal(v.grid.n[0], 2);
+    assert_float_equal(v.wind[grid3_index(&v.grid, 1, 1, 1)], 17.35339, 1e-4);
+    field_volume_finish(&v);
+}
+
+static void test_wind_unavailable(void **state)
+{
+    struct field_volume v;
+    struct wrf_meta m;
+    unsigned warns = log_warn_count();
+    assert_true(read_one(make_file("nowind.nc", 0), 1, &v, &m));
+    assert_false(m.has_wind);
+    assert_null(v.wind);
+    assert_non_null(v.temperature); /* the rest of the step is still there */
+    assert_non_null(v.rho_air);
+    assert_true(log_warn_count() > warns);
+    field_volume_finish(&v);
+
+    /* U over west_east instead of west_east_stag: the file opens, the wind is unavailable. */
+    warns = log_warn_count();
+    unsigned errors = log_error_count();
+    assert_true(read_one(make_file("badu.nc", WITH_WIND | WITH_W | BAD_U), 1, &v, &m));
+    assert_false(m.has_wind);
+    assert_null(v.wind);
+    assert_true(log_warn_count() >= warns + 2);
+    assert_int_equal(log_error_count(), errors);
+    field_volume_finish(&v);
+}
+
+/* anvil synth's file: U, V, W of wrf_synth_wind, T of the standard atmosphere. */
+static void test_synth_wind_and_temperature(void **state)
+{
+    char path[512];
+    snprintf(path, sizeof(path), "%s", test_tmp_path("synthw.nc"));
+    struct synth_desc sd = {
+        .kind = SYNTH_STORM, .n = {20, 16, 10}, .extent_m = {40000.0, 32000.0, 15000.0}, .seed = 3};
+    struct field_volume in;
+    assert_true(synth_storm_fields(&sd, &in));
+    struct wrf_writer *ww = wrf_writer_create(path, &in.grid, NULL);
+    assert_non_null(ww);
+    assert_true(wrf_writer_add(ww, &in, "2000-01-01_00:00:00"));
+    assert_true(wrf_writer_finish(ww));
+    const char *p = path;
+    struct wrf *w = wrf_open(&p, 1);
+    assert_non_null(w);
+    assert_true(wrf_get_meta(w)->has_wind);
+    assert_true(wrf_get_meta(w)->has_w);
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    d.temperature = true;
+    d.wind = true;
+    struct field_volume out;
+    assert_true(wrf_read_step(w, 0, &d, &out, NULL));
+    const struct grid3 *g = &in.grid;
+    const int at[3][3] = {{3, 4, 2}, {10, 8, 5}, {17, 12, 8}};
+    for (int c = 0; c < 3; c++) {
+        int i = at[c][0], j = at[c][1], k = at[c][2];
+        double dx = g->spacing[0], dy = g->spacing[1], dz = g->spacing[2];
+        double zm = g->origin[2] + (k + 0.5) * dz, u0, u1, v0, v1, w0, w1, a, b;
+        wrf_synth_wind(g, i * dx, (j + 0.5) * dy, zm, &u0, &a, &b);
+        wrf_synth_wind(g, (i + 1) * dx, (j + 0.5) * dy, zm, &u1, &a, &b);
+        wrf_synth_wind(g, (i + 0.5) * dx, j * dy, zm, &a, &v0, &b);
+        wrf_synth_wind(g, (i + 0.5) * dx, (j + 1) * dy, zm, &a, &v1, &b);
+        wrf_synth_wind(g, (i + 0.5) * dx, (j + 0.5) * dy, g->origin[2] + k * dz, &a, &b, &w0);
+        wrf_synth_wind(g, (i + 0.5) * dx, (j + 0.5) * dy, g->origin[2] + (k + 1) * dz, &a, &b,
+                       &w1);
+        double um = 0.5 * (u0 + u1), vm = 0.5 * (v0 + v1), wm = 0.5 * (w0 + w1);
+        double want = sqrt(um * um + vm * vm + wm * wm);
+        size_t idx = grid3_index(&out.grid, i, j, k);
+        assert_float_equal(out.wind[idx], want, 1e-4 * want + 1e-5);
+        double temp, pres;
+        wrf_std_atmosphere(zm, &temp, &pres);
+        assert_float_equal(out.temperature[idx], temp, 0.05);
+    }
+    field_volume_finish(&out);
+    field_volume_finish(&in);
+    wrf_close(w);
+}
+
+/* Katrina has U, V, W and T: every voxel finite and plausible; column (10, 10) near the
+ * ground from its P, PB, T (ncdump): 302.289789 (99571.77 / 1e5)^(287 / 1004.5). */
+static void test_katrina(void **state)
+{
+    const char *path = test_shared_data("wrf/katrina_2005_mercator_wsm3.nc");
+    struct wrf *w = wrf_open(&path, 1);
+    assert_non_null(w);
+    assert_true(wrf_get_meta(w)->has_wind);
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    d.temperature = true;
+    d.wind = true;
+    struct field_volume v;
+    assert_true(wrf_read_step(w, 0, &d, &v, NULL));
+    size_t n = grid3_count(&v.grid);
+    double wmax = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        assert_true(isfinite(v.temperature[i]) && v.temperature[i] > 180.0f &&
+                    v.temperature[i] < 320.0f);
+        assert_true(isfinite(v.wind[i]) && v.wind[i] >= 0.0f && v.wind[i] < 120.0f);
+        wmax = fmax(wmax, v.wind[i]);
+    }
+    assert_true(wmax > 20.0); /* a hurricane */
+    field_volume_finish(&v);
+    d.levels = 1000;
+    d.top_m = 10000.0; /* the lowest 10 m levels clamp to the first mass level */
+    assert_true(wrf_read_step(w, 0, &d, &v, NULL));
+    assert_float_equal(v.temperature[grid3_index(&v.grid, 10, 10, 0)], 301.91937, 0.02);
+    field_volume_finish(&v);
+    wrf_close(w);
+}
+
+static void test_field_names(void **state)
+{
+    const char *names[] = {"qvapor", "condensate", "temperature", "wind"};
+    for (int f = 0; f < TRANSFER_FIELD_COUNT; f++) {
+        enum transfer_field got;
+        assert_true(transfer_field_from_name(names[f], &got));
+        assert_int_equal(got, f);
+        assert_string_equal(transfer_field_name((enum transfer_field)f), names[f]);
+        struct transfer_function tf;
+        transfer_defaults(&tf, (enum transfer_field)f);
+        assert_true(transfer_valid(&tf, NULL, 0));
+    }
+    struct transfer_function tf;
+    transfer_defaults(&tf, TRANSFER_FIELD_TEMPERATURE);
+    assert_true(tf.lo < 273.15 && tf.hi > 288.15); /* freezing and the surface inside */
+    char buf[32];
+    transfer_format_value(TRANSFER_FIELD_TEMPERATURE, 273.15, buf, sizeof(buf));
+    assert_string_equal(buf, "0.0 C");
+    transfer_format_value(TRANSFER_FIELD_WIND, 60.0, buf, sizeof(buf));
+    assert_string_equal(buf, "60 m/s");
+    transfer_format_value(TRANSFER_FIELD_QVAPOR, 0.012, buf, sizeof(buf));
+    assert_string_equal(buf, "12 g/kg");
+}
+
+int main(void)
+{
+    log_set_level(LOG_ERROR);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_temperature_by_hand),
+        cmocka_unit_test(test_wind_by_hand),
+        cmocka_unit_test(test_wind_unavailable),
+        cmocka_unit_test(test_synth_wind_and_temperature),
+        cmocka_unit_test(test_katrina),
+        cmocka_unit_test(test_field_names),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
