@@ -473,24 +473,35 @@ static int run_display(struct session *s, const struct render_options *o, double
     return rc;
 }
 
-int cmd_render(int argc, char **argv)
+/* Parses the options and loads the config into S.  Returns -1 to go on, else the exit code
+ * (help, usage errors, bad input). */
+static int command_begin(int argc, char **argv, bool need_output, int (*usage)(void),
+                         struct render_options *o, struct session *s)
 {
-    struct render_options o;
-    int rc = parse_options(argc, argv, &o, true);
+    int rc = parse_options(argc, argv, o, need_output);
     if (rc < 0) {
-        usage_render();
+        usage();
         return EXIT_OK;
     }
     if (rc == EXIT_BAD_INPUT)
         return rc;
     if (rc != EXIT_OK)
-        return usage_render();
-    if (o.display && strcmp(o.display, "help") == 0)
+        return usage();
+    if (o->display && strcmp(o->display, "help") == 0)
         return display_help();
-    double start = time_now_ms();
-    struct session s = {.stats.command = "render"};
-    if (!app_load_config(o.config, o.sets, o.n_sets, &s.cfg))
+    if (!app_load_config(o->config, o->sets, o->n_sets, &s->cfg))
         return EXIT_BAD_INPUT;
+    return -1;
+}
+
+int cmd_render(int argc, char **argv)
+{
+    double start = time_now_ms();
+    struct render_options o;
+    struct session s = {.stats.command = "render"};
+    int rc = command_begin(argc, argv, true, usage_render, &o, &s);
+    if (rc >= 0)
+        return rc;
     if (o.display)
         return render_display(&s, &o, start);
 
@@ -653,22 +664,12 @@ static int usage_run(void)
 
 int cmd_run(int argc, char **argv)
 {
-    struct render_options o;
-    int rc = parse_options(argc, argv, &o, false);
-    if (rc < 0) {
-        usage_run();
-        return EXIT_OK;
-    }
-    if (rc == EXIT_BAD_INPUT)
-        return rc;
-    if (rc != EXIT_OK)
-        return usage_run();
-    if (o.display && strcmp(o.display, "help") == 0)
-        return display_help();
     double start = time_now_ms();
+    struct render_options o;
     struct session s = {.stats.command = "run"};
-    if (!app_load_config(o.config, o.sets, o.n_sets, &s.cfg))
-        return EXIT_BAD_INPUT;
+    int rc = command_begin(argc, argv, false, usage_run, &o, &s);
+    if (rc >= 0)
+        return rc;
     if (o.display)
         return run_display(&s, &o, start);
     struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){
