@@ -277,12 +277,7 @@ bool extfile_writer_finish(struct extfile_writer *w)
 {
     if (!w)
         return false;
-    bool ok = !w->failed;
-    if (ok && w->steps == 0) {
-        log_error("%s: no time steps to write", w->path);
-        ok = false;
-    }
-    ok = data_nc_finish_beside(w->path, &w->tmp, &w->ncid, ok);
+    bool ok = data_nc_finish_beside(w->path, &w->tmp, &w->ncid, !w->failed, w->steps);
     extfile_writer_destroy(w);
     return ok;
 }

@@ -66,8 +66,12 @@ bool data_nc_create_beside(const char *path, int cmode, char **tmp, int *ncid)
     return true;
 }
 
-bool data_nc_finish_beside(const char *path, char **tmp, int *ncid, bool ok)
+bool data_nc_finish_beside(const char *path, char **tmp, int *ncid, bool ok, int steps)
 {
+    if (ok && steps == 0) {
+        log_error("%s: no time steps to write", path);
+        ok = false;
+    }
     data_nc_lock();
     int st = *ncid >= 0 ? nc_close(*ncid) : NC_NOERR;
     data_nc_unlock();

@@ -18,9 +18,9 @@ void data_nc_unlock(void);
 /* Creates the temporary sibling (*TMP, allocated here) with nc_create mode CMODE; *NCID is -1
  * on failure. */
 bool data_nc_create_beside(const char *path, int cmode, char **tmp, int *ncid);
-/* Closes *NCID and, when OK, renames *TMP onto PATH (then frees *TMP and sets it NULL).
- * Returns whether the file is in place. */
-bool data_nc_finish_beside(const char *path, char **tmp, int *ncid, bool ok);
+/* Closes *NCID and, when OK and STEPS > 0 (a file of no time steps is an error), renames *TMP
+ * onto PATH (then frees *TMP and sets it NULL).  Returns whether the file is in place. */
+bool data_nc_finish_beside(const char *path, char **tmp, int *ncid, bool ok, int steps);
 /* Closes *NCID if it is open and removes and frees *TMP if it is still there. */
 void data_nc_abandon(char **tmp, int *ncid);
 

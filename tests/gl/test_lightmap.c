@@ -22,21 +22,6 @@
 static struct gpu_context *ctx;
 static struct renderer *renderer;
 
-static void load(struct config *cfg, const char **sets, int n)
-{
-    config_defaults(cfg);
-    for (int i = 0; i < n; i++)
-        assert_true(config_set(cfg, sets[i]));
-    assert_true(config_validate(cfg));
-}
-
-static void upload(const struct config *cfg, struct ext_volume *vol)
-{
-    assert_true(app_build_volume(cfg, vol));
-    assert_true(renderer_set_volume(renderer, vol));
-    assert_true(renderer_set_optics(renderer, &cfg->optics.params));
-}
-
 static void settings_of(const struct config *cfg, struct light_settings *s)
 {
     light_settings_defaults(s);
@@ -51,8 +36,8 @@ static double gpu_vs_cpu(const char **sets, int n)
 {
     struct config cfg;
     struct ext_volume vol = {0};
-    load(&cfg, sets, n);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, sets, n);
+    test_upload_scene(renderer, &cfg, &vol);
     struct light_settings s;
     settings_of(&cfg, &s);
     double sun[3];
@@ -139,8 +124,8 @@ static void test_compressed_within_epsilon_of_dense(void **state)
     const char *sets[] = {"scene.size=[48,48,24]", "render.width=80", "render.height=60",
                           "lightmap.resolution=[48,48,48]", "lightmap.epsilon=0.02",
                           "render.sky=[0,0,0]", "render.ground_on=false"};
-    load(&cfg, sets, 7);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, sets, 7);
+    test_upload_scene(renderer, &cfg, &vol);
     struct app_light al;
     struct app_stats st = {0};
     struct image dense, comp;
@@ -179,8 +164,8 @@ static void test_twelve_views_one_build(void **state)
     struct ext_volume vol = {0};
     const char *sets[] = {"scene.size=[32,32,16]", "lightmap.resolution=[32,32,32]",
                           "render.width=32", "render.height=24"};
-    load(&cfg, sets, 4);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, sets, 4);
+    test_upload_scene(renderer, &cfg, &vol);
     struct app_light al;
     struct app_stats st = {0};
     assert_true(app_light_init(&al, &cfg));
@@ -237,8 +222,8 @@ static void test_silver_lining(void **state)
                           "camera.position=[5,-40,-2.05]", "camera.target=[5,5,5]",
                           "camera.fov=16", "render.width=96", "render.height=96",
                           "lightmap.resolution=[64,64,96]"};
-    load(&cfg, sets, 14);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, sets, 14);
+    test_upload_scene(renderer, &cfg, &vol);
     struct app_light al;
     struct image img;
     assert_true(app_light_init(&al, &cfg));
@@ -265,8 +250,8 @@ static double sphere_mean(const char *forward)
                           "camera.position=[5,-40,5]", "camera.target=[5,5,5]",
                           "camera.fov=16", "render.width=64", "render.height=64",
                           "lightmap.resolution=[48,48,64]", forward};
-    load(&cfg, sets, 15);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, sets, 15);
+    test_upload_scene(renderer, &cfg, &vol);
     struct app_light al;
     struct image img;
     assert_true(app_light_init(&al, &cfg));
@@ -297,8 +282,8 @@ static double ground_under(const char *mode, double x_km, double y_km)
                           "scene.extent=[10,10,10]", "scene.tau=30", "light.azimuth=90",
                           "light.elevation=45", "render.sky=[0,0,0]", "render.width=16",
                           "render.height=16", "lightmap.resolution=[48,48,64]", mode};
-    load(&cfg, sets, 11);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, sets, 11);
+    test_upload_scene(renderer, &cfg, &vol);
     /* Straight down at (x, y) on the ground from outside the volume. */
     double eye[3] = {x_km * 1e3, y_km * 1e3, 30e3}, target[3] = {x_km * 1e3, y_km * 1e3, 0};
     double up[3] = {0, 1, 0};

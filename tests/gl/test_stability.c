@@ -20,22 +20,6 @@
 static struct gpu_context *ctx;
 static struct renderer *renderer;
 
-static void load(struct config *cfg, const char **sets, int n)
-{
-    config_defaults(cfg);
-    for (int i = 0; i < n; i++)
-        assert_true(config_set(cfg, sets[i]));
-    assert_true(config_validate(cfg));
-}
-
-/* Uploads the config's volume (kept in VOL) and optics. */
-static void upload(const struct config *cfg, struct ext_volume *vol)
-{
-    assert_true(app_build_volume(cfg, vol));
-    assert_true(renderer_set_volume(renderer, vol));
-    assert_true(renderer_set_optics(renderer, &cfg->optics.params));
-}
-
 /* Draws VIEW (the config's camera when NULL) with the light map the config asks for (every
  * auto effect on); LIGHT false draws without a light map. */
 static void draw(const struct config *cfg, const struct render_view *view, bool light,
@@ -126,8 +110,8 @@ static void test_very_thick(void **state)
                           "camera.position=[5,-12,3]", "camera.target=[5,5,0.5]",
                           "render.width=32", "render.height=32",
                           "lightmap.resolution=[24,24,32]"};
-    load(&cfg, sets, 14);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, sets, 14);
+    test_upload_scene(renderer, &cfg, &vol);
     float bound = phase_max(&cfg.optics.params) * 1.0001f;
     struct image img;
     double eye[3] = {5e3, 5e3, 6e3}, target[3] = {5e3, 5e3, 0}, up[3] = {0, 1, 0};
@@ -167,8 +151,8 @@ static void test_empty_light_map_is_one(void **state)
     struct ext_volume vol = {0};
     const char *sets[] = {"scene.kind=empty", "scene.size=[8,8,8]",
                           "lightmap.resolution=[16,16,16]"};
-    load(&cfg, sets, 3);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, sets, 3);
+    test_upload_scene(renderer, &cfg, &vol);
     struct light_map map = {0};
     gpu_light_map(&cfg, true, &map);
     size_t count = (size_t)16 * 16 * 16;
@@ -203,8 +187,8 @@ static void test_single_voxel(void **state)
     const char *one[] = {"scene.kind=slab", "scene.size=[1,1,1]", "scene.extent=[10,10,1]",
                          "scene.tau=2", "render.ground_on=false",
                          "lightmap.resolution=[8,8,8]"};
-    load(&cfg, one, 6);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, one, 6);
+    test_upload_scene(renderer, &cfg, &vol);
     for (int light = 0; light < 2; light++)
         assert_float_equal(centre_transmittance(&cfg, 5.0, 5.0, light), exp(-2.0),
                            1e-3 * exp(-2.0));
@@ -217,8 +201,8 @@ static void test_single_voxel(void **state)
     const char *voxel[] = {"scene.kind=voxel", "scene.size=[5,5,5]", "scene.extent=[5,5,5]",
                            "scene.tau=1.5", "render.ground_on=false",
                            "lightmap.resolution=[12,12,12]", "light.elevation=60"};
-    load(&cfg, voxel, 7);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, voxel, 7);
+    test_upload_scene(renderer, &cfg, &vol);
     for (int light = 0; light < 2; light++)
         assert_float_equal(centre_transmittance(&cfg, 2.5, 2.5, light), exp(-1.5),
                            5e-3 * exp(-1.5));
@@ -251,8 +235,8 @@ static void test_axis_and_grazing_sun(void **state)
                               "render.width=24", "render.height=24", "light.color=[1,1,1]",
                               "light.intensity=1", "render.sky=[0,0,0]",
                               "lightmap.resolution=[16,16,24]", suns[s][0], suns[s][1]};
-        load(&cfg, sets, 14);
-        upload(&cfg, &vol);
+        test_config_from(&cfg, sets, 14);
+        test_upload_scene(renderer, &cfg, &vol);
         struct light_map map = {0};
         gpu_light_map(&cfg, true, &map);
         light_map_finish(&map);
@@ -302,8 +286,8 @@ static void test_camera_on_faces_edges_inside(void **state)
     const char *sets[] = {"scene.kind=slab", "scene.size=[16,16,8]", "scene.extent=[10,10,1]",
                           "scene.tau=2", "light.intensity=0", "render.ground_on=false",
                           "render.sky=[1,1,1]", "lightmap.resolution=[8,8,8]"};
-    load(&cfg, sets, 8);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, sets, 8);
+    test_upload_scene(renderer, &cfg, &vol);
     const double beta = 2e-3;
     double down[3] = {5, 5, -10};
     /* On the top face, near plane 1 m: 999 m of medium. */
@@ -358,11 +342,11 @@ static void test_extreme_asymmetry(void **state)
                           "render.ground_on=false", "lightmap.resolution=[16,16,16]"};
     static const double gs[][2] = {{0.999, -0.999}, {1.0, -1.0}, {-1.0, 1.0}, {0.9999, 0.9999}};
     for (size_t i = 0; i < sizeof(gs) / sizeof(gs[0]); i++) {
-        load(&cfg, sets, 12);
+        test_config_from(&cfg, sets, 12);
         /* Beyond the config's range (-0.9, 0.9): set directly. */
         cfg.optics.params.g_water = gs[i][0];
         cfg.optics.params.g_ice = gs[i][1];
-        upload(&cfg, &vol);
+        test_upload_scene(renderer, &cfg, &vol);
         struct light_settings s;
         light_settings_defaults(&s);
         light_settings_set_optics(&s, &cfg.optics.params, 20.0);
@@ -425,7 +409,7 @@ static void test_bad_values_in_the_volume(void **state)
                           "camera.position=[2,-10,2]", "camera.target=[2,2,2]",
                           "render.width=16", "render.height=16", "render.ground_on=false",
                           "lightmap.resolution=[8,8,8]"};
-    load(&cfg, sets, 9);
+    test_config_from(&cfg, sets, 9);
     struct ext_volume vol = {0};
     assert_true(app_build_volume(&cfg, &vol));
     const float bad[] = {NAN, INFINITY, -1.0f, -INFINITY, 9.96921e36f};
@@ -460,8 +444,8 @@ static void test_extreme_aspect(void **state)
                           "scene.extent=[1000,1000,1]", "scene.tau=2",
                           "render.ground_on=false", "light.elevation=5", "light.azimuth=30",
                           "lightmap.resolution=[32,32,32]"};
-    load(&cfg, flat, 8);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, flat, 8);
+    test_upload_scene(renderer, &cfg, &vol);
     for (int light = 0; light < 2; light++)
         assert_float_equal(centre_transmittance(&cfg, 500.0, 500.0, light), exp(-2.0),
                            1e-3 * exp(-2.0));
@@ -492,8 +476,8 @@ static void test_extreme_aspect(void **state)
                           "camera.target=[0.5,0.5,500]", "render.width=16", "render.height=16",
                           "render.ground_on=false", "render.sky=[0,0,0]", "light.color=[1,1,1]",
                           "light.intensity=1", "lightmap.resolution=[16,16,16]"};
-    load(&cfg, tall, 13);
-    upload(&cfg, &vol);
+    test_config_from(&cfg, tall, 13);
+    test_upload_scene(renderer, &cfg, &vol);
     struct image img;
     draw(&cfg, NULL, true, &img);
     assert_bounded(&img, phase_max(&cfg.optics.params) * 1.0001f);

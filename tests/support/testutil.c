@@ -1,6 +1,8 @@
 #include "testutil.h"
 
+#include "app/app.h"
 #include "gpu/gpu.h"
+#include "render/render.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -72,4 +74,19 @@ struct gpu_context *test_gl_context_or_skip(void)
         exit(TEST_SKIP);
     }
     return ctx;
+}
+
+void test_config_from(struct config *cfg, const char **sets, int n)
+{
+    config_defaults(cfg);
+    for (int i = 0; i < n; i++)
+        assert_true(config_set(cfg, sets[i]));
+    assert_true(config_validate(cfg));
+}
+
+void test_upload_scene(struct renderer *r, const struct config *cfg, struct ext_volume *vol)
+{
+    assert_true(app_build_volume(cfg, vol));
+    assert_true(renderer_set_volume(r, vol));
+    assert_true(renderer_set_optics(r, &cfg->optics.params));
 }

@@ -34,6 +34,16 @@ const char *test_write_file(const char *name, const char *text);
 
 
 struct gpu_context;
+struct config;
+struct renderer;
+struct ext_volume;
+
+/* CFG = the defaults with the N "path=value" overrides SETS applied, validated (asserts). */
+void test_config_from(struct config *cfg, const char **sets, int n);
+
+/* Builds CFG's volume into VOL (the caller finishes it) and uploads it and the optics to R. */
+void test_upload_scene(struct renderer *r, const struct config *cfg, struct ext_volume *vol);
+
 /* A headless OpenGL 4.5 context, or exit(TEST_SKIP) with a message when none can be made. */
 struct gpu_context *test_gl_context_or_skip(void);
 #endif
