@@ -3,7 +3,8 @@
 // for operation in float32; see docs/lightmap.md for the grid and what a node stores.
 // Variants (#define, effects that are off are compiled out): FORWARD 0 = shadow only;
 // PERIPHERAL 0 = no peripheral ring; PHASE_MIX 0 = both phases' CP are equal (one phase), so
-// the ice share is not computed.
+// the ice share is not computed; MULTIPLE 1 = also store each slice's optical depth and ice
+// share for the diffuse column pass (light_diffuse.comp).
 
 #include "common.glsl"
 
@@ -16,11 +17,17 @@
 #ifndef PHASE_MIX
 #define PHASE_MIX 1
 #endif
+#ifndef MULTIPLE
+#define MULTIPLE 0
+#endif
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0) uniform sampler3D beta_tex;      // read with texelFetch only
 layout(r32f, binding = 0) uniform image3D light_img; // node (i, j, k) = light at that point
+#if MULTIPLE
+layout(rg32f, binding = 1) uniform writeonly image3D slice_img; // slice k-1..k: tau, ice share
+#endif
 
 uniform ivec3 vol_n;
 uniform vec3 vol_origin;
@@ -123,27 +130,36 @@ void main()
     }
     float beta = b.x + b.y;
     float l_in = imageLoad(light_img, ivec3(ij, k - 1)).r;
-    float t = exp(-beta * dsub);
-    float l = l_in * t; // Nes eq. 5.8
-#if FORWARD
-    if (beta > 0.0) {
-#if PHASE_MIX
-        float f_ice = b.x / beta;
-        float cp_ctr = cp.x + f_ice * (cp.y - cp.x);
-        float cp_per = cp.z + f_ice * (cp.w - cp.z);
-#else
-        float cp_ctr = cp.x, cp_per = cp.z;
+    float tau = beta * dsub;
+    // The slice integrated exactly (transport.c, beam_slice; docs/lightmap.md): Nes eq.
+    // 5.8-5.10 are the one-step form of the same equation.
+#if PHASE_MIX || MULTIPLE
+    float f_ice = beta > 0.0 ? b.x / beta : 0.0;
 #endif
-        float scat = 1.0 - t;
-        l += l_in * scat * cp_ctr; // Nes eq. 5.9
+#if FORWARD
+#if PHASE_MIX
+    float cp_ctr = cp.x + f_ice * (cp.y - cp.x);
+    float cp_per = cp.z + f_ice * (cp.w - cp.z);
+#else
+    float cp_ctr = cp.x, cp_per = cp.z;
+#endif
+    float a = 1.0 - cp_ctr;
+    float ea = exp(-a * tau);
+    float l = l_in * ea; // the central cone keeps CP(theta/4) of what the slice scatters
 #if PERIPHERAL
+    if (beta > 0.0) {
         float l_per = 0.25 * (plane_tap(fi + per_offset.x, fj, k - 1) +
                               plane_tap(fi - per_offset.x, fj, k - 1) +
                               plane_tap(fi, fj + per_offset.y, k - 1) +
                               plane_tap(fi, fj - per_offset.y, k - 1));
-        l += l_per * scat * cp_per; // Nes eq. 5.10
-#endif
+        l += l_per * (exp(-(a - cp_per) * tau) - ea); // the ring, from the neighbours
     }
+#endif
+#else
+    float l = l_in * exp(-tau); // Nes eq. 5.8
+#endif
+#if MULTIPLE
+    imageStore(slice_img, ivec3(ij, k), vec4(tau, f_ice, 0.0, 0.0));
 #endif
     imageStore(light_img, ivec3(ij, k), vec4(clamp(l, 0.0, 1.0))); // Nes eq. 5.11
 }

@@ -8,6 +8,10 @@
 //   LIGHTMAP_PAIR 1 (effects.temporal): two maps, of steps k and k + 1, bound side by side
 //               (the second at texture unit 8 or buffers 2 and 3, uniforms *_next); the light
 //               is mix(L_k, L_k+1, temporal_f).
+//   MULTIPLE 1 (effects.multiple): the map also holds the diffuse light of its two-stream
+//               column pass, M = 2 (U + V) and N = 2 (U - V) (light.h, light_map.diffuse), a
+//               dense RG volume at texture unit 9 (step k + 1: 10) in either storage;
+//               lightmap_diffuse() reads it (0 beside the light columns).
 
 #ifndef LIGHTMAP
 #define LIGHTMAP 0
@@ -20,6 +24,9 @@
 #endif
 #ifndef LIGHTMAP_PAIR
 #define LIGHTMAP_PAIR 0
+#endif
+#ifndef MULTIPLE
+#define MULTIPLE 0
 #endif
 #if TEMPORAL || LIGHTMAP_PAIR
 uniform float temporal_f; // blend of step k + 1 into step k, in [0, 1]
@@ -149,11 +156,53 @@ float lightmap_light(vec3 p)
 #endif
 #endif
 
+#if LIGHTMAP != 0 && MULTIPLE
+layout(binding = 9) uniform sampler3D diffuse_tex;
+#if LIGHTMAP_PAIR
+layout(binding = 10) uniform sampler3D diffuse_tex_next;
+#endif
+
+vec2 lightmap_diffuse(vec3 p)
+{
+    vec3 tex = (light_world_to_tex * vec4(p, 1.0)).xyz;
+    vec2 d = outside_light_columns(tex) ? vec2(0.0) : texture(diffuse_tex, tex).rg;
+#if LIGHTMAP_PAIR
+    vec3 tn = (light_world_to_tex_next * vec4(p, 1.0)).xyz;
+    vec2 dn = outside_light_columns(tn) ? vec2(0.0) : texture(diffuse_tex_next, tn).rg;
+    d = mix(d, dn, temporal_f);
+#endif
+    return d;
+}
+
+// The diffuse light scattered into direction cos(psi) from the light's direction, by a phase
+// of mean cosine G, as a multiple of the sun radiance scale: with the Eddington radiance
+// I0 + I1 mu and the phase's first moment, I0 + g I1 cos(psi) = (M + 1.5 g N cos(psi)) E / 4 pi
+// (never negative).
+float diffuse_scattered(vec2 d, float g, float cos_psi)
+{
+    return max(d.x + 1.5 * g * d.y * cos_psi, 0.0);
+}
+#endif
+
 float ground_light(vec3 p)
 {
 #if LIGHTMAP != 0 && GROUND_SHADOW != 0
     return lightmap_light(p);
 #else
     return 1.0;
+#endif
+}
+
+// Diffuse light reaching the ground at P, as a multiple of the sun radiance scale: the
+// Eddington field I0 + I1 mu gives an upward-facing surface the irradiance
+// pi I0 + (2 pi / 3) I1 sin(elevation) = E (M + N sin(elevation)) / 4, so a Lambertian ground
+// of albedo rho reflects rho sun_radiance (M + N SUN_Z).
+float ground_diffuse(vec3 p, float sun_z)
+{
+#if LIGHTMAP != 0 && GROUND_SHADOW != 0 && MULTIPLE
+    vec2 d = lightmap_diffuse(p);
+    return max(d.x + d.y * sun_z, 0.0);
+#else
+    return 0.0;
 #endif
 }

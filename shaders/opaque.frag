@@ -34,10 +34,11 @@ void main()
     if (emissive != 0) {
         radiance = c.rgb;
     } else {
-        // As the ground in raycast.comp: rho (4 L_sun cos L_l + L_sky).
+        // As the ground in raycast.comp: rho (L_sun (4 cos L_l + diffuse) + L_sky).
         vec3 n = normalize(v_normal);
         float cos_sun = max(dot(n, sun_dir), 0.0);
-        radiance = c.rgb * (4.0 * sun_radiance * cos_sun * ground_light(v_world) + sky_radiance);
+        float sun = 4.0 * cos_sun * ground_light(v_world) + ground_diffuse(v_world, sun_dir.z);
+        radiance = c.rgb * (sun_radiance * sun + sky_radiance);
     }
     vec2 ndc = gl_FragCoord.xy / vec2(image_size) * 2.0 - 1.0;
     vec4 pn = inv_view_proj * vec4(ndc, -1.0, 1.0);

@@ -9,6 +9,9 @@
 // TINT 1 = the scattered light takes a per-voxel colour (species tints, transfer functions).
 // TEMPORAL 1 = temporal interpolation (effects.temporal): beta = mix(beta_k, beta_k+1,
 // temporal_f) from a second extinction texture (the light map pair is LIGHTMAP_PAIR).
+// MULTIPLE 1 = multiple scattering (effects.multiple): the light map's diffuse light (an
+// Eddington field along the light) is scattered toward the eye beside the sun's.
+uniform vec2 mean_cosine;    // g of the ice and the water phase (MULTIPLE)
 
 #include "common.glsl"
 #include "lightmap_lookup.glsl"
@@ -127,12 +130,16 @@ void main()
 #else
             float pv = phase.g;
 #endif
-            float light = lightmap_light(p);
+            float light = pv * lightmap_light(p);
+#if MULTIPLE
+            float g = (b.r * mean_cosine.x + b.g * mean_cosine.y) / beta;
+            light += diffuse_scattered(lightmap_diffuse(p), g, cos_psi);
+#endif
 #if TINT
             vec3 tint = texture(tint_tex, (p - box_min) / box_size).rgb;
-            radiance += trans * (1.0 - ts) * pv * light * sun_radiance * tint;
+            radiance += trans * (1.0 - ts) * light * sun_radiance * tint;
 #else
-            radiance += trans * (1.0 - ts) * pv * light * sun_radiance;
+            radiance += trans * (1.0 - ts) * light * sun_radiance;
 #endif
             trans *= ts;
             if (trans < termination) {
@@ -154,7 +161,8 @@ void main()
         // the volume's single scattering is T (1 - T_s) (4 pi p) sun_radiance), hence the
         // ground's rho E cos / pi = 4 rho sun_radiance cos; a uniform sky adds rho L_sky.
         float sun_light = max(sun_dir.z, 0.0) * ground_light(g);
-        background = ground_albedo * (4.0 * sun_radiance * sun_light + sky_radiance);
+        background = ground_albedo * (sun_radiance * (4.0 * sun_light + ground_diffuse(g, sun_dir.z)) +
+                                      sky_radiance);
     } else {
         background = sky_radiance;
     }

@@ -14,8 +14,8 @@
 #define MEASURE_STEPS_MAX 4096
 
 static const char *const names[EFFECT_COUNT] = {
-    "shadows", "forward", "peripheral", "phase", "ground_shadow", "detail", "temporal",
-    "distortion",
+    "shadows", "forward", "peripheral", "multiple", "phase", "ground_shadow", "detail",
+    "temporal", "distortion",
 };
 
 const char *effects_name(enum effect e)
@@ -210,6 +210,28 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
                       forward))
         say(out, EFFECT_PERIPHERAL, true, "auto: follows effects.forward (on)");
 
+    /* Multiple scattering: a node stores the diffuse light as 2(U + V), U and V the diffuse
+     * fluxes relative to the sun.  In an optically thin column the diffuse light is at most
+     * what was scattered out of the beam, 1 - e^-tau <= tau, so the eye pass gains at most
+     * 2 tau_max of the sun (docs/effects.md). */
+    if (!decide_fixed(out, EFFECT_MULTIPLE, mode[EFFECT_MULTIPLE], EFFECT_SHADOWS, shadows)) {
+        double bound = 2.0 * tau;
+        if (!facts->volume_known)
+            say(out, EFFECT_MULTIPLE, true, "auto: volume not measured, on");
+        else if (bound <= tol && changes)
+            say(out, EFFECT_MULTIPLE, true, "auto: optically thin now (%.3g) but %s: on", tau,
+                why_changes);
+        else if (bound <= tol)
+            say(out, EFFECT_MULTIPLE, false,
+                "auto: optically thin along the light (diffuse light at most 2 x largest "
+                "optical depth = %.3g <= %.3g, half a display level)",
+                bound, tol);
+        else
+            say(out, EFFECT_MULTIPLE, true,
+                "auto: largest optical depth along the light %.3g > %.3g (thin limit)", tau,
+                0.5 * tol);
+    }
+
     /* Per-species phase: one phase when one kind of particle is absent.  Decided from the
      * first step: a microphysics scheme that writes no ice species (WSM3) never has any. */
     out->single_phase_ice = facts->volume_known && facts->beta_ice_sum > facts->beta_water_sum;
@@ -327,15 +349,9 @@ void effects_light_settings(const struct config *cfg, const struct effects *e,
         s->resolution[a] = cfg->lightmap.resolution[a] < 2 ? 2 : cfg->lightmap.resolution[a];
     s->forward = e->on[EFFECT_FORWARD];
     s->peripheral = e->on[EFFECT_PERIPHERAL];
+    s->multiple = e->on[EFFECT_MULTIPLE];
     s->epsilon = cfg->lightmap.epsilon;
     light_settings_set_optics(s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
-    if (!e->on[EFFECT_PHASE]) {
-        if (e->single_phase_ice) {
-            s->cp.water_ctr = s->cp.ice_ctr;
-            s->cp.water_per = s->cp.ice_per;
-        } else {
-            s->cp.ice_ctr = s->cp.water_ctr;
-            s->cp.ice_per = s->cp.water_per;
-        }
-    }
+    if (!e->on[EFFECT_PHASE])
+        light_settings_one_phase(s, e->single_phase_ice);
 }

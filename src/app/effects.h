@@ -77,7 +77,7 @@ const char *effects_name(enum effect e);
 void effects_apply_render(const struct effects *e, struct render_settings *s);
 
 /* The light map settings that CFG and E ask for: resolution, forward angle, epsilon from
- * lightmap.*, forward and peripheral from E, and with the phase effect off both phases'
+ * lightmap.*, forward, peripheral and multiple from E, and with the phase effect off both phases'
  * cumulative phases set to the single phase's (the light pass then compiles the mix out). */
 void effects_light_settings(const struct config *cfg, const struct effects *e,
                             struct light_settings *s);

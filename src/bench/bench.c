@@ -75,14 +75,15 @@ int bench_variants(const struct bench_scene *sc, bool quick, struct bench_varian
             snprintf(v->value, sizeof(v->value), "theta %.0f", angles[i]);
             /* CP scales with the cone: recompute it for the new angle. */
             light_settings_set_optics(&v->light, &sc->optics, angles[i]);
-            if (sc->light.cp.ice_ctr == sc->light.cp.water_ctr) {
-                v->light.cp.ice_ctr = v->light.cp.water_ctr;
-                v->light.cp.ice_per = v->light.cp.water_per;
-            });
+            if (sc->settings.single_phase)
+                light_settings_one_phase(&v->light, sc->settings.single_phase_ice));
     ADD(snprintf(v->knob, sizeof(v->knob), "peripheral"); snprintf(v->value, sizeof(v->value),
         "off"); v->light.peripheral = false);
     ADD(snprintf(v->knob, sizeof(v->knob), "forward"); snprintf(v->value, sizeof(v->value),
         "off (shadow only)"); v->light.forward = false; v->light.peripheral = false);
+    ADD(snprintf(v->knob, sizeof(v->knob), "multiple"); snprintf(v->value, sizeof(v->value),
+        "%s", sc->light.multiple ? "off" : "on (two-stream)");
+        v->light.multiple = !sc->light.multiple);
     ADD(snprintf(v->knob, sizeof(v->knob), "shadows"); snprintf(v->value, sizeof(v->value),
         "off (no light map)"); v->shadows = false);
     ADD(snprintf(v->knob, sizeof(v->knob), "combination");

@@ -38,6 +38,8 @@ enum effect {
     EFFECT_SHADOWS,       /* effects.shadows: self-shadowing through the deep light map */
     EFFECT_FORWARD,       /* effects.forward: central forward scattering in the light map */
     EFFECT_PERIPHERAL,    /* effects.peripheral: peripheral forward scattering */
+    EFFECT_MULTIPLE,      /* effects.multiple: multiple scattering, the light map's diffuse
+                             two-stream term */
     EFFECT_PHASE,         /* effects.phase: per-species phase (off: one phase for all) */
     EFFECT_GROUND_SHADOW, /* effects.ground_shadow: the ground reads the light map */
     EFFECT_DETAIL,        /* effects.detail: procedural detail (docs/terrain.md) */

@@ -71,6 +71,11 @@ static void visit_key(struct visit *v, const struct light_key *k)
     visit_double(v, s->cp.water_per, t->cp.water_per);
     visit_double(v, s->cp.ice_ctr, t->cp.ice_ctr);
     visit_double(v, s->cp.ice_per, t->cp.ice_per);
+    visit_u64(v, s->multiple, t->multiple);
+    visit_double(v, s->cp.water_back, t->cp.water_back);
+    visit_double(v, s->cp.ice_back, t->cp.ice_back);
+    visit_double(v, s->cp.water_gamma, t->cp.water_gamma);
+    visit_double(v, s->cp.ice_gamma, t->cp.ice_gamma);
     visit_double(v, s->epsilon, t->epsilon);
     visit_u64(v, (uint64_t)(int64_t)s->substeps, (uint64_t)(int64_t)t->substeps);
 }

@@ -81,6 +81,8 @@ struct light_settings {
     double forward_angle_deg; /* theta: light scattered within theta/2 stays in the beam */
     bool forward;             /* forward scattering on; off = shadow only */
     bool peripheral;          /* peripheral ring theta/4 .. theta/2 on (needs forward) */
+    bool multiple;            /* multiple scattering: the diffuse light of the two-stream
+                                 column pass (light_map.diffuse) */
     struct optics_cp cp;      /* CP(theta/4) and CP(theta/2) - CP(theta/4) per phase */
     double epsilon;           /* compression error bound (compressed storage only) */
     int substeps;             /* extinction samples per slice; 0 = light_auto_substeps */
@@ -95,6 +97,12 @@ void light_settings_defaults(struct light_settings *s);
 void light_settings_set_optics(struct light_settings *s, const struct optics_params *optics,
                                double forward_angle_deg);
 
+/* One phase for every species (effects.phase off): copies the ice phase's (ICE) or the water
+ * phase's terms of s->cp over the other's, so the build compiles the mix out. */
+void light_settings_one_phase(struct light_settings *s, bool ice);
+/* Whether both phases' terms in s->cp are equal (the mix is then exact and compiled out). */
+bool light_settings_phases_equal(const struct light_settings *s);
+
 /* Peripheral offset (metres): the distance in the across-light plane, one slice spacing DZ
  * back, of a ray arriving from the middle of the peripheral ring, 3 theta / 8:
  * dz tan(3 theta / 8). */
@@ -108,8 +116,15 @@ int light_auto_substeps(const struct light_grid *g, const struct grid3 *box);
 
 struct light_map {
     struct light_grid grid;
-    int substeps; /* extinction samples per slice used by the build */
-    float *light; /* grid.n[0] * grid.n[1] * grid.n[2] values in [0, 1], owned */
+    int substeps;   /* extinction samples per slice used by the build */
+    float *light;   /* grid.n[0] * grid.n[1] * grid.n[2] values in [0, 1], owned */
+    /* With settings.multiple, the diffuse light at each node, two floats per node in the same
+     * order: M = 2 (U + V) and N = 2 (U - V) for the diffuse fluxes U (along the light) and V
+     * (back toward the sun) of the two-stream column pass, relative to the sun's irradiance E.
+     * In the Eddington radiance I(mu) = I0 + I1 mu (mu along the light), M = 4 pi I0 / E and
+     * N = (8 pi / 3) I1 / E; the eye pass scatters M + (3/2) g N cos(psi) toward the eye
+     * beside P_v(psi) L_l.  M >= 0, |N| <= M; NULL when off. */
+    float *diffuse;
 };
 
 /* Computes the dense light map of VOL for the sun direction SUN (toward the sun) with settings
@@ -127,12 +142,26 @@ static inline float light_map_node(const struct light_map *m, int i, int j, int 
     return m->light[(size_t)i + (size_t)n[0] * ((size_t)j + (size_t)n[1] * (size_t)k)];
 }
 
-/* Trilinear lookup at texture coordinates TEX (as from world_to_tex), clamped to the edge
- * nodes: what a GL_LINEAR, CLAMP_TO_EDGE sampler3D returns (up to its weight precision). */
 /* Texture coordinate TEX on an axis of N nodes -> lower node index, with *T the weight of the
  * next node; clamped to [0, n - 1] like GL_LINEAR with CLAMP_TO_EDGE. */
 int light_tex_node(float tex, int n, float *t);
+/* Trilinear lookup at texture coordinates TEX (as from world_to_tex), clamped to the edge
+ * nodes: what a GL_LINEAR, CLAMP_TO_EDGE sampler3D returns (up to its weight precision).
+ * light_map_sample_diffuse does the same for M and N of the diffuse array (0 when there is
+ * none). */
 float light_map_sample(const struct light_map *m, const float tex[3]);
+void light_map_sample_diffuse(const struct light_map *m, const float tex[3], float out[2]);
+
+/* The two-stream pass of one light column (light_map_build with settings.multiple; exposed for
+ * tests).  N nodes; BEAM[k] the light map values down the column; TAU[k] and F_ICE[k], k >= 1,
+ * the optical depth and ice share of the slice from node k - 1 to node k (TAU[0], F_ICE[0]
+ * unused); S the settings (cp).  Writes OUT[2 k] = M and OUT[2 k + 1] = N at every node (see
+ * light_map.diffuse).  SCRATCH holds 2 N floats.  Conservative scattering: the beam's loss becomes diffuse light, split between the
+ * hemispheres by the phase, and the diffuse fluxes are coupled by the Eddington two-stream
+ * equations, integrated exactly across each slice and joined by the adding method
+ * (docs/lightmap.md). */
+void light_diffuse_column(int n, const float *beam, const float *tau, const float *f_ice,
+                          const struct light_settings *s, float *scratch, float *out);
 
 /* Bytes of the dense map as a float32 3D texture. */
 size_t light_map_bytes(const struct light_map *m);

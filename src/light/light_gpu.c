@@ -9,10 +9,16 @@
 
 struct light_gpu {
     struct render_light hook; /* first: the renderer's bind callback gets it back */
-    /* Build programs by variant: bit 0 FORWARD, bit 1 PERIPHERAL, bit 2 PHASE_MIX (made on
-     * first use: an effect that is off is compiled out). */
-    struct gpu_program build[8];
-    struct gpu_texture light; /* R32F node volume */
+    /* Build programs by variant: bit 0 FORWARD, bit 1 PERIPHERAL, bit 2 PHASE_MIX, bit 3
+     * MULTIPLE (made on first use: an effect that is off is compiled out); the diffuse column
+     * pass by the first three bits. */
+    struct gpu_program build[16];
+    struct gpu_program diffuse_pass[8];
+    struct gpu_texture light;   /* R32F node volume */
+    struct gpu_texture diffuse; /* RG32F node volume, M and N; only with multiple scattering */
+    struct gpu_texture slice;   /* RG32F build scratch: each slice's tau and ice share */
+    struct gpu_texture adding;  /* RG32F build scratch of the column pass */
+    bool built_multiple;
     struct gpu_buffer columns, nodes;
     struct light_grid grid;
     struct light_cache cache;
@@ -30,6 +36,8 @@ void light_gpu_bind(const struct light_gpu *lg, const struct gpu_program *prog, 
     gpu_uniform_mat4(prog, next ? "light_world_to_tex_next" : "light_world_to_tex",
                      lg->grid.world_to_tex);
     gpu_uniform_ivec3(prog, next ? "light_n_next" : "light_n", lg->grid.n);
+    if (lg->built_multiple)
+        gpu_texture_bind(&lg->diffuse, next ? 10 : 9);
     if (lg->built_mode == LIGHT_GPU_DENSE) {
         gpu_texture_bind(&lg->light, next ? 8 : 2);
     } else {
@@ -54,21 +62,35 @@ static const struct gpu_program *build_program(struct light_gpu *lg, int v)
 {
     if (lg->build[v].id)
         return &lg->build[v];
-    char defines[96];
+    char defines[128];
     snprintf(defines, sizeof(defines), "#define FORWARD %d\n#define PERIPHERAL %d\n"
-             "#define PHASE_MIX %d\n", v & 1, (v >> 1) & 1, (v >> 2) & 1);
+             "#define PHASE_MIX %d\n#define MULTIPLE %d\n", v & 1, (v >> 1) & 1, (v >> 2) & 1,
+             (v >> 3) & 1);
     if (!gpu_program_init(&lg->build[v], "light_build.comp", defines))
         return NULL;
     return &lg->build[v];
+}
+
+static const struct gpu_program *diffuse_program(struct light_gpu *lg, int v)
+{
+    v &= 7;
+    if (lg->diffuse_pass[v].id)
+        return &lg->diffuse_pass[v];
+    char defines[96];
+    snprintf(defines, sizeof(defines), "#define FORWARD %d\n#define PERIPHERAL %d\n"
+             "#define PHASE_MIX %d\n", v & 1, (v >> 1) & 1, (v >> 2) & 1);
+    if (!gpu_program_init(&lg->diffuse_pass[v], "light_diffuse.comp", defines))
+        return NULL;
+    return &lg->diffuse_pass[v];
 }
 
 /* The variant of settings S: forward scattering, the peripheral ring, and the ice/water mix
  * (compiled out when both phases' cumulative phases are equal: the mix is then exact). */
 static int build_variant(const struct light_settings *s)
 {
-    bool mix = s->cp.ice_ctr != s->cp.water_ctr || s->cp.ice_per != s->cp.water_per;
+    bool mix = !light_settings_phases_equal(s);
     return (s->forward ? 1 : 0) | (s->forward && s->peripheral ? 2 : 0) |
-           (s->forward && mix ? 4 : 0);
+           ((s->forward || s->multiple) && mix ? 4 : 0) | (s->multiple ? 8 : 0);
 }
 
 struct light_gpu *light_gpu_create(void)
@@ -91,23 +113,68 @@ void light_gpu_destroy(struct light_gpu *lg)
 {
     if (!lg)
         return;
-    for (int v = 0; v < 8; v++)
+    for (int v = 0; v < 16; v++)
         gpu_program_finish(&lg->build[v]);
+    for (int v = 0; v < 8; v++)
+        gpu_program_finish(&lg->diffuse_pass[v]);
     gpu_texture_finish(&lg->light);
+    gpu_texture_finish(&lg->diffuse);
+    gpu_texture_finish(&lg->slice);
+    gpu_texture_finish(&lg->adding);
     gpu_buffer_finish(&lg->columns);
     gpu_buffer_finish(&lg->nodes);
     gpu_timer_finish(&lg->timer);
     free(lg);
 }
 
+/* (Re)allocates TEX as a 3D texture of the grid's size and FORMAT unless it already is. */
+static bool node_texture(struct gpu_texture *tex, const int n[3], enum gpu_format format)
+{
+    if (tex->id && memcmp(tex->size, n, 3 * sizeof(int)) == 0 && tex->format == format)
+        return true;
+    gpu_texture_finish(tex);
+    return gpu_texture_init(tex, 3, n, format, NULL);
+}
+
+/* The two-stream pass down every column (light_diffuse.comp), after the beam. */
+static bool build_diffuse(struct light_gpu *lg, const struct light_settings *s)
+{
+    const struct light_grid *g = &lg->grid;
+    if (!node_texture(&lg->diffuse, g->n, GPU_RG32F) ||
+        !node_texture(&lg->adding, g->n, GPU_RG32F))
+        return false;
+    const struct gpu_program *p = diffuse_program(lg, build_variant(s));
+    if (!p)
+        return false;
+    float cp[4] = {(float)s->cp.water_ctr, (float)s->cp.ice_ctr, (float)s->cp.water_per,
+                   (float)s->cp.ice_per};
+    float back[2] = {(float)s->cp.water_back, (float)s->cp.ice_back};
+    float gamma[2] = {(float)s->cp.water_gamma, (float)s->cp.ice_gamma};
+    gpu_uniform_ivec3(p, "grid_n", g->n);
+    gpu_uniform_vec4(p, "cp", cp);
+    gpu_uniform_vec2(p, "back", back);
+    gpu_uniform_vec2(p, "gamma", gamma);
+    gpu_image_bind(&lg->light, 0, false);
+    gpu_image_bind(&lg->slice, 1, false);
+    gpu_image_bind_rw(&lg->adding, 2);
+    gpu_image_bind(&lg->diffuse, 3, true);
+    gpu_dispatch(p, g->n[0], g->n[1], 1);
+    return true;
+}
+
 static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src,
                         const struct light_settings *s)
 {
     const struct light_grid *g = &lg->grid;
-    if (!lg->light.id || memcmp(lg->light.size, g->n, sizeof(g->n)) != 0) {
-        gpu_texture_finish(&lg->light);
-        if (!gpu_texture_init(&lg->light, 3, g->n, GPU_R32F, NULL))
+    if (!node_texture(&lg->light, g->n, GPU_R32F))
+        return false;
+    if (s->multiple) {
+        if (!node_texture(&lg->slice, g->n, GPU_RG32F))
             return false;
+    } else {
+        gpu_texture_finish(&lg->diffuse);
+        gpu_texture_finish(&lg->slice);
+        gpu_texture_finish(&lg->adding);
     }
     const struct gpu_program *p = build_program(lg, build_variant(s));
     if (!p)
@@ -136,11 +203,13 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
     gpu_uniform_vec2(p, "per_offset", per);
     gpu_texture_bind(src->beta, 0);
     gpu_image_bind_rw(&lg->light, 0);
+    if (s->multiple)
+        gpu_image_bind(&lg->slice, 1, true);
     for (int k = 0; k < g->n[2]; k++) {
         gpu_uniform_int(p, "plane", k);
         gpu_dispatch(p, g->n[0], g->n[1], 1);
     }
-    return true;
+    return !s->multiple || build_diffuse(lg, s);
 }
 
 bool light_gpu_read(const struct light_gpu *lg, struct light_map *map)
@@ -158,6 +227,15 @@ bool light_gpu_read(const struct light_gpu *lg, struct light_map *map)
         return false;
     }
     gpu_texture_read(&lg->light, map->light, count * sizeof(float));
+    if (lg->diffuse.id) {
+        map->diffuse = malloc(2 * count * sizeof(float));
+        if (!map->diffuse) {
+            log_error("light map: out of memory reading %zu nodes back", count);
+            light_map_finish(map);
+            return false;
+        }
+        gpu_texture_read(&lg->diffuse, map->diffuse, 2 * count * sizeof(float));
+    }
     return true;
 }
 
@@ -220,8 +298,9 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
     lg->have_key_mode = true;
     lg->built_mode = mode;
     lg->built_epsilon = settings->epsilon;
-    snprintf(lg->defines, sizeof(lg->defines), "#define LIGHTMAP %d\n",
-             mode == LIGHT_GPU_DENSE ? 1 : 2);
+    lg->built_multiple = settings->multiple;
+    snprintf(lg->defines, sizeof(lg->defines), "#define LIGHTMAP %d\n#define MULTIPLE %d\n",
+             mode == LIGHT_GPU_DENSE ? 1 : 2, settings->multiple ? 1 : 0);
     if (built)
         *built = true;
     return true;
@@ -245,6 +324,8 @@ double light_gpu_last_build_ms(const struct light_gpu *lg)
 void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed)
 {
     /* What the dense volume takes (or would take, in compressed mode, for comparison). */
-    *dense = (size_t)lg->grid.n[0] * lg->grid.n[1] * lg->grid.n[2] * sizeof(float);
-    *compressed = lg->compressed_bytes;
+    size_t nodes = (size_t)lg->grid.n[0] * lg->grid.n[1] * lg->grid.n[2];
+    size_t diffuse = lg->built_multiple ? 2 * nodes * sizeof(float) : 0;
+    *dense = nodes * sizeof(float) + diffuse;
+    *compressed = lg->compressed_bytes ? lg->compressed_bytes + diffuse : 0;
 }

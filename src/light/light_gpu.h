@@ -53,11 +53,12 @@ int light_gpu_variant(const struct light_gpu *lg);
 unsigned light_gpu_builds(const struct light_gpu *lg);
 double light_gpu_last_build_ms(const struct light_gpu *lg);
 
-/* Bytes of the dense light volume and of the compressed nodes (0 in dense mode). */
+/* Bytes of the dense light volume and of the compressed nodes (0 in dense mode), each with
+ * the dense diffuse volume added when the last build had multiple scattering. */
 void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed);
 
-/* Reads the dense light volume back into MAP (initialised here, finish with
- * light_map_finish): the same layout as the CPU reference.  Dense mode only: compressed mode
+/* Reads the dense light volume (and the diffuse one, with multiple scattering) back into MAP
+ * (initialised here, finish with light_map_finish): the same layout as the CPU reference.  Dense mode only: compressed mode
  * frees the dense volume once its columns are compressed. */
 bool light_gpu_read(const struct light_gpu *lg, struct light_map *map);
 

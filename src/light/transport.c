@@ -114,6 +114,29 @@ void light_settings_set_optics(struct light_settings *s, const struct optics_par
     optics_forward_cp(optics, forward_angle_deg * (PI / 180.0), &s->cp);
 }
 
+void light_settings_one_phase(struct light_settings *s, bool ice)
+{
+    struct optics_cp *c = &s->cp;
+    if (ice) {
+        c->water_ctr = c->ice_ctr;
+        c->water_per = c->ice_per;
+        c->water_back = c->ice_back;
+        c->water_gamma = c->ice_gamma;
+    } else {
+        c->ice_ctr = c->water_ctr;
+        c->ice_per = c->water_per;
+        c->ice_back = c->water_back;
+        c->ice_gamma = c->water_gamma;
+    }
+}
+
+bool light_settings_phases_equal(const struct light_settings *s)
+{
+    const struct optics_cp *c = &s->cp;
+    return c->ice_ctr == c->water_ctr && c->ice_per == c->water_per &&
+           c->ice_back == c->water_back && c->ice_gamma == c->water_gamma;
+}
+
 double light_peripheral_offset(double forward_angle_deg, double dz)
 {
     /* Riley §4.4: the outer band runs from theta/4 to theta/2; its four samples are taken at
@@ -145,7 +168,111 @@ void light_map_finish(struct light_map *map)
     if (!map)
         return;
     free(map->light);
+    free(map->diffuse);
     memset(map, 0, sizeof(*map));
+}
+
+/* The diffuse light that a slice of optical depth TAU, entered by the beam D0, sends out of
+ * its top (*SU) and bottom (*SD), times (1 + GT), for a beam loss rate K, a backward share SB of
+ * the lost light and the coupling GT = GAMMA TAU: the Eddington two-stream equations with the
+ * source K D0 e^-K t, solved exactly with no diffuse light entering the slice (docs/lightmap.md).
+ * Their sum is (1 + GT) D0 (1 - e^-K TAU): nothing is lost. */
+static void slice_sources(float d0, float tau, float k, float sb, float gamma, float *su,
+                          float *sd)
+{
+    float x = k * tau, e = expf(-x);
+    float e1, d1, d2; /* (1 - e) / k, tau - e1, e1 - tau e */
+    if (x < 1e-3f) {
+        e1 = tau * (1.0f - x * (0.5f - x * (1.0f / 6.0f)));
+        d1 = tau * x * (0.5f - x * (1.0f / 6.0f));
+        d2 = tau * x * (0.5f - x * (1.0f / 3.0f));
+    } else {
+        e1 = (1.0f - e) / k;
+        d1 = tau - e1;
+        d2 = e1 - tau * e;
+    }
+    float w = d0 * (1.0f - e);
+    *su = sb * w + gamma * d0 * d1;
+    *sd = (1.0f - sb) * w + gamma * d0 * d2;
+}
+
+/* One slice of the beam (docs/lightmap.md, "Integrating a slice"): the per-slice equations of
+ * Nes eq. 5.8-5.10 are the one-step form of dL/dtau = -(1 - CP_ctr) L + CP_per L_per; the
+ * slice is integrated exactly, taking the peripheral light to decay as a beam in the same
+ * medium does, exp(-(1 - CP_ctr - CP_per) tau).  The result no longer depends on how many
+ * slices a path is cut into, and it equals Nes' form to first order in tau. */
+static float beam_slice(float l_in, float l_per, float tau, float cpc, float cpp, bool fwd,
+                        bool per)
+{
+    if (!fwd)
+        return l_in * expf(-tau); /* Nes eq. 5.8 */
+    float a = 1.0f - cpc;
+    float ea = expf(-a * tau);
+    if (!per)
+        return l_in * ea;
+    float ek = expf(-(a - cpp) * tau);
+    return l_in * ea + l_per * (ek - ea);
+}
+
+/* The share of the extinction that leaves the beam for good: what is not kept in it by the
+ * central cone (and the peripheral ring, which hands it to the neighbouring columns). */
+static float beam_loss_rate(float cpc, float cpp, bool fwd, bool per)
+{
+    if (!fwd)
+        return 1.0f;
+    return 1.0f - cpc - (per ? cpp : 0.0f);
+}
+
+/* The phase terms of one slice, mixed by its ice share. */
+struct slice_terms {
+    float tau, loss, back, gamma; /* optical depth, beam loss rate, backward share, coupling */
+};
+
+static struct slice_terms slice_terms(const struct light_settings *s, float tau, float f_ice)
+{
+    const struct optics_cp *c = &s->cp;
+    const bool fwd = s->forward, per = s->forward && s->peripheral;
+    float cpc = (float)c->water_ctr + f_ice * ((float)c->ice_ctr - (float)c->water_ctr);
+    float cpp = (float)c->water_per + f_ice * ((float)c->ice_per - (float)c->water_per);
+    float back = (float)c->water_back + f_ice * ((float)c->ice_back - (float)c->water_back);
+    struct slice_terms t;
+    t.tau = fminf(tau, 1e8f); /* deeper is opaque all the same; keeps the sums finite */
+    t.loss = fmaxf(beam_loss_rate(cpc, cpp, fwd, per), 1e-6f);
+    t.back = fminf(fmaxf(back / t.loss, 0.0f), 1.0f);
+    t.gamma = (float)c->water_gamma + f_ice * ((float)c->ice_gamma - (float)c->water_gamma);
+    return t;
+}
+
+void light_diffuse_column(int n, const float *beam, const float *tau, const float *f_ice,
+                          const struct light_settings *s, float *scratch, float *out)
+{
+    /* Adding method, from the far end toward the sun: z[l] = 1 / (1 - A_l) with A_l the
+     * albedo of everything beyond node l, g[l] the diffuse light coming back out of it when
+     * none goes in.  Then from the sun's side: u the diffuse flux along the light. */
+    float *z = scratch, *g = scratch + n;
+    z[n - 1] = 1.0f; /* nothing beyond the last node sends light back */
+    g[n - 1] = 0.0f;
+    for (int l = n - 1; l >= 1; l--) {
+        struct slice_terms t = slice_terms(s, tau[l], f_ice[l]);
+        float gt = t.gamma * t.tau, su, sd;
+        slice_sources(beam[l - 1], t.tau, t.loss, t.back, t.gamma, &su, &sd);
+        float zt = z[l] + gt;
+        float a = 1.0f - 1.0f / z[l];
+        g[l - 1] = su / (1.0f + gt) + (g[l] + a * sd / (1.0f + gt)) * (z[l] / zt);
+        z[l - 1] = zt;
+    }
+    float u = 0.0f; /* no diffuse light enters from the sun's side */
+    out[0] = 2.0f * g[0];
+    out[1] = -2.0f * g[0];
+    for (int l = 1; l < n; l++) {
+        struct slice_terms t = slice_terms(s, tau[l], f_ice[l]);
+        float gt = t.gamma * t.tau, su, sd;
+        slice_sources(beam[l - 1], t.tau, t.loss, t.back, t.gamma, &su, &sd);
+        u = (u + gt * g[l] + sd) * (z[l] / z[l - 1]);
+        float v = (1.0f - 1.0f / z[l]) * u + g[l];
+        out[2 * l] = 2.0f * (u + v);
+        out[2 * l + 1] = 2.0f * (u - v);
+    }
 }
 
 bool light_map_build(const struct ext_volume *vol, const double sun[3],
@@ -190,6 +317,21 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
     float *L = map->light;
     for (size_t c = 0; c < plane; c++)
         L[c] = 1.0f; /* node plane 0 touches the box only at its sun-most corner */
+    /* With multiple scattering: each slice's optical depth and ice share, for the column pass. */
+    float *slice = NULL;
+    free(map->diffuse);
+    map->diffuse = NULL;
+    if (s->multiple) {
+        slice = calloc(2 * count, sizeof(float));
+        map->diffuse = malloc(2 * count * sizeof(float));
+        if (!slice || !map->diffuse) {
+            free(slice);
+            log_error("light map: out of memory for the diffuse light of %d x %d x %d nodes",
+                      n0, n1, n2);
+            light_map_finish(map);
+            return false;
+        }
+    }
 
     for (int k = 1; k < n2; k++) {
         const float *prev = L + plane * (size_t)(k - 1);
@@ -211,27 +353,53 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
                 }
                 float beta = b[0] + b[1]; /* sum over the parts: tau = beta dsub */
                 float l_in = prev[i + (size_t)n0 * j];
-                float t = expf(-beta * dsub); /* tau >> 100 underflows to 0: fine */
-                float l = l_in * t;           /* Nes eq. 5.8 */
-                if (fwd && beta > 0.0f) {
-                    float f_ice = b[0] / beta;
-                    float scat = 1.0f - t;
-                    float cpc = cpc_water + f_ice * (cpc_ice - cpc_water);
-                    l += l_in * scat * cpc; /* Nes eq. 5.9, Riley eq. 15 */
-                    if (per) {
-                        float fi = (float)i, fj = (float)j;
-                        float l_per = 0.25f * (plane_tap(prev, n0, n1, fi + rx, fj) +
-                                               plane_tap(prev, n0, n1, fi - rx, fj) +
-                                               plane_tap(prev, n0, n1, fi, fj + ry) +
-                                               plane_tap(prev, n0, n1, fi, fj - ry));
-                        float cpp = cpp_water + f_ice * (cpp_ice - cpp_water);
-                        l += l_per * scat * cpp; /* Nes eq. 5.10, Riley eq. 16 */
-                    }
+                float tau = beta * dsub; /* tau >> 100: the exponentials underflow to 0, fine */
+                float f_ice = beta > 0.0f ? b[0] / beta : 0.0f;
+                float cpc = cpc_water + f_ice * (cpc_ice - cpc_water);
+                float cpp = cpp_water + f_ice * (cpp_ice - cpp_water);
+                float l_per = 0.0f;
+                if (per && beta > 0.0f) {
+                    float fi = (float)i, fj = (float)j;
+                    l_per = 0.25f * (plane_tap(prev, n0, n1, fi + rx, fj) +
+                                     plane_tap(prev, n0, n1, fi - rx, fj) +
+                                     plane_tap(prev, n0, n1, fi, fj + ry) +
+                                     plane_tap(prev, n0, n1, fi, fj - ry));
+                }
+                float l = beam_slice(l_in, l_per, tau, cpc, cpp, fwd, per);
+                if (slice) {
+                    size_t at = 2 * (i + (size_t)n0 * (j + (size_t)n1 * k));
+                    slice[at] = tau;
+                    slice[at + 1] = f_ice;
                 }
                 /* Nes eq. 5.11; never above the incident light, never negative. */
                 cur[i + (size_t)n0 * j] = fminf(fmaxf(l, 0.0f), 1.0f);
             }
         }
+    }
+    if (slice) {
+        float *col = malloc(7 * (size_t)n2 * sizeof(float));
+        if (!col) {
+            free(slice);
+            log_error("light map: out of memory for a light column");
+            light_map_finish(map);
+            return false;
+        }
+        float *beam = col, *tau = col + n2, *fi = col + 2 * n2, *scratch = col + 3 * n2,
+              *out = col + 5 * n2;
+        for (size_t c = 0; c < plane; c++) {
+            for (int k = 0; k < n2; k++) {
+                beam[k] = L[c + plane * k];
+                tau[k] = slice[2 * (c + plane * k)];
+                fi[k] = slice[2 * (c + plane * k) + 1];
+            }
+            light_diffuse_column(n2, beam, tau, fi, s, scratch, out);
+            for (int k = 0; k < n2; k++) {
+                map->diffuse[2 * (c + plane * k)] = out[2 * k];
+                map->diffuse[2 * (c + plane * k) + 1] = out[2 * k + 1];
+            }
+        }
+        free(col);
+        free(slice);
     }
     return true;
 }
@@ -257,7 +425,27 @@ int light_tex_node(float tex, int n, float *t)
     return i;
 }
 
+static size_t node_index(const int *n, int i, int j, int k)
+{
+    return (size_t)i + (size_t)n[0] * ((size_t)j + (size_t)n[1] * (size_t)k);
+}
+
+static float sample_nodes(const struct light_map *m, const float *values, int stride,
+                          const float tex[3]);
+
 float light_map_sample(const struct light_map *m, const float tex[3])
+{
+    return sample_nodes(m, m->light, 1, tex);
+}
+
+void light_map_sample_diffuse(const struct light_map *m, const float tex[3], float out[2])
+{
+    out[0] = m->diffuse ? sample_nodes(m, m->diffuse, 2, tex) : 0.0f;
+    out[1] = m->diffuse ? sample_nodes(m, m->diffuse + 1, 2, tex) : 0.0f;
+}
+
+static float sample_nodes(const struct light_map *m, const float *values, int stride,
+                          const float tex[3])
 {
     const int *n = m->grid.n;
     int i[3];
@@ -267,8 +455,8 @@ float light_map_sample(const struct light_map *m, const float tex[3])
     float c[2][2];
     for (int dk = 0; dk < 2; dk++) {
         for (int dj = 0; dj < 2; dj++) {
-            float a0 = light_map_node(m, i[0], i[1] + dj, i[2] + dk);
-            float a1 = light_map_node(m, i[0] + 1, i[1] + dj, i[2] + dk);
+            float a0 = values[stride * node_index(n, i[0], i[1] + dj, i[2] + dk)];
+            float a1 = values[stride * node_index(n, i[0] + 1, i[1] + dj, i[2] + dk)];
             c[dk][dj] = a0 + t[0] * (a1 - a0);
         }
     }

@@ -389,4 +389,8 @@ void optics_forward_cp(const struct optics_params *p, double forward_angle_rad,
     out->water_per = phase_cs_cumulative(gw, h) - out->water_ctr;
     out->ice_ctr = phase_cs_cumulative(gi, q);
     out->ice_per = phase_cs_cumulative(gi, h) - out->ice_ctr;
+    out->water_back = 1.0 - phase_cs_cumulative(gw, 0.5 * PI);
+    out->ice_back = 1.0 - phase_cs_cumulative(gi, 0.5 * PI);
+    out->water_gamma = 0.75 * (1.0 - p->g_water);
+    out->ice_gamma = 0.75 * (1.0 - p->g_ice);
 }

@@ -84,6 +84,11 @@ void optics_eye_phase_table(const struct optics_params *p, int n, float *out);
 struct optics_cp {
     double water_ctr, water_per; /* CP(theta/4), CP(theta/2) - CP(theta/4) */
     double ice_ctr, ice_per;
+    /* For the diffuse (two-stream) pass of the light map: the backward hemisphere's share
+     * 1 - CP(pi/2), and the Eddington two-stream coupling 3 (1 - g) / 4 of the phase's mean
+     * cosine g (Meador and Weaver 1980, Table 1, with albedo 1). */
+    double water_back, ice_back;
+    double water_gamma, ice_gamma;
 };
 void optics_forward_cp(const struct optics_params *p, double forward_angle_rad,
                        struct optics_cp *out);

@@ -34,6 +34,7 @@ struct renderer {
     struct grid3 grid_next;
     bool have_next;
     struct gpu_texture phase;
+    float mean_cosine[2]; /* g of the ice and the water phase (MULTIPLE) */
     struct gpu_program tonemap;
     struct variant variants[MAX_VARIANTS];
     int n_variants;
@@ -185,6 +186,8 @@ bool renderer_set_optics(struct renderer *r, const struct optics_params *optics)
 {
     float table[PHASE_TABLE_SIZE * 2];
     optics_eye_phase_table(optics, PHASE_TABLE_SIZE, table);
+    r->mean_cosine[0] = (float)optics->g_ice;
+    r->mean_cosine[1] = (float)optics->g_water;
     if (r->phase.id) {
         gpu_texture_upload(&r->phase, table);
         return true;
@@ -318,6 +321,11 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     gpu_uniform_vec3(prog, "ground_albedo", s->ground);
     gpu_uniform_int(prog, "ground_on", s->ground_on ? 1 : 0);
     gpu_uniform_float(prog, "phase_size", (float)PHASE_TABLE_SIZE);
+    /* One phase for all (PHASE_MIX 0): its mean cosine for both. */
+    float g1 = s->single_phase_ice ? r->mean_cosine[0] : r->mean_cosine[1];
+    float mean_cosine[2] = {s->single_phase ? g1 : r->mean_cosine[0],
+                            s->single_phase ? g1 : r->mean_cosine[1]};
+    gpu_uniform_vec2(prog, "mean_cosine", mean_cosine);
     gpu_uniform_ivec2(prog, "image_size", image_size);
     int zero[2] = {0, 0};
     gpu_uniform_ivec2(prog, "pixel_offset", zero);

@@ -18,6 +18,9 @@
  * both sum the same float32 operations, but the GPU may fuse multiply-adds and its exp()
  * differs from libm's in the last bits; errors stay far below this after 128 planes. */
 #define GPU_CPU_TOLERANCE 2e-4
+/* The same for the diffuse volume (M and N, light_map.diffuse), relative to max(1, |CPU|): M
+ * reaches about 4 and the column pass runs the adding recursion twice over each column. */
+#define GPU_CPU_DIFFUSE_TOLERANCE 2e-4
 
 static struct gpu_context *ctx;
 static struct renderer *renderer;
@@ -32,7 +35,10 @@ static void settings_of(const struct config *cfg, struct light_settings *s)
     light_settings_set_optics(s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
 }
 
-static double gpu_vs_cpu(const char **sets, int n)
+/* Builds the light map of the scene SETS on the GPU and the CPU and returns the largest
+ * |GPU - CPU| of the light; with MULTIPLE the diffuse volume is built and compared too, its
+ * largest difference relative to max(1, |CPU|) in *DIFFUSE. */
+static double gpu_vs_cpu(const char **sets, int n, bool multiple, double *diffuse)
 {
     struct config cfg;
     struct ext_volume vol = {0};
@@ -40,6 +46,7 @@ static double gpu_vs_cpu(const char **sets, int n)
     test_upload_scene(renderer, &cfg, &vol);
     struct light_settings s;
     settings_of(&cfg, &s);
+    s.multiple = multiple;
     double sun[3];
     light_sun_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
 
@@ -63,6 +70,21 @@ static double gpu_vs_cpu(const char **sets, int n)
     }
     /* The scene casts a real shadow: a comparison of two all-ones maps proves nothing. */
     assert_true(lo < 0.5);
+    if (multiple) {
+        assert_non_null(gpu.diffuse);
+        assert_non_null(cpu.diffuse);
+        double dworst = 0.0, mmax = 0.0;
+        for (size_t i = 0; i < 2 * count; i++) {
+            assert_true(isfinite(gpu.diffuse[i]));
+            double c = cpu.diffuse[i];
+            dworst = fmax(dworst, fabs((double)gpu.diffuse[i] - c) / fmax(1.0, fabs(c)));
+            mmax = fmax(mmax, c);
+        }
+        assert_true(mmax > 0.5); /* real diffuse light, not two zero volumes */
+        *diffuse = dworst;
+    } else {
+        assert_null(gpu.diffuse); /* nothing read back that was not built */
+    }
     light_map_finish(&gpu);
     light_map_finish(&cpu);
     light_gpu_destroy(lg);
@@ -75,7 +97,7 @@ static void test_gpu_matches_cpu_sphere(void **state)
     const char *sets[] = {"scene.kind=sphere", "scene.size=[32,32,32]",
                           "scene.extent=[10,10,10]", "scene.tau=30", "light.azimuth=60",
                           "light.elevation=25", "lightmap.resolution=[48,48,64]"};
-    double err = gpu_vs_cpu(sets, 7);
+    double err = gpu_vs_cpu(sets, 7, false, NULL);
     print_message("sphere: max |GPU - CPU| = %.3g\n", err);
     assert_true(err <= GPU_CPU_TOLERANCE);
 }
@@ -85,7 +107,7 @@ static void test_gpu_matches_cpu_slab(void **state)
     const char *sets[] = {"scene.kind=slab", "scene.size=[24,24,12]", "scene.extent=[10,10,2]",
                           "scene.tau=6", "light.azimuth=200", "light.elevation=40",
                           "lightmap.resolution=[40,40,48]", "scene.phase=ice"};
-    double err = gpu_vs_cpu(sets, 8);
+    double err = gpu_vs_cpu(sets, 8, false, NULL);
     print_message("slab: max |GPU - CPU| = %.3g\n", err);
     assert_true(err <= GPU_CPU_TOLERANCE);
 }
@@ -93,9 +115,43 @@ static void test_gpu_matches_cpu_slab(void **state)
 static void test_gpu_matches_cpu_storm(void **state)
 {
     const char *sets[] = {"scene.size=[64,64,32]", "lightmap.resolution=[64,64,64]"};
-    double err = gpu_vs_cpu(sets, 2);
+    double err = gpu_vs_cpu(sets, 2, false, NULL);
     print_message("storm: max |GPU - CPU| = %.3g\n", err);
     assert_true(err <= GPU_CPU_TOLERANCE);
+}
+
+/* Multiple scattering on the same three scenes: the column pass on the GPU
+ * (light_diffuse.comp) against light_diffuse_column.  Measured on Mesa llvmpipe (relative to
+ * max(1, |CPU|)): sphere 1.5e-6, slab 5.1e-7, storm 7.2e-7, storm with peripheral off 7.5e-7. */
+static void test_gpu_matches_cpu_diffuse(void **state)
+{
+    const char *sphere[] = {"scene.kind=sphere", "scene.size=[32,32,32]",
+                            "scene.extent=[10,10,10]", "scene.tau=30", "light.azimuth=60",
+                            "light.elevation=25", "lightmap.resolution=[48,48,64]"};
+    const char *slab[] = {"scene.kind=slab", "scene.size=[24,24,12]", "scene.extent=[10,10,2]",
+                          "scene.tau=6", "light.azimuth=200", "light.elevation=40",
+                          "lightmap.resolution=[40,40,48]", "scene.phase=ice"};
+    const char *storm[] = {"scene.size=[64,64,32]", "lightmap.resolution=[64,64,64]"};
+    /* The storm holds both phases: its mix of the two-stream terms runs (PHASE_MIX). */
+    const char *storm_central[] = {"scene.size=[64,64,32]", "lightmap.resolution=[64,64,64]",
+                                   "effects.peripheral=off"};
+    struct {
+        const char *name;
+        const char **sets;
+        int n;
+    } scenes[] = {{"sphere", sphere, 7},
+                  {"slab", slab, 8},
+                  {"storm", storm, 2},
+                  {"storm, peripheral off", storm_central, 3}};
+    for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++) {
+        double diffuse = INFINITY;
+        double err = gpu_vs_cpu(scenes[i].sets, scenes[i].n, true, &diffuse);
+        print_message("%s, multiple scattering: max |GPU - CPU| light %.3g, diffuse %.3g "
+                      "(relative to max(1, |CPU|))\n",
+                      scenes[i].name, err, diffuse);
+        assert_true(err <= GPU_CPU_TOLERANCE);
+        assert_true(diffuse <= GPU_CPU_DIFFUSE_TOLERANCE);
+    }
 }
 
 /* Renders the config's camera (or VIEW when given) with the light map the config asks for;
@@ -240,7 +296,9 @@ static void test_silver_lining(void **state)
     ext_volume_finish(&vol);
 }
 
-static double sphere_mean(const char *forward)
+/* A thick sphere (tau 20 along its diameter) lit from the east at the horizon, seen from the
+ * south: MODE is one more config override. */
+static void side_lit_sphere(const char *mode, struct image *img)
 {
     struct config cfg;
     struct ext_volume vol = {0};
@@ -249,19 +307,48 @@ static double sphere_mean(const char *forward)
                           "light.elevation=0", "render.sky=[0,0,0]", "render.ground_on=false",
                           "camera.position=[5,-40,5]", "camera.target=[5,5,5]",
                           "camera.fov=16", "render.width=64", "render.height=64",
-                          "lightmap.resolution=[48,48,64]", forward};
+                          "lightmap.resolution=[48,48,64]", mode};
     test_config_from(&cfg, sets, 15);
     test_upload_scene(renderer, &cfg, &vol);
     struct app_light al;
-    struct image img;
     assert_true(app_light_init(&al, &cfg));
-    render(&cfg, &al, NULL, NULL, &img);
-    double r = 5.0 / 45.0 / tan(8.0 * M_PI / 180.0) * 32.0;
-    double m = ring_mean(&img, r, 0.0, 0.9);
-    image_finish(&img);
+    render(&cfg, &al, NULL, NULL, img);
     app_light_finish(&al);
     ext_volume_finish(&vol);
+}
+
+/* The sphere's radius in pixels in side_lit_sphere: 5 km at 45 km, 16 degrees over 64. */
+#define SIDE_LIT_RADIUS (5.0 / 45.0 / tan(8.0 * M_PI / 180.0) * 32.0)
+
+static double sphere_mean(const char *forward)
+{
+    struct image img;
+    side_lit_sphere(forward, &img);
+    double m = ring_mean(&img, SIDE_LIT_RADIUS, 0.0, 0.9);
+    image_finish(&img);
     return m;
+}
+
+/* Mean of channel 0 over the pixels of the sphere's disc (within 0.9 of its radius R) whose
+ * horizontal offset from the centre, in units of R, lies in [A, B): negative is west, away from
+ * the sun. */
+static double band_mean(const struct image *img, double r, double a, double b)
+{
+    double sum = 0.0;
+    int n = 0;
+    for (int y = 0; y < img->height; y++) {
+        for (int x = 0; x < img->width; x++) {
+            double dx = (x + 0.5 - img->width / 2.0) / r, dy = (y + 0.5 - img->height / 2.0) / r;
+            if (hypot(dx, dy) < 0.9 && dx >= a && dx < b) {
+                float v = img->rgba[4 * (y * img->width + x)];
+                assert_true(isfinite(v) && v >= 0.0f);
+                sum += v;
+                n++;
+            }
+        }
+    }
+    assert_true(n > 0);
+    return sum / n;
 }
 
 static void test_forward_scattering_brightens_interior(void **state)
@@ -272,6 +359,34 @@ static void test_forward_scattering_brightens_interior(void **state)
     double off = sphere_mean("effects.forward=off");
     print_message("sphere seen from the side: forward on %.4g, off %.4g\n", on, off);
     assert_true(on > 1.2 * off);
+}
+
+static void test_multiple_scattering_brightens_shadow(void **state)
+{
+    /* The same sphere with the diffuse light of the two-stream pass: the half away from the
+     * sun, where the beam is all but gone, is lit by the light the sunlit half scattered into
+     * it.  Without it only (peripheral) forward scattering reaches there. */
+    struct image on, off;
+    side_lit_sphere("effects.multiple=on", &on);
+    side_lit_sphere("effects.multiple=off", &off);
+    const double r = SIDE_LIT_RADIUS;
+    double shade_on = band_mean(&on, r, -0.9, -0.3), shade_off = band_mean(&off, r, -0.9, -0.3);
+    double sun_on = band_mean(&on, r, 0.3, 0.9), sun_off = band_mean(&off, r, 0.3, 0.9);
+    print_message("side-lit sphere, shadowed half: multiple on %.4g, off %.4g (x %.2f); sunlit "
+                  "half: on %.4g, off %.4g (x %.2f)\n",
+                  shade_on, shade_off, shade_on / shade_off, sun_on, sun_off, sun_on / sun_off);
+    /* Measured on llvmpipe: shadowed half x 2560 (6.72 against 0.0026), sunlit half x 32
+     * (11.3 against 0.36: the sun's light scattered through 90 degrees by a forward-peaked
+     * phase is weak, the diffuse light nearly isotropic). */
+    assert_true(sun_off > shade_off); /* the east (sun) side is the right one */
+    assert_true(shade_on > 20.0 * shade_off);
+    /* Multiple scattering matters most where single scattering is weakest... */
+    assert_true(shade_on / shade_off > 4.0 * (sun_on / sun_off));
+    /* ...but the diffuse light still fades away from the sun (the column pass runs down the
+     * light, not up it). */
+    assert_true(shade_on < sun_on);
+    image_finish(&on);
+    image_finish(&off);
 }
 
 static double ground_under(const char *mode, double x_km, double y_km)
@@ -329,10 +444,12 @@ int main(void)
         cmocka_unit_test(test_gpu_matches_cpu_sphere),
         cmocka_unit_test(test_gpu_matches_cpu_slab),
         cmocka_unit_test(test_gpu_matches_cpu_storm),
+        cmocka_unit_test(test_gpu_matches_cpu_diffuse),
         cmocka_unit_test(test_compressed_within_epsilon_of_dense),
         cmocka_unit_test(test_twelve_views_one_build),
         cmocka_unit_test(test_silver_lining),
         cmocka_unit_test(test_forward_scattering_brightens_interior),
+        cmocka_unit_test(test_multiple_scattering_brightens_shadow),
         cmocka_unit_test(test_cloud_shadows_the_ground),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);

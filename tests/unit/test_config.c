@@ -122,8 +122,10 @@ static void test_defaults(void **state)
     assert_int_equal(cfg.lightmap.resolution[2], 64);
     assert_true(cfg.lightmap.epsilon == 0.01);
     assert_true(cfg.lightmap.forward_angle_deg == 20.0);
+    /* Every effect is auto, except multiple scattering, which costs a second pass over the
+     * light map and is opt-in. */
     for (int e = 0; e < EFFECT_COUNT; e++)
-        assert_int_equal(cfg.effects.mode[e], EFFECT_AUTO);
+        assert_int_equal(cfg.effects.mode[e], e == EFFECT_MULTIPLE ? EFFECT_OFF : EFFECT_AUTO);
     assert_true(config_validate(&cfg));
 }
 
@@ -375,6 +377,13 @@ static void test_set_each_type(void **state)
     assert_int_equal(cfg.effects.mode[EFFECT_SHADOWS], EFFECT_OFF);
     assert_true(config_set(&cfg, "effects.ground_shadow=\"on\""));
     assert_int_equal(cfg.effects.mode[EFFECT_GROUND_SHADOW], EFFECT_ON);
+    /* The row sets its own slot, not a neighbour's (off is the default: set the others). */
+    assert_true(config_set(&cfg, "effects.multiple=on"));
+    assert_int_equal(cfg.effects.mode[EFFECT_MULTIPLE], EFFECT_ON);
+    assert_true(config_set(&cfg, "effects.multiple=auto"));
+    assert_int_equal(cfg.effects.mode[EFFECT_MULTIPLE], EFFECT_AUTO);
+    assert_int_equal(cfg.effects.mode[EFFECT_PERIPHERAL], EFFECT_AUTO);
+    assert_int_equal(cfg.effects.mode[EFFECT_PHASE], EFFECT_AUTO);
     assert_true(config_set(&cfg, "render.ground_on=false"));
     assert_false(cfg.render.ground_on);
     assert_true(config_set(&cfg, "render.ground_on=yes"));
@@ -557,7 +566,7 @@ static void test_reference(void **state)
     assert_non_null(strstr(table, "| `species.graupel.enabled` | bool | `true` |"));
     assert_non_null(strstr(table, "| `data.files` | list of strings | `[]` |"));
 
-    /* Every row's setting can be set from the command line; header + rule + 93 rows. */
+    /* Every row's setting can be set from the command line; header + rule + 94 rows. */
     int rows = 0;
     for (const char *line = table; *line; line = strchr(line, '\n') + 1) {
         rows++;
@@ -580,7 +589,7 @@ static void test_reference(void **state)
         if (strncmp(path, "optics.radius_mm.", 17) != 0) /* mm to m may round differently */
             assert_memory_equal(&cfg, &before, sizeof(cfg));
     }
-    assert_int_equal(rows, 2 + 93);
+    assert_int_equal(rows, 2 + 94);
 
     /* docs/config-reference.md holds the current table. */
     char doc_path[1024];

@@ -30,12 +30,26 @@ static void test_unknown_facts_simulate_everything(void **state)
     struct effects e;
     effects_decide(&cfg, NULL, &e);
     assert_true(e.on[EFFECT_SHADOWS] && e.on[EFFECT_FORWARD] && e.on[EFFECT_PERIPHERAL]);
+    /* Multiple scattering is opt-in: off by default, even when nothing is known... */
+    assert_false(e.on[EFFECT_MULTIPLE]);
+    assert_string_equal(e.reason[EFFECT_MULTIPLE], "off in the config");
     assert_true(e.on[EFFECT_PHASE] && e.on[EFFECT_GROUND_SHADOW]);
     assert_false(e.on[EFFECT_TEMPORAL]);
     assert_false(e.on[EFFECT_DISTORTION]);
     for (int i = 0; i < EFFECT_COUNT; i++)
         assert_true(strlen(e.reason[i]) > 0);
     assert_string_equal(effects_name(EFFECT_GROUND_SHADOW), "ground_shadow");
+    /* The names follow the enum: a new effect shifts nothing. */
+    assert_string_equal(effects_name(EFFECT_PERIPHERAL), "peripheral");
+    assert_string_equal(effects_name(EFFECT_MULTIPLE), "multiple");
+    assert_string_equal(effects_name(EFFECT_PHASE), "phase");
+    assert_string_equal(effects_name(EFFECT_DISTORTION), "distortion");
+    assert_string_equal(effects_name(EFFECT_COUNT), "?");
+    /* ...and auto simulates it too when nothing is known. */
+    assert_true(config_set(&cfg, "effects.multiple=auto"));
+    effects_decide(&cfg, NULL, &e);
+    assert_true(e.on[EFFECT_MULTIPLE]);
+    assert_non_null(strstr(e.reason[EFFECT_MULTIPLE], "not measured"));
 }
 
 static void test_thin_medium_bound(void **state)
@@ -68,6 +82,120 @@ static void test_thin_medium_bound(void **state)
     assert_false(e.on[EFFECT_SHADOWS] || e.on[EFFECT_FORWARD] || e.on[EFFECT_GROUND_SHADOW]);
     assert_non_null(strstr(e.reason[EFFECT_FORWARD], "effects.shadows"));
     assert_non_null(strstr(e.light_builds, "no light map"));
+}
+
+/* effects.multiple: the diffuse term adds at most 2 tau_max of the sun to the eye pass's
+ * source; auto turns it off exactly when that is at most half a display level. */
+static void test_multiple_thin_limit(void **state)
+{
+    struct config cfg;
+    config_defaults(&cfg);
+    assert_true(config_set(&cfg, "effects.multiple=auto")); /* the default is off */
+    struct effects_facts f;
+    known_thick(&f);
+    struct effects e;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_MULTIPLE]);
+    assert_non_null(strstr(e.reason[EFFECT_MULTIPLE], "auto: largest optical depth"));
+    /* Shadows stay on above the tolerance; multiple is off below half of it. */
+    double thin = 0.5 * EFFECTS_FORWARD_TOLERANCE;
+    f.max_tau_light = 0.99 * thin;
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_SHADOWS]); /* tau < tolerance: no shadows, nothing needs them */
+    assert_false(e.on[EFFECT_MULTIPLE]);
+    assert_non_null(strstr(e.reason[EFFECT_MULTIPLE], "effects.shadows"));
+    /* With shadows forced on, the thin limit itself decides. */
+    assert_true(config_set(&cfg, "effects.shadows=on"));
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_SHADOWS]);
+    assert_false(e.on[EFFECT_MULTIPLE]);
+    assert_non_null(strstr(e.reason[EFFECT_MULTIPLE], "optically thin"));
+    f.max_tau_light = 1.01 * thin;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_MULTIPLE]);
+    assert_non_null(strstr(e.reason[EFFECT_MULTIPLE], "thin limit"));
+    /* Between the two limits (auto would drop shadows, tau <= tolerance): with shadows on,
+     * multiple is on, since 2 tau > tolerance. */
+    config_defaults(&cfg);
+    assert_true(config_set(&cfg, "effects.multiple=auto"));
+    f.max_tau_light = 0.75 * EFFECTS_FORWARD_TOLERANCE;
+    assert_true(config_set(&cfg, "effects.shadows=on"));
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_MULTIPLE]);
+    /* Thin now, but the scene can change, or it was never measured: on. */
+    f.max_tau_light = 0.5 * thin;
+    f.time_steps = 3;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_MULTIPLE]);
+    assert_non_null(strstr(e.reason[EFFECT_MULTIPLE], "several time steps"));
+    f.time_steps = 1;
+    f.sun_moves = true;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_MULTIPLE]);
+    assert_non_null(strstr(e.reason[EFFECT_MULTIPLE], "the sun can move"));
+    f.sun_moves = false;
+    f.volume_known = false;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_MULTIPLE]);
+    assert_non_null(strstr(e.reason[EFFECT_MULTIPLE], "not measured"));
+}
+
+/* effects.multiple: on and off in the config, the shadows prerequisite, and the light map
+ * settings that carry the decision. */
+static void test_multiple_modes(void **state)
+{
+    struct config cfg;
+    config_defaults(&cfg);
+    struct effects_facts f;
+    known_thick(&f);
+    struct effects e;
+    struct light_settings s;
+    /* The default, off, wins over a thick medium where auto would turn it on, and the light
+     * map is told. */
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_MULTIPLE]);
+    assert_string_equal(e.reason[EFFECT_MULTIPLE], "off in the config");
+    effects_light_settings(&cfg, &e, &s);
+    assert_false(s.multiple);
+    assert_true(config_set(&cfg, "effects.multiple=auto"));
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_MULTIPLE]);
+    effects_light_settings(&cfg, &e, &s);
+    assert_true(s.multiple);
+    assert_true(config_set(&cfg, "effects.multiple=off"));
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_MULTIPLE]);
+    assert_string_equal(e.reason[EFFECT_MULTIPLE], "off in the config");
+    assert_true(e.on[EFFECT_SHADOWS] && e.on[EFFECT_FORWARD] && e.on[EFFECT_PERIPHERAL]);
+    effects_light_settings(&cfg, &e, &s);
+    assert_false(s.multiple);
+    assert_true(s.forward && s.peripheral);
+    /* on wins over a thin medium (thin, but thick enough that shadows stay on). */
+    assert_true(config_set(&cfg, "effects.multiple=on"));
+    f.max_tau_light = 0.25 * EFFECTS_FORWARD_TOLERANCE;
+    assert_true(config_set(&cfg, "effects.shadows=on"));
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_MULTIPLE]);
+    assert_string_equal(e.reason[EFFECT_MULTIPLE], "on in the config");
+    effects_light_settings(&cfg, &e, &s);
+    assert_true(s.multiple);
+    /* on, but shadows are off: no light map, so no diffuse term either. */
+    assert_true(config_set(&cfg, "effects.shadows=off"));
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_MULTIPLE]);
+    assert_string_equal(e.reason[EFFECT_MULTIPLE], "needs effects.shadows, which is off");
+    effects_light_settings(&cfg, &e, &s);
+    assert_false(s.multiple);
+    /* Independent of forward scattering: forward off leaves multiple (auto) on. */
+    config_defaults(&cfg);
+    assert_true(config_set(&cfg, "effects.multiple=auto"));
+    known_thick(&f);
+    assert_true(config_set(&cfg, "effects.forward=off"));
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_FORWARD]);
+    assert_true(e.on[EFFECT_MULTIPLE]);
+    effects_light_settings(&cfg, &e, &s);
+    assert_true(s.multiple && !s.forward);
 }
 
 static void test_a_changing_scene_keeps_effects_on(void **state)
@@ -333,6 +461,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_unknown_facts_simulate_everything),
         cmocka_unit_test(test_thin_medium_bound),
+        cmocka_unit_test(test_multiple_thin_limit),
+        cmocka_unit_test(test_multiple_modes),
         cmocka_unit_test(test_a_changing_scene_keeps_effects_on),
         cmocka_unit_test(test_thin_bound_holds_in_the_light_map),
         cmocka_unit_test(test_config_modes_and_prerequisites),

@@ -2,6 +2,8 @@
  * light: the CPU deep light map.  Grid frame and texture mapping, transport against closed
  * forms (slab, single voxel), the hard cases (empty, axis-aligned and grazing sun, optically
  * very thick), invariants (shadow monotone, forward >= shadow only, [0, 1]), the silver lining,
+ * exact slices (no dependence on the slice count), the two-stream column pass of multiple
+ * scattering (energy, slice count, an independent ODE solution, extreme depths, whole maps),
  * compression error bounds, and rebuild-on-change.
  */
 #include <math.h>
@@ -658,6 +660,382 @@ static void test_substeps_flat_volume(void **state)
     ext_volume_finish(&v);
 }
 
+/* ---- exact slices ------------------------------------------------------------------------ */
+
+/* A laterally wide homogeneous water slab, 64 km x 64 km x 1 km of optical depth TAU, lit from
+ * straight above with NK nodes along the light and 9 x 9 across: the centre column (four nodes
+ * from the edges, where the peripheral taps read 1) sees a laterally uniform medium. */
+static void slab_beam(double tau, int nk, bool peripheral, struct light_map *m)
+{
+    struct ext_volume v;
+    make_volume(&v, 8, 8, 8, 8000.0, 8000.0, 125.0);
+    fill_uniform(&v, 0.0f, (float)(tau / 1000.0));
+    struct light_settings s;
+    realistic_settings(&s, 9);
+    s.resolution[2] = nk;
+    s.peripheral = peripheral;
+    assert_true(light_map_build(&v, (const double[3]){0, 0, 1}, &s, m));
+    ext_volume_finish(&v);
+}
+
+/* Each slice of the beam is integrated exactly: in a homogeneous slab the light at depth tau
+ * is exp(-(1 - CPc) tau) (peripheral off) or exp(-(1 - CPc - CPp) tau) (peripheral on, the
+ * taps seeing the same light) however many slices the path is cut into.  Nes' one-step form
+ * L_k = L_k-1 (T + (1 - T) CPc), T = e^-tau_slice, only tends to it as the slices thin. */
+static void test_beam_slice_count_independent(void **state)
+{
+    struct light_settings s;
+    realistic_settings(&s, 9);
+    const double cpc = s.cp.water_ctr, cpp = s.cp.water_per, tau = 10.0;
+    assert_true(cpc > 0.05 && cpp > 0.0 && cpc + cpp < 1.0);
+    const int nks[] = {8, 32, 128};
+    for (int per = 0; per < 2; per++) {
+        const double loss = 1.0 - cpc - (per ? cpp : 0.0);
+        for (size_t r = 0; r < sizeof nks / sizeof nks[0]; r++) {
+            struct light_map m = {0};
+            slab_beam(tau, nks[r], per, &m);
+            double worst = 0.0;
+            for (int k = 0; k < nks[r]; k++) {
+                double depth = tau * k / (nks[r] - 1.0);
+                double expect = exp(-loss * depth);
+                double got = light_map_node(&m, 4, 4, k);
+                worst = fmax(worst, fabs(got - expect) / expect);
+            }
+            print_message("slab tau %g, %3d nodes, peripheral %s: max relative error %.2g\n",
+                          tau, nks[r], per ? "on " : "off", worst);
+            assert_true(worst <= 1e-4);
+            light_map_finish(&m);
+        }
+    }
+    /* The old form at 8 nodes (7 slices of tau 10/7): far off the exact light. */
+    double t = exp(-tau / 7.0), old = 1.0;
+    for (int k = 0; k < 7; k++)
+        old *= t + (1.0 - t) * cpc; /* Nes eq. 5.8-5.9 */
+    double exact = exp(-(1.0 - cpc) * tau);
+    print_message("one-step form at 8 nodes: %.4g at the bottom, exact %.4g (x %.2f)\n", old,
+                  exact, old / exact);
+    assert_true(fabs(old - exact) / exact > 0.1);
+}
+
+/* ---- multiple scattering: the two-stream column pass -------------------------------------- */
+
+/* light_diffuse_column on a homogeneous water column of total optical depth TAU cut into N - 1
+ * equal slices, with the beam the map would hold there: exp(-k tau_k), k = 1 - CPc (forward on,
+ * peripheral off).  OUT holds 2 N floats. */
+static void homogeneous_column(const struct light_settings *s, int n, double tau, float *out)
+{
+    float *beam = malloc(5 * (size_t)n * sizeof(float));
+    assert_non_null(beam);
+    float *t = beam + n, *fi = beam + 2 * n, *scratch = beam + 3 * n;
+    const double k = 1.0 - s->cp.water_ctr;
+    for (int i = 0; i < n; i++) {
+        beam[i] = (float)exp(-k * tau * i / (n - 1.0));
+        t[i] = i > 0 ? (float)(tau / (n - 1.0)) : 0.0f;
+        fi[i] = 0.0f;
+    }
+    light_diffuse_column(n, beam, t, fi, s, scratch, out);
+    free(beam);
+}
+
+static void diffuse_settings(struct light_settings *s)
+{
+    realistic_settings(s, 8);
+    s->peripheral = false;
+    s->multiple = true;
+    assert_true(s->cp.water_gamma > 0.0 && s->cp.water_back > 0.0);
+}
+
+/* Conservative scattering: what the beam loses leaves the column as diffuse light, through the
+ * top (V0 = M0 / 2: no diffuse light enters there, U0 = 0) or the bottom (U = M / 2: nothing
+ * comes back from below, V = 0). */
+static void test_diffuse_column_conserves_energy(void **state)
+{
+    struct light_settings s;
+    diffuse_settings(&s);
+    const double taus[] = {0.1, 2.0, 20.0, 200.0};
+    const int ns[] = {2, 33};
+    float out[2 * 33];
+    for (size_t a = 0; a < sizeof taus / sizeof taus[0]; a++) {
+        for (size_t b = 0; b < sizeof ns / sizeof ns[0]; b++) {
+            int n = ns[b];
+            homogeneous_column(&s, n, taus[a], out);
+            double beam = exp(-(1.0 - s.cp.water_ctr) * taus[a]);
+            double top = 0.5 * out[0], bottom = 0.5 * out[2 * (n - 1)];
+            double sum = (double)(float)beam + top + bottom;
+            print_message("tau %5g, %2d nodes: reflected %.6f, diffuse through %.6f, beam %.6f, "
+                          "sum - 1 = %.2g\n",
+                          taus[a], n, top, bottom, beam, sum - 1.0);
+            assert_true(fabs(sum - 1.0) <= 1e-5);
+            /* At the top only V, at the bottom only U. */
+            assert_float_equal(out[1], -out[0], 1e-7);
+            assert_float_equal(out[2 * n - 1], out[2 * n - 2], 1e-7);
+            assert_true(top > 0.0 && bottom > 0.0);
+        }
+    }
+}
+
+/* Each slice is solved exactly and joined by the adding method: the reflectance and the
+ * diffuse transmittance do not depend on the number of slices. */
+static void test_diffuse_column_slice_count_independent(void **state)
+{
+    struct light_settings s;
+    diffuse_settings(&s);
+    const double taus[] = {2.0, 20.0};
+    const int ns[] = {2, 5, 33, 257};
+    float *out = malloc(2 * 257 * sizeof(float));
+    assert_non_null(out);
+    for (size_t a = 0; a < sizeof taus / sizeof taus[0]; a++) {
+        double v0[4], ut[4], worst_v = 0.0, worst_u = 0.0;
+        for (int b = 0; b < 4; b++) {
+            homogeneous_column(&s, ns[b], taus[a], out);
+            v0[b] = 0.5 * out[0];
+            ut[b] = 0.5 * out[2 * (ns[b] - 1)];
+            worst_v = fmax(worst_v, fabs(v0[b] - v0[0]) / v0[0]);
+            worst_u = fmax(worst_u, fabs(ut[b] - ut[0]) / ut[0]);
+        }
+        print_message("tau %g, 2..257 nodes: reflectance %.6f (spread %.2g), diffuse "
+                      "transmittance %.6f (spread %.2g)\n",
+                      taus[a], v0[0], worst_v, ut[0], worst_u);
+        assert_true(worst_v <= 1e-4);
+        assert_true(worst_u <= 1e-4);
+    }
+    free(out);
+}
+
+/* The two-stream equations with the beam's loss as source, d/dt of (U, V) at optical depth t:
+ * dU/dt = -g U + g V + s_f k e^-kt,  dV/dt = -g U + g V - s_b k e^-kt. */
+struct two_stream {
+    double gamma, k, sb;
+};
+
+static void two_stream_rhs(const struct two_stream *p, double t, const double y[2], double dy[2])
+{
+    double src = p->k * exp(-p->k * t);
+    double c = p->gamma * (y[1] - y[0]);
+    dy[0] = c + (1.0 - p->sb) * src;
+    dy[1] = c - p->sb * src;
+}
+
+/* RK4 from t = 0 (U = 0, V = V0) to TAU in STEPS steps; with NODES > 0 also records M and N at
+ * NODES equally spaced depths (STEPS a multiple of NODES - 1) into MN. */
+static void two_stream_shoot(const struct two_stream *p, double v0, double tau, int steps,
+                             int nodes, double *mn, double end[2])
+{
+    double y[2] = {0.0, v0}, h = tau / steps;
+    int per_node = nodes > 1 ? steps / (nodes - 1) : 0;
+    for (int i = 0; i <= steps; i++) {
+        if (per_node && i % per_node == 0) {
+            mn[2 * (i / per_node)] = 2.0 * (y[0] + y[1]);
+            mn[2 * (i / per_node) + 1] = 2.0 * (y[0] - y[1]);
+        }
+        if (i == steps)
+            break;
+        double t = i * h, k1[2], k2[2], k3[2], k4[2], yt[2];
+        two_stream_rhs(p, t, y, k1);
+        for (int c = 0; c < 2; c++)
+            yt[c] = y[c] + 0.5 * h * k1[c];
+        two_stream_rhs(p, t + 0.5 * h, yt, k2);
+        for (int c = 0; c < 2; c++)
+            yt[c] = y[c] + 0.5 * h * k2[c];
+        two_stream_rhs(p, t + 0.5 * h, yt, k3);
+        for (int c = 0; c < 2; c++)
+            yt[c] = y[c] + h * k3[c];
+        two_stream_rhs(p, t + h, yt, k4);
+        for (int c = 0; c < 2; c++)
+            y[c] += h / 6.0 * (k1[c] + 2.0 * k2[c] + 2.0 * k3[c] + k4[c]);
+    }
+    end[0] = y[0];
+    end[1] = y[1];
+}
+
+/* An independent solution of the same boundary value problem (U(0) = 0, V(tau) = 0): RK4 in
+ * double precision, shooting on V(0); the system is linear, so two shots fix it. */
+static void test_diffuse_column_matches_ode(void **state)
+{
+    struct light_settings s;
+    diffuse_settings(&s);
+    struct two_stream p;
+    p.gamma = s.cp.water_gamma;
+    p.k = 1.0 - s.cp.water_ctr;
+    p.sb = s.cp.water_back / p.k;
+    assert_true(p.sb > 0.0 && p.sb < 1.0);
+    enum { N = 65, STEPS = 64 * 400 };
+    const double taus[] = {2.0, 20.0};
+    for (size_t a = 0; a < sizeof taus / sizeof taus[0]; a++) {
+        double tau = taus[a], e0[2], e1[2], end[2], mn[2 * N];
+        two_stream_shoot(&p, 0.0, tau, STEPS, 0, NULL, e0);
+        two_stream_shoot(&p, 1.0, tau, STEPS, 0, NULL, e1);
+        double v0 = -e0[1] / (e1[1] - e0[1]); /* V(tau) = 0 */
+        two_stream_shoot(&p, v0, tau, STEPS, N, mn, end);
+        assert_true(fabs(end[1]) < 1e-12);
+        float out[2 * N];
+        homogeneous_column(&s, N, tau, out);
+        double dv = fabs(0.5 * out[0] - v0) / v0;
+        double du = fabs(0.5 * out[2 * (N - 1)] - end[0]) / end[0];
+        /* And the whole profile, relative to the largest value. */
+        double big = 0.0, worst = 0.0;
+        for (int i = 0; i < 2 * N; i++)
+            big = fmax(big, fabs(mn[i]));
+        for (int i = 0; i < 2 * N; i++)
+            worst = fmax(worst, fabs(out[i] - mn[i]) / big);
+        print_message("tau %g: ODE V(0) %.6f U(tau) %.6f; column pass relative differences "
+                      "%.2g, %.2g; M, N profile %.2g\n",
+                      tau, v0, end[0], dv, du, worst);
+        assert_true(dv <= 1e-4);
+        assert_true(du <= 1e-4);
+        assert_true(worst <= 1e-4);
+    }
+}
+
+/* Slices of optical depth 1e4 and 1e30 (kept finite), and empty ones, in both phases: every
+ * output finite, M >= 0, |N| <= M; the column still conserves energy. */
+static void test_diffuse_column_extreme(void **state)
+{
+    enum { N = 24 };
+    const float taus[N] = {0, 0, 1e4f, 0, 1e30f, 0, 0.5f, 1e4f, 1e4f, 0, 1e30f, 1e30f,
+                           0, 2.0f, 0, 1e-30f, 1e4f, 0, 0, 1e30f, 3.0f, 0, 1e4f, 0};
+    float beam[N], fi[N], scratch[2 * N], out[2 * N];
+    for (int mode = 0; mode < 3; mode++) { /* forward off, central only, both */
+        struct light_settings s;
+        realistic_settings(&s, 8);
+        s.multiple = true;
+        s.forward = mode > 0;
+        s.peripheral = mode > 1;
+        for (int first = 0; first < 3; first++) { /* start at different rows of the table */
+            float t[N];
+            for (int i = 0; i < N; i++) {
+                t[i] = i == 0 ? 0.0f : taus[(i + 7 * first) % N];
+                fi[i] = (float)((i + first) % 3) * 0.5f;
+            }
+            beam[0] = 1.0f;
+            for (int i = 1; i < N; i++) {
+                double cpc = s.cp.water_ctr + fi[i] * (s.cp.ice_ctr - s.cp.water_ctr);
+                double cpp = s.cp.water_per + fi[i] * (s.cp.ice_per - s.cp.water_per);
+                double k = mode == 0 ? 1.0 : 1.0 - cpc - (mode > 1 ? cpp : 0.0);
+                beam[i] = (float)(beam[i - 1] * exp(-k * (double)t[i]));
+            }
+            light_diffuse_column(N, beam, t, fi, &s, scratch, out);
+            for (int i = 0; i < N; i++) {
+                float m = out[2 * i], nn = out[2 * i + 1];
+                if (!(isfinite(m) && isfinite(nn) && m >= 0.0f && fabsf(nn) <= m + 1e-6f))
+                    fail_msg("mode %d start %d node %d: M %g N %g", mode, first, i, (double)m,
+                             (double)nn);
+            }
+            double sum = beam[N - 1] + 0.5 * out[0] + 0.5 * out[2 * (N - 1)];
+            assert_true(fabs(sum - 1.0) <= 1e-3);
+        }
+    }
+    /* A single slice that is all of it, and one column of two empty nodes: no diffuse light. */
+    struct light_settings s;
+    diffuse_settings(&s);
+    const float t1[2] = {0, 1e30f}, b1[2] = {1.0f, 0.0f}, f1[2] = {0, 0};
+    light_diffuse_column(2, b1, t1, f1, &s, scratch, out);
+    for (int i = 0; i < 4; i++)
+        assert_true(isfinite(out[i]));
+    assert_true(out[0] > 1.0f && out[0] <= 2.0f + 1e-6f); /* nearly all reflected */
+    const float t0[2] = {0, 0}, b0[2] = {1.0f, 1.0f};
+    light_diffuse_column(2, b0, t0, f1, &s, scratch, out);
+    for (int i = 0; i < 4; i++)
+        assert_true(out[i] == 0.0f);
+}
+
+/* The diffuse array of a whole map: only with settings.multiple, finite, M >= 0, |N| <= M,
+ * zero in columns that cross no medium, the beam unchanged by it, and (peripheral off: no
+ * light changes columns) every column conserving energy. */
+static void check_diffuse_map(const struct ext_volume *v, const double sun[3],
+                              struct light_settings *s, const char *what)
+{
+    struct light_map on = {0}, off = {0};
+    s->multiple = false;
+    assert_true(light_map_build(v, sun, s, &off));
+    assert_null(off.diffuse);
+    float zero[2] = {1, 1};
+    light_map_sample_diffuse(&off, (const float[3]){0.5f, 0.5f, 0.5f}, zero);
+    assert_true(zero[0] == 0.0f && zero[1] == 0.0f);
+    s->multiple = true;
+    assert_true(light_map_build(v, sun, s, &on));
+    assert_non_null(on.diffuse);
+    const int *n = on.grid.n;
+    size_t plane = (size_t)n[0] * n[1], count = plane * n[2];
+    assert_memory_equal(on.light, off.light, count * sizeof(float));
+    double mmax = 0.0, worst_energy = 0.0;
+    size_t clear = 0;
+    for (size_t c = 0; c < plane; c++) {
+        bool lit = true;
+        for (int k = 0; k < n[2]; k++) {
+            float m = on.diffuse[2 * (c + plane * k)], nn = on.diffuse[2 * (c + plane * k) + 1];
+            if (!(isfinite(m) && isfinite(nn) && m >= 0.0f && fabsf(nn) <= m * (1.0f + 1e-5f)))
+                fail_msg("%s: column %zu node %d: M %g N %g", what, c, k, (double)m, (double)nn);
+            mmax = fmax(mmax, m);
+            lit = lit && on.light[c + plane * k] == 1.0f;
+        }
+        if (lit) { /* the column crosses no medium */
+            clear++;
+            for (int k = 0; k < n[2]; k++)
+                assert_true(on.diffuse[2 * (c + plane * k)] == 0.0f);
+        }
+        if (!s->peripheral) {
+            double sum = on.light[c + plane * (n[2] - 1)] + 0.5 * on.diffuse[2 * c] +
+                         0.5 * on.diffuse[2 * (c + plane * (n[2] - 1))];
+            worst_energy = fmax(worst_energy, fabs(sum - 1.0));
+        }
+    }
+    if (s->peripheral)
+        print_message("%s: max M %.3g, %zu clear columns of %zu\n", what, mmax, clear, plane);
+    else
+        print_message("%s: max M %.3g, %zu clear columns of %zu, worst column energy error "
+                      "%.2g\n",
+                      what, mmax, clear, plane, worst_energy);
+    assert_true(mmax > 0.1);
+    assert_true(worst_energy <= 1e-4);
+    /* The lookup at a node's texel centre returns that node's pair. */
+    int i = n[0] / 2, j = n[1] / 2, k = n[2] / 2;
+    float tex[3] = {(i + 0.5f) / n[0], (j + 0.5f) / n[1], (k + 0.5f) / n[2]}, d[2];
+    light_map_sample_diffuse(&on, tex, d);
+    size_t at = 2 * ((size_t)i + n[0] * ((size_t)j + (size_t)n[1] * k));
+    assert_float_equal(d[0], on.diffuse[at], 1e-5 * (1.0 + on.diffuse[at]));
+    assert_float_equal(d[1], on.diffuse[at + 1], 1e-5 * (1.0 + fabsf(on.diffuse[at + 1])));
+    /* Rebuilt into the same map with multiple off: the diffuse array goes. */
+    s->multiple = false;
+    assert_true(light_map_build(v, sun, s, &on));
+    assert_null(on.diffuse);
+    light_map_finish(&on);
+    light_map_finish(&off);
+}
+
+static void test_diffuse_map_sphere_and_storm(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 24, 20, 16, 300.0, 300.0, 100.0);
+    fill_sphere(&v, 8.0);
+    struct light_settings s;
+    realistic_settings(&s, 24);
+    double sun[3];
+    light_sun_direction(247.0, 30.0, sun);
+    check_diffuse_map(&v, sun, &s, "sphere, peripheral on");
+    s.peripheral = false;
+    check_diffuse_map(&v, sun, &s, "sphere, peripheral off");
+    s.forward = false;
+    check_diffuse_map(&v, (const double[3]){0, 0, 1}, &s, "sphere, shadow only, overhead");
+    ext_volume_finish(&v);
+
+    struct synth_desc d = {.kind = SYNTH_STORM,
+                           .n = {64, 64, 32},
+                           .extent_m = {60000.0, 60000.0, 16000.0},
+                           .seed = 1,
+                           .time = 0.5};
+    if (!synth_extinction(&d, NULL, &v)) {
+        print_message("synthetic storm unavailable; skipping its diffuse map\n");
+        return;
+    }
+    realistic_settings(&s, 40);
+    light_sun_direction(135.0, 35.0, sun);
+    check_diffuse_map(&v, sun, &s, "storm, peripheral on");
+    s.peripheral = false;
+    check_diffuse_map(&v, sun, &s, "storm, peripheral off");
+    ext_volume_finish(&v);
+}
+
 /* ---- compression ------------------------------------------------------------------------- */
 
 static void check_compressed(const struct light_map *m, double eps)
@@ -841,8 +1219,9 @@ static void test_key_and_cache(void **state)
     assert_true(c.node_count > 0);
 
     /* Each input that matters triggers exactly one rebuild. */
-    struct light_key changed[9];
-    for (int i = 0; i < 9; i++)
+    enum { CHANGES = 12 };
+    struct light_key changed[CHANGES];
+    for (int i = 0; i < CHANGES; i++)
         changed[i] = k;
     light_sun_direction(136.0, 30.0, changed[0].sun);
     changed[1].volume_id = 8;
@@ -853,7 +1232,11 @@ static void test_key_and_cache(void **state)
     changed[6].settings.epsilon = 0.01;
     changed[7].box.spacing[0] = 101.0;
     changed[8].settings.substeps = 3;
-    for (int i = 0; i < 9; i++) {
+    /* Multiple scattering: the switch alone, and the two-stream terms it reads. */
+    changed[9].settings.multiple = true;
+    changed[10].settings.cp.water_back += 0.01;
+    changed[11].settings.cp.ice_gamma += 0.01;
+    for (int i = 0; i < CHANGES; i++) {
         assert_false(light_key_equal(&k, &changed[i]));
         assert_true(light_key_hash(&k) != light_key_hash(&changed[i]));
         unsigned before = cache.builds;
@@ -959,6 +1342,12 @@ int main(void)
         cmocka_unit_test(test_peripheral_spreads_light),
         cmocka_unit_test(test_silver_lining),
         cmocka_unit_test(test_substeps_flat_volume),
+        cmocka_unit_test(test_beam_slice_count_independent),
+        cmocka_unit_test(test_diffuse_column_conserves_energy),
+        cmocka_unit_test(test_diffuse_column_slice_count_independent),
+        cmocka_unit_test(test_diffuse_column_matches_ode),
+        cmocka_unit_test(test_diffuse_column_extreme),
+        cmocka_unit_test(test_diffuse_map_sphere_and_storm),
         cmocka_unit_test(test_compressed_within_epsilon),
         cmocka_unit_test(test_compress_degenerate),
         cmocka_unit_test(test_compression_reduces),

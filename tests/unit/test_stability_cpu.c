@@ -1,6 +1,7 @@
 /* Hard cases of SPEC.md on the CPU side: the Monte Carlo reference through a single voxel,
  * along axes and at grazing angles, through a 1000:1 volume, with |g| -> 1; the light map
- * reference and the optics tables with |g| -> 1.  docs/stability.md lists every case. */
+ * reference (with its diffuse light) and the optics tables with |g| -> 1.  docs/stability.md
+ * lists every case. */
 #include <math.h>
 #include <string.h>
 
@@ -113,7 +114,15 @@ static void test_extreme_asymmetry(void **state)
         assert_true(cp.ice_ctr >= 0.0 && cp.ice_per >= 0.0);
         assert_true(cp.ice_ctr + cp.ice_per <= 1.0 + 1e-9);
 
-        /* The CPU light map with these phases: in [0, 1] everywhere. */
+        /* The two-stream terms: a backward share in [0, 1], a coupling in [0, 1.5]. */
+        assert_true(cp.water_back >= 0.0 && cp.water_back <= 1.0);
+        assert_true(cp.ice_back >= 0.0 && cp.ice_back <= 1.0);
+        assert_true(cp.water_gamma >= 0.0 && cp.water_gamma <= 1.5);
+        assert_true(cp.ice_gamma >= 0.0 && cp.ice_gamma <= 1.5);
+
+        /* The CPU light map with these phases: in [0, 1] everywhere; its diffuse light (g -> 1:
+         * nothing leaves the beam, no coupling; g -> -1: all of it backward) finite, M >= 0,
+         * |N| <= M. */
         struct synth_desc d = {.kind = SYNTH_SPHERE, .n = {12, 12, 12},
                                .extent_m = {1e3, 1e3, 1e3}, .tau = 50.0};
         struct ext_volume vol = {0};
@@ -122,11 +131,16 @@ static void test_extreme_asymmetry(void **state)
         light_settings_defaults(&s);
         s.resolution[0] = s.resolution[1] = s.resolution[2] = 12;
         light_settings_set_optics(&s, &optics, 20.0);
+        s.multiple = true;
         double sun[3] = {0.3, 0.2, 0.9};
         struct light_map map = {0};
         assert_true(light_map_build(&vol, sun, &s, &map));
-        for (int k = 0; k < 12 * 12 * 12; k++)
+        for (int k = 0; k < 12 * 12 * 12; k++) {
             assert_true(isfinite(map.light[k]) && map.light[k] >= 0.0f && map.light[k] <= 1.0f);
+            float m = map.diffuse[2 * k], nn = map.diffuse[2 * k + 1];
+            if (!(isfinite(m) && isfinite(nn) && m >= 0.0f && fabsf(nn) <= m + 1e-6f))
+                fail_msg("g %g node %d: M %g N %g", gs[i], k, (double)m, (double)nn);
+        }
         light_map_finish(&map);
         ext_volume_finish(&vol);
     }
