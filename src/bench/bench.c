@@ -327,7 +327,7 @@ static bool same_light_map(const struct bench_variant *a, const struct bench_var
     bool per_x = x->peripheral && x->forward, per_y = y->peripheral && y->forward;
     return a->mode == b->mode &&
            memcmp(x->resolution, y->resolution, sizeof(x->resolution)) == 0 &&
-           x->forward == y->forward && per_x == per_y &&
+           x->forward == y->forward && per_x == per_y && x->multiple == y->multiple &&
            x->forward_angle_deg == y->forward_angle_deg && x->substeps == y->substeps &&
            memcmp(&x->cp, &y->cp, sizeof(x->cp)) == 0 &&
            (a->mode == LIGHT_GPU_DENSE || x->epsilon == y->epsilon);
