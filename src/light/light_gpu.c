@@ -212,7 +212,8 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
     return !s->multiple || build_diffuse(lg, s);
 }
 
-bool light_gpu_read(const struct light_gpu *lg, struct light_map *map)
+/* Reads the light volume back, and the diffuse one too when WITH_DIFFUSE and it exists. */
+static bool read_back(const struct light_gpu *lg, struct light_map *map, bool with_diffuse)
 {
     memset(map, 0, sizeof(*map));
     if (!lg->light.id) {
@@ -227,7 +228,7 @@ bool light_gpu_read(const struct light_gpu *lg, struct light_map *map)
         return false;
     }
     gpu_texture_read(&lg->light, map->light, count * sizeof(float));
-    if (lg->diffuse.id) {
+    if (with_diffuse && lg->diffuse.id) {
         map->diffuse = malloc(2 * count * sizeof(float));
         if (!map->diffuse) {
             log_error("light map: out of memory reading %zu nodes back", count);
@@ -239,10 +240,15 @@ bool light_gpu_read(const struct light_gpu *lg, struct light_map *map)
     return true;
 }
 
+bool light_gpu_read(const struct light_gpu *lg, struct light_map *map)
+{
+    return read_back(lg, map, true);
+}
+
 static bool build_compressed(struct light_gpu *lg, double epsilon)
 {
-    struct light_map dense;
-    if (!light_gpu_read(lg, &dense))
+    struct light_map dense; /* the compressor needs the light only: the diffuse volume stays */
+    if (!read_back(lg, &dense, false))
         return false;
     struct light_compressed c;
     bool ok = light_compressed_build(&dense, epsilon, &c);
