@@ -7,6 +7,7 @@
 #include "testutil.h"
 
 #include "app/app.h"
+#include "bench/reference.h"
 #include "common/log.h"
 #include "gpu/gpu.h"
 #include "light/light.h"
@@ -389,6 +390,87 @@ static void test_multiple_scattering_brightens_shadow(void **state)
     image_finish(&off);
 }
 
+/* Mean radiance (channel 0) of a thick plane-parallel layer, 100 x 100 x 1 km of optical depth
+ * 20, water phase, seen from above at 45 degrees with the sun behind the camera at elevation
+ * ELEVATION, drawn by the renderer with MULTIPLE ("on" or "off") into *RENDERED and traced by
+ * the Monte Carlo reference (64 samples per pixel) into *TRACED, with its standard error of
+ * the mean in *ERR.  No sky, no ground: sun-lit scattering only, as in the benchmark. */
+static void layer_means(const char *multiple, double elevation, double *rendered, double *traced,
+                        double *err)
+{
+    char sun[48], mode[48];
+    snprintf(sun, sizeof(sun), "light.elevation=%g", elevation);
+    snprintf(mode, sizeof(mode), "effects.multiple=%s", multiple);
+    struct config cfg;
+    struct ext_volume vol = {0};
+    const char *sets[] = {"scene.kind=slab", "scene.size=[64,64,16]", "scene.extent=[100,100,1]",
+                          "scene.tau=20", "scene.phase=water", "light.azimuth=180", sun,
+                          "camera.position=[50,40,10]", "camera.target=[50,50,0.5]",
+                          "camera.fov=20", "render.width=32", "render.height=24",
+                          "render.sky=[0,0,0]", "render.ground_on=false", mode};
+    test_config_from(&cfg, sets, 15);
+    test_upload_scene(renderer, &cfg, &vol);
+    struct app_light al;
+    struct image img, ref, ref_err;
+    assert_true(app_light_init(&al, &cfg));
+    render(&cfg, &al, NULL, NULL, &img);
+    app_light_finish(&al);
+
+    struct render_settings rs;
+    app_render_settings(&cfg, &rs);
+    struct reference_desc desc;
+    reference_desc_from_render(&rs, &cfg.optics.params, &desc);
+    struct reference *tracer = reference_create(&vol, &desc);
+    assert_non_null(tracer);
+    struct render_view v;
+    app_camera_view(&cfg, cfg.render.width, cfg.render.height, &v);
+    struct reference_image_desc id = {.spp = 64, .threads = 0, .seed = 1, .jitter = false};
+    assert_true(reference_render(tracer, &v, &id, &ref, &ref_err));
+    double a = 0.0, b = 0.0, var = 0.0;
+    int n = img.width * img.height;
+    for (int i = 0; i < n; i++) {
+        assert_true(isfinite(img.rgba[4 * i]) && img.rgba[4 * i] >= 0.0f);
+        a += img.rgba[4 * i];
+        b += ref.rgba[4 * i];
+        var += (double)ref_err.rgba[4 * i] * ref_err.rgba[4 * i];
+    }
+    *rendered = a / n;
+    *traced = b / n;
+    *err = sqrt(var) / n;
+    reference_destroy(tracer);
+    image_finish(&img);
+    image_finish(&ref);
+    image_finish(&ref_err);
+    ext_volume_finish(&vol);
+}
+
+static void test_multiple_scattering_layer_matches_reference(void **state)
+{
+    /* Sun overhead: the light columns are the layer's vertical, the two-stream pass is the
+     * plane-parallel Eddington problem, and the picture must be what Monte Carlo traces with
+     * every order of scattering.  Measured on llvmpipe: 15.44 against 14.96 +- 0.17 (+3 %);
+     * single scattering alone is 1.7 % of it. */
+    double on, traced, err, off, traced_off, err_off;
+    layer_means("on", 90.0, &on, &traced, &err);
+    layer_means("off", 90.0, &off, &traced_off, &err_off);
+    print_message("layer, sun overhead: multiple on %.4g, off %.4g, Monte Carlo %.4g +- %.2g\n",
+                  on, off, traced, err);
+    assert_true(err < 0.02 * traced);
+    assert_true(fabs(on / traced - 1.0) < 0.08);
+    assert_true(off < 0.1 * traced); /* the test sees multiple scattering, not the beam */
+    /* A low sun: the columns run along the light, so the pass treats the layer as a slab
+     * across the light; a layer spreads the light it receives over 1 / sin(elevation) times
+     * the area, and the renderer overestimates it (docs/accuracy.md).  Reported, measured
+     * 2.0 x at 35 degrees (16.4 against 8.16); 60 degrees is printed too. */
+    double low = 0.0, traced_low = 0.0, err_low;
+    for (double e = 60.0; e >= 35.0; e -= 25.0) {
+        layer_means("on", e, &low, &traced_low, &err_low);
+        print_message("layer, sun at %g degrees: multiple on %.4g, Monte Carlo %.4g +- %.2g "
+                      "(x %.2f)\n", e, low, traced_low, err_low, low / traced_low);
+    }
+    assert_true(low > traced_low); /* the known bias has its known sign */
+}
+
 static double ground_under(const char *mode, double x_km, double y_km)
 {
     struct config cfg;
@@ -451,6 +533,7 @@ int main(void)
         cmocka_unit_test(test_forward_scattering_brightens_interior),
         cmocka_unit_test(test_multiple_scattering_brightens_shadow),
         cmocka_unit_test(test_cloud_shadows_the_ground),
+        cmocka_unit_test(test_multiple_scattering_layer_matches_reference),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     renderer_destroy(renderer);
