@@ -1,7 +1,9 @@
 // Deep light map, multiple scattering: the two-stream pass along every light column, one
 // invocation per column, after light_build.comp has swept the beam (docs/lightmap.md,
-// "Multiple scattering").  Mirrors light_diffuse_column() in src/light/transport.c operation
-// for operation in float32.  Variants as light_build.comp: FORWARD, PERIPHERAL, PHASE_MIX.
+// "Multiple scattering"): each column is solved as a plane-parallel atmosphere lit at mu0
+// (the tilted independent column approximation).  Mirrors light_diffuse_column() in
+// src/light/transport.c operation for operation in float32.  Variants as light_build.comp:
+// FORWARD, PERIPHERAL, PHASE_MIX (only PHASE_MIX changes this pass).
 
 #ifndef FORWARD
 #define FORWARD 1
@@ -21,9 +23,10 @@ layout(rg32f, binding = 2) uniform image3D adding_img;          // z = 1 / (1 - 
 layout(rg32f, binding = 3) uniform writeonly image3D diffuse_img; // 2 (U + V), 2 (U - V)
 
 uniform ivec3 grid_n;
-uniform vec4 cp;    // water_ctr, ice_ctr, water_per, ice_per
-uniform vec2 back;  // backward hemisphere share 1 - CP(pi/2): water, ice
+uniform vec2 loss;  // the beam's loss share: water, ice
+uniform vec2 back;  // lost and heading up toward the sun's side: water, ice
 uniform vec2 gamma; // Eddington coupling 3 (1 - g) / 4: water, ice
+uniform float mu0;  // |sin(elevation)|, at least 1e-3
 
 struct slice_terms {
     float tau, loss, back, gamma;
@@ -37,40 +40,25 @@ slice_terms terms(ivec3 c)
 #else
     float fi = 0.0;
 #endif
-    float cpc = cp.x + fi * (cp.y - cp.x), cpp = cp.z + fi * (cp.w - cp.z);
-    float bk = back.x + fi * (back.y - back.x);
-#if !FORWARD
-    float loss = 1.0;
-#elif PERIPHERAL
-    float loss = 1.0 - cpc - cpp;
-#else
-    float loss = 1.0 - cpc;
-#endif
     slice_terms t;
     t.tau = min(sl.x, 1e8);
-    t.loss = max(loss, 1e-6);
+    t.loss = loss.x + fi * (loss.y - loss.x);
+    float bk = back.x + fi * (back.y - back.x);
     t.back = min(max(bk / t.loss, 0.0), 1.0);
     t.gamma = gamma.x + fi * (gamma.y - gamma.x);
     return t;
 }
 
-// Diffuse light out of a slice's top (x) and bottom (y), times (1 + gamma tau), for the beam
-// D0 entering it (transport.c, slice_sources).
+// Diffuse light out of a slice's sun side (x) and far side (y), times (1 + gamma mu0 tau), for
+// the beam D0 entering it (transport.c, column_slice and slice_sources).
 vec2 sources(float d0, slice_terms t)
 {
-    float x = t.loss * t.tau, e = exp(-x);
-    float e1, d1, d2;
-    if (x < 1e-3) {
-        e1 = t.tau * (1.0 - x * (0.5 - x * (1.0 / 6.0)));
-        d1 = t.tau * x * (0.5 - x * (1.0 / 6.0));
-        d2 = t.tau * x * (0.5 - x * (1.0 / 3.0));
-    } else {
-        e1 = (1.0 - e) / t.loss;
-        d1 = t.tau - e1;
-        d2 = e1 - t.tau * e;
-    }
-    float w = d0 * (1.0 - e);
-    return vec2(t.back * w + t.gamma * d0 * d1, (1.0 - t.back) * w + t.gamma * d0 * d2);
+    float x = min(t.loss * t.tau, 1e8);
+    float w = mu0 * d0 * (1.0 - exp(-x));
+    float a1 = x < 0.1 ? 0.5 + x * (1.0 / 12.0) - x * x * x * (1.0 / 720.0)
+                       : 1.0 / (1.0 - exp(-x)) - 1.0 / x;
+    float gw = t.gamma * (mu0 * t.tau) * w;
+    return vec2(t.back * w + gw * a1, (1.0 - t.back) * w + gw * (1.0 - a1));
 }
 
 void main()
@@ -83,7 +71,7 @@ void main()
     imageStore(adding_img, ivec3(ij, n - 1), vec4(z, g, 0.0, 0.0));
     for (int l = n - 1; l >= 1; l--) {
         slice_terms t = terms(ivec3(ij, l));
-        float gt = t.gamma * t.tau;
+        float gt = t.gamma * mu0 * t.tau;
         vec2 s = sources(imageLoad(light_img, ivec3(ij, l - 1)).r, t);
         float zt = z + gt;
         float a = 1.0 - 1.0 / z;
@@ -96,7 +84,7 @@ void main()
     float z_prev = z;
     for (int l = 1; l < n; l++) {
         slice_terms t = terms(ivec3(ij, l));
-        float gt = t.gamma * t.tau;
+        float gt = t.gamma * mu0 * t.tau;
         vec2 s = sources(imageLoad(light_img, ivec3(ij, l - 1)).r, t);
         vec2 zg = imageLoad(adding_img, ivec3(ij, l)).rg;
         u = (u + gt * zg.y + s.y) * (zg.x / z_prev);

@@ -174,13 +174,21 @@ vec2 lightmap_diffuse(vec3 p)
     return d;
 }
 
-// The diffuse light scattered into direction cos(psi) from the light's direction, by a phase
-// of mean cosine G, as a multiple of the sun radiance scale: with the Eddington radiance
-// I0 + I1 mu and the phase's first moment, I0 + g I1 cos(psi) = (M + 1.5 g N cos(psi)) E / 4 pi
-// (never negative).
-float diffuse_scattered(vec2 d, float g, float cos_psi)
+// The diffuse light scattered toward the eye by a phase of mean cosine G, as a multiple of the
+// sun radiance scale: with the Eddington radiance I0 + I1 mu (mu the cosine with the vertical
+// pointing away from the sun's side, down when the sun is up) and the phase's first moment,
+// I0 + g I1 mu_eye = (M + 1.5 g N mu_eye) E / 4 pi (never negative), where mu_eye is that
+// cosine for the light heading to the eye: diffuse_mu_eye().
+float diffuse_scattered(vec2 d, float g, float mu_eye)
 {
-    return max(d.x + 1.5 * g * d.y * cos_psi, 0.0);
+    return max(d.x + 1.5 * g * d.y * mu_eye, 0.0);
+}
+
+// mu_eye for the eye ray DIR (from the eye) and the sun's height SUN_Z: the light travels
+// along -DIR, the vertical axis points down (-z) when the sun is up.
+float diffuse_mu_eye(vec3 dir, float sun_z)
+{
+    return sun_z >= 0.0 ? dir.z : -dir.z;
 }
 #endif
 
@@ -194,14 +202,14 @@ float ground_light(vec3 p)
 }
 
 // Diffuse light reaching the ground at P, as a multiple of the sun radiance scale: the
-// Eddington field I0 + I1 mu gives an upward-facing surface the irradiance
-// pi I0 + (2 pi / 3) I1 sin(elevation) = E (M + N sin(elevation)) / 4, so a Lambertian ground
-// of albedo rho reflects rho sun_radiance (M + N SUN_Z).
+// Eddington field I0 + I1 mu (mu along the vertical away from the sun's side) gives an
+// upward-facing surface the irradiance pi I0 +- (2 pi / 3) I1 = E (M +- N) / 4 (+ when the
+// sun is up), so a Lambertian ground of albedo rho reflects rho sun_radiance (M +- N).
 float ground_diffuse(vec3 p, float sun_z)
 {
 #if LIGHTMAP != 0 && GROUND_SHADOW != 0 && MULTIPLE
     vec2 d = lightmap_diffuse(p);
-    return max(d.x + d.y * sun_z, 0.0);
+    return max(d.x + (sun_z >= 0.0 ? d.y : -d.y), 0.0);
 #else
     return 0.0;
 #endif

@@ -96,6 +96,9 @@ void main()
     float trans = 1.0;
     float cos_psi = dot(dir, sun_dir); // scattering angle between sunlight and the eye ray
     vec2 phase = eye_phase(cos_psi);
+#if MULTIPLE
+    float mu_eye = diffuse_mu_eye(dir, sun_dir.z);
+#endif
     if (t1 > t0) {
         float len = t1 - t0;
         float step = step_len;
@@ -133,7 +136,7 @@ void main()
             float light = pv * lightmap_light(p);
 #if MULTIPLE
             float g = (b.r * mean_cosine.x + b.g * mean_cosine.y) / beta;
-            light += diffuse_scattered(lightmap_diffuse(p), g, cos_psi);
+            light += diffuse_scattered(lightmap_diffuse(p), g, mu_eye);
 #endif
 #if TINT
             vec3 tint = texture(tint_tex, (p - box_min) / box_size).rgb;

@@ -72,8 +72,8 @@ static void visit_key(struct visit *v, const struct light_key *k)
     visit_double(v, s->cp.ice_ctr, t->cp.ice_ctr);
     visit_double(v, s->cp.ice_per, t->cp.ice_per);
     visit_u64(v, s->multiple, t->multiple);
-    visit_double(v, s->cp.water_back, t->cp.water_back);
-    visit_double(v, s->cp.ice_back, t->cp.ice_back);
+    visit_double(v, s->cp.water_cs_g, t->cp.water_cs_g);
+    visit_double(v, s->cp.ice_cs_g, t->cp.ice_cs_g);
     visit_double(v, s->cp.water_gamma, t->cp.water_gamma);
     visit_double(v, s->cp.ice_gamma, t->cp.ice_gamma);
     visit_double(v, s->epsilon, t->epsilon);

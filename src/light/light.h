@@ -119,11 +119,13 @@ struct light_map {
     int substeps;   /* extinction samples per slice used by the build */
     float *light;   /* grid.n[0] * grid.n[1] * grid.n[2] values in [0, 1], owned */
     /* With settings.multiple, the diffuse light at each node, two floats per node in the same
-     * order: M = 2 (U + V) and N = 2 (U - V) for the diffuse fluxes U (along the light) and V
-     * (back toward the sun) of the two-stream column pass, relative to the sun's irradiance E.
-     * In the Eddington radiance I(mu) = I0 + I1 mu (mu along the light), M = 4 pi I0 / E and
-     * N = (8 pi / 3) I1 / E; the eye pass scatters M + (3/2) g N cos(psi) toward the eye
-     * beside P_v(psi) L_l.  M >= 0, |N| <= M; NULL when off. */
+     * order: M = 2 (U + V) and N = 2 (U - V) for the diffuse fluxes U (through a horizontal
+     * plane away from the sun's side: down when the sun is up) and V (back toward it) of the
+     * two-stream column pass, per unit horizontal area, relative to the sun's irradiance E.
+     * In the Eddington radiance I(mu) = I0 + I1 mu (mu the cosine with that vertical
+     * direction), M = 4 pi I0 / E and N = (8 pi / 3) I1 / E; the eye pass scatters
+     * M + (3/2) g N mu_eye toward the eye beside P_v(psi) L_l.  M >= 0, |N| <= M; NULL when
+     * off. */
     float *diffuse;
 };
 
@@ -152,16 +154,33 @@ int light_tex_node(float tex, int n, float *t);
 float light_map_sample(const struct light_map *m, const float tex[3]);
 void light_map_sample_diffuse(const struct light_map *m, const float tex[3], float out[2]);
 
+/* The per-phase terms of the diffuse pass ([0] water, [1] ice): the share of the extinction
+ * that leaves the beam (what the forward cone and ring do not keep), the share of all scattered
+ * light that leaves it AND heads up toward the sun's side of the horizontal (it depends on the
+ * sun's elevation: phase_cs_back_fraction), and the Eddington coupling 3 (1 - g) / 4; mu0 is
+ * |sin(elevation)| (at least 1e-3). */
+struct light_diffuse_terms {
+    float loss[2], back[2], gamma[2];
+    float mu0;
+};
+
+void light_diffuse_terms_init(const struct light_settings *s, const double sun[3],
+                              struct light_diffuse_terms *t);
+
 /* The two-stream pass of one light column (light_map_build with settings.multiple; exposed for
- * tests).  N nodes; BEAM[k] the light map values down the column; TAU[k] and F_ICE[k], k >= 1,
- * the optical depth and ice share of the slice from node k - 1 to node k (TAU[0], F_ICE[0]
- * unused); S the settings (cp).  Writes OUT[2 k] = M and OUT[2 k + 1] = N at every node (see
- * light_map.diffuse).  SCRATCH holds 2 N floats.  Conservative scattering: the beam's loss becomes diffuse light, split between the
- * hemispheres by the phase, and the diffuse fluxes are coupled by the Eddington two-stream
- * equations, integrated exactly across each slice and joined by the adding method
- * (docs/lightmap.md). */
+ * tests), in the tilted independent column approximation: the column along the light is solved
+ * as a plane-parallel atmosphere lit at mu0 whose layers are its slices (docs/lightmap.md,
+ * "Multiple scattering").  N nodes from the sun's side; BEAM[k] the light map values down the
+ * column; TAU[k] and F_ICE[k], k >= 1, the optical depth along the light and the ice share of
+ * the slice from node k - 1 to node k (TAU[0], F_ICE[0] unused); D the phase terms.  Writes
+ * OUT[2 k] = M and OUT[2 k + 1] = N at every node (see light_map.diffuse).  SCRATCH holds 2 N
+ * floats.  Conservative scattering: a slice is a layer of vertical optical depth mu0 TAU that
+ * receives what the beam loses in it, mu0 BEAM (1 - e^-(loss TAU)) per unit horizontal area;
+ * that is split between the hemispheres by the phase, and the diffuse fluxes are coupled by
+ * the Eddington two-stream equations, integrated exactly across each slice and joined by the
+ * adding method (docs/lightmap.md). */
 void light_diffuse_column(int n, const float *beam, const float *tau, const float *f_ice,
-                          const struct light_settings *s, float *scratch, float *out);
+                          const struct light_diffuse_terms *d, float *scratch, float *out);
 
 /* Bytes of the dense map as a float32 3D texture. */
 size_t light_map_bytes(const struct light_map *m);

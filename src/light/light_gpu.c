@@ -137,7 +137,8 @@ static bool node_texture(struct gpu_texture *tex, const int n[3], enum gpu_forma
 }
 
 /* The two-stream pass down every column (light_diffuse.comp), after the beam. */
-static bool build_diffuse(struct light_gpu *lg, const struct light_settings *s)
+static bool build_diffuse(struct light_gpu *lg, const double sun[3],
+                          const struct light_settings *s)
 {
     const struct light_grid *g = &lg->grid;
     if (!node_texture(&lg->diffuse, g->n, GPU_RG32F) ||
@@ -146,14 +147,13 @@ static bool build_diffuse(struct light_gpu *lg, const struct light_settings *s)
     const struct gpu_program *p = diffuse_program(lg, build_variant(s));
     if (!p)
         return false;
-    float cp[4] = {(float)s->cp.water_ctr, (float)s->cp.ice_ctr, (float)s->cp.water_per,
-                   (float)s->cp.ice_per};
-    float back[2] = {(float)s->cp.water_back, (float)s->cp.ice_back};
-    float gamma[2] = {(float)s->cp.water_gamma, (float)s->cp.ice_gamma};
+    struct light_diffuse_terms t;
+    light_diffuse_terms_init(s, sun, &t);
     gpu_uniform_ivec3(p, "grid_n", g->n);
-    gpu_uniform_vec4(p, "cp", cp);
-    gpu_uniform_vec2(p, "back", back);
-    gpu_uniform_vec2(p, "gamma", gamma);
+    gpu_uniform_vec2(p, "loss", t.loss);
+    gpu_uniform_vec2(p, "back", t.back);
+    gpu_uniform_vec2(p, "gamma", t.gamma);
+    gpu_uniform_float(p, "mu0", t.mu0);
     gpu_image_bind(&lg->light, 0, false);
     gpu_image_bind(&lg->slice, 1, false);
     gpu_image_bind_rw(&lg->adding, 2);
@@ -163,7 +163,7 @@ static bool build_diffuse(struct light_gpu *lg, const struct light_settings *s)
 }
 
 static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src,
-                        const struct light_settings *s)
+                        const double sun[3], const struct light_settings *s)
 {
     const struct light_grid *g = &lg->grid;
     if (!node_texture(&lg->light, g->n, GPU_R32F))
@@ -209,7 +209,7 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
         gpu_uniform_int(p, "plane", k);
         gpu_dispatch(p, g->n[0], g->n[1], 1);
     }
-    return !s->multiple || build_diffuse(lg, s);
+    return !s->multiple || build_diffuse(lg, sun, s);
 }
 
 /* Reads the light volume back, and the diffuse one too when WITH_DIFFUSE and it exists. */
@@ -284,7 +284,7 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
     if (!light_grid_init(&lg->grid, sun, src->grid, settings->resolution))
         return false;
     gpu_timer_begin(&lg->timer);
-    bool ok = build_dense(lg, src, settings);
+    bool ok = build_dense(lg, src, sun, settings);
     gpu_timer_end(&lg->timer);
     double ms = gpu_timer_ms(&lg->timer);
     if (ok && mode == LIGHT_GPU_COMPRESSED) {

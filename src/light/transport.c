@@ -120,12 +120,12 @@ void light_settings_one_phase(struct light_settings *s, bool ice)
     if (ice) {
         c->water_ctr = c->ice_ctr;
         c->water_per = c->ice_per;
-        c->water_back = c->ice_back;
+        c->water_cs_g = c->ice_cs_g;
         c->water_gamma = c->ice_gamma;
     } else {
         c->ice_ctr = c->water_ctr;
         c->ice_per = c->water_per;
-        c->ice_back = c->water_back;
+        c->ice_cs_g = c->water_cs_g;
         c->ice_gamma = c->water_gamma;
     }
 }
@@ -134,7 +134,7 @@ bool light_settings_phases_equal(const struct light_settings *s)
 {
     const struct optics_cp *c = &s->cp;
     return c->ice_ctr == c->water_ctr && c->ice_per == c->water_per &&
-           c->ice_back == c->water_back && c->ice_gamma == c->water_gamma;
+           c->ice_cs_g == c->water_cs_g && c->ice_gamma == c->water_gamma;
 }
 
 double light_peripheral_offset(double forward_angle_deg, double dz)
@@ -172,28 +172,25 @@ void light_map_finish(struct light_map *map)
     memset(map, 0, sizeof(*map));
 }
 
-/* The diffuse light that a slice of optical depth TAU, entered by the beam D0, sends out of
- * its top (*SU) and bottom (*SD), times (1 + GT), for a beam loss rate K, a backward share SB of
- * the lost light and the coupling GT = GAMMA TAU: the Eddington two-stream equations with the
- * source K D0 e^-K t, solved exactly with no diffuse light entering the slice (docs/lightmap.md).
- * Their sum is (1 + GT) D0 (1 - e^-K TAU): nothing is lost. */
-static void slice_sources(float d0, float tau, float k, float sb, float gamma, float *su,
+/* The diffuse light that a slice of vertical optical depth TAU sends out of its sun-side end
+ * (*SU) and its far end (*SD), times (1 + GT), when the beam deposits W in it with a source
+ * fading as e^(-X t / TAU) from its sun side, a backward share SB and the coupling
+ * GT = GAMMA TAU: the Eddington two-stream equations solved exactly with no diffuse light
+ * entering the slice (docs/lightmap.md).  Their sum is (1 + GT) W: nothing is lost. */
+static void slice_sources(float w, float x, float tau, float sb, float gamma, float *su,
                           float *sd)
 {
-    float x = k * tau, e = expf(-x);
-    float e1, d1, d2; /* (1 - e) / k, tau - e1, e1 - tau e */
-    if (x < 1e-3f) {
-        e1 = tau * (1.0f - x * (0.5f - x * (1.0f / 6.0f)));
-        d1 = tau * x * (0.5f - x * (1.0f / 6.0f));
-        d2 = tau * x * (0.5f - x * (1.0f / 3.0f));
-    } else {
-        e1 = (1.0f - e) / k;
-        d1 = tau - e1;
-        d2 = e1 - tau * e;
-    }
-    float w = d0 * (1.0f - e);
-    *su = sb * w + gamma * d0 * d1;
-    *sd = (1.0f - sb) * w + gamma * d0 * d2;
+    /* The share of the coupled term that leaves by the sun side: 1 / (1 - e^-x) - 1 / x (its
+     * series below 0.1, where the two terms cancel in float32). */
+    float a1;
+    x = fminf(x, 1e8f);
+    if (x < 0.1f)
+        a1 = 0.5f + x * (1.0f / 12.0f) - x * x * x * (1.0f / 720.0f);
+    else
+        a1 = 1.0f / (1.0f - expf(-x)) - 1.0f / x;
+    float gw = gamma * tau * w;
+    *su = sb * w + gw * a1;
+    *sd = (1.0f - sb) * w + gw * (1.0f - a1);
 }
 
 /* One slice of the beam (docs/lightmap.md, "Integrating a slice"): the per-slice equations of
@@ -214,48 +211,68 @@ static float beam_slice(float l_in, float l_per, float tau, float cpc, float cpp
     return l_in * ea + l_per * (ek - ea);
 }
 
-/* The share of the extinction that leaves the beam for good: what is not kept in it by the
- * central cone (and the peripheral ring, which hands it to the neighbouring columns). */
-static float beam_loss_rate(float cpc, float cpp, bool fwd, bool per)
-{
-    if (!fwd)
-        return 1.0f;
-    return 1.0f - cpc - (per ? cpp : 0.0f);
-}
-
-/* The phase terms of one slice, mixed by its ice share. */
-struct slice_terms {
-    float tau, loss, back, gamma; /* optical depth, beam loss rate, backward share, coupling */
-};
-
-static struct slice_terms slice_terms(const struct light_settings *s, float tau, float f_ice)
+void light_diffuse_terms_init(const struct light_settings *s, const double sun[3],
+                              struct light_diffuse_terms *t)
 {
     const struct optics_cp *c = &s->cp;
     const bool fwd = s->forward, per = s->forward && s->peripheral;
-    float cpc = (float)c->water_ctr + f_ice * ((float)c->ice_ctr - (float)c->water_ctr);
-    float cpp = (float)c->water_per + f_ice * ((float)c->ice_per - (float)c->water_per);
-    float back = (float)c->water_back + f_ice * ((float)c->ice_back - (float)c->water_back);
+    double len = sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2]);
+    double mu0 = len > 0.0 && isfinite(len) ? fmin(fabs(sun[2]) / len, 1.0) : 1.0;
+    /* What the beam keeps: nothing with forward scattering off, the central cone (theta/4),
+     * or the cone and the peripheral ring (theta/2). */
+    double psi_min = !fwd ? 0.0 : (per ? 0.5 : 0.25) * s->forward_angle_deg * (PI / 180.0);
+    const double ctr[2] = {c->water_ctr, c->ice_ctr}, ring[2] = {c->water_per, c->ice_per};
+    const double csg[2] = {c->water_cs_g, c->ice_cs_g};
+    const double gam[2] = {c->water_gamma, c->ice_gamma};
+    for (int p = 0; p < 2; p++) {
+        double loss = !fwd ? 1.0 : 1.0 - ctr[p] - (per ? ring[p] : 0.0);
+        t->loss[p] = (float)fmax(loss, 1e-6);
+        t->back[p] = (float)phase_cs_back_fraction(csg[p], psi_min, mu0);
+        t->gamma[p] = (float)gam[p];
+    }
+    t->mu0 = (float)fmax(mu0, 1e-3);
+}
+
+/* The terms of one slice, mixed by its ice share. */
+struct slice_terms {
+    float tau, loss, back, gamma; /* slant optical depth, beam loss rate, backward share,
+                                     coupling */
+};
+
+static struct slice_terms slice_terms(const struct light_diffuse_terms *d, float tau,
+                                      float f_ice)
+{
     struct slice_terms t;
     t.tau = fminf(tau, 1e8f); /* deeper is opaque all the same; keeps the sums finite */
-    t.loss = fmaxf(beam_loss_rate(cpc, cpp, fwd, per), 1e-6f);
+    t.loss = d->loss[0] + f_ice * (d->loss[1] - d->loss[0]);
+    float back = d->back[0] + f_ice * (d->back[1] - d->back[0]);
     t.back = fminf(fmaxf(back / t.loss, 0.0f), 1.0f);
-    t.gamma = (float)c->water_gamma + f_ice * ((float)c->ice_gamma - (float)c->water_gamma);
+    t.gamma = d->gamma[0] + f_ice * (d->gamma[1] - d->gamma[0]);
     return t;
 }
 
+/* The diffuse light out of slice L's two ends (slice_sources) for the beam D0 entering it. */
+static void column_slice(const struct light_diffuse_terms *d, const struct slice_terms *t,
+                         float d0, float *su, float *sd)
+{
+    float x = t->loss * t->tau;
+    float w = d->mu0 * d0 * (1.0f - expf(-x)); /* per unit horizontal area */
+    slice_sources(w, x, d->mu0 * t->tau, t->back, t->gamma, su, sd);
+}
+
 void light_diffuse_column(int n, const float *beam, const float *tau, const float *f_ice,
-                          const struct light_settings *s, float *scratch, float *out)
+                          const struct light_diffuse_terms *d, float *scratch, float *out)
 {
     /* Adding method, from the far end toward the sun: z[l] = 1 / (1 - A_l) with A_l the
      * albedo of everything beyond node l, g[l] the diffuse light coming back out of it when
-     * none goes in.  Then from the sun's side: u the diffuse flux along the light. */
+     * none goes in.  Then from the sun's side: u the diffuse flux away from the sun's side. */
     float *z = scratch, *g = scratch + n;
     z[n - 1] = 1.0f; /* nothing beyond the last node sends light back */
     g[n - 1] = 0.0f;
     for (int l = n - 1; l >= 1; l--) {
-        struct slice_terms t = slice_terms(s, tau[l], f_ice[l]);
-        float gt = t.gamma * t.tau, su, sd;
-        slice_sources(beam[l - 1], t.tau, t.loss, t.back, t.gamma, &su, &sd);
+        struct slice_terms t = slice_terms(d, tau[l], f_ice[l]);
+        float gt = t.gamma * d->mu0 * t.tau, su, sd;
+        column_slice(d, &t, beam[l - 1], &su, &sd);
         float zt = z[l] + gt;
         float a = 1.0f - 1.0f / z[l];
         g[l - 1] = su / (1.0f + gt) + (g[l] + a * sd / (1.0f + gt)) * (z[l] / zt);
@@ -265,9 +282,9 @@ void light_diffuse_column(int n, const float *beam, const float *tau, const floa
     out[0] = 2.0f * g[0];
     out[1] = -2.0f * g[0];
     for (int l = 1; l < n; l++) {
-        struct slice_terms t = slice_terms(s, tau[l], f_ice[l]);
-        float gt = t.gamma * t.tau, su, sd;
-        slice_sources(beam[l - 1], t.tau, t.loss, t.back, t.gamma, &su, &sd);
+        struct slice_terms t = slice_terms(d, tau[l], f_ice[l]);
+        float gt = t.gamma * d->mu0 * t.tau, su, sd;
+        column_slice(d, &t, beam[l - 1], &su, &sd);
         u = (u + gt * g[l] + sd) * (z[l] / z[l - 1]);
         float v = (1.0f - 1.0f / z[l]) * u + g[l];
         out[2 * l] = 2.0f * (u + v);
@@ -386,13 +403,15 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
         }
         float *beam = col, *tau = col + n2, *fi = col + 2 * n2, *scratch = col + 3 * n2,
               *out = col + 5 * n2;
+        struct light_diffuse_terms terms;
+        light_diffuse_terms_init(s, sun, &terms);
         for (size_t c = 0; c < plane; c++) {
             for (int k = 0; k < n2; k++) {
                 beam[k] = L[c + plane * k];
                 tau[k] = slice[2 * (c + plane * k)];
                 fi[k] = slice[2 * (c + plane * k) + 1];
             }
-            light_diffuse_column(n2, beam, tau, fi, s, scratch, out);
+            light_diffuse_column(n2, beam, tau, fi, &terms, scratch, out);
             for (int k = 0; k < n2; k++) {
                 map->diffuse[2 * (c + plane * k)] = out[2 * k];
                 map->diffuse[2 * (c + plane * k) + 1] = out[2 * k + 1];

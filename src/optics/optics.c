@@ -347,6 +347,30 @@ double phase_cs_cumulative(double g, double theta)
     return clamp_unit(norm * c.x / (4.0 * (c.t + c.s) * c.s * c.t) * poly);
 }
 
+double phase_cs_back_fraction(double g, double psi_min, double mu0)
+{
+    enum { STEPS = 8192 };
+    mu0 = mu0 < 0.0 ? 0.0 : mu0 > 1.0 ? 1.0 : mu0;
+    double lo = psi_min < 0.0 ? 0.0 : psi_min > PI ? PI : psi_min;
+    double s = sqrt(fmax(0.0, 1.0 - mu0 * mu0));
+    double h = (PI - lo) / STEPS, sum = 0.0;
+    for (int i = 0; i < STEPS; i++) {
+        double psi = lo + (i + 0.5) * h;
+        double cs = cos(psi), sn = sin(psi);
+        /* The direction at psi and azimuth phi has the cosine mu0 cos psi + s sin psi cos phi
+         * with the axis: it faces back where cos phi < c. */
+        double back;
+        if (s * sn <= 0.0) {
+            back = mu0 * cs < 0.0 ? 1.0 : 0.0;
+        } else {
+            double c = -mu0 * cs / (s * sn);
+            back = c <= -1.0 ? 0.0 : c >= 1.0 ? 1.0 : acos(-c) / PI;
+        }
+        sum += phase_cs(g, cs) * sn * back;
+    }
+    return clamp_unit(2.0 * PI * h * sum);
+}
+
 /*
  * One eye-phase column: CS with parameter G, constant p(psi0) inside psi0 (Nes §5.2.4: the
  * forward peak truncated), scaled so the sphere integral is 1, times 4 pi.  The clamped
@@ -389,8 +413,8 @@ void optics_forward_cp(const struct optics_params *p, double forward_angle_rad,
     out->water_per = phase_cs_cumulative(gw, h) - out->water_ctr;
     out->ice_ctr = phase_cs_cumulative(gi, q);
     out->ice_per = phase_cs_cumulative(gi, h) - out->ice_ctr;
-    out->water_back = 1.0 - phase_cs_cumulative(gw, 0.5 * PI);
-    out->ice_back = 1.0 - phase_cs_cumulative(gi, 0.5 * PI);
+    out->water_cs_g = gw;
+    out->ice_cs_g = gi;
     out->water_gamma = 0.75 * (1.0 - p->g_water);
     out->ice_gamma = 0.75 * (1.0 - p->g_ice);
 }

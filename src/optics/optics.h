@@ -74,6 +74,14 @@ double phase_cs_g_for_mean_cosine(double mean_cosine);
 double phase_hg_cumulative(double g, double theta);
 double phase_cs_cumulative(double g, double theta);
 
+/* Share of all the light scattered by the CS phase G that leaves at an angle of at least
+ * PSI_MIN [rad] from the beam AND into the hemisphere facing back along an axis that the beam
+ * makes the cosine MU0 in [0, 1] with: the backward share of the scattered light for a vertical
+ * two-stream column lit at MU0 = sin(elevation).  At MU0 = 1 and PSI_MIN <= pi / 2 it is
+ * 1 - CP(pi / 2); at MU0 = 0 it is half of 1 - CP(PSI_MIN).  Integrated numerically over the
+ * scattering angle (8192 steps; the azimuth in closed form). */
+double phase_cs_back_fraction(double g, double psi_min, double mu0);
+
 /* Eye-scattering phase table (Nes §5.2.4): N entries at angles psi_i = pi i/(N-1); for each,
  * OUT[2i] the ice phase and OUT[2i+1] the water phase.  Each is the CS phase with its
  * asymmetry, the forward peak clamped to its value at eye_peak_deg, renormalised to integrate
@@ -84,10 +92,11 @@ void optics_eye_phase_table(const struct optics_params *p, int n, float *out);
 struct optics_cp {
     double water_ctr, water_per; /* CP(theta/4), CP(theta/2) - CP(theta/4) */
     double ice_ctr, ice_per;
-    /* For the diffuse (two-stream) pass of the light map: the backward hemisphere's share
-     * 1 - CP(pi/2), and the Eddington two-stream coupling 3 (1 - g) / 4 of the phase's mean
-     * cosine g (Meador and Weaver 1980, Table 1, with albedo 1). */
-    double water_back, ice_back;
+    /* For the diffuse (two-stream) pass of the light map: the Cornette-Shanks parameter of
+     * each phase (for phase_cs_back_fraction, which depends on the sun's elevation), and the
+     * Eddington two-stream coupling 3 (1 - g) / 4 of the phase's mean cosine g (Meador and
+     * Weaver 1980, Table 1, with albedo 1). */
+    double water_cs_g, ice_cs_g;
     double water_gamma, ice_gamma;
 };
 void optics_forward_cp(const struct optics_params *p, double forward_angle_rad,

@@ -719,21 +719,31 @@ static void test_beam_slice_count_independent(void **state)
 
 /* ---- multiple scattering: the two-stream column pass -------------------------------------- */
 
-/* light_diffuse_column on a homogeneous water column of total optical depth TAU cut into N - 1
- * equal slices, with the beam the map would hold there: exp(-k tau_k), k = 1 - CPc (forward on,
- * peripheral off).  OUT holds 2 N floats. */
-static void homogeneous_column(const struct light_settings *s, int n, double tau, float *out)
+/* The diffuse terms of settings S for a sun at elevation ELEV_DEG. */
+static void terms_at(const struct light_settings *s, double elev_deg, struct light_diffuse_terms *t)
+{
+    double sun[3];
+    light_sun_direction(200.0, elev_deg, sun);
+    light_diffuse_terms_init(s, sun, t);
+}
+
+/* light_diffuse_column on a homogeneous water column of total vertical optical depth TAU cut
+ * into N - 1 equal slices, lit at MU0 = sin(elevation): the light column crosses it along the
+ * slant, each slice of optical depth TAU / ((N - 1) MU0), holding the beam the map would hold
+ * there, exp(-k tau_slant), k = 1 - CPc (forward on, peripheral off).  OUT holds 2 N floats. */
+static void homogeneous_column(const struct light_diffuse_terms *d, int n, double tau,
+                               float *out)
 {
     float *beam = malloc(5 * (size_t)n * sizeof(float));
     assert_non_null(beam);
     float *t = beam + n, *fi = beam + 2 * n, *scratch = beam + 3 * n;
-    const double k = 1.0 - s->cp.water_ctr;
+    const double ts = tau / ((n - 1.0) * d->mu0);
     for (int i = 0; i < n; i++) {
-        beam[i] = (float)exp(-k * tau * i / (n - 1.0));
-        t[i] = i > 0 ? (float)(tau / (n - 1.0)) : 0.0f;
+        beam[i] = (float)exp(-d->loss[0] * ts * i);
+        t[i] = i > 0 ? (float)ts : 0.0f;
         fi[i] = 0.0f;
     }
-    light_diffuse_column(n, beam, t, fi, s, scratch, out);
+    light_diffuse_column(n, beam, t, fi, d, scratch, out);
     free(beam);
 }
 
@@ -742,34 +752,41 @@ static void diffuse_settings(struct light_settings *s)
     realistic_settings(s, 8);
     s->peripheral = false;
     s->multiple = true;
-    assert_true(s->cp.water_gamma > 0.0 && s->cp.water_back > 0.0);
+    assert_true(s->cp.water_gamma > 0.0 && s->cp.water_cs_g > 0.0);
 }
 
 /* Conservative scattering: what the beam loses leaves the column as diffuse light, through the
  * top (V0 = M0 / 2: no diffuse light enters there, U0 = 0) or the bottom (U = M / 2: nothing
- * comes back from below, V = 0). */
+ * comes back from below, V = 0).  Per unit horizontal area the layer receives mu0 of the sun's
+ * irradiance: mu0 (1 - e^(-k tau / mu0)) of it is lost by the beam. */
 static void test_diffuse_column_conserves_energy(void **state)
 {
     struct light_settings s;
     diffuse_settings(&s);
     const double taus[] = {0.1, 2.0, 20.0, 200.0};
     const int ns[] = {2, 33};
+    const double elevs[] = {90.0, 35.0, 5.0};
     float out[2 * 33];
-    for (size_t a = 0; a < sizeof taus / sizeof taus[0]; a++) {
-        for (size_t b = 0; b < sizeof ns / sizeof ns[0]; b++) {
-            int n = ns[b];
-            homogeneous_column(&s, n, taus[a], out);
-            double beam = exp(-(1.0 - s.cp.water_ctr) * taus[a]);
-            double top = 0.5 * out[0], bottom = 0.5 * out[2 * (n - 1)];
-            double sum = (double)(float)beam + top + bottom;
-            print_message("tau %5g, %2d nodes: reflected %.6f, diffuse through %.6f, beam %.6f, "
-                          "sum - 1 = %.2g\n",
-                          taus[a], n, top, bottom, beam, sum - 1.0);
-            assert_true(fabs(sum - 1.0) <= 1e-5);
-            /* At the top only V, at the bottom only U. */
-            assert_float_equal(out[1], -out[0], 1e-7);
-            assert_float_equal(out[2 * n - 1], out[2 * n - 2], 1e-7);
-            assert_true(top > 0.0 && bottom > 0.0);
+    for (size_t e = 0; e < sizeof elevs / sizeof elevs[0]; e++) {
+        struct light_diffuse_terms d;
+        terms_at(&s, elevs[e], &d);
+        assert_float_equal(d.mu0, sin(elevs[e] * M_PI / 180.0), 1e-6);
+        for (size_t a = 0; a < sizeof taus / sizeof taus[0]; a++) {
+            for (size_t b = 0; b < sizeof ns / sizeof ns[0]; b++) {
+                int n = ns[b];
+                homogeneous_column(&d, n, taus[a], out);
+                double beam = d.mu0 * exp(-d.loss[0] * taus[a] / d.mu0);
+                double top = 0.5 * out[0], bottom = 0.5 * out[2 * (n - 1)];
+                double sum = beam + top + bottom;
+                print_message("elevation %2g, tau %5g, %2d nodes: reflected %.6f, diffuse "
+                              "through %.6f, beam %.6f, sum / mu0 - 1 = %.2g\n",
+                              elevs[e], taus[a], n, top, bottom, beam, sum / d.mu0 - 1.0);
+                assert_true(fabs(sum / d.mu0 - 1.0) <= 1e-5);
+                /* At the top only V, at the bottom only U. */
+                assert_float_equal(out[1], -out[0], 1e-7);
+                assert_float_equal(out[2 * n - 1], out[2 * n - 2], 1e-7);
+                assert_true(top > 0.0 && bottom > 0.0);
+            }
         }
     }
 }
@@ -784,33 +801,39 @@ static void test_diffuse_column_slice_count_independent(void **state)
     const int ns[] = {2, 5, 33, 257};
     float *out = malloc(2 * 257 * sizeof(float));
     assert_non_null(out);
-    for (size_t a = 0; a < sizeof taus / sizeof taus[0]; a++) {
-        double v0[4], ut[4], worst_v = 0.0, worst_u = 0.0;
-        for (int b = 0; b < 4; b++) {
-            homogeneous_column(&s, ns[b], taus[a], out);
-            v0[b] = 0.5 * out[0];
-            ut[b] = 0.5 * out[2 * (ns[b] - 1)];
-            worst_v = fmax(worst_v, fabs(v0[b] - v0[0]) / v0[0]);
-            worst_u = fmax(worst_u, fabs(ut[b] - ut[0]) / ut[0]);
+    for (int e = 0; e < 2; e++) {
+        struct light_diffuse_terms d;
+        terms_at(&s, e ? 35.0 : 90.0, &d);
+        for (size_t a = 0; a < sizeof taus / sizeof taus[0]; a++) {
+            double v0[4], ut[4], worst_v = 0.0, worst_u = 0.0;
+            for (int b = 0; b < 4; b++) {
+                homogeneous_column(&d, ns[b], taus[a], out);
+                v0[b] = 0.5 * out[0];
+                ut[b] = 0.5 * out[2 * (ns[b] - 1)];
+                worst_v = fmax(worst_v, fabs(v0[b] - v0[0]) / v0[0]);
+                worst_u = fmax(worst_u, fabs(ut[b] - ut[0]) / ut[0]);
+            }
+            print_message("mu0 %.3f, tau %g, 2..257 nodes: reflectance %.6f (spread %.2g), "
+                          "diffuse transmittance %.6f (spread %.2g)\n",
+                          d.mu0, taus[a], v0[0], worst_v, ut[0], worst_u);
+            assert_true(worst_v <= 1e-4);
+            assert_true(worst_u <= 1e-4);
         }
-        print_message("tau %g, 2..257 nodes: reflectance %.6f (spread %.2g), diffuse "
-                      "transmittance %.6f (spread %.2g)\n",
-                      taus[a], v0[0], worst_v, ut[0], worst_u);
-        assert_true(worst_v <= 1e-4);
-        assert_true(worst_u <= 1e-4);
     }
     free(out);
 }
 
-/* The two-stream equations with the beam's loss as source, d/dt of (U, V) at optical depth t:
- * dU/dt = -g U + g V + s_f k e^-kt,  dV/dt = -g U + g V - s_b k e^-kt. */
+/* The two-stream equations with the beam's loss as source, d/dt of (U, V) at vertical optical
+ * depth t, for a beam fading as e^-(kappa t) (kappa = k / mu0) that deposits k e^-(kappa t)
+ * per unit of t and horizontal area: dU/dt = -g U + g V + s_f k e^-(kappa t),
+ * dV/dt = -g U + g V - s_b k e^-(kappa t). */
 struct two_stream {
-    double gamma, k, sb;
+    double gamma, k, kappa, sb;
 };
 
 static void two_stream_rhs(const struct two_stream *p, double t, const double y[2], double dy[2])
 {
-    double src = p->k * exp(-p->k * t);
+    double src = p->k * exp(-p->kappa * t);
     double c = p->gamma * (y[1] - y[0]);
     dy[0] = c + (1.0 - p->sb) * src;
     dy[1] = c - p->sb * src;
@@ -854,36 +877,41 @@ static void test_diffuse_column_matches_ode(void **state)
 {
     struct light_settings s;
     diffuse_settings(&s);
-    struct two_stream p;
-    p.gamma = s.cp.water_gamma;
-    p.k = 1.0 - s.cp.water_ctr;
-    p.sb = s.cp.water_back / p.k;
-    assert_true(p.sb > 0.0 && p.sb < 1.0);
     enum { N = 65, STEPS = 64 * 400 };
     const double taus[] = {2.0, 20.0};
-    for (size_t a = 0; a < sizeof taus / sizeof taus[0]; a++) {
-        double tau = taus[a], e0[2], e1[2], end[2], mn[2 * N];
-        two_stream_shoot(&p, 0.0, tau, STEPS, 0, NULL, e0);
-        two_stream_shoot(&p, 1.0, tau, STEPS, 0, NULL, e1);
-        double v0 = -e0[1] / (e1[1] - e0[1]); /* V(tau) = 0 */
-        two_stream_shoot(&p, v0, tau, STEPS, N, mn, end);
-        assert_true(fabs(end[1]) < 1e-12);
-        float out[2 * N];
-        homogeneous_column(&s, N, tau, out);
-        double dv = fabs(0.5 * out[0] - v0) / v0;
-        double du = fabs(0.5 * out[2 * (N - 1)] - end[0]) / end[0];
-        /* And the whole profile, relative to the largest value. */
-        double big = 0.0, worst = 0.0;
-        for (int i = 0; i < 2 * N; i++)
-            big = fmax(big, fabs(mn[i]));
-        for (int i = 0; i < 2 * N; i++)
-            worst = fmax(worst, fabs(out[i] - mn[i]) / big);
-        print_message("tau %g: ODE V(0) %.6f U(tau) %.6f; column pass relative differences "
-                      "%.2g, %.2g; M, N profile %.2g\n",
-                      tau, v0, end[0], dv, du, worst);
-        assert_true(dv <= 1e-4);
-        assert_true(du <= 1e-4);
-        assert_true(worst <= 1e-4);
+    for (int e = 0; e < 2; e++) {
+        struct light_diffuse_terms d;
+        terms_at(&s, e ? 35.0 : 90.0, &d);
+        struct two_stream p;
+        p.gamma = s.cp.water_gamma;
+        p.k = d.loss[0];
+        p.kappa = d.loss[0] / d.mu0;
+        p.sb = d.back[0] / d.loss[0];
+        assert_true(p.sb > 0.0 && p.sb < 1.0);
+        for (size_t a = 0; a < sizeof taus / sizeof taus[0]; a++) {
+            double tau = taus[a], e0[2], e1[2], end[2], mn[2 * N];
+            two_stream_shoot(&p, 0.0, tau, STEPS, 0, NULL, e0);
+            two_stream_shoot(&p, 1.0, tau, STEPS, 0, NULL, e1);
+            double v0 = -e0[1] / (e1[1] - e0[1]); /* V(tau) = 0 */
+            two_stream_shoot(&p, v0, tau, STEPS, N, mn, end);
+            assert_true(fabs(end[1]) < 1e-12);
+            float out[2 * N];
+            homogeneous_column(&d, N, tau, out);
+            double dv = fabs(0.5 * out[0] - v0) / v0;
+            double du = fabs(0.5 * out[2 * (N - 1)] - end[0]) / end[0];
+            /* And the whole profile, relative to the largest value. */
+            double big = 0.0, worst = 0.0;
+            for (int i = 0; i < 2 * N; i++)
+                big = fmax(big, fabs(mn[i]));
+            for (int i = 0; i < 2 * N; i++)
+                worst = fmax(worst, fabs(out[i] - mn[i]) / big);
+            print_message("mu0 %.3f, tau %g: ODE V(0) %.6f U(tau) %.6f; column pass relative "
+                          "differences %.2g, %.2g; M, N profile %.2g\n",
+                          d.mu0, tau, v0, end[0], dv, du, worst);
+            assert_true(dv <= 1e-4);
+            assert_true(du <= 1e-4);
+            assert_true(worst <= 1e-4);
+        }
     }
 }
 
@@ -901,40 +929,44 @@ static void test_diffuse_column_extreme(void **state)
         s.multiple = true;
         s.forward = mode > 0;
         s.peripheral = mode > 1;
-        for (int first = 0; first < 3; first++) { /* start at different rows of the table */
-            float t[N];
-            for (int i = 0; i < N; i++) {
-                t[i] = i == 0 ? 0.0f : taus[(i + 7 * first) % N];
-                fi[i] = (float)((i + first) % 3) * 0.5f;
+        for (int e = 0; e < 2; e++) { /* sun overhead, and low */
+            struct light_diffuse_terms d;
+            terms_at(&s, e ? 8.0 : 90.0, &d);
+            for (int first = 0; first < 3; first++) { /* start at different rows */
+                float t[N];
+                for (int i = 0; i < N; i++) {
+                    t[i] = i == 0 ? 0.0f : taus[(i + 7 * first) % N];
+                    fi[i] = (float)((i + first) % 3) * 0.5f;
+                }
+                beam[0] = 1.0f;
+                for (int i = 1; i < N; i++) {
+                    double k = d.loss[0] + fi[i] * (d.loss[1] - d.loss[0]);
+                    beam[i] = (float)(beam[i - 1] * exp(-k * (double)t[i]));
+                }
+                light_diffuse_column(N, beam, t, fi, &d, scratch, out);
+                for (int i = 0; i < N; i++) {
+                    float m = out[2 * i], nn = out[2 * i + 1];
+                    if (!(isfinite(m) && isfinite(nn) && m >= 0.0f && fabsf(nn) <= m + 1e-6f))
+                        fail_msg("mode %d mu0 %g start %d node %d: M %g N %g", mode,
+                                 (double)d.mu0, first, i, (double)m, (double)nn);
+                }
+                double sum = d.mu0 * beam[N - 1] + 0.5 * out[0] + 0.5 * out[2 * (N - 1)];
+                assert_true(fabs(sum / d.mu0 - 1.0) <= 1e-3);
             }
-            beam[0] = 1.0f;
-            for (int i = 1; i < N; i++) {
-                double cpc = s.cp.water_ctr + fi[i] * (s.cp.ice_ctr - s.cp.water_ctr);
-                double cpp = s.cp.water_per + fi[i] * (s.cp.ice_per - s.cp.water_per);
-                double k = mode == 0 ? 1.0 : 1.0 - cpc - (mode > 1 ? cpp : 0.0);
-                beam[i] = (float)(beam[i - 1] * exp(-k * (double)t[i]));
-            }
-            light_diffuse_column(N, beam, t, fi, &s, scratch, out);
-            for (int i = 0; i < N; i++) {
-                float m = out[2 * i], nn = out[2 * i + 1];
-                if (!(isfinite(m) && isfinite(nn) && m >= 0.0f && fabsf(nn) <= m + 1e-6f))
-                    fail_msg("mode %d start %d node %d: M %g N %g", mode, first, i, (double)m,
-                             (double)nn);
-            }
-            double sum = beam[N - 1] + 0.5 * out[0] + 0.5 * out[2 * (N - 1)];
-            assert_true(fabs(sum - 1.0) <= 1e-3);
         }
     }
     /* A single slice that is all of it, and one column of two empty nodes: no diffuse light. */
     struct light_settings s;
     diffuse_settings(&s);
+    struct light_diffuse_terms d;
+    terms_at(&s, 90.0, &d);
     const float t1[2] = {0, 1e30f}, b1[2] = {1.0f, 0.0f}, f1[2] = {0, 0};
-    light_diffuse_column(2, b1, t1, f1, &s, scratch, out);
+    light_diffuse_column(2, b1, t1, f1, &d, scratch, out);
     for (int i = 0; i < 4; i++)
         assert_true(isfinite(out[i]));
     assert_true(out[0] > 1.0f && out[0] <= 2.0f + 1e-6f); /* nearly all reflected */
     const float t0[2] = {0, 0}, b0[2] = {1.0f, 1.0f};
-    light_diffuse_column(2, b0, t0, f1, &s, scratch, out);
+    light_diffuse_column(2, b0, t0, f1, &d, scratch, out);
     for (int i = 0; i < 4; i++)
         assert_true(out[i] == 0.0f);
 }
@@ -960,6 +992,9 @@ static void check_diffuse_map(const struct ext_volume *v, const double sun[3],
     assert_memory_equal(on.light, off.light, count * sizeof(float));
     double mmax = 0.0, worst_energy = 0.0;
     size_t clear = 0;
+    struct light_diffuse_terms terms;
+    light_diffuse_terms_init(s, sun, &terms);
+    const double mu0 = terms.mu0;
     for (size_t c = 0; c < plane; c++) {
         bool lit = true;
         for (int k = 0; k < n[2]; k++) {
@@ -974,10 +1009,10 @@ static void check_diffuse_map(const struct ext_volume *v, const double sun[3],
             for (int k = 0; k < n[2]; k++)
                 assert_true(on.diffuse[2 * (c + plane * k)] == 0.0f);
         }
-        if (!s->peripheral) {
-            double sum = on.light[c + plane * (n[2] - 1)] + 0.5 * on.diffuse[2 * c] +
+        if (!s->peripheral) { /* per unit horizontal area the column receives mu0 */
+            double sum = mu0 * on.light[c + plane * (n[2] - 1)] + 0.5 * on.diffuse[2 * c] +
                          0.5 * on.diffuse[2 * (c + plane * (n[2] - 1))];
-            worst_energy = fmax(worst_energy, fabs(sum - 1.0));
+            worst_energy = fmax(worst_energy, fabs(sum / mu0 - 1.0));
         }
     }
     if (s->peripheral)
@@ -1001,6 +1036,62 @@ static void check_diffuse_map(const struct ext_volume *v, const double sun[3],
     assert_null(on.diffuse);
     light_map_finish(&on);
     light_map_finish(&off);
+}
+
+/* A layer that fills the box, lit from above at 90 and 35 degrees: every light column that
+ * crosses all of it (in at the top, out at the bottom) is the plane-parallel problem, so its
+ * diffuse light must be homogeneous_column's for the optical depth the column's slices add up
+ * to (the light map's, read from the beam it lets through), whichever nodes the layer's faces
+ * fall between: the slices' depths, the beam and the wiring of the pass. */
+static void test_diffuse_map_layer(void **state)
+{
+    struct ext_volume v;
+    make_volume(&v, 40, 40, 10, 100.0, 100.0, 100.0);
+    fill_uniform(&v, 0.0f, 2e-3f); /* water, tau 2 over 1 km */
+    struct light_settings s;
+    diffuse_settings(&s);
+    s.resolution[0] = s.resolution[1] = 24;
+    s.resolution[2] = 32;
+    const double elevs[] = {90.0, 35.0};
+    for (int e = 0; e < 2; e++) {
+        double sun[3];
+        light_sun_direction(200.0, elevs[e], sun);
+        struct light_map m = {0};
+        assert_true(light_map_build(&v, sun, &s, &m));
+        struct light_diffuse_terms t;
+        light_diffuse_terms_init(&s, sun, &t);
+        assert_float_equal(t.mu0, sin(elevs[e] * M_PI / 180.0), 1e-6);
+        const double through = exp(-t.loss[0] * 2.0 / t.mu0);
+        const int *n = m.grid.n;
+        size_t plane = (size_t)n[0] * n[1];
+        double worst = 0.0, r_min = 1.0, r_max = 0.0;
+        int whole = 0;
+        float expect[2 * 65];
+        for (size_t c = 0; c < plane; c++) {
+            double bottom = m.light[c + plane * (n[2] - 1)];
+            if (fabs(bottom / through - 1.0) > 0.1)
+                continue; /* enters or leaves through a side: a shorter path */
+            whole++;
+            double tau = -log(bottom) / t.loss[0] * t.mu0; /* vertical */
+            homogeneous_column(&t, 65, tau, expect);
+            /* Above the layer the column holds what it reflects, below what it lets through. */
+            double up = 0.5 * m.diffuse[2 * c];
+            double down = 0.5 * m.diffuse[2 * (c + plane * (n[2] - 1))];
+            worst = fmax(worst, fabs(up - 0.5 * expect[0]) / (0.5 * expect[0]));
+            worst = fmax(worst, fabs(down - 0.5 * expect[2 * 64]) / (0.5 * expect[2 * 64]));
+            assert_float_equal(m.diffuse[2 * c + 1], -m.diffuse[2 * c], 1e-6);
+            r_min = fmin(r_min, up);
+            r_max = fmax(r_max, up);
+        }
+        print_message("layer lit at %g degrees: %d of %zu light columns cross all of it; "
+                      "reflected %.5f .. %.5f, largest difference from the plane-parallel "
+                      "column %.2g\n",
+                      elevs[e], whole, plane, r_min, r_max, worst);
+        assert_true(whole >= (int)(plane / 8));
+        assert_true(worst <= 1e-4);
+        light_map_finish(&m);
+    }
+    ext_volume_finish(&v);
 }
 
 static void test_diffuse_map_sphere_and_storm(void **state)
@@ -1234,7 +1325,7 @@ static void test_key_and_cache(void **state)
     changed[8].settings.substeps = 3;
     /* Multiple scattering: the switch alone, and the two-stream terms it reads. */
     changed[9].settings.multiple = true;
-    changed[10].settings.cp.water_back += 0.01;
+    changed[10].settings.cp.water_cs_g += 0.01;
     changed[11].settings.cp.ice_gamma += 0.01;
     for (int i = 0; i < CHANGES; i++) {
         assert_false(light_key_equal(&k, &changed[i]));
@@ -1348,6 +1439,7 @@ int main(void)
         cmocka_unit_test(test_diffuse_column_matches_ode),
         cmocka_unit_test(test_diffuse_column_extreme),
         cmocka_unit_test(test_diffuse_map_sphere_and_storm),
+        cmocka_unit_test(test_diffuse_map_layer),
         cmocka_unit_test(test_compressed_within_epsilon),
         cmocka_unit_test(test_compress_degenerate),
         cmocka_unit_test(test_compression_reduces),

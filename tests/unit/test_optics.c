@@ -405,6 +405,36 @@ static void test_forward_cp(void **state)
     assert_true(cp.ice_ctr == 0.0 && cp.ice_per == 0.0);
 }
 
+/* The backward share of a vertical two-stream column lit at mu0: its closed-form ends (sun
+ * overhead: the backward hemisphere 1 - CP(pi/2); sun at the horizon: half of what leaves the
+ * cone, by symmetry), isotropic scattering halves at every sun, and a forward-peaked phase
+ * sends less back the higher the sun. */
+static void test_cs_back_fraction(void **state)
+{
+    const double gs[] = {0.0, 0.5, 0.85, -0.3};
+    const double psis[] = {0.0, 0.1, 0.3};
+    for (size_t a = 0; a < sizeof gs / sizeof gs[0]; a++) {
+        for (size_t b = 0; b < sizeof psis / sizeof psis[0]; b++) {
+            double g = gs[a], psi = psis[b];
+            double top = phase_cs_back_fraction(g, psi, 1.0);
+            double side = phase_cs_back_fraction(g, psi, 0.0);
+            /* 8192 midpoint steps across the hemisphere's edge: about 1e-5 */
+            assert_float_equal(top, 1.0 - phase_cs_cumulative(g, 0.5 * PI), 1e-4);
+            assert_float_equal(side, 0.5 * (1.0 - phase_cs_cumulative(g, psi)), 1e-4);
+            double prev = side;
+            for (double mu0 = 0.1; mu0 <= 1.0001; mu0 += 0.1) {
+                double f = phase_cs_back_fraction(g, psi, mu0);
+                assert_true(f >= 0.0 && f <= 1.0);
+                if (g == 0.0 && psi == 0.0)
+                    assert_float_equal(f, 0.5, 1e-6);
+                if (g > 0.0)
+                    assert_true(f <= prev + 1e-9);
+                prev = f;
+            }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -421,6 +451,7 @@ int main(void)
         cmocka_unit_test(test_cs_mean_cosine),
         cmocka_unit_test(test_eye_phase_table),
         cmocka_unit_test(test_forward_cp),
+        cmocka_unit_test(test_cs_back_fraction),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -114,9 +114,13 @@ static void test_extreme_asymmetry(void **state)
         assert_true(cp.ice_ctr >= 0.0 && cp.ice_per >= 0.0);
         assert_true(cp.ice_ctr + cp.ice_per <= 1.0 + 1e-9);
 
-        /* The two-stream terms: a backward share in [0, 1], a coupling in [0, 1.5]. */
-        assert_true(cp.water_back >= 0.0 && cp.water_back <= 1.0);
-        assert_true(cp.ice_back >= 0.0 && cp.ice_back <= 1.0);
+        /* The two-stream terms: a backward share in [0, 1] at any sun, a coupling in
+         * [0, 1.5]. */
+        for (double mu0 = 0.0; mu0 <= 1.0; mu0 += 0.25) {
+            double bw = phase_cs_back_fraction(cp.water_cs_g, 0.1, mu0);
+            double bi = phase_cs_back_fraction(cp.ice_cs_g, 0.1, mu0);
+            assert_true(bw >= 0.0 && bw <= 1.0 && bi >= 0.0 && bi <= 1.0);
+        }
         assert_true(cp.water_gamma >= 0.0 && cp.water_gamma <= 1.5);
         assert_true(cp.ice_gamma >= 0.0 && cp.ice_gamma <= 1.5);
 
