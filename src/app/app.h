@@ -93,7 +93,7 @@ struct app_light {
     uint64_t held[2];        /* the step each of gpu, spare was last built for */
     int pair_first;          /* which of them holds step_id while the pair is bound */
     struct render_light pair; /* the hook that binds both */
-    char pair_defines[64];
+    char pair_defines[96];
 };
 
 /* The identity of time step STEP made with look generation GEN (never 0). */

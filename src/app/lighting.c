@@ -113,8 +113,9 @@ static bool update_temporal(struct app_light *al, struct renderer *r, const doub
         return false;
     al->held[1 - cur] = al->next_id;
     al->pair_first = cur;
-    snprintf(al->pair_defines, sizeof(al->pair_defines),
-             "#define LIGHTMAP %d\n#define LIGHTMAP_PAIR 1\n", light_gpu_variant(maps[cur]));
+    /* Step k's variant (LIGHTMAP, MULTIPLE) and the pair: both maps are built alike. */
+    snprintf(al->pair_defines, sizeof(al->pair_defines), "%s#define LIGHTMAP_PAIR 1\n",
+             light_gpu_render_light(maps[cur])->defines);
     al->pair.defines = al->pair_defines;
     al->pair.bind = bind_pair;
     renderer_set_light(r, &al->pair);

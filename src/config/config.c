@@ -217,11 +217,10 @@ static const struct setting settings[] = {
            "along the light"),
     EFFECT("effects.peripheral", EFFECT_PERIPHERAL,
            "peripheral forward scattering; auto: as effects.forward"),
-    {.path = "effects.multiple", .type = T_ENUM, .n = 1, .offset = OFF(effects.mode[EFFECT_MULTIPLE]),
-     .names = effect_mode_names, .def = {EFFECT_OFF},
-     .help = "multiple scattering: diffuse light from a two-stream pass along each light column "
-             "(docs/lightmap.md); off by default (it overestimates small clouds, "
-             "docs/accuracy.md); auto: on unless optically thin along the light"},
+    EFFECT("effects.multiple", EFFECT_MULTIPLE,
+           "multiple scattering: diffuse light from a two-stream pass down each light column, "
+           "solved as a layer lit at the sun's elevation (docs/lightmap.md); auto: on unless "
+           "optically thin along the light"),
     EFFECT("effects.phase", EFFECT_PHASE,
            "per-species phase (ice vs water); auto: off (one phase) when one kind is absent"),
     EFFECT("effects.ground_shadow", EFFECT_GROUND_SHADOW,

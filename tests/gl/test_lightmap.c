@@ -270,7 +270,8 @@ static double ring_mean(const struct image *img, double r, double a, double b)
 
 static void test_silver_lining(void **state)
 {
-    /* A thick sphere between the eye and the sun: its rim glows, its centre is dark. */
+    /* A thick sphere between the eye and the sun: its rim glows, its centre is dark (the
+     * light map's forward peak alone: multiple scattering off). */
     struct config cfg;
     struct ext_volume vol = {0};
     const char *sets[] = {"scene.kind=sphere", "scene.size=[40,40,40]",
@@ -278,8 +279,8 @@ static void test_silver_lining(void **state)
                           "light.elevation=10", "render.sky=[0,0,0]", "render.ground_on=false",
                           "camera.position=[5,-40,-2.05]", "camera.target=[5,5,5]",
                           "camera.fov=16", "render.width=96", "render.height=96",
-                          "lightmap.resolution=[64,64,96]"};
-    test_config_from(&cfg, sets, 14);
+                          "lightmap.resolution=[64,64,96]", "effects.multiple=off"};
+    test_config_from(&cfg, sets, 15);
     test_upload_scene(renderer, &cfg, &vol);
     struct app_light al;
     struct image img;
@@ -481,8 +482,9 @@ static double ground_under(const char *mode, double x_km, double y_km)
     const char *sets[] = {"scene.kind=sphere", "scene.size=[32,32,32]",
                           "scene.extent=[10,10,10]", "scene.tau=30", "light.azimuth=90",
                           "light.elevation=45", "render.sky=[0,0,0]", "render.width=16",
-                          "render.height=16", "lightmap.resolution=[48,48,64]", mode};
-    test_config_from(&cfg, sets, 11);
+                          "render.height=16", "lightmap.resolution=[48,48,64]",
+                          "effects.multiple=off", mode};
+    test_config_from(&cfg, sets, 12);
     test_upload_scene(renderer, &cfg, &vol);
     /* Straight down at (x, y) on the ground from outside the volume. */
     double eye[3] = {x_km * 1e3, y_km * 1e3, 30e3}, target[3] = {x_km * 1e3, y_km * 1e3, 0};
@@ -510,8 +512,11 @@ static void test_cloud_shadows_the_ground(void **state)
     double lit = ground_under("lightmap.mode=dense", -3.0, -6.0);
     double unshadowed = ground_under("effects.shadows=off", -3.0, 5.0);
     double compressed = ground_under("lightmap.mode=compressed", -3.0, 5.0);
-    print_message("ground: shadow %.4g, lit %.4g, without light map %.4g\n", shadow, lit,
-                  unshadowed);
+    /* With multiple scattering the cloud lets diffuse light through into its shadow. */
+    double diffuse = ground_under("effects.multiple=on", -3.0, 5.0);
+    print_message("ground: shadow %.4g (with diffuse light %.4g), lit %.4g, without light map "
+                  "%.4g\n", shadow, diffuse, lit, unshadowed);
+    assert_true(diffuse > shadow && diffuse < 0.6 * lit);
     assert_true(lit > 0.0);
     assert_true(shadow < 0.3 * lit);
     assert_float_equal(unshadowed, lit, 1e-6);

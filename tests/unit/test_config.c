@@ -122,10 +122,9 @@ static void test_defaults(void **state)
     assert_int_equal(cfg.lightmap.resolution[2], 64);
     assert_true(cfg.lightmap.epsilon == 0.01);
     assert_true(cfg.lightmap.forward_angle_deg == 20.0);
-    /* Every effect is auto, except multiple scattering, which costs a second pass over the
-     * light map and is opt-in. */
+    /* Every effect is auto. */
     for (int e = 0; e < EFFECT_COUNT; e++)
-        assert_int_equal(cfg.effects.mode[e], e == EFFECT_MULTIPLE ? EFFECT_OFF : EFFECT_AUTO);
+        assert_int_equal(cfg.effects.mode[e], EFFECT_AUTO);
     assert_true(config_validate(&cfg));
 }
 

@@ -30,9 +30,8 @@ static void test_unknown_facts_simulate_everything(void **state)
     struct effects e;
     effects_decide(&cfg, NULL, &e);
     assert_true(e.on[EFFECT_SHADOWS] && e.on[EFFECT_FORWARD] && e.on[EFFECT_PERIPHERAL]);
-    /* Multiple scattering is opt-in: off by default, even when nothing is known... */
-    assert_false(e.on[EFFECT_MULTIPLE]);
-    assert_string_equal(e.reason[EFFECT_MULTIPLE], "off in the config");
+    /* Multiple scattering too: nothing says the volume is thin. */
+    assert_true(e.on[EFFECT_MULTIPLE]);
     assert_true(e.on[EFFECT_PHASE] && e.on[EFFECT_GROUND_SHADOW]);
     assert_false(e.on[EFFECT_TEMPORAL]);
     assert_false(e.on[EFFECT_DISTORTION]);
@@ -150,14 +149,7 @@ static void test_multiple_modes(void **state)
     known_thick(&f);
     struct effects e;
     struct light_settings s;
-    /* The default, off, wins over a thick medium where auto would turn it on, and the light
-     * map is told. */
-    effects_decide(&cfg, &f, &e);
-    assert_false(e.on[EFFECT_MULTIPLE]);
-    assert_string_equal(e.reason[EFFECT_MULTIPLE], "off in the config");
-    effects_light_settings(&cfg, &e, &s);
-    assert_false(s.multiple);
-    assert_true(config_set(&cfg, "effects.multiple=auto"));
+    /* The default, auto, turns it on in a thick medium, and the light map is told. */
     effects_decide(&cfg, &f, &e);
     assert_true(e.on[EFFECT_MULTIPLE]);
     effects_light_settings(&cfg, &e, &s);
