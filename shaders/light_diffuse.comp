@@ -2,15 +2,9 @@
 // invocation per column, after light_build.comp has swept the beam (docs/lightmap.md,
 // "Multiple scattering"): each column is solved as a plane-parallel atmosphere lit at mu0
 // (the tilted independent column approximation).  Mirrors light_diffuse_column() in
-// src/light/transport.c operation for operation in float32.  Variants as light_build.comp:
-// FORWARD, PERIPHERAL, PHASE_MIX (only PHASE_MIX changes this pass).
+// src/light/transport.c operation for operation in float32.  Variant: PHASE_MIX 0 when both
+// phases' terms are equal (the ice share is then not read).
 
-#ifndef FORWARD
-#define FORWARD 1
-#endif
-#ifndef PERIPHERAL
-#define PERIPHERAL 1
-#endif
 #ifndef PHASE_MIX
 #define PHASE_MIX 1
 #endif

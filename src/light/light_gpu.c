@@ -11,9 +11,9 @@ struct light_gpu {
     struct render_light hook; /* first: the renderer's bind callback gets it back */
     /* Build programs by variant: bit 0 FORWARD, bit 1 PERIPHERAL, bit 2 PHASE_MIX, bit 3
      * MULTIPLE (made on first use: an effect that is off is compiled out); the diffuse column
-     * pass by the first three bits. */
+     * pass by PHASE_MIX. */
     struct gpu_program build[16];
-    struct gpu_program diffuse_pass[8];
+    struct gpu_program diffuse_pass[2];
     struct gpu_texture light;   /* R32F node volume */
     struct gpu_texture diffuse; /* RG32F node volume, M and N; only with multiple scattering */
     struct gpu_texture slice;   /* RG32F build scratch: each slice's tau and ice share */
@@ -71,15 +71,15 @@ static const struct gpu_program *build_program(struct light_gpu *lg, int v)
     return &lg->build[v];
 }
 
-static const struct gpu_program *diffuse_program(struct light_gpu *lg, int v)
+/* The diffuse column pass: its only variant is the ice/water mix (the loss shares the forward
+ * terms leave come as uniforms). */
+static const struct gpu_program *diffuse_program(struct light_gpu *lg, bool mix)
 {
-    v &= 7;
+    int v = mix ? 1 : 0;
     if (lg->diffuse_pass[v].id)
         return &lg->diffuse_pass[v];
-    char defines[96];
-    snprintf(defines, sizeof(defines), "#define FORWARD %d\n#define PERIPHERAL %d\n"
-             "#define PHASE_MIX %d\n", v & 1, (v >> 1) & 1, (v >> 2) & 1);
-    if (!gpu_program_init(&lg->diffuse_pass[v], "light_diffuse.comp", defines))
+    if (!gpu_program_init(&lg->diffuse_pass[v], "light_diffuse.comp",
+                          mix ? "#define PHASE_MIX 1\n" : "#define PHASE_MIX 0\n"))
         return NULL;
     return &lg->diffuse_pass[v];
 }
@@ -115,7 +115,7 @@ void light_gpu_destroy(struct light_gpu *lg)
         return;
     for (int v = 0; v < 16; v++)
         gpu_program_finish(&lg->build[v]);
-    for (int v = 0; v < 8; v++)
+    for (int v = 0; v < 2; v++)
         gpu_program_finish(&lg->diffuse_pass[v]);
     gpu_texture_finish(&lg->light);
     gpu_texture_finish(&lg->diffuse);
@@ -144,7 +144,7 @@ static bool build_diffuse(struct light_gpu *lg, const double sun[3],
     if (!node_texture(&lg->diffuse, g->n, GPU_RG32F) ||
         !node_texture(&lg->adding, g->n, GPU_RG32F))
         return false;
-    const struct gpu_program *p = diffuse_program(lg, build_variant(s));
+    const struct gpu_program *p = diffuse_program(lg, !light_settings_phases_equal(s));
     if (!p)
         return false;
     struct light_diffuse_terms t;
