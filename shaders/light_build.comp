@@ -4,7 +4,8 @@
 // Variants (#define, effects that are off are compiled out): FORWARD 0 = shadow only;
 // PERIPHERAL 0 = no peripheral ring; PHASE_MIX 0 = both phases' CP are equal (one phase), so
 // the ice share is not computed; MULTIPLE 1 = also store each slice's optical depth and ice
-// share for the diffuse column pass (light_diffuse.comp).
+// share for the diffuse column pass (light_diffuse.comp); LATERAL 1 (with MULTIPLE) = and its
+// lateral escape rates (light_lateral.comp), weighted by the extinction.
 
 #include "common.glsl"
 
@@ -20,13 +21,20 @@
 #ifndef MULTIPLE
 #define MULTIPLE 0
 #endif
+#ifndef LATERAL
+#define LATERAL 0
+#endif
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0) uniform sampler3D beta_tex;      // read with texelFetch only
 layout(r32f, binding = 0) uniform image3D light_img; // node (i, j, k) = light at that point
 #if MULTIPLE
-layout(rg32f, binding = 1) uniform writeonly image3D slice_img; // slice k-1..k: tau, ice share
+// slice k-1..k: tau, ice share, lateral escape rates along x and y (0 without LATERAL)
+layout(rgba32f, binding = 1) uniform writeonly image3D slice_img;
+#endif
+#if MULTIPLE && LATERAL
+layout(binding = 1) uniform sampler3D rates_tex; // volume grid; read with texelFetch only
 #endif
 
 uniform ivec3 vol_n;
@@ -57,12 +65,9 @@ int axis_weight(float x, int n, out float t)
     return i;
 }
 
-vec2 fetch(ivec3 c)
-{
-    return texelFetch(beta_tex, c, 0).rg;
-}
-
-vec2 sample_beta(vec3 p)
+// Trilinear in the volume's voxels with the CPU's weights; outside the box reads 0.  NaN and
+// negative read as 0, infinity as 1e30.
+vec2 sample_voxels(sampler3D tex, vec3 p)
 {
     vec3 x = (p - vol_origin) * vol_inv_spacing;
     for (int a = 0; a < 3; a++) {
@@ -77,10 +82,13 @@ vec2 sample_beta(vec3 p)
         t[a] = ta;
         d[a] = vol_n[a] > 1 ? 1 : 0;
     }
-    vec2 c000 = fetch(i0), c100 = fetch(i0 + ivec3(d.x, 0, 0));
-    vec2 c010 = fetch(i0 + ivec3(0, d.y, 0)), c110 = fetch(i0 + ivec3(d.x, d.y, 0));
-    vec2 c001 = fetch(i0 + ivec3(0, 0, d.z)), c101 = fetch(i0 + ivec3(d.x, 0, d.z));
-    vec2 c011 = fetch(i0 + ivec3(0, d.y, d.z)), c111 = fetch(i0 + d);
+    vec2 c000 = texelFetch(tex, i0, 0).rg, c100 = texelFetch(tex, i0 + ivec3(d.x, 0, 0), 0).rg;
+    vec2 c010 = texelFetch(tex, i0 + ivec3(0, d.y, 0), 0).rg;
+    vec2 c110 = texelFetch(tex, i0 + ivec3(d.x, d.y, 0), 0).rg;
+    vec2 c001 = texelFetch(tex, i0 + ivec3(0, 0, d.z), 0).rg;
+    vec2 c101 = texelFetch(tex, i0 + ivec3(d.x, 0, d.z), 0).rg;
+    vec2 c011 = texelFetch(tex, i0 + ivec3(0, d.y, d.z), 0).rg;
+    vec2 c111 = texelFetch(tex, i0 + d, 0).rg;
     vec2 c00 = c000 + t.x * (c100 - c000);
     vec2 c10 = c010 + t.x * (c110 - c010);
     vec2 c01 = c001 + t.x * (c101 - c001);
@@ -123,10 +131,17 @@ void main()
     }
     float fi = float(ij.x), fj = float(ij.y);
     vec2 b = vec2(0.0);
+#if MULTIPLE && LATERAL
+    vec2 lat = vec2(0.0);
+#endif
     for (int m = 0; m < substeps; m++) {
         float kz = float(k - 1) + (float(m) + 0.5) / float(substeps);
         vec3 p = g_origin + fi * g_du + fj * g_dv + kz * g_dw;
-        b += sample_beta(p);
+        vec2 bm = sample_voxels(beta_tex, p);
+        b += bm;
+#if MULTIPLE && LATERAL
+        lat += (bm.x + bm.y) * sample_voxels(rates_tex, p);
+#endif
     }
     float beta = b.x + b.y;
     float l_in = imageLoad(light_img, ivec3(ij, k - 1)).r;
@@ -159,7 +174,12 @@ void main()
     float l = l_in * exp(-tau); // Nes eq. 5.8
 #endif
 #if MULTIPLE
-    imageStore(slice_img, ivec3(ij, k), vec4(tau, f_ice, 0.0, 0.0));
+#if LATERAL
+    vec2 rates = beta > 0.0 ? lat / beta : vec2(0.0);
+#else
+    vec2 rates = vec2(0.0);
+#endif
+    imageStore(slice_img, ivec3(ij, k), vec4(tau, f_ice, rates));
 #endif
     imageStore(light_img, ivec3(ij, k), vec4(clamp(l, 0.0, 1.0))); // Nes eq. 5.11
 }

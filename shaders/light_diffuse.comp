@@ -2,18 +2,23 @@
 // invocation per column, after light_build.comp has swept the beam (docs/lightmap.md,
 // "Multiple scattering"): each column is solved as a plane-parallel atmosphere lit at mu0
 // (the tilted independent column approximation).  Mirrors light_diffuse_column() in
-// src/light/transport.c operation for operation in float32.  Variant: PHASE_MIX 0 when both
-// phases' terms are equal (the ice share is then not read).
+// src/light/transport.c operation for operation in float32.  Variants: PHASE_MIX 0 when both
+// phases' terms are equal (the ice share is then not read); LATERAL 1 when diffuse light
+// escapes through the clouds' sides (the slices' escape rates are read).
 
 #ifndef PHASE_MIX
 #define PHASE_MIX 1
+#endif
+#ifndef LATERAL
+#define LATERAL 0
 #endif
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(r32f, binding = 0) uniform readonly image3D light_img;   // the beam at each node
-layout(rg32f, binding = 1) uniform readonly image3D slice_img;  // slice k-1..k: tau, ice share
-layout(rg32f, binding = 2) uniform image3D adding_img;          // z = 1 / (1 - A), g
+layout(rgba32f, binding = 1) uniform readonly image3D slice_img; // slice k-1..k: tau, ice
+                                                                 // share, escape rates x, y
+layout(rg32f, binding = 2) uniform image3D adding_img;          // 1 - A, g
 layout(rg32f, binding = 3) uniform writeonly image3D diffuse_img; // 2 (U + V), 2 (U - V)
 
 uniform ivec3 grid_n;
@@ -24,11 +29,48 @@ uniform float mu0;  // |sin(elevation)|, at least 1e-3
 
 struct slice_terms {
     float tau, loss, back, gamma;
+    float refl, trans, keep, absorb, escape; // R, T, 1 - R, 1 - R - T, share of its own light
+                                             // out of its ends
 };
+
+// light_lateral_escape(): the straight-flight rate of each axis, for runs narrower than a
+// transport mean free path.
+float lateral_escape(float g, vec2 r)
+{
+    float tr = 4.0 * g / 3.0;
+    return (r.x > 0.0 ? r.x * exp(-tr / r.x) : 0.0) + (r.y > 0.0 ? r.y * exp(-tr / r.y) : 0.0);
+}
+
+// The slice as an absorbing layer (transport.c, slice_layer).
+void slice_layer(float g, float a, float tv, inout slice_terms t)
+{
+    float x = sqrt(a * (2.0 * g + a)) * tv;
+    float p, q, sech;
+    if (x < 1.0) { // through sinh(x/2), whose series keeps 1 - sech(x) to the last digit
+        float y = 0.5 * x, y2 = y * y;
+        float shy = 1.0 + y2 * (1.0 / 6.0) * (1.0 + y2 * (1.0 / 20.0) * (1.0 + y2 * (1.0 / 42.0)));
+        float sh = y * shy;
+        float ch = 1.0 + 2.0 * sh * sh;
+        sech = 1.0 / ch;
+        p = shy * sqrt(1.0 + sh * sh) / ch;
+        q = shy * shy / (2.0 * ch);
+    } else {
+        float e = exp(-x), e2 = e * e;
+        sech = 2.0 * e / (1.0 + e2);
+        p = (1.0 - e2) / (1.0 + e2) / x;
+        q = (1.0 - sech) / (x * x);
+    }
+    float den = 1.0 + (g + a) * tv * p;
+    t.refl = g * tv * p / den;
+    t.trans = sech / den;
+    t.keep = (1.0 + a * tv * p) / den;
+    t.absorb = (x * x * q + a * tv * p) / den;
+    t.escape = ((2.0 * g + a) * tv * q + p) / den;
+}
 
 slice_terms terms(ivec3 c)
 {
-    vec2 sl = imageLoad(slice_img, c).rg;
+    vec4 sl = imageLoad(slice_img, c);
 #if PHASE_MIX
     float fi = sl.y;
 #else
@@ -40,19 +82,27 @@ slice_terms terms(ivec3 c)
     float bk = back.x + fi * (back.y - back.x);
     t.back = min(max(bk / t.loss, 0.0), 1.0);
     t.gamma = gamma.x + fi * (gamma.y - gamma.x);
+#if LATERAL
+    float a = lateral_escape(t.gamma, sl.zw);
+#else
+    float a = 0.0;
+#endif
+    slice_layer(t.gamma, a, mu0 * t.tau, t);
     return t;
 }
 
-// Diffuse light out of a slice's sun side (x) and far side (y), times (1 + gamma mu0 tau), for
-// the beam D0 entering it (transport.c, column_slice and slice_sources).
+// Diffuse light out of a slice's sun side (x) and far side (y) for the beam D0 entering it
+// (transport.c, column_slice and slice_sources).
 vec2 sources(float d0, slice_terms t)
 {
     float x = min(t.loss * t.tau, 1e8);
     float w = mu0 * d0 * (1.0 - exp(-x));
+    float tv = mu0 * t.tau;
     float a1 = x < 0.1 ? 0.5 + x * (1.0 / 12.0) - x * x * x * (1.0 / 720.0)
                        : 1.0 / (1.0 - exp(-x)) - 1.0 / x;
-    float gw = t.gamma * (mu0 * t.tau) * w;
-    return vec2(t.back * w + gw * a1, (1.0 - t.back) * w + gw * (1.0 - a1));
+    float gw = t.gamma * tv * w;
+    vec2 s = vec2(t.back * w + gw * a1, (1.0 - t.back) * w + gw * (1.0 - a1));
+    return s * (t.escape / (1.0 + t.gamma * tv));
 }
 
 void main()
@@ -61,29 +111,25 @@ void main()
     if (ij.x >= grid_n.x || ij.y >= grid_n.y)
         return;
     int n = grid_n.z;
-    float z = 1.0, g = 0.0; // beyond the last node: nothing sends light back
-    imageStore(adding_img, ivec3(ij, n - 1), vec4(z, g, 0.0, 0.0));
+    float k = 1.0, g = 0.0; // beyond the last node: nothing sends light back
+    imageStore(adding_img, ivec3(ij, n - 1), vec4(k, g, 0.0, 0.0));
     for (int l = n - 1; l >= 1; l--) {
         slice_terms t = terms(ivec3(ij, l));
-        float gt = t.gamma * mu0 * t.tau;
         vec2 s = sources(imageLoad(light_img, ivec3(ij, l - 1)).r, t);
-        float zt = z + gt;
-        float a = 1.0 - 1.0 / z;
-        g = s.x / (1.0 + gt) + (g + a * s.y / (1.0 + gt)) * (z / zt);
-        z = zt;
-        imageStore(adding_img, ivec3(ij, l - 1), vec4(z, g, 0.0, 0.0));
+        float den = t.keep + k * t.refl;
+        g = s.x + t.trans * (g + (1.0 - k) * s.y) / den;
+        k = t.absorb + t.trans * (t.absorb + k * (t.refl + t.trans)) / den;
+        imageStore(adding_img, ivec3(ij, l - 1), vec4(k, g, 0.0, 0.0));
     }
     float u = 0.0; // no diffuse light enters from the sun's side
     imageStore(diffuse_img, ivec3(ij, 0), vec4(2.0 * g, -2.0 * g, 0.0, 0.0));
-    float z_prev = z;
     for (int l = 1; l < n; l++) {
         slice_terms t = terms(ivec3(ij, l));
-        float gt = t.gamma * mu0 * t.tau;
         vec2 s = sources(imageLoad(light_img, ivec3(ij, l - 1)).r, t);
-        vec2 zg = imageLoad(adding_img, ivec3(ij, l)).rg;
-        u = (u + gt * zg.y + s.y) * (zg.x / z_prev);
-        float v = (1.0 - 1.0 / zg.x) * u + zg.y;
+        vec2 kg = imageLoad(adding_img, ivec3(ij, l)).rg;
+        float den = t.keep + kg.x * t.refl;
+        u = (t.trans * u + s.y + t.refl * kg.y) / den;
+        float v = (1.0 - kg.x) * u + kg.y;
         imageStore(diffuse_img, ivec3(ij, l), vec4(2.0 * (u + v), 2.0 * (u - v), 0.0, 0.0));
-        z_prev = zg.x;
     }
 }

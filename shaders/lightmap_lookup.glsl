@@ -175,20 +175,30 @@ vec2 lightmap_diffuse(vec3 p)
 }
 
 // The diffuse light scattered toward the eye by a phase of mean cosine G, as a multiple of the
-// sun radiance scale: with the Eddington radiance I0 + I1 mu (mu the cosine with the vertical
-// pointing away from the sun's side, down when the sun is up) and the phase's first moment,
+// sun radiance scale: with the Eddington radiance I0 + I1 mu (mu the cosine with the axis of
+// the diffuse light's anisotropy, diffuse_mu_eye) and the phase's first moment,
 // I0 + g I1 mu_eye = (M + 1.5 g N mu_eye) E / 4 pi (never negative), where mu_eye is that
-// cosine for the light heading to the eye: diffuse_mu_eye().
+// cosine for the light heading to the eye.
 float diffuse_scattered(vec2 d, float g, float mu_eye)
 {
     return max(d.x + 1.5 * g * d.y * mu_eye, 0.0);
 }
 
-// mu_eye for the eye ray DIR (from the eye) and the sun's height SUN_Z: the light travels
-// along -DIR, the vertical axis points down (-z) when the sun is up.
-float diffuse_mu_eye(vec3 dir, float sun_z)
+// mu_eye for the eye ray DIR (from the eye), the direction SUN_DIR toward the sun, the beam
+// LIGHT at the point and the mean cosine G there (docs/lightmap.md, "The diffuse light seen"):
+// light just scattered out of the beam still travels along the sunlight, light scattered many
+// times flows along the vertical (down, away from the sun's side, when the sun is up).  The
+// axis leans from the first to the second as the beam fades: by the weight LIGHT^(1 - g), the
+// share of the light that has not yet crossed one transport mean free path (1 / (1 - g)
+// optical depths) of the medium, exactly so when forward scattering is off and the beam is
+// e^-tau.
+float diffuse_mu_eye(vec3 dir, vec3 sun_dir, float light, float g)
 {
-    return sun_z >= 0.0 ? dir.z : -dir.z;
+    vec3 down = vec3(0.0, 0.0, sun_dir.z >= 0.0 ? -1.0 : 1.0);
+    float w = pow(max(light, 1e-30), 1.0 - g);
+    vec3 axis = w * (-sun_dir) + (1.0 - w) * down;
+    float len = length(axis); // >= |sun_dir.z|: the two never point apart
+    return len > 1e-6 ? dot(-dir, axis) / len : 0.0;
 }
 #endif
 

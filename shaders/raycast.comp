@@ -96,9 +96,6 @@ void main()
     float trans = 1.0;
     float cos_psi = dot(dir, sun_dir); // scattering angle between sunlight and the eye ray
     vec2 phase = eye_phase(cos_psi);
-#if MULTIPLE
-    float mu_eye = diffuse_mu_eye(dir, sun_dir.z);
-#endif
     if (t1 > t0) {
         float len = t1 - t0;
         float step = step_len;
@@ -133,10 +130,12 @@ void main()
 #else
             float pv = phase.g;
 #endif
-            float light = pv * lightmap_light(p);
+            float beam = lightmap_light(p);
+            float light = pv * beam;
 #if MULTIPLE
             float g = (b.r * mean_cosine.x + b.g * mean_cosine.y) / beta;
-            light += diffuse_scattered(lightmap_diffuse(p), g, mu_eye);
+            light += diffuse_scattered(lightmap_diffuse(p), g,
+                                       diffuse_mu_eye(dir, sun_dir, beam, g));
 #endif
 #if TINT
             vec3 tint = texture(tint_tex, (p - box_min) / box_size).rgb;

@@ -350,6 +350,7 @@ void effects_light_settings(const struct config *cfg, const struct effects *e,
     s->forward = e->on[EFFECT_FORWARD];
     s->peripheral = e->on[EFFECT_PERIPHERAL];
     s->multiple = e->on[EFFECT_MULTIPLE];
+    s->lateral = cfg->lightmap.lateral;
     s->epsilon = cfg->lightmap.epsilon;
     light_settings_set_optics(s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
     if (!e->on[EFFECT_PHASE])

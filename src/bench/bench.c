@@ -84,6 +84,10 @@ int bench_variants(const struct bench_scene *sc, bool quick, struct bench_varian
     ADD(snprintf(v->knob, sizeof(v->knob), "multiple"); snprintf(v->value, sizeof(v->value),
         "%s", sc->light.multiple ? "off" : "on (two-stream)");
         v->light.multiple = !sc->light.multiple);
+    if (sc->light.multiple)
+        ADD(snprintf(v->knob, sizeof(v->knob), "lateral escape");
+            snprintf(v->value, sizeof(v->value), "%s", sc->light.lateral ? "off" : "on");
+            v->light.lateral = !sc->light.lateral);
     ADD(snprintf(v->knob, sizeof(v->knob), "shadows"); snprintf(v->value, sizeof(v->value),
         "off (no light map)"); v->shadows = false);
     ADD(snprintf(v->knob, sizeof(v->knob), "combination");
@@ -328,6 +332,7 @@ static bool same_light_map(const struct bench_variant *a, const struct bench_var
     return a->mode == b->mode &&
            memcmp(x->resolution, y->resolution, sizeof(x->resolution)) == 0 &&
            x->forward == y->forward && per_x == per_y && x->multiple == y->multiple &&
+           (!x->multiple || x->lateral == y->lateral) &&
            x->forward_angle_deg == y->forward_angle_deg && x->substeps == y->substeps &&
            memcmp(&x->cp, &y->cp, sizeof(x->cp)) == 0 &&
            (a->mode == LIGHT_GPU_DENSE || x->epsilon == y->epsilon);

@@ -205,6 +205,9 @@ static const struct setting settings[] = {
         "error bound of the compressed light map"),
     DBL("lightmap.forward_angle", lightmap.forward_angle_deg, 0, 180, F_MIN_OPEN, 20.0,
         "forward scattering cone angle theta, degrees"),
+    BOOL("lightmap.lateral", lightmap.lateral, 1,
+         "with multiple scattering: diffuse light escapes through the sides of clouds "
+         "narrower than a plane-parallel layer (docs/lightmap.md)"),
 
     DBL("playback.speed", playback.speed, 0, 1000, F_MIN_OPEN, 2.0,
         "playback speed, time steps per second"),

@@ -119,6 +119,7 @@ struct config_lightmap {
     int resolution[3];       /* lightmap.resolution: [across x, across y, along the light] */
     double epsilon;          /* lightmap.epsilon: compression error bound */
     double forward_angle_deg;/* lightmap.forward_angle: theta */
+    bool lateral;            /* lightmap.lateral: diffuse light escapes through clouds' sides */
 };
 
 enum coast_resolution { COAST_CRUDE, COAST_LOW, COAST_INTERMEDIATE };

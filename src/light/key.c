@@ -72,6 +72,7 @@ static void visit_key(struct visit *v, const struct light_key *k)
     visit_double(v, s->cp.ice_ctr, t->cp.ice_ctr);
     visit_double(v, s->cp.ice_per, t->cp.ice_per);
     visit_u64(v, s->multiple, t->multiple);
+    visit_u64(v, s->multiple && s->lateral, t->multiple && t->lateral);
     visit_double(v, s->cp.water_cs_g, t->cp.water_cs_g);
     visit_double(v, s->cp.ice_cs_g, t->cp.ice_cs_g);
     visit_double(v, s->cp.water_gamma, t->cp.water_gamma);

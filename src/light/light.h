@@ -83,12 +83,15 @@ struct light_settings {
     bool peripheral;          /* peripheral ring theta/4 .. theta/2 on (needs forward) */
     bool multiple;            /* multiple scattering: the diffuse light of the two-stream
                                  column pass (light_map.diffuse) */
+    bool lateral;             /* with multiple: diffuse light escapes through the sides of
+                                 clouds narrower than the plane-parallel column assumes */
     struct optics_cp cp;      /* CP(theta/4) and CP(theta/2) - CP(theta/4) per phase */
     double epsilon;           /* compression error bound (compressed storage only) */
     int substeps;             /* extinction samples per slice; 0 = light_auto_substeps */
 };
 
-/* Defaults: 128^3 nodes, theta = 20 degrees, forward and peripheral on, epsilon 0.002,
+/* Defaults: 128^3 nodes, theta = 20 degrees, forward and peripheral on, lateral escape on
+ * (it acts with multiple only), epsilon 0.002,
  * substeps auto, and cp all zero: call light_settings_set_optics (or fill cp) before building
  * with forward on. */
 void light_settings_defaults(struct light_settings *s);
@@ -167,20 +170,47 @@ struct light_diffuse_terms {
 void light_diffuse_terms_init(const struct light_settings *s, const double sun[3],
                               struct light_diffuse_terms *t);
 
+/* Extinction (per metre) below which a voxel counts as clear air between clouds: 0.01 per km,
+ * so that 100 km of it is optical depth 1. */
+#define LIGHT_CLEAR_BETA 1e-5f
+
+/* The lateral escape rates of every voxel of VOL (docs/lightmap.md, "Lateral escape"): OUT[2 v]
+ * and OUT[2 v + 1] are 1 / w along x and along y, w the optical width of the run of cloudy
+ * voxels (extinction at least LIGHT_CLEAR_BETA) that holds voxel v along that axis, summed in
+ * float32 from the lower index.  A clear voxel takes the larger rate of the runs it touches
+ * (so that interpolation across a cloud's edge keeps the cloud's rate), 0 when it touches
+ * none.  NaN and negative extinction read as 0, infinity as 1e30. */
+void light_lateral_rates(const struct ext_volume *vol, float *out);
+
+/* The lateral escape of the diffuse light, per unit vertical optical depth, for the rates RX,
+ * RY of light_lateral_rates and the Eddington coupling GAMMA (docs/lightmap.md, "Lateral
+ * escape"): along each axis r e^-((1 - g) / r), 1 - g = 4 GAMMA / 3.  A diffuse photon in a
+ * run of optical width w = 1 / r flies out of its side before it scatters again at the rate
+ * r per unit vertical optical depth (the isotropic mean of |sin theta cos phi| is 1/2, the
+ * two-stream path is 2 per unit depth); the factor leaves that to runs narrower than a
+ * transport mean free path, 1 / (1 - g): wider, the light a cloud loses through its sides
+ * is the brightness of those sides, which a column cannot place, and the plane-parallel
+ * column is the better estimate.  It enters the two-stream equations as absorption does. */
+float light_lateral_escape(float gamma, float rx, float ry);
+
 /* The two-stream pass of one light column (light_map_build with settings.multiple; exposed for
  * tests), in the tilted independent column approximation: the column along the light is solved
  * as a plane-parallel atmosphere lit at mu0 whose layers are its slices (docs/lightmap.md,
  * "Multiple scattering").  N nodes from the sun's side; BEAM[k] the light map values down the
  * column; TAU[k] and F_ICE[k], k >= 1, the optical depth along the light and the ice share of
- * the slice from node k - 1 to node k (TAU[0], F_ICE[0] unused); D the phase terms.  Writes
+ * the slice from node k - 1 to node k (TAU[0], F_ICE[0] unused); LATERAL, NULL for none,
+ * the slice's lateral escape rates (LATERAL[2 k], LATERAL[2 k + 1]: light_lateral_rates
+ * averaged over the slice), which make the slice lose diffuse light through its sides
+ * (light_lateral_escape); D the phase terms.  Writes
  * OUT[2 k] = M and OUT[2 k + 1] = N at every node (see light_map.diffuse).  SCRATCH holds 2 N
- * floats.  Conservative scattering: a slice is a layer of vertical optical depth mu0 TAU that
+ * floats.  Without lateral escape scattering is conservative: a slice is a layer of vertical optical depth mu0 TAU that
  * receives what the beam loses in it, mu0 BEAM (1 - e^-(loss TAU)) per unit horizontal area;
  * that is split between the hemispheres by the phase, and the diffuse fluxes are coupled by
  * the Eddington two-stream equations, integrated exactly across each slice and joined by the
  * adding method (docs/lightmap.md). */
 void light_diffuse_column(int n, const float *beam, const float *tau, const float *f_ice,
-                          const struct light_diffuse_terms *d, float *scratch, float *out);
+                          const float *lateral, const struct light_diffuse_terms *d,
+                          float *scratch, float *out);
 
 /* Bytes of the dense map as a float32 3D texture. */
 size_t light_map_bytes(const struct light_map *m);

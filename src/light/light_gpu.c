@@ -10,13 +10,16 @@
 struct light_gpu {
     struct render_light hook; /* first: the renderer's bind callback gets it back */
     /* Build programs by variant: bit 0 FORWARD, bit 1 PERIPHERAL, bit 2 PHASE_MIX, bit 3
-     * MULTIPLE (made on first use: an effect that is off is compiled out); the diffuse column
-     * pass by PHASE_MIX. */
-    struct gpu_program build[16];
-    struct gpu_program diffuse_pass[2];
+     * MULTIPLE, bit 4 LATERAL (made on first use: an effect that is off is compiled out); the
+     * diffuse column pass by PHASE_MIX (bit 0) and LATERAL (bit 1). */
+    struct gpu_program build[32];
+    struct gpu_program diffuse_pass[4];
+    struct gpu_program lateral_pass;
     struct gpu_texture light;   /* R32F node volume */
     struct gpu_texture diffuse; /* RG32F node volume, M and N; only with multiple scattering */
-    struct gpu_texture slice;   /* RG32F build scratch: each slice's tau and ice share */
+    struct gpu_texture slice;   /* RGBA32F build scratch: each slice's tau, ice share and
+                                   lateral escape rates */
+    struct gpu_texture rates;   /* RG32F on the volume's grid: lateral escape rates */
     struct gpu_texture adding;  /* RG32F build scratch of the column pass */
     bool built_multiple;
     struct gpu_buffer columns, nodes;
@@ -64,8 +67,8 @@ static const struct gpu_program *build_program(struct light_gpu *lg, int v)
         return &lg->build[v];
     char defines[128];
     snprintf(defines, sizeof(defines), "#define FORWARD %d\n#define PERIPHERAL %d\n"
-             "#define PHASE_MIX %d\n#define MULTIPLE %d\n", v & 1, (v >> 1) & 1, (v >> 2) & 1,
-             (v >> 3) & 1);
+             "#define PHASE_MIX %d\n#define MULTIPLE %d\n#define LATERAL %d\n", v & 1,
+             (v >> 1) & 1, (v >> 2) & 1, (v >> 3) & 1, (v >> 4) & 1);
     if (!gpu_program_init(&lg->build[v], "light_build.comp", defines))
         return NULL;
     return &lg->build[v];
@@ -73,15 +76,42 @@ static const struct gpu_program *build_program(struct light_gpu *lg, int v)
 
 /* The diffuse column pass: its only variant is the ice/water mix (the loss shares the forward
  * terms leave come as uniforms). */
-static const struct gpu_program *diffuse_program(struct light_gpu *lg, bool mix)
+static const struct gpu_program *diffuse_program(struct light_gpu *lg, bool mix, bool lateral)
 {
-    int v = mix ? 1 : 0;
+    int v = (mix ? 1 : 0) | (lateral ? 2 : 0);
     if (lg->diffuse_pass[v].id)
         return &lg->diffuse_pass[v];
-    if (!gpu_program_init(&lg->diffuse_pass[v], "light_diffuse.comp",
-                          mix ? "#define PHASE_MIX 1\n" : "#define PHASE_MIX 0\n"))
+    char defines[64];
+    snprintf(defines, sizeof(defines), "#define PHASE_MIX %d\n#define LATERAL %d\n", v & 1,
+             v >> 1);
+    if (!gpu_program_init(&lg->diffuse_pass[v], "light_diffuse.comp", defines))
         return NULL;
     return &lg->diffuse_pass[v];
+}
+
+/* The lateral escape rates of the volume (light_lateral.comp): one pass along x, one along
+ * y, one invocation per row. */
+static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src)
+{
+    const int *n = src->grid->n;
+    if (!(lg->rates.id && memcmp(lg->rates.size, n, 3 * sizeof(int)) == 0)) {
+        gpu_texture_finish(&lg->rates);
+        if (!gpu_texture_init(&lg->rates, 3, n, GPU_RG32F, NULL))
+            return false;
+    }
+    if (!lg->lateral_pass.id && !gpu_program_init(&lg->lateral_pass, "light_lateral.comp", ""))
+        return false;
+    const struct gpu_program *p = &lg->lateral_pass;
+    gpu_uniform_ivec3(p, "vol_n", n);
+    gpu_uniform_float(p, "clear_beta", LIGHT_CLEAR_BETA);
+    gpu_texture_bind(src->beta, 0);
+    gpu_image_bind_rw(&lg->rates, 0);
+    for (int axis = 0; axis < 2; axis++) {
+        gpu_uniform_int(p, "axis", axis);
+        gpu_uniform_float(p, "spacing", (float)src->grid->spacing[axis]);
+        gpu_dispatch(p, n[1 - axis] * n[2], 1, 1);
+    }
+    return true;
 }
 
 /* The variant of settings S: forward scattering, the peripheral ring, and the ice/water mix
@@ -90,7 +120,8 @@ static int build_variant(const struct light_settings *s)
 {
     bool mix = !light_settings_phases_equal(s);
     return (s->forward ? 1 : 0) | (s->forward && s->peripheral ? 2 : 0) |
-           ((s->forward || s->multiple) && mix ? 4 : 0) | (s->multiple ? 8 : 0);
+           ((s->forward || s->multiple) && mix ? 4 : 0) | (s->multiple ? 8 : 0) |
+           (s->multiple && s->lateral ? 16 : 0);
 }
 
 struct light_gpu *light_gpu_create(void)
@@ -113,13 +144,15 @@ void light_gpu_destroy(struct light_gpu *lg)
 {
     if (!lg)
         return;
-    for (int v = 0; v < 16; v++)
+    for (int v = 0; v < 32; v++)
         gpu_program_finish(&lg->build[v]);
-    for (int v = 0; v < 2; v++)
+    for (int v = 0; v < 4; v++)
         gpu_program_finish(&lg->diffuse_pass[v]);
     gpu_texture_finish(&lg->light);
     gpu_texture_finish(&lg->diffuse);
     gpu_texture_finish(&lg->slice);
+    gpu_texture_finish(&lg->rates);
+    gpu_program_finish(&lg->lateral_pass);
     gpu_texture_finish(&lg->adding);
     gpu_buffer_finish(&lg->columns);
     gpu_buffer_finish(&lg->nodes);
@@ -144,7 +177,8 @@ static bool build_diffuse(struct light_gpu *lg, const double sun[3],
     if (!node_texture(&lg->diffuse, g->n, GPU_RG32F) ||
         !node_texture(&lg->adding, g->n, GPU_RG32F))
         return false;
-    const struct gpu_program *p = diffuse_program(lg, !light_settings_phases_equal(s));
+    const struct gpu_program *p =
+        diffuse_program(lg, !light_settings_phases_equal(s), s->lateral);
     if (!p)
         return false;
     struct light_diffuse_terms t;
@@ -169,12 +203,18 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
     if (!node_texture(&lg->light, g->n, GPU_R32F))
         return false;
     if (s->multiple) {
-        if (!node_texture(&lg->slice, g->n, GPU_RG32F))
+        if (!node_texture(&lg->slice, g->n, GPU_RGBA32F))
             return false;
     } else {
         gpu_texture_finish(&lg->diffuse);
         gpu_texture_finish(&lg->slice);
         gpu_texture_finish(&lg->adding);
+    }
+    if (s->multiple && s->lateral) {
+        if (!build_rates(lg, src))
+            return false;
+    } else {
+        gpu_texture_finish(&lg->rates);
     }
     const struct gpu_program *p = build_program(lg, build_variant(s));
     if (!p)
@@ -202,6 +242,8 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
     gpu_uniform_vec4(p, "cp", cp);
     gpu_uniform_vec2(p, "per_offset", per);
     gpu_texture_bind(src->beta, 0);
+    if (s->multiple && s->lateral)
+        gpu_texture_bind(&lg->rates, 1);
     gpu_image_bind_rw(&lg->light, 0);
     if (s->multiple)
         gpu_image_bind(&lg->slice, 1, true);

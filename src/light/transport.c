@@ -92,6 +92,7 @@ void light_settings_defaults(struct light_settings *s)
     s->forward_angle_deg = 20.0;
     s->forward = true;
     s->peripheral = true;
+    s->lateral = true;
     s->epsilon = 0.002;
     s->substeps = 0;
 }
@@ -233,14 +234,108 @@ void light_diffuse_terms_init(const struct light_settings *s, const double sun[3
     t->mu0 = (float)fmax(mu0, 1e-3);
 }
 
+float light_lateral_escape(float gamma, float rx, float ry)
+{
+    float tr = 4.0f * gamma / 3.0f; /* 1 - g: a transport mean free path is 1 / tr */
+    return (rx > 0.0f ? rx * expf(-tr / rx) : 0.0f) + (ry > 0.0f ? ry * expf(-tr / ry) : 0.0f);
+}
+
+void light_lateral_rates(const struct ext_volume *vol, float *out)
+{
+    /* One row at a time, as shaders/light_lateral.comp does it: PREV is what voxel i - 1 was
+     * given (0 for a clear voxel after clear air, a run's rate for the clear voxel after
+     * that run), so no value is read back. */
+    const int *n = vol->grid.n;
+    const size_t plane = (size_t)n[0] * n[1];
+    for (int axis = 0; axis < 2; axis++) {
+        const int len = n[axis], rows = n[1 - axis];
+        const size_t stride = axis == 0 ? 1 : (size_t)n[0];
+        const float step = (float)vol->grid.spacing[axis];
+        for (int k = 0; k < n[2]; k++) {
+            for (int r = 0; r < rows; r++) {
+                size_t base = plane * k + (axis == 0 ? (size_t)n[0] * r : (size_t)r);
+                float *o = out + 2 * base + axis;
+                const float *b = vol->beta + 2 * base;
+                float prev = 0.0f;
+                int i = 0;
+                while (i < len) {
+                    size_t v = stride * i;
+                    if (!(b[2 * v] + b[2 * v + 1] >= LIGHT_CLEAR_BETA)) { /* clear, or NaN */
+                        o[2 * v] = 0.0f;
+                        prev = 0.0f;
+                        i++;
+                        continue;
+                    }
+                    float w = 0.0f;
+                    int end = i;
+                    for (; end < len; end++) {
+                        size_t e = stride * end;
+                        float be = b[2 * e] + b[2 * e + 1];
+                        if (!(be >= LIGHT_CLEAR_BETA))
+                            break;
+                        w += fminf(be, 1e30f) * step;
+                    }
+                    float rate = 1.0f / w; /* w >= LIGHT_CLEAR_BETA spacing > 0 */
+                    for (int m = i; m < end; m++)
+                        o[2 * stride * m] = rate;
+                    if (i > 0) /* the clear voxels on either side keep the run's rate */
+                        o[2 * stride * (i - 1)] = fmaxf(prev, rate);
+                    if (end < len)
+                        o[2 * stride * end] = rate;
+                    prev = rate;
+                    i = end + 1;
+                }
+            }
+        }
+    }
+}
+
 /* The terms of one slice, mixed by its ice share. */
 struct slice_terms {
     float tau, loss, back, gamma; /* slant optical depth, beam loss rate, backward share,
                                      coupling */
+    float refl, trans, keep, absorb, escape; /* the slice as a layer: reflectance R,
+                                                transmittance T, 1 - R, 1 - R - T (each
+                                                computed without cancellation), and the share
+                                                of its own diffuse light out of its ends */
 };
 
+/* The slice as a layer of vertical optical depth TV with coupling G and lateral escape A:
+ * the two-stream equations with gamma1 = G + A, gamma2 = G solved in closed form, written
+ * with x = k TV (k^2 = A (2 G + A)), p = tanh(x) / x and q = (1 - sech x) / x^2 so that every
+ * term stays finite and A = 0 is exact: R = G TV p / D, T = sech(x) / D with
+ * D = 1 + (G + A) TV p; the absorptance 1 - R - T = (x^2 q + A TV p) / D; and the share of
+ * a source spread evenly through the layer that leaves by its ends, (1 - R - T) / (A TV) =
+ * ((2 G + A) TV q + p) / D (docs/lightmap.md, "Lateral escape"). */
+static void slice_layer(float g, float a, float tv, struct slice_terms *t)
+{
+    float x = sqrtf(a * (2.0f * g + a)) * tv;
+    float p, q, sech;
+    if (x < 1.0f) { /* through sinh(x/2), whose series keeps 1 - sech(x) to the last digit */
+        float y = 0.5f * x, y2 = y * y;
+        float shy = 1.0f + y2 * (1.0f / 6.0f) * (1.0f + y2 * (1.0f / 20.0f) *
+                                                          (1.0f + y2 * (1.0f / 42.0f)));
+        float sh = y * shy; /* sinh(x/2), shy = sinh(x/2) / (x/2) */
+        float ch = 1.0f + 2.0f * sh * sh; /* cosh(x) */
+        sech = 1.0f / ch;
+        p = shy * sqrtf(1.0f + sh * sh) / ch; /* tanh(x) / x */
+        q = shy * shy / (2.0f * ch);          /* (1 - sech x) / x^2 */
+    } else {
+        float e = expf(-x), e2 = e * e;
+        sech = 2.0f * e / (1.0f + e2);
+        p = (1.0f - e2) / (1.0f + e2) / x;
+        q = (1.0f - sech) / (x * x);
+    }
+    float den = 1.0f + (g + a) * tv * p;
+    t->refl = g * tv * p / den;
+    t->trans = sech / den;
+    t->keep = (1.0f + a * tv * p) / den;
+    t->absorb = (x * x * q + a * tv * p) / den;
+    t->escape = ((2.0f * g + a) * tv * q + p) / den;
+}
+
 static struct slice_terms slice_terms(const struct light_diffuse_terms *d, float tau,
-                                      float f_ice)
+                                      float f_ice, const float *lateral)
 {
     struct slice_terms t;
     t.tau = fminf(tau, 1e8f); /* deeper is opaque all the same; keeps the sums finite */
@@ -248,45 +343,54 @@ static struct slice_terms slice_terms(const struct light_diffuse_terms *d, float
     float back = d->back[0] + f_ice * (d->back[1] - d->back[0]);
     t.back = fminf(fmaxf(back / t.loss, 0.0f), 1.0f);
     t.gamma = d->gamma[0] + f_ice * (d->gamma[1] - d->gamma[0]);
+    float a = lateral ? light_lateral_escape(t.gamma, lateral[0], lateral[1]) : 0.0f;
+    slice_layer(t.gamma, a, d->mu0 * t.tau, &t);
     return t;
 }
 
-/* The diffuse light out of slice L's two ends (slice_sources) for the beam D0 entering it. */
+/* The diffuse light out of the slice's two ends (slice_sources, scaled by the share that does
+ * not escape through its sides) for the beam D0 entering it. */
 static void column_slice(const struct light_diffuse_terms *d, const struct slice_terms *t,
                          float d0, float *su, float *sd)
 {
     float x = t->loss * t->tau;
     float w = d->mu0 * d0 * (1.0f - expf(-x)); /* per unit horizontal area */
-    slice_sources(w, x, d->mu0 * t->tau, t->back, t->gamma, su, sd);
+    float tv = d->mu0 * t->tau;
+    slice_sources(w, x, tv, t->back, t->gamma, su, sd);
+    float s = t->escape / (1.0f + t->gamma * tv);
+    *su *= s;
+    *sd *= s;
 }
 
 void light_diffuse_column(int n, const float *beam, const float *tau, const float *f_ice,
-                          const struct light_diffuse_terms *d, float *scratch, float *out)
+                          const float *lateral, const struct light_diffuse_terms *d,
+                          float *scratch, float *out)
 {
-    /* Adding method, from the far end toward the sun: z[l] = 1 / (1 - A_l) with A_l the
-     * albedo of everything beyond node l, g[l] the diffuse light coming back out of it when
-     * none goes in.  Then from the sun's side: u the diffuse flux away from the sun's side. */
-    float *z = scratch, *g = scratch + n;
-    z[n - 1] = 1.0f; /* nothing beyond the last node sends light back */
+    /* Adding method, from the far end toward the sun: k[l] = 1 - A_l with A_l the albedo of
+     * everything beyond node l (kept as its complement: it is what thick columns need to
+     * the last digit), g[l] the diffuse light coming back out of it when none goes in.  Then
+     * from the sun's side: u the diffuse flux away from the sun's side. */
+    float *k = scratch, *g = scratch + n;
+    k[n - 1] = 1.0f; /* nothing beyond the last node sends light back */
     g[n - 1] = 0.0f;
     for (int l = n - 1; l >= 1; l--) {
-        struct slice_terms t = slice_terms(d, tau[l], f_ice[l]);
-        float gt = t.gamma * d->mu0 * t.tau, su, sd;
+        struct slice_terms t = slice_terms(d, tau[l], f_ice[l], lateral ? lateral + 2 * l : NULL);
+        float su, sd;
         column_slice(d, &t, beam[l - 1], &su, &sd);
-        float zt = z[l] + gt;
-        float a = 1.0f - 1.0f / z[l];
-        g[l - 1] = su / (1.0f + gt) + (g[l] + a * sd / (1.0f + gt)) * (z[l] / zt);
-        z[l - 1] = zt;
+        float den = t.keep + k[l] * t.refl; /* 1 - R_slice A_l */
+        g[l - 1] = su + t.trans * (g[l] + (1.0f - k[l]) * sd) / den;
+        k[l - 1] = t.absorb + t.trans * (t.absorb + k[l] * (t.refl + t.trans)) / den;
     }
     float u = 0.0f; /* no diffuse light enters from the sun's side */
     out[0] = 2.0f * g[0];
     out[1] = -2.0f * g[0];
     for (int l = 1; l < n; l++) {
-        struct slice_terms t = slice_terms(d, tau[l], f_ice[l]);
-        float gt = t.gamma * d->mu0 * t.tau, su, sd;
+        struct slice_terms t = slice_terms(d, tau[l], f_ice[l], lateral ? lateral + 2 * l : NULL);
+        float su, sd;
         column_slice(d, &t, beam[l - 1], &su, &sd);
-        u = (u + gt * g[l] + sd) * (z[l] / z[l - 1]);
-        float v = (1.0f - 1.0f / z[l]) * u + g[l];
+        float den = t.keep + k[l] * t.refl;
+        u = (t.trans * u + sd + t.refl * g[l]) / den;
+        float v = (1.0f - k[l]) * u + g[l];
         out[2 * l] = 2.0f * (u + v);
         out[2 * l + 1] = 2.0f * (u - v);
     }
@@ -335,14 +439,19 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
     for (size_t c = 0; c < plane; c++)
         L[c] = 1.0f; /* node plane 0 touches the box only at its sun-most corner */
     /* With multiple scattering: each slice's optical depth and ice share, for the column pass. */
-    float *slice = NULL;
+    float *slice = NULL, *rates = NULL;
+    const bool lateral = s->multiple && s->lateral;
+    struct beta_sampler rs = bs;
     free(map->diffuse);
     map->diffuse = NULL;
     if (s->multiple) {
-        slice = calloc(2 * count, sizeof(float));
+        slice = calloc(4 * count, sizeof(float));
         map->diffuse = malloc(2 * count * sizeof(float));
-        if (!slice || !map->diffuse) {
+        size_t voxels = (size_t)vol->grid.n[0] * vol->grid.n[1] * vol->grid.n[2];
+        rates = lateral ? malloc(2 * voxels * sizeof(float)) : NULL;
+        if (!slice || !map->diffuse || (lateral && !rates)) {
             free(slice);
+            free(rates);
             log_error("light map: out of memory for the diffuse light of %d x %d x %d nodes",
                       n0, n1, n2);
             light_map_finish(map);
@@ -350,6 +459,10 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
         }
     }
 
+    if (rates) {
+        light_lateral_rates(vol, rates);
+        rs.beta = rates;
+    }
     for (int k = 1; k < n2; k++) {
         const float *prev = L + plane * (size_t)(k - 1);
         float *cur = L + plane * (size_t)k;
@@ -357,7 +470,7 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
             for (int i = 0; i < n0; i++) {
                 /* Segment from node plane k-1 to k: optical depth by the midpoint rule on SUB
                  * equal parts (one part, the segment midpoint, when the grids match). */
-                float b[2] = {0.0f, 0.0f};
+                float b[2] = {0.0f, 0.0f}, lat[2] = {0.0f, 0.0f};
                 for (int m = 0; m < sub; m++) {
                     float kz = (float)(k - 1) + ((float)m + 0.5f) / (float)sub;
                     float p[3], bm[2];
@@ -367,6 +480,12 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
                     sample_beta(&bs, p, bm);
                     b[0] += bm[0];
                     b[1] += bm[1];
+                    if (rates) { /* the escape rates, weighted by the extinction */
+                        float rm[2];
+                        sample_beta(&rs, p, rm);
+                        lat[0] += (bm[0] + bm[1]) * rm[0];
+                        lat[1] += (bm[0] + bm[1]) * rm[1];
+                    }
                 }
                 float beta = b[0] + b[1]; /* sum over the parts: tau = beta dsub */
                 float l_in = prev[i + (size_t)n0 * j];
@@ -384,17 +503,20 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
                 }
                 float l = beam_slice(l_in, l_per, tau, cpc, cpp, fwd, per);
                 if (slice) {
-                    size_t at = 2 * (i + (size_t)n0 * (j + (size_t)n1 * k));
+                    size_t at = 4 * (i + (size_t)n0 * (j + (size_t)n1 * k));
                     slice[at] = tau;
                     slice[at + 1] = f_ice;
+                    slice[at + 2] = beta > 0.0f ? lat[0] / beta : 0.0f;
+                    slice[at + 3] = beta > 0.0f ? lat[1] / beta : 0.0f;
                 }
                 /* Nes eq. 5.11; never above the incident light, never negative. */
                 cur[i + (size_t)n0 * j] = fminf(fmaxf(l, 0.0f), 1.0f);
             }
         }
     }
+    free(rates);
     if (slice) {
-        float *col = malloc(7 * (size_t)n2 * sizeof(float));
+        float *col = malloc(9 * (size_t)n2 * sizeof(float));
         if (!col) {
             free(slice);
             log_error("light map: out of memory for a light column");
@@ -402,16 +524,19 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
             return false;
         }
         float *beam = col, *tau = col + n2, *fi = col + 2 * n2, *scratch = col + 3 * n2,
-              *out = col + 5 * n2;
+              *out = col + 5 * n2, *lat = col + 7 * n2;
         struct light_diffuse_terms terms;
         light_diffuse_terms_init(s, sun, &terms);
         for (size_t c = 0; c < plane; c++) {
             for (int k = 0; k < n2; k++) {
                 beam[k] = L[c + plane * k];
-                tau[k] = slice[2 * (c + plane * k)];
-                fi[k] = slice[2 * (c + plane * k) + 1];
+                tau[k] = slice[4 * (c + plane * k)];
+                fi[k] = slice[4 * (c + plane * k) + 1];
+                lat[2 * k] = slice[4 * (c + plane * k) + 2];
+                lat[2 * k + 1] = slice[4 * (c + plane * k) + 3];
             }
-            light_diffuse_column(n2, beam, tau, fi, &terms, scratch, out);
+            light_diffuse_column(n2, beam, tau, fi, lateral ? lat : NULL, &terms, scratch,
+                                 out);
             for (int k = 0; k < n2; k++) {
                 map->diffuse[2 * (c + plane * k)] = out[2 * k];
                 map->diffuse[2 * (c + plane * k) + 1] = out[2 * k + 1];
