@@ -34,7 +34,7 @@ layout(r32f, binding = 0) uniform image3D light_img; // node (i, j, k) = light a
 layout(rgba32f, binding = 1) uniform writeonly image3D slice_img;
 #endif
 #if MULTIPLE && LATERAL
-layout(binding = 1) uniform sampler3D rates_tex; // volume grid; read with texelFetch only
+layout(binding = 1) uniform sampler3D rates_tex; // volume grid, beta / w; texelFetch only
 #endif
 
 uniform ivec3 vol_n;
@@ -140,7 +140,7 @@ void main()
         vec2 bm = sample_voxels(beta_tex, p);
         b += bm;
 #if MULTIPLE && LATERAL
-        lat += (bm.x + bm.y) * sample_voxels(rates_tex, p);
+        lat += sample_voxels(rates_tex, p); // extinction times rate: over beta, the rate
 #endif
     }
     float beta = b.x + b.y;

@@ -29,8 +29,9 @@ uniform float mu0;  // |sin(elevation)|, at least 1e-3
 
 struct slice_terms {
     float tau, loss, back, gamma;
-    float refl, trans, keep, absorb, escape; // R, T, 1 - R, 1 - R - T, share of its own light
-                                             // out of its ends
+    float refl, trans, keep, absorb, escape; // R, T, 1 - R, 1 - R - T, share of an even
+                                             // source's light out of its ends
+    float escape_rate, kt;                   // a; k times the vertical optical depth
 };
 
 // light_lateral_escape(): the straight-flight rate of each axis, for runs narrower than a
@@ -45,6 +46,8 @@ float lateral_escape(float g, vec2 r)
 void slice_layer(float g, float a, float tv, inout slice_terms t)
 {
     float x = sqrt(a * (2.0 * g + a)) * tv;
+    t.escape_rate = a;
+    t.kt = x;
     float p, q, sech;
     if (x < 1.0) { // through sinh(x/2), whose series keeps 1 - sech(x) to the last digit
         float y = 0.5 * x, y2 = y * y;
@@ -91,18 +94,46 @@ slice_terms terms(ivec3 c)
     return t;
 }
 
+// (1 - e^-z) / z for z >= 0 (transport.c, one_minus_exp_over).
+float one_minus_exp_over(float z)
+{
+    if (z < 0.25)
+        return 1.0 - z * (1.0 / 2.0) *
+                         (1.0 - z * (1.0 / 3.0) *
+                                    (1.0 - z * (1.0 / 4.0) *
+                                               (1.0 - z * (1.0 / 5.0) *
+                                                          (1.0 - z * (1.0 / 6.0) *
+                                                                     (1.0 - z / 7.0)))));
+    return (1.0 - exp(-z)) / z;
+}
+
 // Diffuse light out of a slice's sun side (x) and far side (y) for the beam D0 entering it
-// (transport.c, column_slice and slice_sources).
+// (transport.c, column_slice and slice_sources): an even source's share for thin slices,
+// the exponential source through the layer's Green's function otherwise.
 vec2 sources(float d0, slice_terms t)
 {
-    float x = min(t.loss * t.tau, 1e8);
+    float x = t.loss * t.tau;
     float w = mu0 * d0 * (1.0 - exp(-x));
     float tv = mu0 * t.tau;
-    float a1 = x < 0.1 ? 0.5 + x * (1.0 / 12.0) - x * x * x * (1.0 / 720.0)
-                       : 1.0 / (1.0 - exp(-x)) - 1.0 / x;
-    float gw = t.gamma * tv * w;
-    vec2 s = vec2(t.back * w + gw * a1, (1.0 - t.back) * w + gw * (1.0 - a1));
-    return s * (t.escape / (1.0 + t.gamma * tv));
+    if (t.kt < 0.01) {
+        x = min(x, 1e8);
+        float a1 = x < 0.1 ? 0.5 + x * (1.0 / 12.0) - x * x * x * (1.0 / 720.0)
+                           : 1.0 / (1.0 - exp(-x)) - 1.0 / x;
+        float gw = t.gamma * tv * w;
+        vec2 s = vec2(t.back * w + gw * a1, (1.0 - t.back) * w + gw * (1.0 - a1));
+        return s * (t.escape / (1.0 + t.gamma * tv));
+    }
+    float kt = t.kt, g = t.gamma, g1 = g + t.escape_rate, k = kt / tv;
+    float ek = exp(-kt);
+    float ap = one_minus_exp_over(x + kt);
+    float am = exp(-min(x, kt)) * one_minus_exp_over(abs(x - kt));
+    float h = 0.5 * w / one_minus_exp_over(x);
+    float jch = h * (am + ek * ap), jsh = max(h * (am - ek * ap), 0.0) / k;
+    float ich = h * (ap + ek * am), ish = max(h * (ap - ek * am), 0.0) / k;
+    float den = 0.5 * (1.0 + ek * ek) + g1 * tv * one_minus_exp_over(2.0 * kt);
+    float sb = t.back;
+    return vec2((sb * (ich + g1 * ish) + (1.0 - sb) * g * ish) / den,
+                ((1.0 - sb) * (jch + g1 * jsh) + sb * g * jsh) / den);
 }
 
 void main()

@@ -174,12 +174,13 @@ void light_diffuse_terms_init(const struct light_settings *s, const double sun[3
  * so that 100 km of it is optical depth 1. */
 #define LIGHT_CLEAR_BETA 1e-5f
 
-/* The lateral escape rates of every voxel of VOL (docs/lightmap.md, "Lateral escape"): OUT[2 v]
- * and OUT[2 v + 1] are 1 / w along x and along y, w the optical width of the run of cloudy
- * voxels (extinction at least LIGHT_CLEAR_BETA) that holds voxel v along that axis, summed in
- * float32 from the lower index.  A clear voxel takes the larger rate of the runs it touches
- * (so that interpolation across a cloud's edge keeps the cloud's rate), 0 when it touches
- * none.  NaN and negative extinction read as 0, infinity as 1e30. */
+/* The lateral escape rates of every voxel of VOL (docs/lightmap.md, "Lateral escape"), each
+ * times the voxel's extinction: OUT[2 v] and OUT[2 v + 1] are beta_v / w along x and along y,
+ * w the optical width of the run of cloudy voxels (extinction at least LIGHT_CLEAR_BETA) that
+ * holds voxel v along that axis, summed in float32 from the run's lower end; 0 in clear
+ * voxels.  Interpolated like the extinction and divided by it, they give the rate 1 / w
+ * weighted by the extinction at the point: a thin cloud touching a thick one does not lend
+ * the thick one its rate.  NaN and negative extinction read as clear, infinity as 1e30. */
 void light_lateral_rates(const struct ext_volume *vol, float *out);
 
 /* The lateral escape of the diffuse light, per unit vertical optical depth, for the rates RX,

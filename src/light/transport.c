@@ -242,9 +242,7 @@ float light_lateral_escape(float gamma, float rx, float ry)
 
 void light_lateral_rates(const struct ext_volume *vol, float *out)
 {
-    /* One row at a time, as shaders/light_lateral.comp does it: PREV is what voxel i - 1 was
-     * given (0 for a clear voxel after clear air, a run's rate for the clear voxel after
-     * that run), so no value is read back. */
+    /* One row at a time, as shaders/light_lateral.comp does it. */
     const int *n = vol->grid.n;
     const size_t plane = (size_t)n[0] * n[1];
     for (int axis = 0; axis < 2; axis++) {
@@ -256,13 +254,11 @@ void light_lateral_rates(const struct ext_volume *vol, float *out)
                 size_t base = plane * k + (axis == 0 ? (size_t)n[0] * r : (size_t)r);
                 float *o = out + 2 * base + axis;
                 const float *b = vol->beta + 2 * base;
-                float prev = 0.0f;
                 int i = 0;
                 while (i < len) {
                     size_t v = stride * i;
                     if (!(b[2 * v] + b[2 * v + 1] >= LIGHT_CLEAR_BETA)) { /* clear, or NaN */
                         o[2 * v] = 0.0f;
-                        prev = 0.0f;
                         i++;
                         continue;
                     }
@@ -275,15 +271,11 @@ void light_lateral_rates(const struct ext_volume *vol, float *out)
                             break;
                         w += fminf(be, 1e30f) * step;
                     }
-                    float rate = 1.0f / w; /* w >= LIGHT_CLEAR_BETA spacing > 0 */
-                    for (int m = i; m < end; m++)
-                        o[2 * stride * m] = rate;
-                    if (i > 0) /* the clear voxels on either side keep the run's rate */
-                        o[2 * stride * (i - 1)] = fmaxf(prev, rate);
-                    if (end < len)
-                        o[2 * stride * end] = rate;
-                    prev = rate;
-                    i = end + 1;
+                    for (int m = i; m < end; m++) { /* w >= LIGHT_CLEAR_BETA step > 0 */
+                        size_t e = stride * m;
+                        o[2 * e] = fminf(b[2 * e] + b[2 * e + 1], 1e30f) / w;
+                    }
+                    i = end;
                 }
             }
         }
@@ -297,7 +289,8 @@ struct slice_terms {
     float refl, trans, keep, absorb, escape; /* the slice as a layer: reflectance R,
                                                 transmittance T, 1 - R, 1 - R - T (each
                                                 computed without cancellation), and the share
-                                                of its own diffuse light out of its ends */
+                                                of an even source's light out of its ends */
+    float escape_rate, kt; /* lateral escape a; k times the vertical optical depth */
 };
 
 /* The slice as a layer of vertical optical depth TV with coupling G and lateral escape A:
@@ -310,6 +303,8 @@ struct slice_terms {
 static void slice_layer(float g, float a, float tv, struct slice_terms *t)
 {
     float x = sqrtf(a * (2.0f * g + a)) * tv;
+    t->escape_rate = a;
+    t->kt = x;
     float p, q, sech;
     if (x < 1.0f) { /* through sinh(x/2), whose series keeps 1 - sech(x) to the last digit */
         float y = 0.5f * x, y2 = y * y;
@@ -348,18 +343,54 @@ static struct slice_terms slice_terms(const struct light_diffuse_terms *d, float
     return t;
 }
 
-/* The diffuse light out of the slice's two ends (slice_sources, scaled by the share that does
- * not escape through its sides) for the beam D0 entering it. */
+/* (1 - e^-z) / z for z >= 0 (1 at 0), without the cancellation of small z. */
+static float one_minus_exp_over(float z)
+{
+    if (z < 0.25f)
+        return 1.0f - z * (1.0f / 2.0f) *
+                          (1.0f - z * (1.0f / 3.0f) *
+                                      (1.0f - z * (1.0f / 4.0f) *
+                                                  (1.0f - z * (1.0f / 5.0f) *
+                                                              (1.0f - z * (1.0f / 6.0f) *
+                                                                          (1.0f - z / 7.0f)))));
+    return (1.0f - expf(-z)) / z;
+}
+
+/* The diffuse light out of the slice's two ends for the beam D0 entering it.  Without escape
+ * (or with so little that k tau_v < 0.01) slice_sources, scaled by the share an even source
+ * would get out of the ends (off by at most (k tau_v)^2 / 2 for the real source).  Else the
+ * exact answer for the exponential source S(t) = S0 e^-(c t), c tau_v = x: the light emitted
+ * at depth t leaves by the sun side in the share
+ * [s_u (k ch(k(tau - t)) + g1 sh(k(tau - t))) + s_d g2 sh(k(tau - t))] / D and by the far side
+ * in [s_d (k ch(k t) + g1 sh(k t)) + s_u g2 sh(k t)] / D, D = k ch(k tau) + g1 sh(k tau)
+ * (the layer's Green's function, from the R and T of its two parts), and the integrals over t
+ * are sums of E(z) = (1 - e^-z) / z, written with e^(-k tau) factored out so that nothing
+ * overflows (docs/lightmap.md, "Lateral escape"). */
 static void column_slice(const struct light_diffuse_terms *d, const struct slice_terms *t,
                          float d0, float *su, float *sd)
 {
     float x = t->loss * t->tau;
     float w = d->mu0 * d0 * (1.0f - expf(-x)); /* per unit horizontal area */
     float tv = d->mu0 * t->tau;
-    slice_sources(w, x, tv, t->back, t->gamma, su, sd);
-    float s = t->escape / (1.0f + t->gamma * tv);
-    *su *= s;
-    *sd *= s;
+    if (t->kt < 0.01f) {
+        slice_sources(w, x, tv, t->back, t->gamma, su, sd);
+        float s = t->escape / (1.0f + t->gamma * tv);
+        *su *= s;
+        *sd *= s;
+        return;
+    }
+    float kt = t->kt, g = t->gamma, g1 = g + t->escape_rate, k = kt / tv;
+    float ek = expf(-kt);
+    float ap = one_minus_exp_over(x + kt);                           /* E((c + k) tau) */
+    float am = expf(-fminf(x, kt)) * one_minus_exp_over(fabsf(x - kt)); /* e^-k tau E((c-k)tau) */
+    /* S0 tau / 2 times the four integrals, each over e^(k tau): S0 tau = W / E(x). */
+    float h = 0.5f * w / one_minus_exp_over(x);
+    float jch = h * (am + ek * ap), jsh = fmaxf(h * (am - ek * ap), 0.0f) / k;
+    float ich = h * (ap + ek * am), ish = fmaxf(h * (ap - ek * am), 0.0f) / k;
+    float den = 0.5f * (1.0f + ek * ek) + g1 * tv * one_minus_exp_over(2.0f * kt); /* D */
+    float sb = t->back;
+    *su = (sb * (ich + g1 * ish) + (1.0f - sb) * g * ish) / den;
+    *sd = ((1.0f - sb) * (jch + g1 * jsh) + sb * g * jsh) / den;
 }
 
 void light_diffuse_column(int n, const float *beam, const float *tau, const float *f_ice,
@@ -480,11 +511,11 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
                     sample_beta(&bs, p, bm);
                     b[0] += bm[0];
                     b[1] += bm[1];
-                    if (rates) { /* the escape rates, weighted by the extinction */
+                    if (rates) { /* extinction times escape rate: their ratio is the rate */
                         float rm[2];
                         sample_beta(&rs, p, rm);
-                        lat[0] += (bm[0] + bm[1]) * rm[0];
-                        lat[1] += (bm[0] + bm[1]) * rm[1];
+                        lat[0] += rm[0];
+                        lat[1] += rm[1];
                     }
                 }
                 float beta = b[0] + b[1]; /* sum over the parts: tau = beta dsub */
