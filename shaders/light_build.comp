@@ -140,7 +140,8 @@ void main()
         vec2 bm = sample_voxels(beta_tex, p);
         b += bm;
 #if MULTIPLE && LATERAL
-        lat += sample_voxels(rates_tex, p); // extinction times rate: over beta, the rate
+        if (bm.x + bm.y > 0.0) // else every voxel around p is clear, and so 0 here
+            lat += sample_voxels(rates_tex, p); // extinction times rate: over beta, the rate
 #endif
     }
     float beta = b.x + b.y;

@@ -26,16 +26,10 @@ float beta_at(ivec3 c)
     return b.x + b.y;
 }
 
-void put(ivec3 c, float v)
-{
-    if (axis == 0) {
-        imageStore(rates_img, c, vec4(v, 0.0, 0.0, 0.0));
-    } else {
-        float rx = imageLoad(rates_img, c).r;
-        imageStore(rates_img, c, vec4(rx, v, 0.0, 0.0));
-    }
-}
-
+// Two sweeps of the row, the same length for every invocation: forward, each cloudy voxel
+// keeps the optical width of its run so far (in the axis' own channel); backward, the run's
+// last voxel holds the whole width, which every voxel of the run then divides its
+// extinction by.
 void main()
 {
     int len = vol_n[axis], rows = vol_n[1 - axis];
@@ -43,23 +37,27 @@ void main()
     if (id >= rows * vol_n.z)
         return;
     int r = id % rows, k = id / rows;
-    int i = 0;
-    while (i < len) {
-        if (!(beta_at(voxel(i, r, k)) >= clear_beta)) { // clear, or NaN
-            put(voxel(i, r, k), 0.0);
-            i++;
-            continue;
-        }
-        float w = 0.0;
-        int end = i;
-        for (; end < len; end++) {
-            float be = beta_at(voxel(end, r, k));
-            if (!(be >= clear_beta))
-                break;
-            w += min(be, 1e30) * spacing;
-        }
-        for (int m = i; m < end; m++)
-            put(voxel(m, r, k), min(beta_at(voxel(m, r, k)), 1e30) / w);
-        i = end;
+    float w = 0.0;
+    for (int i = 0; i < len; i++) {
+        ivec3 c = voxel(i, r, k);
+        float b = beta_at(c);
+        w = b >= clear_beta ? w + min(b, 1e30) * spacing : 0.0; // 0 also for NaN
+        if (axis == 0)
+            imageStore(rates_img, c, vec4(w, 0.0, 0.0, 0.0));
+        else
+            imageStore(rates_img, c, vec4(imageLoad(rates_img, c).r, w, 0.0, 0.0));
+    }
+    float total = 0.0;
+    for (int i = len - 1; i >= 0; i--) {
+        ivec3 c = voxel(i, r, k);
+        vec2 v = imageLoad(rates_img, c).rg;
+        float here = axis == 0 ? v.x : v.y;
+        // A run's last voxel (cloudy, and the next one is not) holds the run's width.
+        total = here > 0.0 ? (total > 0.0 ? total : here) : 0.0;
+        float rate = here > 0.0 ? min(beta_at(c), 1e30) / total : 0.0;
+        if (axis == 0)
+            imageStore(rates_img, c, vec4(rate, 0.0, 0.0, 0.0));
+        else
+            imageStore(rates_img, c, vec4(v.x, rate, 0.0, 0.0));
     }
 }

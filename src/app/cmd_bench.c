@@ -192,7 +192,7 @@ static bool scene_prepare(const char *name, const struct config *cfg, int w, int
     app_camera_view(cfg, w, h, &sc->view);
     struct effects_facts facts;
     effects_facts_init(&facts);
-    if (!effects_measure_volume(vol, sc->sun, &facts))
+    if (!effects_measure_volume(vol, sc->sun, &cfg->optics.params, &facts))
         return false;
     facts.time_steps = 1;
     facts.views_known = true;

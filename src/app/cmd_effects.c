@@ -100,7 +100,7 @@ int cmd_effects(int argc, char **argv)
     effects_facts_init(&facts);
     double sun[3];
     light_sun_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
-    bool ok = effects_measure_volume(&vol, sun, &facts);
+    bool ok = effects_measure_volume(&vol, sun, &cfg.optics.params, &facts);
     ext_volume_finish(&vol);
     if (!ok)
         return EXIT_BAD_INPUT;

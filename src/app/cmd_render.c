@@ -182,7 +182,7 @@ static int session_start(struct session *s, const struct render_options *o)
     s->facts.time_steps = app_time_steps(&s->cfg);
     /* anvil run plays time; a render plays only when a script drives it. */
     s->facts.playback = strcmp(s->stats.command, "run") == 0 || o->input != NULL;
-    if (!effects_measure_volume(&vol, sun, &s->facts)) {
+    if (!effects_measure_volume(&vol, sun, &s->cfg.optics.params, &s->facts)) {
         ext_volume_finish(&vol);
         return EXIT_BAD_INPUT;
     }

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include <cglm/cglm.h>
@@ -14,8 +15,8 @@
 #define MEASURE_STEPS_MAX 4096
 
 static const char *const names[EFFECT_COUNT] = {
-    "shadows", "forward", "peripheral", "multiple", "phase", "ground_shadow", "detail",
-    "temporal", "distortion",
+    "shadows", "forward", "peripheral", "multiple", "lateral", "phase", "ground_shadow",
+    "detail", "temporal", "distortion",
 };
 
 const char *effects_name(enum effect e)
@@ -28,8 +29,37 @@ void effects_facts_init(struct effects_facts *f)
     memset(f, 0, sizeof(*f));
 }
 
+/* The share of VOL's extinction in narrow cloud (EFFECTS_NARROW_MFP), or -1 out of memory. */
+static double narrow_share(const struct ext_volume *vol, const struct optics_params *optics)
+{
+    size_t count = grid3_count(&vol->grid);
+    float *r = malloc(2 * count * sizeof(float));
+    if (!r) {
+        log_error("effects: out of memory for the lateral escape rates of %zu voxels", count);
+        return -1.0;
+    }
+    light_lateral_rates(vol, r);
+    double narrow = 0.0, total = 0.0;
+    for (size_t v = 0; v < count; v++) {
+        float bi = vol->beta[2 * v], bw = vol->beta[2 * v + 1];
+        double b = (bi > 0.0f ? (double)fminf(bi, 1e30f) : 0.0) +
+                   (bw > 0.0f ? (double)fminf(bw, 1e30f) : 0.0);
+        if (!(b > 0.0))
+            continue;
+        total += b;
+        double f_ice = bi > 0.0f ? fmin(bi, 1e30) / b : 0.0;
+        double g = optics->g_water + f_ice * (optics->g_ice - optics->g_water);
+        /* Rate 1 / w times beta, so w <= N / (1 - g) is r >= (1 - g) beta / N. */
+        double limit = (1.0 - g) * b / EFFECTS_NARROW_MFP;
+        if (r[2 * v] >= limit || r[2 * v + 1] >= limit)
+            narrow += b;
+    }
+    free(r);
+    return total > 0.0 ? narrow / total : 0.0;
+}
+
 bool effects_measure_volume(const struct ext_volume *vol, const double sun[3],
-                            struct effects_facts *f)
+                            const struct optics_params *optics, struct effects_facts *f)
 {
     const struct grid3 *g = &vol->grid;
     int n[3];
@@ -75,6 +105,10 @@ bool effects_measure_volume(const struct ext_volume *vol, const double sun[3],
         ice += bi > 0.0f ? bi : 0.0;
         water += bw > 0.0f ? bw : 0.0;
     }
+    double narrow = narrow_share(vol, optics);
+    if (narrow < 0.0)
+        return false;
+    f->narrow_share = narrow;
     f->volume_known = true;
     f->max_tau_light = isfinite(max_tau) ? max_tau : INFINITY;
     f->beta_ice_sum = ice;
@@ -232,6 +266,27 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
                 0.5 * tol);
     }
 
+    /* Lateral escape: only narrow cloud loses diffuse light through its sides. */
+    bool multiple = out->on[EFFECT_MULTIPLE];
+    if (!decide_fixed(out, EFFECT_LATERAL, mode[EFFECT_LATERAL], EFFECT_MULTIPLE, multiple)) {
+        double share = facts->narrow_share;
+        if (!facts->volume_known)
+            say(out, EFFECT_LATERAL, true, "auto: volume not measured, on");
+        else if (share < EFFECTS_NARROW_SHARE && changes)
+            say(out, EFFECT_LATERAL, true, "auto: little narrow cloud now (%.3g %%) but %s: on",
+                100.0 * share, why_changes);
+        else if (share < EFFECTS_NARROW_SHARE)
+            say(out, EFFECT_LATERAL, false,
+                "auto: %.3g %% of the extinction is in cloud narrower than %g transport mean "
+                "free paths (< %g %%): the plane-parallel columns stand",
+                100.0 * share, EFFECTS_NARROW_MFP, 100.0 * EFFECTS_NARROW_SHARE);
+        else
+            say(out, EFFECT_LATERAL, true,
+                "auto: %.3g %% of the extinction is in cloud narrower than %g transport mean "
+                "free paths (>= %g %%)",
+                100.0 * share, EFFECTS_NARROW_MFP, 100.0 * EFFECTS_NARROW_SHARE);
+    }
+
     /* Per-species phase: one phase when one kind of particle is absent.  Decided from the
      * first step: a microphysics scheme that writes no ice species (WSM3) never has any. */
     out->single_phase_ice = facts->volume_known && facts->beta_ice_sum > facts->beta_water_sum;
@@ -350,7 +405,7 @@ void effects_light_settings(const struct config *cfg, const struct effects *e,
     s->forward = e->on[EFFECT_FORWARD];
     s->peripheral = e->on[EFFECT_PERIPHERAL];
     s->multiple = e->on[EFFECT_MULTIPLE];
-    s->lateral = cfg->lightmap.lateral;
+    s->lateral = e->on[EFFECT_LATERAL];
     s->epsilon = cfg->lightmap.epsilon;
     light_settings_set_optics(s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
     if (!e->on[EFFECT_PHASE])

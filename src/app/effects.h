@@ -23,6 +23,13 @@
  * before auto turns it on: half of one 8-bit display level. */
 #define EFFECTS_FORWARD_TOLERANCE (0.5 / 255.0)
 
+/* Lateral escape (effects.lateral): a cloud is narrow when a run of it along x or y is at most
+ * this many transport mean free paths, 1 / (1 - g), wide: escape then takes at least e^-3 of
+ * the straight-flight rate (light_lateral_escape).  Auto turns it on when such cloud holds at
+ * least EFFECTS_NARROW_SHARE of the extinction. */
+#define EFFECTS_NARROW_MFP 3.0
+#define EFFECTS_NARROW_SHARE 0.005
+
 /* What is known about the scene.  effects_facts_init marks everything unknown; an unknown
  * fact makes auto decide on (the full simulation) for the effects that depend on it. */
 struct effects_facts {
@@ -31,6 +38,8 @@ struct effects_facts {
                                  volume (INFINITY when it overflows) */
     double beta_ice_sum;      /* sums of the ice-phase and water-phase extinction over voxels */
     double beta_water_sum;
+    double narrow_share;      /* share of the extinction in cloud narrower (along x or y) than
+                                 EFFECTS_NARROW_MFP transport mean free paths */
     bool views_known;
     bool ground_visible;      /* some view sees the ground plane (and render.ground_on) */
     int time_steps;           /* time steps the session can show; 0 = unknown */
@@ -46,10 +55,12 @@ void effects_facts_init(struct effects_facts *f);
 /* Measures the volume facts of VOL for the sun direction SUN (toward the sun): the optical
  * depth along the light through every column of a light-space grid as fine as the volume
  * across the light (at most 192 x 192 columns, the midpoint rule at half the shortest voxel
- * crossing), and the sums of both extinctions.  CPU, a few tens of milliseconds for the
- * default storm.  Returns false (logged) on a bad sun direction. */
+ * crossing), the sums of both extinctions, and the narrow share (light_lateral_rates, each
+ * voxel's mean cosine mixed from OPTICS' phases by its ice share).  CPU, a few tens of
+ * milliseconds for the default storm.  Returns false (logged) on a bad sun direction or out
+ * of memory. */
 bool effects_measure_volume(const struct ext_volume *vol, const double sun[3],
-                            struct effects_facts *f);
+                            const struct optics_params *optics, struct effects_facts *f);
 
 /* Whether VIEW sees the ground plane z = 0 from above: the eye is above it and some ray of
  * the frustum points down (the frustum's directions form a convex cone, so its corners

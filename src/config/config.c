@@ -205,9 +205,6 @@ static const struct setting settings[] = {
         "error bound of the compressed light map"),
     DBL("lightmap.forward_angle", lightmap.forward_angle_deg, 0, 180, F_MIN_OPEN, 20.0,
         "forward scattering cone angle theta, degrees"),
-    BOOL("lightmap.lateral", lightmap.lateral, 1,
-         "with multiple scattering: diffuse light escapes through the sides of clouds "
-         "narrower than a plane-parallel layer (docs/lightmap.md)"),
 
     DBL("playback.speed", playback.speed, 0, 1000, F_MIN_OPEN, 2.0,
         "playback speed, time steps per second"),
@@ -224,6 +221,10 @@ static const struct setting settings[] = {
            "multiple scattering: diffuse light from a two-stream pass down each light column, "
            "solved as a layer lit at the sun's elevation (docs/lightmap.md); auto: on unless "
            "optically thin along the light"),
+    EFFECT("effects.lateral", EFFECT_LATERAL,
+           "lateral escape: multiple scattering lets diffuse light out of the sides of clouds "
+           "narrower than a few transport mean free paths (docs/lightmap.md); auto: on when "
+           "such cloud holds 0.5 % of the extinction or more"),
     EFFECT("effects.phase", EFFECT_PHASE,
            "per-species phase (ice vs water); auto: off (one phase) when one kind is absent"),
     EFFECT("effects.ground_shadow", EFFECT_GROUND_SHADOW,

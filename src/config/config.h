@@ -40,6 +40,8 @@ enum effect {
     EFFECT_PERIPHERAL,    /* effects.peripheral: peripheral forward scattering */
     EFFECT_MULTIPLE,      /* effects.multiple: multiple scattering, the light map's diffuse
                              two-stream term */
+    EFFECT_LATERAL,       /* effects.lateral: diffuse light escapes through narrow clouds'
+                             sides (needs multiple) */
     EFFECT_PHASE,         /* effects.phase: per-species phase (off: one phase for all) */
     EFFECT_GROUND_SHADOW, /* effects.ground_shadow: the ground reads the light map */
     EFFECT_DETAIL,        /* effects.detail: procedural detail (docs/terrain.md) */
@@ -119,7 +121,6 @@ struct config_lightmap {
     int resolution[3];       /* lightmap.resolution: [across x, across y, along the light] */
     double epsilon;          /* lightmap.epsilon: compression error bound */
     double forward_angle_deg;/* lightmap.forward_angle: theta */
-    bool lateral;            /* lightmap.lateral: diffuse light escapes through clouds' sides */
 };
 
 enum coast_resolution { COAST_CRUDE, COAST_LOW, COAST_INTERMEDIATE };

@@ -19,7 +19,11 @@ struct light_gpu {
     struct gpu_texture diffuse; /* RG32F node volume, M and N; only with multiple scattering */
     struct gpu_texture slice;   /* RGBA32F build scratch: each slice's tau, ice share and
                                    lateral escape rates */
-    struct gpu_texture rates;   /* RG32F on the volume's grid: lateral escape rates */
+    struct gpu_texture rates;   /* RG32F on the volume's grid: lateral escape rates times the
+                                   extinction; they depend on the volume only */
+    bool have_rates;            /* rates hold the volume below */
+    unsigned rates_beta;        /* its texture, identity and generation */
+    uint64_t rates_volume, rates_generation;
     struct gpu_texture adding;  /* RG32F build scratch of the column pass */
     bool built_multiple;
     struct gpu_buffer columns, nodes;
@@ -94,7 +98,12 @@ static const struct gpu_program *diffuse_program(struct light_gpu *lg, bool mix,
 static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src)
 {
     const int *n = src->grid->n;
-    if (!(lg->rates.id && memcmp(lg->rates.size, n, 3 * sizeof(int)) == 0)) {
+    bool same_size = lg->rates.id && memcmp(lg->rates.size, n, 3 * sizeof(int)) == 0;
+    if (same_size && lg->have_rates && lg->rates_beta == src->beta->id &&
+        lg->rates_volume == src->volume_id && lg->rates_generation == src->generation)
+        return true; /* a new sun, the same volume: the rates stand */
+    lg->have_rates = false;
+    if (!same_size) {
         gpu_texture_finish(&lg->rates);
         if (!gpu_texture_init(&lg->rates, 3, n, GPU_RG32F, NULL))
             return false;
@@ -111,6 +120,10 @@ static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src
         gpu_uniform_float(p, "spacing", (float)src->grid->spacing[axis]);
         gpu_dispatch(p, n[1 - axis] * n[2], 1, 1);
     }
+    lg->have_rates = true;
+    lg->rates_beta = src->beta->id;
+    lg->rates_volume = src->volume_id;
+    lg->rates_generation = src->generation;
     return true;
 }
 
@@ -215,6 +228,7 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
             return false;
     } else {
         gpu_texture_finish(&lg->rates);
+        lg->have_rates = false;
     }
     const struct gpu_program *p = build_program(lg, build_variant(s));
     if (!p)

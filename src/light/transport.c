@@ -511,7 +511,9 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
                     sample_beta(&bs, p, bm);
                     b[0] += bm[0];
                     b[1] += bm[1];
-                    if (rates) { /* extinction times escape rate: their ratio is the rate */
+                    if (rates && bm[0] + bm[1] > 0.0f) { /* extinction times escape rate:
+                                                            their ratio is the rate (0 where
+                                                            every voxel around is clear) */
                         float rm[2];
                         sample_beta(&rs, p, rm);
                         lat[0] += rm[0];

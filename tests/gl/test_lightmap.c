@@ -32,7 +32,7 @@ static void settings_of(const struct config *cfg, struct light_settings *s)
     memcpy(s->resolution, cfg->lightmap.resolution, sizeof(s->resolution));
     s->forward = cfg->effects.mode[EFFECT_FORWARD] != EFFECT_OFF;
     s->peripheral = cfg->effects.mode[EFFECT_PERIPHERAL] != EFFECT_OFF;
-    s->lateral = cfg->lightmap.lateral;
+    s->lateral = cfg->effects.mode[EFFECT_LATERAL] != EFFECT_OFF;
     s->epsilon = cfg->lightmap.epsilon;
     light_settings_set_optics(s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
 }
@@ -144,7 +144,7 @@ static void test_gpu_matches_cpu_diffuse(void **state)
                           "scene.extent=[10,10,10]", "scene.tau=4", "light.azimuth=135",
                           "light.elevation=35", "lightmap.resolution=[48,48,64]"};
     const char *storm_plane[] = {"scene.size=[64,64,32]", "lightmap.resolution=[64,64,64]",
-                                 "lightmap.lateral=false"};
+                                 "effects.lateral=off"};
     struct {
         const char *name;
         const char **sets;

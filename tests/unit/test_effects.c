@@ -18,6 +18,7 @@ static void known_thick(struct effects_facts *f)
     f->max_tau_light = 50.0;
     f->beta_ice_sum = 1.0;
     f->beta_water_sum = 3.0;
+    f->narrow_share = 0.02;
     f->views_known = true;
     f->ground_visible = true;
     f->time_steps = 1;
@@ -30,8 +31,10 @@ static void test_unknown_facts_simulate_everything(void **state)
     struct effects e;
     effects_decide(&cfg, NULL, &e);
     assert_true(e.on[EFFECT_SHADOWS] && e.on[EFFECT_FORWARD] && e.on[EFFECT_PERIPHERAL]);
-    /* Multiple scattering too: nothing says the volume is thin. */
+    /* Multiple scattering too: nothing says the volume is thin; and its lateral escape. */
     assert_true(e.on[EFFECT_MULTIPLE]);
+    assert_true(e.on[EFFECT_LATERAL]);
+    assert_non_null(strstr(e.reason[EFFECT_LATERAL], "not measured"));
     assert_true(e.on[EFFECT_PHASE] && e.on[EFFECT_GROUND_SHADOW]);
     assert_false(e.on[EFFECT_TEMPORAL]);
     assert_false(e.on[EFFECT_DISTORTION]);
@@ -41,6 +44,7 @@ static void test_unknown_facts_simulate_everything(void **state)
     /* The names follow the enum: a new effect shifts nothing. */
     assert_string_equal(effects_name(EFFECT_PERIPHERAL), "peripheral");
     assert_string_equal(effects_name(EFFECT_MULTIPLE), "multiple");
+    assert_string_equal(effects_name(EFFECT_LATERAL), "lateral");
     assert_string_equal(effects_name(EFFECT_PHASE), "phase");
     assert_string_equal(effects_name(EFFECT_DISTORTION), "distortion");
     assert_string_equal(effects_name(EFFECT_COUNT), "?");
@@ -137,6 +141,51 @@ static void test_multiple_thin_limit(void **state)
     effects_decide(&cfg, &f, &e);
     assert_true(e.on[EFFECT_MULTIPLE]);
     assert_non_null(strstr(e.reason[EFFECT_MULTIPLE], "not measured"));
+}
+
+/* effects.lateral: on when narrow cloud holds at least EFFECTS_NARROW_SHARE of the
+ * extinction, off below; off with multiple scattering; on when the scene can change. */
+static void test_lateral_narrow_share(void **state)
+{
+    struct config cfg;
+    config_defaults(&cfg);
+    struct effects_facts f;
+    known_thick(&f);
+    struct effects e;
+    struct light_settings s;
+    f.narrow_share = 1.01 * EFFECTS_NARROW_SHARE;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_LATERAL]);
+    assert_non_null(strstr(e.reason[EFFECT_LATERAL], "transport mean free paths (>="));
+    effects_light_settings(&cfg, &e, &s);
+    assert_true(s.multiple && s.lateral);
+    f.narrow_share = 0.99 * EFFECTS_NARROW_SHARE;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_MULTIPLE]);
+    assert_false(e.on[EFFECT_LATERAL]);
+    assert_non_null(strstr(e.reason[EFFECT_LATERAL], "plane-parallel columns stand"));
+    effects_light_settings(&cfg, &e, &s);
+    assert_true(s.multiple && !s.lateral);
+    /* The share can grow over the time steps: on. */
+    f.time_steps = 4;
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_LATERAL]);
+    assert_non_null(strstr(e.reason[EFFECT_LATERAL], "several time steps"));
+    f.time_steps = 1;
+    /* Forced either way; and nothing to escape from without multiple scattering. */
+    assert_true(config_set(&cfg, "effects.lateral=on"));
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_LATERAL]);
+    assert_true(config_set(&cfg, "effects.multiple=off"));
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_LATERAL]);
+    assert_non_null(strstr(e.reason[EFFECT_LATERAL], "effects.multiple"));
+    config_defaults(&cfg);
+    f.narrow_share = 0.5;
+    assert_true(config_set(&cfg, "effects.lateral=off"));
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_LATERAL]);
+    assert_non_null(strstr(e.reason[EFFECT_LATERAL], "off in the config"));
 }
 
 /* effects.multiple: on and off in the config, the shadows prerequisite, and the light map
@@ -418,17 +467,36 @@ static void test_measure_volume(void **state)
     light_sun_direction(45.0, 30.0, sun);
     struct effects_facts f;
     effects_facts_init(&f);
-    assert_true(effects_measure_volume(&vol, sun, &f));
+    assert_true(effects_measure_volume(&vol, sun, &optics, &f));
     assert_true(f.volume_known);
     assert_true(fabs(f.max_tau_light - 6.0) < 0.4);
     assert_true(f.beta_ice_sum > 0.0 && f.beta_water_sum == 0.0);
+    /* 120 optical depths wide, 30 transport mean free paths of ice: nothing narrow. */
+    assert_true(f.narrow_share == 0.0);
+    ext_volume_finish(&vol);
+
+    /* A ball of optical diameter 2 is narrow throughout (0.3 transport mean free paths of
+     * water); one of diameter 200 only near its rim, where its chords are short. */
+    struct synth_desc ball = {.kind = SYNTH_SPHERE, .n = {32, 32, 32},
+                              .extent_m = {10e3, 10e3, 10e3}, .tau = 2.0};
+    assert_true(synth_extinction(&ball, &optics, &vol));
+    assert_true(effects_measure_volume(&vol, sun, &optics, &f));
+    print_message("ball of optical diameter 2: narrow share %.3f\n", f.narrow_share);
+    assert_true(f.narrow_share > 0.99);
+    ext_volume_finish(&vol);
+    ball.tau = 200.0;
+    assert_true(synth_extinction(&ball, &optics, &vol));
+    assert_true(effects_measure_volume(&vol, sun, &optics, &f));
+    print_message("ball of optical diameter 200: narrow share %.3f\n", f.narrow_share);
+    assert_true(f.narrow_share > 0.0 && f.narrow_share < 0.1);
     ext_volume_finish(&vol);
 
     /* Empty: zero, exactly. */
     struct synth_desc empty = {.kind = SYNTH_EMPTY, .n = {8, 8, 8}, .extent_m = {1e3, 1e3, 1e3}};
     assert_true(synth_extinction(&empty, &optics, &vol));
-    assert_true(effects_measure_volume(&vol, sun, &f));
+    assert_true(effects_measure_volume(&vol, sun, &optics, &f));
     assert_true(f.max_tau_light == 0.0);
+    assert_true(f.narrow_share == 0.0);
     ext_volume_finish(&vol);
 }
 
@@ -454,6 +522,7 @@ int main(void)
         cmocka_unit_test(test_unknown_facts_simulate_everything),
         cmocka_unit_test(test_thin_medium_bound),
         cmocka_unit_test(test_multiple_thin_limit),
+        cmocka_unit_test(test_lateral_narrow_share),
         cmocka_unit_test(test_multiple_modes),
         cmocka_unit_test(test_a_changing_scene_keeps_effects_on),
         cmocka_unit_test(test_thin_bound_holds_in_the_light_map),
