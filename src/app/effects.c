@@ -29,7 +29,7 @@ void effects_facts_init(struct effects_facts *f)
     memset(f, 0, sizeof(*f));
 }
 
-/* The share of VOL's extinction in narrow cloud (EFFECTS_NARROW_MFP), or -1 out of memory. */
+/* The share of VOL's extinction in narrow cloud (EFFECTS_NARROW_RATE), or -1 out of memory. */
 static double narrow_share(const struct ext_volume *vol, const struct optics_params *optics)
 {
     size_t count = grid3_count(&vol->grid);
@@ -49,9 +49,10 @@ static double narrow_share(const struct ext_volume *vol, const struct optics_par
         total += b;
         double f_ice = bi > 0.0f ? fmin(bi, 1e30) / b : 0.0;
         double g = optics->g_water + f_ice * (optics->g_ice - optics->g_water);
-        /* Rate 1 / w times beta, so w <= N / (1 - g) is r >= (1 - g) beta / N. */
-        double limit = (1.0 - g) * b / EFFECTS_NARROW_MFP;
-        if (r[2 * v] >= limit || r[2 * v + 1] >= limit)
+        float gamma = (float)(0.75 * (1.0 - g));
+        float rate = fmaxf(light_lateral_escape(gamma, (float)(r[2 * v] / b), 0.0f),
+                           light_lateral_escape(gamma, 0.0f, (float)(r[2 * v + 1] / b)));
+        if (rate >= EFFECTS_NARROW_RATE)
             narrow += b;
     }
     free(r);
@@ -277,14 +278,15 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
                 100.0 * share, why_changes);
         else if (share < EFFECTS_NARROW_SHARE)
             say(out, EFFECT_LATERAL, false,
-                "auto: %.3g %% of the extinction is in cloud narrower than %g transport mean "
-                "free paths (< %g %%): the plane-parallel columns stand",
-                100.0 * share, EFFECTS_NARROW_MFP, 100.0 * EFFECTS_NARROW_SHARE);
+                "auto: %.3g %% of the extinction is in cloud narrow enough to lose %g %% of its "
+                "diffuse light per optical depth through its sides (< %g %%): the "
+                "plane-parallel columns stand",
+                100.0 * share, 100.0 * EFFECTS_NARROW_RATE, 100.0 * EFFECTS_NARROW_SHARE);
         else
             say(out, EFFECT_LATERAL, true,
-                "auto: %.3g %% of the extinction is in cloud narrower than %g transport mean "
-                "free paths (>= %g %%)",
-                100.0 * share, EFFECTS_NARROW_MFP, 100.0 * EFFECTS_NARROW_SHARE);
+                "auto: %.3g %% of the extinction is in cloud narrow enough to lose %g %% of its "
+                "diffuse light per optical depth through its sides (>= %g %%)",
+                100.0 * share, 100.0 * EFFECTS_NARROW_RATE, 100.0 * EFFECTS_NARROW_SHARE);
     }
 
     /* Per-species phase: one phase when one kind of particle is absent.  Decided from the

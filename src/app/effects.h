@@ -23,11 +23,11 @@
  * before auto turns it on: half of one 8-bit display level. */
 #define EFFECTS_FORWARD_TOLERANCE (0.5 / 255.0)
 
-/* Lateral escape (effects.lateral): a cloud is narrow when a run of it along x or y is at most
- * this many transport mean free paths, 1 / (1 - g), wide: escape then takes at least e^-3 of
- * the straight-flight rate (light_lateral_escape).  Auto turns it on when such cloud holds at
- * least EFFECTS_NARROW_SHARE of the extinction. */
-#define EFFECTS_NARROW_MFP 3.0
+/* Lateral escape (effects.lateral): a voxel is in narrow cloud when its escape rate
+ * (light_lateral_escape, the larger axis) lets at least EFFECTS_NARROW_RATE of the diffuse
+ * light out per unit optical depth.  Auto turns the effect on when such cloud holds at least
+ * EFFECTS_NARROW_SHARE of the extinction. */
+#define EFFECTS_NARROW_RATE 0.01
 #define EFFECTS_NARROW_SHARE 0.005
 
 /* What is known about the scene.  effects_facts_init marks everything unknown; an unknown
@@ -38,8 +38,7 @@ struct effects_facts {
                                  volume (INFINITY when it overflows) */
     double beta_ice_sum;      /* sums of the ice-phase and water-phase extinction over voxels */
     double beta_water_sum;
-    double narrow_share;      /* share of the extinction in cloud narrower (along x or y) than
-                                 EFFECTS_NARROW_MFP transport mean free paths */
+    double narrow_share;      /* share of the extinction in narrow cloud (EFFECTS_NARROW_RATE) */
     bool views_known;
     bool ground_visible;      /* some view sees the ground plane (and render.ground_on) */
     int time_steps;           /* time steps the session can show; 0 = unknown */

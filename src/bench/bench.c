@@ -196,15 +196,26 @@ static int compare_doubles(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+static double middle(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof(double), compare_doubles);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* The median of V (reordered) and, in *SPREAD, 1.4826 times the median absolute deviation:
+ * a standard deviation that one stalled repeat on a shared machine does not inflate. */
 static double median(double *v, int n, double *spread)
 {
     if (n <= 0) {
         *spread = 0.0;
         return 0.0;
     }
-    qsort(v, (size_t)n, sizeof(double), compare_doubles);
-    *spread = 0.5 * (v[n - 1] - v[0]);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+    double m = middle(v, n);
+    double dev[n];
+    for (int i = 0; i < n; i++)
+        dev[i] = fabs(v[i] - m);
+    *spread = 1.4826 * middle(dev, n);
+    return m;
 }
 
 /* Builds the light map of V (forced: a new generation) and points R at it; *MS its time. */
@@ -255,6 +266,7 @@ static void compare(const struct image *img, const struct image *ref, const stru
         }
     }
     out->rmse = sqrt(sum / (3.0 * count));
+    out->rmse_model = sqrt(fmax(sum - noise, 0.0) / (3.0 * count));
     out->max_err = worst;
     double sigma = sqrt(noise / (3.0 * count));
     out->rmse_rel = sigma > 0 ? out->rmse / sigma : INFINITY;
@@ -264,48 +276,63 @@ static void compare(const struct image *img, const struct image *ref, const stru
 bool bench_measure(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
                    const struct bench_variant *v, const struct image *ref,
                    const struct image *ref_err, const struct image *self_ref,
-                   int build_repeats, int view_repeats, struct bench_result *out)
+                   struct bench_result *out)
 {
     memset(out, 0, sizeof(*out));
     out->v = *v;
-    build_repeats = build_repeats < 1 ? 1 : build_repeats > REPEATS_MAX ? REPEATS_MAX
-                                                                         : build_repeats;
-    view_repeats = view_repeats < 1 ? 1 : view_repeats > REPEATS_MAX ? REPEATS_MAX
-                                                                      : view_repeats;
     struct render_settings s = sc->settings;
     s.step_m = v->step_m;
-    double builds[REPEATS_MAX], views[REPEATS_MAX], ms;
+    double ms;
     struct gpu_texture target = {0};
     struct image img = {0};
-    bool ok = false;
-    /* One untimed build and draw: compiles the variants, and gives the image. */
-    if (!build(r, lg, sc, v, &ms) || !draw(r, &s, &sc->view, &target, &ms) ||
-        !renderer_read(&target, &img))
-        goto done;
-    if (ref && ref_err)
+    bool ok = build(r, lg, sc, v, &ms) && draw(r, &s, &sc->view, &target, &ms) &&
+              renderer_read(&target, &img);
+    if (ok && ref && ref_err)
         compare(&img, ref, ref_err, out);
-    if (self_ref) {
+    if (ok && self_ref) {
         struct bench_result self;
         compare(&img, self_ref, self_ref, &self);
         out->self_rmse = self.rmse;
     }
-    for (int i = 0; i < build_repeats; i++) {
-        if (!build(r, lg, sc, v, &builds[i]))
-            goto done;
-    }
-    for (int i = 0; i < view_repeats; i++) {
-        if (!draw(r, &s, &sc->view, &target, &views[i]))
-            goto done;
-    }
-    memcpy(out->build_samples, builds, sizeof(double) * build_repeats);
-    out->n_build_samples = build_repeats;
-    out->build_ms = median(builds, build_repeats, &out->build_spread);
-    out->view_ms = median(views, view_repeats, &out->view_spread);
-    ok = true;
-done:
     image_finish(&img);
     gpu_texture_finish(&target);
     return ok;
+}
+
+bool bench_time_once(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
+                     bool with_build, struct bench_result *out)
+{
+    struct render_settings s = sc->settings;
+    s.step_m = out->v.step_m;
+    double ms;
+    struct gpu_texture target = {0};
+    /* The view needs this variant's map bound: build it.  Round-robin, the previous variant
+     * may have left maps of another size: an untimed build first reallocates them, so the
+     * timed one is a rebuild in place, as in a session. */
+    bool ok = build(r, lg, sc, &out->v, &ms);
+    if (ok && with_build) {
+        ok = build(r, lg, sc, &out->v, &ms);
+        if (ok && out->n_build_samples < REPEATS_MAX)
+            out->build_samples[out->n_build_samples++] = ms;
+    }
+    ok = ok && draw(r, &s, &sc->view, &target, &ms);
+    if (ok && out->n_view_samples < REPEATS_MAX)
+        out->view_samples[out->n_view_samples++] = ms;
+    gpu_texture_finish(&target);
+    return ok;
+}
+
+void bench_timings_finish(struct bench_result *out)
+{
+    double v[REPEATS_MAX];
+    if (out->n_build_samples > 0) {
+        memcpy(v, out->build_samples, sizeof(double) * out->n_build_samples);
+        out->build_ms = median(v, out->n_build_samples, &out->build_spread);
+    }
+    if (out->n_view_samples > 0) {
+        memcpy(v, out->view_samples, sizeof(double) * out->n_view_samples);
+        out->view_ms = median(v, out->n_view_samples, &out->view_spread);
+    }
 }
 
 bool bench_render(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
@@ -354,24 +381,38 @@ void bench_pool_builds(struct bench_result *res, int n)
     }
 }
 
-/* The relative timing noise of R: half the range of its repeats over its time. */
+/* The relative timing noise of R: the robust spread of its repeats over its time. */
 static double time_noise(const struct bench_result *r)
 {
     double t = r->build_ms + r->view_ms;
     return t > 0.0 ? (r->build_spread + r->view_spread) / t : 0.0;
 }
 
+double bench_error(const struct bench_result *r, bool self)
+{
+    return self ? r->self_rmse : r->rmse_model;
+}
+
+/* Time noise of a comparison: the larger of the floor and what either's repeats scattered. */
+static double pair_time_noise(const struct bench_result *a, const struct bench_result *b)
+{
+    return fmax(BENCH_TIME_NOISE, fmax(time_noise(a), time_noise(b)));
+}
+
+bool bench_no_worse(const struct bench_result *b, const struct bench_result *a, bool self)
+{
+    double ta = a->build_ms + a->view_ms, tb = b->build_ms + b->view_ms;
+    double ea = bench_error(a, self), eb = bench_error(b, self);
+    return tb <= ta * (1.0 + pair_time_noise(a, b)) && eb <= ea * (1.0 + BENCH_ERROR_NOISE);
+}
+
 bool bench_beats(const struct bench_result *b, const struct bench_result *a, bool self)
 {
     double ta = a->build_ms + a->view_ms, tb = b->build_ms + b->view_ms;
-    double ea = self ? a->self_rmse : a->rmse, eb = self ? b->self_rmse : b->rmse;
-    /* Times differ only beyond the larger of the floor and what the repeats scattered. */
-    double tn = fmax(BENCH_TIME_NOISE, fmax(time_noise(a), time_noise(b)));
-    bool no_slower = tb <= ta * (1.0 + tn);
-    bool no_worse = eb <= ea * (1.0 + BENCH_ERROR_NOISE);
-    bool faster = tb * (1.0 + tn) < ta;
+    double ea = bench_error(a, self), eb = bench_error(b, self);
+    bool faster = tb * (1.0 + pair_time_noise(a, b)) < ta;
     bool better = eb * (1.0 + BENCH_ERROR_NOISE) < ea;
-    return no_slower && no_worse && (faster || better);
+    return bench_no_worse(b, a, self) && (faster || better);
 }
 
 void bench_pareto(struct bench_result *res, int n)
@@ -476,18 +517,19 @@ void bench_write_csv(FILE *f, const char *scene, const struct bench_result *res,
     if (header)
         fprintf(f, "scene,knob,value,default,light_map,resolution,mode,epsilon,forward_angle,"
                    "forward,peripheral,step_m,build_ms,build_noise_ms,view_ms,view_noise_ms,"
-                   "rmse,max_error,rmse_over_sigma,max_over_sigma,pareto,self_rmse,pareto_self\n");
+                   "rmse,rmse_model,max_error,rmse_over_sigma,max_over_sigma,pareto,self_rmse,"
+                   "pareto_self\n");
     for (int i = 0; i < n; i++) {
         const struct bench_result *r = &res[i];
         const struct bench_variant *v = &r->v;
         fprintf(f, "%s,%s,\"%s\",%d,%d,%d,%s,%g,%g,%d,%d,%g,%.3f,%.3f,%.3f,%.3f,%.6g,%.6g,"
-                   "%.4g,%.4g,%d,%.6g,%d\n",
+                   "%.6g,%.4g,%.4g,%d,%.6g,%d\n",
                 scene, v->knob, v->value, v->is_default, v->shadows, v->light.resolution[0],
                 v->mode == LIGHT_GPU_DENSE ? "dense" : "compressed", v->light.epsilon,
                 v->light.forward_angle_deg, v->light.forward, v->light.forward &&
                 v->light.peripheral, v->step_m, r->build_ms, r->build_spread, r->view_ms,
-                r->view_spread, r->rmse, r->max_err, r->rmse_rel, r->max_rel, r->pareto,
-                r->self_rmse, r->pareto_self);
+                r->view_spread, r->rmse, r->rmse_model, r->max_err, r->rmse_rel, r->max_rel,
+                r->pareto, r->self_rmse, r->pareto_self);
     }
 }
 
@@ -498,17 +540,18 @@ void bench_write_markdown(FILE *f, const char *scene, const struct bench_result 
         if (res[i].v.is_default)
             base = res[i].build_ms + res[i].view_ms;
     }
-    fprintf(f, "| %s: knob | value | build ms | view ms | cost × default | RMSE | max error | "
-               "RMSE / σ | max / σ | Pareto | RMSE vs converged renderer | Pareto |\n", scene);
-    fprintf(f, "|---|---|---:|---:|---:|---:|---:|---:|---:|:---:|---:|:---:|\n");
+    fprintf(f, "| %s: knob | value | build ms | view ms | cost × default | RMSE | model RMSE | "
+               "max error | RMSE / σ | max / σ | Pareto | RMSE vs converged renderer | "
+               "Pareto |\n", scene);
+    fprintf(f, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|:---:|---:|:---:|\n");
     for (int i = 0; i < n; i++) {
         const struct bench_result *r = &res[i];
-        fprintf(f, "| %s%s%s | %s | %.1f ± %.1f | %.1f ± %.1f | %.2f | %.4g | %.3g | %.3g | "
-                   "%.3g | %s | %.3g | %s |\n",
+        fprintf(f, "| %s%s%s | %s | %.1f ± %.1f | %.1f ± %.1f | %.2f | %.4g | %.4g | %.3g | "
+                   "%.3g | %.3g | %s | %.3g | %s |\n",
                 r->v.is_default ? "**" : "", r->v.knob, r->v.is_default ? "**" : "", r->v.value,
                 r->build_ms, r->build_spread, r->view_ms, r->view_spread,
-                base > 0 ? (r->build_ms + r->view_ms) / base : 0.0, r->rmse, r->max_err,
-                r->rmse_rel, r->max_rel, r->pareto ? "●" : "", r->self_rmse,
+                base > 0 ? (r->build_ms + r->view_ms) / base : 0.0, r->rmse, r->rmse_model,
+                r->max_err, r->rmse_rel, r->max_rel, r->pareto ? "●" : "", r->self_rmse,
                 r->pareto_self ? "●" : "");
     }
 }

@@ -57,8 +57,14 @@ struct bench_result {
                                          with the same light map, bench_pool_builds) */
     double build_samples[32];         /* the build times measured for this result */
     int n_build_samples;
-    double build_spread, view_spread; /* half the range of the repeats: the noise */
+    double view_samples[32];          /* ... and the view times */
+    int n_view_samples;
+    double build_spread, view_spread; /* 1.48 x the median absolute deviation */
     double rmse, max_err;             /* linear radiance, over pixels and RGB channels */
+    double rmse_model;                /* sqrt(RMSE^2 - sigma^2): the part of the RMSE the
+                                         reference's own noise does not explain, an
+                                         unbiased estimate of the squared error against the
+                                         noise-free image (bench_beats, the plot) */
     double rmse_rel, max_rel;         /* both over the reference's RMS standard error */
     double self_rmse;                 /* against the renderer's own converged image (finest
                                          ray step and light map, the default model) */
@@ -77,14 +83,21 @@ int bench_variants(const struct bench_scene *sc, bool quick, struct bench_varian
 bool bench_reference(const struct bench_scene *sc, int spp, const char *cache_dir,
                      struct image *mean, struct image *err, bool *cached);
 
-/* Measures V on SC: light builds (BUILD_REPEATS, each forced) and eye passes (VIEW_REPEATS)
- * after one untimed draw whose image is compared with REF (mean) and REF_ERR (both NULL: no
- * error measured) and with SELF_REF (may be NULL).  R must hold SC's volume and optics.
- * GL context current. */
+/* Starts OUT for V on SC: one untimed build and draw (it compiles the variants) whose image
+ * is compared with REF (mean) and REF_ERR (both NULL: no error measured) and with SELF_REF
+ * (may be NULL).  R must hold SC's volume and optics.  GL context current. */
 bool bench_measure(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
                    const struct bench_variant *v, const struct image *ref,
                    const struct image *ref_err, const struct image *self_ref,
-                   int build_repeats, int view_repeats, struct bench_result *out);
+                   struct bench_result *out);
+
+/* Adds one timing sample to OUT (started by bench_measure): a forced light build when BUILD,
+ * then one eye pass.  The caller goes round all the variants once per repeat, so that the
+ * shared machine's load drifts over every variant alike rather than over one block of them;
+ * bench_timings_finish then takes the medians. */
+bool bench_time_once(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
+                     bool build, struct bench_result *out);
+void bench_timings_finish(struct bench_result *out);
 
 /* Renders V on SC once into OUT (initialised here): e.g. the converged image of the
  * renderer's own model.  GL context current. */
@@ -97,9 +110,9 @@ bool bench_render(struct renderer *r, struct light_gpu *lg, const struct bench_s
 void bench_pool_builds(struct bench_result *res, int n);
 
 /* Marks the results (N of one scene) that no other result beats: another result beats one
- * when it is no worse in both milliseconds (build + view) and RMSE, and better in one, by
+ * when it is no worse in both milliseconds (build + view) and error, and better in one, by
  * more than the noise: BENCH_TIME_NOISE relative in time, BENCH_ERROR_NOISE relative in
- * RMSE. */
+ * error (rmse_model against Monte Carlo, self_rmse against the converged renderer). */
 #define BENCH_TIME_NOISE 0.10
 #define BENCH_ERROR_NOISE 0.01
 
@@ -107,6 +120,11 @@ void bench_pool_builds(struct bench_result *res, int n);
  * it.  The time noise is the larger of BENCH_TIME_NOISE and the relative spread of either's
  * repeats (a shared machine scatters far more than a quiet GPU). */
 bool bench_beats(const struct bench_result *b, const struct bench_result *a, bool self);
+/* The same with "no slower and no worse" only (ties allowed): a setting that dominates on
+ * every scene must tie or win on each and win on one. */
+bool bench_no_worse(const struct bench_result *b, const struct bench_result *a, bool self);
+/* The error bench_beats compares. */
+double bench_error(const struct bench_result *r, bool self);
 void bench_pareto(struct bench_result *res, int n);
 
 /* ---- views -------------------------------------------------------------------------- */

@@ -167,7 +167,7 @@ static int by_time(const void *a, const void *b)
 
 static double error_of(const struct bench_result *r, bool self)
 {
-    return self ? r->self_rmse : r->rmse;
+    return bench_error(r, self);
 }
 
 static void panel(struct canvas *c, int x0, const char *name, const struct bench_result *res,

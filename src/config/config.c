@@ -224,7 +224,8 @@ static const struct setting settings[] = {
     EFFECT("effects.lateral", EFFECT_LATERAL,
            "lateral escape: multiple scattering lets diffuse light out of the sides of clouds "
            "narrower than a few transport mean free paths (docs/lightmap.md); auto: on when "
-           "such cloud holds 0.5 % of the extinction or more"),
+           "cloud that loses 1 % of its diffuse light per optical depth that way holds 0.5 % "
+           "of the extinction or more"),
     EFFECT("effects.phase", EFFECT_PHASE,
            "per-species phase (ice vs water); auto: off (one phase) when one kind is absent"),
     EFFECT("effects.ground_shadow", EFFECT_GROUND_SHADOW,

@@ -24,6 +24,9 @@ check "phase off in the config" stdout_has "phase          off  (off) off in the
 expect_exit 0 "hmd" "$anvil" effects "$src/configs/sphere.cfg" --display "$src/displays/hmd.cfg"
 check "hmd: distortion on" stdout_has "distortion     on"
 check "sphere: one phase" stdout_has "phase          off  (auto) auto: no ice"
+check "sphere: lateral escape, all of it narrow" stdout_has "lateral        on   (auto) auto: 99.9 %"
+expect_exit 0 "slab: no narrow cloud" "$anvil" effects "$src/configs/slab.cfg"
+check "slab: lateral escape off" stdout_has "lateral        off  (auto) auto: 0 % of the extinction"
 if [ -f "$data/wrf/katrina_2005_mercator_wsm3.nc" ]; then
     expect_exit 0 "katrina" "$anvil" effects -q "$src/configs/katrina.cfg"
     check "katrina: water phase for all" stdout_has "the water phase for all"
@@ -47,5 +50,7 @@ for f in accuracy.csv accuracy-table.md accuracy.png accuracy-self.png; do
 done
 check "CSV has the default row" grep -q "^sphere,default," "$tmp/b/accuracy.csv"
 check "table records the device" grep -q "Device: " "$tmp/b/accuracy-table.md"
-check "reference cached" test -n "$(ls "$tmp/cache"/ref-sphere-32-*.pfm 2>/dev/null)"
+# The sphere's reference gets 64 times the base samples (32 with --quick).
+check "reference cached" test -n "$(ls "$tmp/cache"/ref-sphere-2048-*.pfm 2>/dev/null)"
+check "table says the model RMSE" grep -q "model RMSE" "$tmp/b/accuracy-table.md"
 finish

@@ -156,7 +156,7 @@ static void test_lateral_narrow_share(void **state)
     f.narrow_share = 1.01 * EFFECTS_NARROW_SHARE;
     effects_decide(&cfg, &f, &e);
     assert_true(e.on[EFFECT_LATERAL]);
-    assert_non_null(strstr(e.reason[EFFECT_LATERAL], "transport mean free paths (>="));
+    assert_non_null(strstr(e.reason[EFFECT_LATERAL], "through its sides (>="));
     effects_light_settings(&cfg, &e, &s);
     assert_true(s.multiple && s.lateral);
     f.narrow_share = 0.99 * EFFECTS_NARROW_SHARE;
@@ -476,7 +476,8 @@ static void test_measure_volume(void **state)
     ext_volume_finish(&vol);
 
     /* A ball of optical diameter 2 is narrow throughout (0.3 transport mean free paths of
-     * water); one of diameter 200 only near its rim, where its chords are short. */
+     * water: escape 0.46 per optical depth at its centre); one of diameter 200 only near its
+     * rim, where its chords are short. */
     struct synth_desc ball = {.kind = SYNTH_SPHERE, .n = {32, 32, 32},
                               .extent_m = {10e3, 10e3, 10e3}, .tau = 2.0};
     assert_true(synth_extinction(&ball, &optics, &vol));
