@@ -1058,7 +1058,8 @@ static void test_lateral_rates(void **state)
 }
 
 /* Slices of optical depth 1e4 and 1e30 (kept finite), and empty ones, in both phases: every
- * output finite, M >= 0, |N| <= M; the column still conserves energy. */
+ * output finite, M >= 0, |N| <= M; the column still conserves energy; and the same with
+ * lateral escape from none to extreme, where it can only lose light. */
 static void test_diffuse_column_extreme(void **state)
 {
     enum { N = 24 };
@@ -1094,6 +1095,27 @@ static void test_diffuse_column_extreme(void **state)
                 }
                 double sum = d.mu0 * beam[N - 1] + 0.5 * out[0] + 0.5 * out[2 * (N - 1)];
                 assert_true(fabs(sum / d.mu0 - 1.0) <= 1e-3);
+                /* With lateral escape at rates from none to a run a millionth of an optical
+                 * depth wide: the same bounds, and what leaves by the ends is at most what
+                 * came in; never more than without escape. */
+                static const float rates[] = {0.0f, 1e-6f, 0.3f, 40.0f, 1e6f};
+                float lat[2 * N], esc[2 * N];
+                for (int i = 0; i < N; i++) {
+                    lat[2 * i] = rates[(i + first) % 5];
+                    lat[2 * i + 1] = rates[(3 * i + mode) % 5];
+                }
+                light_diffuse_column(N, beam, t, fi, lat, &d, scratch, esc);
+                for (int i = 0; i < N; i++) {
+                    float m = esc[2 * i], nn = esc[2 * i + 1];
+                    if (!(isfinite(m) && isfinite(nn) && m >= 0.0f && fabsf(nn) <= m + 1e-6f &&
+                          m <= out[2 * i] * (1.0f + 1e-4f) + 1e-6f))
+                        fail_msg("escape: mode %d mu0 %g start %d node %d: M %g N %g (%g "
+                                 "without)",
+                                 mode, (double)d.mu0, first, i, (double)m, (double)nn,
+                                 (double)out[2 * i]);
+                }
+                double kept = d.mu0 * beam[N - 1] + 0.5 * esc[0] + 0.5 * esc[2 * (N - 1)];
+                assert_true(kept <= d.mu0 * (1.0 + 1e-4));
             }
         }
     }
