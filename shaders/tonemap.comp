@@ -1,4 +1,5 @@
-// Linear radiance to display sRGB: 1 - exp(-exposure L) per channel, then the sRGB curve.
+// Linear radiance to display sRGB: x / (1 + x) with x = exposure L per channel (Reinhard et al.
+// 2002, the global operator), then the sRGB curve.
 // Must match image_tonemap() in src/render/image.c.
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -18,6 +19,7 @@ void main()
     if (pix.x >= image_size.x || pix.y >= image_size.y)
         return;
     vec3 l = imageLoad(in_image, pix).rgb;
-    vec3 c = 1.0 - exp(-exposure * max(l, vec3(0.0)));
+    vec3 x = exposure * max(l, vec3(0.0));
+    vec3 c = x / (1.0 + x);
     imageStore(out_image, pix, vec4(srgb(c.r), srgb(c.g), srgb(c.b), 1.0));
 }

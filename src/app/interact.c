@@ -77,6 +77,37 @@ static void model_from_session(struct app_interact *ia, struct menu_model *m)
     m->step_max_m = smin > 0.0 ? 4.0 * smin : 2000.0;
     m->light_resolution = cfg->lightmap.resolution[0];
     m->epsilon = cfg->lightmap.epsilon;
+    const struct effects *e = &ia->light->effects;
+    m->diffuse_possible = !ia->light->have_effects || e->on[EFFECT_SHADOWS];
+    m->diffuse_on = m->diffuse_possible && (!ia->light->have_effects || e->on[EFFECT_MULTIPLE]);
+}
+
+/* The menu's diffuse-light toggle: effects.multiple on or off from now on, and lateral escape
+ * with it (on unless the config turns it off: the scene's narrow share was decided for the
+ * multiple scattering it had).  The next frame builds the map, and so picks the eye pass's
+ * variant, accordingly. */
+static void set_diffuse(struct app_interact *ia, bool on)
+{
+    struct app_light *al = ia->light;
+    if (!al->have_effects) {
+        struct effects e;
+        effects_decide(ia->cfg, NULL, &e);
+        app_light_set_effects(al, &e);
+    }
+    struct effects *e = &al->effects;
+    if (on == e->on[EFFECT_MULTIPLE] || (on && !e->on[EFFECT_SHADOWS]))
+        return;
+    ia->cfg->effects.mode[EFFECT_MULTIPLE] = on ? EFFECT_ON : EFFECT_OFF;
+    e->on[EFFECT_MULTIPLE] = on;
+    snprintf(e->reason[EFFECT_MULTIPLE], sizeof(e->reason[EFFECT_MULTIPLE]), "%s from the menu",
+             on ? "on" : "off");
+    bool lateral = on && ia->cfg->effects.mode[EFFECT_LATERAL] != EFFECT_OFF;
+    if (lateral != e->on[EFFECT_LATERAL]) {
+        e->on[EFFECT_LATERAL] = lateral;
+        snprintf(e->reason[EFFECT_LATERAL], sizeof(e->reason[EFFECT_LATERAL]),
+                 "%s with the diffuse light, from the menu", lateral ? "on" : "off");
+    }
+    log_info("menu: diffuse light (multiple scattering) %s", on ? "on" : "off");
 }
 
 struct app_interact *app_interact_create(struct config *cfg, struct renderer *r,
@@ -229,6 +260,7 @@ static void apply_changes(struct app_interact *ia, unsigned ch, struct render_se
         for (int a = 0; a < 3; a++)
             cfg->lightmap.resolution[a] = m->light_resolution;
         cfg->lightmap.epsilon = m->epsilon;
+        set_diffuse(ia, m->diffuse_on);
     }
     if (ch & (MENU_ACTION_SAVE | MENU_ACTION_LOAD)) {
         char path[CONFIG_PATH_MAX + 32], status[128];

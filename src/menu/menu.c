@@ -27,7 +27,7 @@ enum id {
     ID_SUB, ID_PICK, ID_SCALE, ID_TINT,
     ID_TF_MODE, ID_TF_FIELD, ID_CHANNEL, ID_CANVAS, ID_DELETE, ID_SLOT, ID_SAVE, ID_LOAD,
     ID_AZIMUTH, ID_ELEVATION,
-    ID_RAY_STEP, ID_RESOLUTION, ID_EPSILON,
+    ID_RAY_STEP, ID_RESOLUTION, ID_EPSILON, ID_DIFFUSE,
 };
 
 struct widget {
@@ -338,6 +338,15 @@ static void layout(struct menu *m)
         slider(m, ID_RESOLUTION, 0, "quality.resolution", y, 16.0, 256.0, "");
         y += 56;
         slider(m, ID_EPSILON, 0, "quality.epsilon", y, 0.001, 0.1, "");
+        y += 56;
+        {
+            struct widget *wd = add(m, W_TOGGLE, ID_DIFFUSE, 0, "quality.diffuse", 16, y,
+                                    m->w - 32, 36, "Diffuse light (multiple scattering)");
+            if (wd) {
+                wd->selected = md->diffuse_on;
+                wd->disabled = !md->diffuse_possible;
+            }
+        }
         break;
     case MENU_PAGE_COUNT:
         break;
@@ -848,6 +857,10 @@ static void activate(struct menu *m, const struct widget *wd)
     case ID_LOOP:
         md->loop = !md->loop;
         m->changes |= MENU_CHANGE_PLAYBACK;
+        break;
+    case ID_DIFFUSE:
+        md->diffuse_on = !md->diffuse_on;
+        m->changes |= MENU_CHANGE_QUALITY;
         break;
     case ID_SPECIES_ON:
         md->species_on[wd->index] = !md->species_on[wd->index];

@@ -53,6 +53,8 @@ struct menu_model {
     double step_m, step_max_m;           /* ray step (0 = automatic) and the slider's top */
     int light_resolution;                /* light map cells per axis */
     double epsilon;                      /* compression error bound */
+    bool diffuse_on;                     /* multiple scattering (effects.multiple) */
+    bool diffuse_possible;               /* false without a light map (effects.shadows off) */
 };
 
 /* Change flags (menu_take_changes). */

@@ -36,7 +36,8 @@ uint8_t image_tonemap(float linear, float exposure)
     float l = linear > 0.0f ? linear : 0.0f;
     if (!isfinite(l))
         l = 0.0f;
-    float c = 1.0f - expf(-exposure * l);
+    float x = exposure * l;
+    float c = isfinite(x) ? x / (1.0f + x) : 1.0f; /* Reinhard's global operator */
     float s = c <= 0.0031308f ? 12.92f * c : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
     int v = (int)lrintf(s * 255.0f);
     return (uint8_t)(v < 0 ? 0 : v > 255 ? 255 : v);

@@ -18,7 +18,8 @@ struct image {
 bool image_init(struct image *img, int width, int height);
 void image_finish(struct image *img);
 
-/* Tone mapping shared with shaders/tonemap.comp: c = 1 - exp(-exposure L), then sRGB. */
+/* Tone mapping shared with shaders/tonemap.comp: c = x / (1 + x), x = exposure L (Reinhard
+ * et al. 2002, the global operator: highlights roll off instead of clipping), then sRGB. */
 uint8_t image_tonemap(float linear, float exposure);
 
 /* Writes by extension: ".png" tone-mapped with EXPOSURE, ".pfm" linear RGB.  Anything else

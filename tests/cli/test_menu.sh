@@ -114,6 +114,33 @@ printf '20 aim transfer.slot.4\n21 button trigger down\n22 button trigger up\n23
 "$anvil" render --quiet $small --input "$tmp/reload.txt" --transfers "$tmp/tfs" -o "$tmp/reload.png"
 check "a loaded function renders as the one saved" cmp -s "$tmp/tfmove.png" "$tmp/reload.png"
 
+# --- The diffuse light toggled off on the Quality page: the picture becomes the one rendered
+# with effects.multiple off, after exactly one more light map build.
+cat >"$tmp/diffuse.txt" <<'SCRIPT'
+0 key menu
+0 aim tab.quality
+1 button trigger down
+2 button trigger up
+3 aim quality.diffuse
+4 button trigger down
+5 button trigger up
+10 key menu
+SCRIPT
+printf '0 key menu\n10 key menu\n' >"$tmp/nodiffuse.txt"
+"$anvil" render --quiet $small --input "$tmp/diffuse.txt" -o "$tmp/diffuse.png" \
+    --stats "$tmp/diffuse.json"
+check "diffuse toggle script exits 0" test $? -eq 0
+"$anvil" render --quiet $small --input "$tmp/nodiffuse.txt" -o "$tmp/plain.png" \
+    --stats "$tmp/plain.json"
+"$anvil" render --quiet $small --input "$tmp/nodiffuse.txt" -o "$tmp/single.png" \
+    --set 'effects.multiple="off"'
+check "diffuse off from the menu draws what effects.multiple off draws" \
+    cmp -s "$tmp/diffuse.png" "$tmp/single.png"
+check "the diffuse light shows in the default picture" \
+    bash -c "! cmp -s '$tmp/plain.png' '$tmp/single.png'"
+check "toggling the diffuse light rebuilds the light map once" test \
+    "$(json "$tmp/diffuse.json" light_map_builds)" -eq $(($(json "$tmp/plain.json" light_map_builds) + 1))
+
 # --- A bad script is refused with file:line.
 printf '0 key play\n1 wiggle\n' >"$tmp/bad.txt"
 "$anvil" render --quiet $small --input "$tmp/bad.txt" -o "$tmp/bad.png" 2>"$tmp/err"
