@@ -64,10 +64,13 @@ static bool build(struct light_gpu *lg, const struct light_gpu_source *src, cons
         st->light_bytes_dense = (double)dense;
         st->light_bytes_compressed = (double)compressed;
     }
-    log_info("light map %dx%dx%d built in %.1f ms (%s%s%s)", s->resolution[0], s->resolution[1],
-             s->resolution[2], ms, mode == LIGHT_GPU_DENSE ? "dense" : "compressed",
+    log_info("light map %dx%dx%d built in %.1f ms (%s%s%s%s)", s->resolution[0],
+             s->resolution[1], s->resolution[2], ms,
+             mode == LIGHT_GPU_DENSE ? "dense" : "compressed",
              s->forward ? (s->peripheral ? ", forward and peripheral" : ", forward")
                         : ", shadow only",
+             s->multiple ? (s->lateral ? ", diffuse light with lateral escape" : ", diffuse light")
+                         : "",
              e->on[EFFECT_PHASE] ? "" : ", one phase");
     return true;
 }
