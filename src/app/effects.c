@@ -70,7 +70,7 @@ bool effects_measure_volume(const struct ext_volume *vol, const double sun[3],
     }
     n[2] = 2;
     struct light_grid lg;
-    if (!light_grid_init(&lg, sun, g, n))
+    if (!light_grid_init(&lg, sun, g, n, LIGHT_GRID_AUTO))
         return false;
     /* March each column along the light in steps of half the shortest distance in which the
      * light crosses a voxel (the light map's own sub-step rule, halved). */
@@ -408,6 +408,7 @@ void effects_light_settings(const struct config *cfg, const struct effects *e,
     s->peripheral = e->on[EFFECT_PERIPHERAL];
     s->multiple = e->on[EFFECT_MULTIPLE];
     s->lateral = e->on[EFFECT_LATERAL];
+    s->grid = cfg->lightmap.grid == 1 ? LIGHT_GRID_UPRIGHT : LIGHT_GRID_AUTO;
     s->epsilon = cfg->lightmap.epsilon;
     light_settings_set_optics(s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
     if (!e->on[EFFECT_PHASE])

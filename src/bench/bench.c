@@ -84,6 +84,13 @@ int bench_variants(const struct bench_scene *sc, bool quick, struct bench_varian
     ADD(snprintf(v->knob, sizeof(v->knob), "multiple"); snprintf(v->value, sizeof(v->value),
         "%s", sc->light.multiple ? "off" : "on (two-stream)");
         v->light.multiple = !sc->light.multiple);
+    struct light_grid grid;
+    if (sc->light.grid == LIGHT_GRID_AUTO &&
+        light_grid_init(&grid, sc->sun, &sc->vol->grid, sc->light.resolution, LIGHT_GRID_AUTO) &&
+        grid.sheared)
+        ADD(snprintf(v->knob, sizeof(v->knob), "light grid");
+            snprintf(v->value, sizeof(v->value), "upright (not sheared)");
+            v->light.grid = LIGHT_GRID_UPRIGHT);
     if (sc->light.multiple)
         ADD(snprintf(v->knob, sizeof(v->knob), "lateral escape");
             snprintf(v->value, sizeof(v->value), "%s", sc->light.lateral ? "off" : "on");
@@ -359,7 +366,7 @@ static bool same_light_map(const struct bench_variant *a, const struct bench_var
     return a->mode == b->mode &&
            memcmp(x->resolution, y->resolution, sizeof(x->resolution)) == 0 &&
            x->forward == y->forward && per_x == per_y && x->multiple == y->multiple &&
-           (!x->multiple || x->lateral == y->lateral) &&
+           (!x->multiple || x->lateral == y->lateral) && x->grid == y->grid &&
            x->forward_angle_deg == y->forward_angle_deg && x->substeps == y->substeps &&
            memcmp(&x->cp, &y->cp, sizeof(x->cp)) == 0 &&
            (a->mode == LIGHT_GPU_DENSE || x->epsilon == y->epsilon);

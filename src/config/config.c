@@ -74,6 +74,7 @@ static const char *const scene_kind_names[] = {
 };
 static const char *const data_format_names[] = {"wrf", "isabel", "extinction", NULL};
 static const char *const lightmap_mode_names[] = {"dense", "compressed", NULL};
+static const char *const lightmap_grid_names[] = {"auto", "upright", NULL}; /* light_grid_kind */
 static const char *const effect_mode_names[] = {"auto", "on", "off", NULL};
 static const char *const phase_names[] = {"water", "ice", NULL};
 static const char *const coast_res_names[] = {"crude", "low", "intermediate", NULL};
@@ -205,6 +206,10 @@ static const struct setting settings[] = {
         "error bound of the compressed light map"),
     DBL("lightmap.forward_angle", lightmap.forward_angle_deg, 0, 180, F_MIN_OPEN, 20.0,
         "forward scattering cone angle theta, degrees"),
+    ENUM("lightmap.grid", lightmap.grid, lightmap_grid_names, 0,
+         "light map node planes: auto = horizontal for a volume flat against the light's "
+         "drift (a WRF domain), else across the light; upright = always across the light "
+         "(docs/lightmap.md)"),
 
     DBL("playback.speed", playback.speed, 0, 1000, F_MIN_OPEN, 2.0,
         "playback speed, time steps per second"),

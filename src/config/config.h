@@ -121,6 +121,7 @@ struct config_lightmap {
     int resolution[3];       /* lightmap.resolution: [across x, across y, along the light] */
     double epsilon;          /* lightmap.epsilon: compression error bound */
     double forward_angle_deg;/* lightmap.forward_angle: theta */
+    int grid;                /* lightmap.grid: enum light_grid_kind (auto, upright) */
 };
 
 enum coast_resolution { COAST_CRUDE, COAST_LOW, COAST_INTERMEDIATE };

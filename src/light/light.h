@@ -46,10 +46,18 @@ void light_sample_beta(const struct ext_volume *vol, const float p[3], float out
 
 struct light_grid {
     double sun[3];           /* unit, toward the sun */
-    double u[3], v[3], w[3]; /* orthonormal, w = -sun, u x v = w */
-    double lo[3], hi[3];     /* volume box projected on u, v, w: metres */
+    /* Upright grid (sheared false): u, v, w orthonormal, w = -sun, u x v = w; node planes
+     * across the light.  Sheared grid (a box flat against the light's drift, see
+     * light_grid_init): u horizontal across the light, v horizontal along the light's
+     * heading, w = -sun; node planes horizontal, so every column crosses a flat volume's
+     * whole height in n[2] - 1 slices. */
+    bool sheared;
+    double u[3], v[3], w[3];
+    double lo[3], hi[3];     /* upright: the box projected on u, v, w; sheared: the columns'
+                                first plane on u, v, and 0 .. the column length */
     int n[3];                /* nodes along u, v, w (each >= 2) */
-    double step[3];          /* node spacing along u, v, w: (hi - lo) / (n - 1), metres */
+    double step[3];          /* node spacing along u and v, and the path along the light from
+                                one node plane to the next, metres */
     /* World position of node (i, j, k) = origin + i du + j dv + k dw, as the float32 values
      * the transport loop uses (GPU uniforms). */
     float origin[3], du[3], dv[3], dw[3];
@@ -63,10 +71,14 @@ struct light_grid {
 /* Sets up the grid for the sun direction SUN (toward the sun, any nonzero length) over the box
  * of BOX with N nodes per axis.  u is horizontal unless the sun is within ~26 degrees of the
  * zenith or nadir (then u is taken across the x axis); the choice is deterministic and exact
- * for axis-aligned suns.  Returns false (logged) on a zero or non-finite SUN, a degenerate
- * box, or N outside [2, 4096]. */
+ * for axis-aligned suns.  The grid is sheared (horizontal node planes) when the sun is between
+ * about 3 and 64 degrees from the horizon and the light drifts across the box's height by at
+ * most a quarter of its smaller horizontal size (a WRF domain; docs/lightmap.md, "Light-space
+ * grid"); else, or with KIND LIGHT_GRID_UPRIGHT, upright.  Returns false (logged) on a zero or non-finite SUN, a degenerate box,
+ * or N outside [2, 4096]. */
+enum light_grid_kind { LIGHT_GRID_AUTO, LIGHT_GRID_UPRIGHT };
 bool light_grid_init(struct light_grid *g, const double sun[3], const struct grid3 *box,
-                     const int n[3]);
+                     const int n[3], enum light_grid_kind kind);
 
 /* World position of node (i, j, k), metres (double, from the frame; for tests and tools). */
 void light_grid_node_world(const struct light_grid *g, double i, double j, double k, double out[3]);
@@ -85,6 +97,7 @@ struct light_settings {
                                  column pass (light_map.diffuse) */
     bool lateral;             /* with multiple: diffuse light escapes through the sides of
                                  clouds narrower than the plane-parallel column assumes */
+    enum light_grid_kind grid; /* auto: sheared for flat boxes; upright: never sheared */
     struct optics_cp cp;      /* CP(theta/4) and CP(theta/2) - CP(theta/4) per phase */
     double epsilon;           /* compression error bound (compressed storage only) */
     int substeps;             /* extinction samples per slice; 0 = light_auto_substeps */
@@ -110,6 +123,11 @@ bool light_settings_phases_equal(const struct light_settings *s);
  * back, of a ray arriving from the middle of the peripheral ring, 3 theta / 8:
  * dz tan(3 theta / 8). */
 double light_peripheral_offset(double forward_angle_deg, double dz);
+
+/* The peripheral taps of grid G in node units along u and v for the offset R (metres across
+ * the light): R / step along u; along v as well in an upright grid, R / (step |w_z|) in a
+ * sheared one, whose v runs horizontally and so crosses the light at sin(elevation). */
+void light_grid_peripheral_taps(const struct light_grid *g, double r, float out[2]);
 
 /* Extinction samples per slice so that the samples along the light are no farther apart than
  * the shortest distance in which the light crosses one voxel (min over axes of

@@ -240,7 +240,8 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
         inv_spacing[a] = (float)(1.0 / src->grid->spacing[a]);
     }
     double r = light_peripheral_offset(s->forward_angle_deg, g->step[2]);
-    float per[2] = {(float)(r / g->step[0]), (float)(r / g->step[1])};
+    float per[2];
+    light_grid_peripheral_taps(g, r, per);
     float cp[4] = {(float)s->cp.water_ctr, (float)s->cp.ice_ctr, (float)s->cp.water_per,
                    (float)s->cp.ice_per};
     gpu_uniform_ivec3(p, "vol_n", src->grid->n);
@@ -337,7 +338,7 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
                  (mode == LIGHT_GPU_COMPRESSED && lg->built_epsilon != settings->epsilon);
     if (!stale)
         return true;
-    if (!light_grid_init(&lg->grid, sun, src->grid, settings->resolution))
+    if (!light_grid_init(&lg->grid, sun, src->grid, settings->resolution, settings->grid))
         return false;
     gpu_timer_begin(&lg->timer);
     bool ok = build_dense(lg, src, sun, settings);

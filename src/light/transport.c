@@ -138,6 +138,12 @@ bool light_settings_phases_equal(const struct light_settings *s)
            c->ice_cs_g == c->water_cs_g && c->ice_gamma == c->water_gamma;
 }
 
+void light_grid_peripheral_taps(const struct light_grid *g, double r, float out[2])
+{
+    out[0] = (float)(r / g->step[0]);
+    out[1] = (float)(r / (g->step[1] * (g->sheared ? fabs(g->w[2]) : 1.0)));
+}
+
 double light_peripheral_offset(double forward_angle_deg, double dz)
 {
     /* Riley §4.4: the outer band runs from theta/4 to theta/2; its four samples are taken at
@@ -434,7 +440,7 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
     float *reuse = map->light;
     size_t old_count = map->light ? (size_t)map->grid.n[0] * map->grid.n[1] * map->grid.n[2] : 0;
     map->light = NULL;
-    if (!light_grid_init(&map->grid, sun, &vol->grid, s->resolution)) {
+    if (!light_grid_init(&map->grid, sun, &vol->grid, s->resolution, s->grid)) {
         free(reuse);
         light_map_finish(map);
         return false;
@@ -464,7 +470,9 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
     const float cpc_water = (float)s->cp.water_ctr, cpc_ice = (float)s->cp.ice_ctr;
     const float cpp_water = (float)s->cp.water_per, cpp_ice = (float)s->cp.ice_per;
     const double r = light_peripheral_offset(s->forward_angle_deg, g->step[2]);
-    const float rx = (float)(r / g->step[0]), ry = (float)(r / g->step[1]);
+    float taps[2];
+    light_grid_peripheral_taps(g, r, taps);
+    const float rx = taps[0], ry = taps[1];
 
     float *L = map->light;
     for (size_t c = 0; c < plane; c++)
