@@ -106,14 +106,14 @@ void main()
             vec3 cross = voxel_size / max(abs(dir), vec3(1e-6));
             step = 0.5 * min(cross.x, min(cross.y, cross.z));
 #if LIGHTMAP != 0
-            // ... cut into as many equal parts as it takes to stay within half the distance
-            // in which the ray crosses one light map node: a sheared map of a flat volume has
+            // ... cut into as many equal parts as it takes to stay within the distance in
+            // which the ray crosses one light map node: a sheared map of a flat volume has
             // node planes a fraction of a voxel apart (docs/lightmap.md).  Equal parts keep
             // the samples where the voxel rule puts them, so a homogeneous path stays exact.
             vec3 nodes = abs(mat3(light_world_to_tex) * dir) * vec3(light_n);
             float fastest = max(nodes.x, max(nodes.y, nodes.z));
-            if (fastest > 0.0 && 0.5 / fastest < step)
-                step /= ceil(step * fastest / 0.5);
+            if (fastest > 0.0 && 1.0 / fastest < step)
+                step /= ceil(step * fastest);
 #endif
         }
         int n = clamp(int(ceil(len / step)), 1, max_steps);
