@@ -11,6 +11,7 @@ check "forward on, with the optical depth" stdout_has "forward        on   (auto
 check "phase on: ice and water" stdout_has "ice and water species both present"
 check "no HMD: no distortion" stdout_has "distortion     off"
 check "light map built once" stdout_has "built once, ever"
+check "the storm's light grid is upright" stdout_has "light grid     upright"
 # Empty: nothing casts a shadow, and what needs shadows says so.
 expect_exit 0 "effects of the empty scene" "$anvil" effects "$src/configs/empty.cfg"
 check "empty: shadows off" stdout_has "shadows        off"
@@ -27,6 +28,7 @@ check "sphere: one phase" stdout_has "phase          off  (auto) auto: no ice"
 check "sphere: lateral escape, all of it narrow" stdout_has "lateral        on   (auto) auto: 99.9 %"
 expect_exit 0 "slab: no narrow cloud" "$anvil" effects "$src/configs/slab.cfg"
 check "slab: lateral escape off" stdout_has "lateral        off  (auto) auto: 0 % of the extinction"
+check "slab: sheared light grid" stdout_has "light grid     sheared: horizontal node planes 16 m apart"
 if [ -f "$data/wrf/katrina_2005_mercator_wsm3.nc" ]; then
     expect_exit 0 "katrina" "$anvil" effects -q "$src/configs/katrina.cfg"
     check "katrina: water phase for all" stdout_has "the water phase for all"
