@@ -102,16 +102,7 @@ int cmd_effects(int argc, char **argv)
     double sun[3];
     light_sun_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
     bool ok = effects_measure_volume(&vol, sun, &cfg.optics.params, &facts);
-    /* How the light map's nodes will lie (docs/lightmap.md, "Sheared grid"). */
-    struct light_grid grid;
-    int res[3];
-    for (int a = 0; a < 3; a++)
-        res[a] = cfg.lightmap.resolution[a] < 2 ? 2 : cfg.lightmap.resolution[a];
-    bool sheared = ok && light_grid_init(&grid, sun, &vol.grid, res,
-                                         cfg.lightmap.grid == 1 ? LIGHT_GRID_UPRIGHT
-                                                                : LIGHT_GRID_AUTO) &&
-                   grid.sheared;
-    double plane_m = sheared ? grid.step[2] * fabs(grid.w[2]) : 0.0;
+    const struct grid3 box = vol.grid;
     ext_volume_finish(&vol);
     if (!ok)
         return EXIT_BAD_INPUT;
@@ -155,12 +146,19 @@ int cmd_effects(int argc, char **argv)
                e.reason[i]);
     }
     printf("  light map      %s\n", e.light_builds);
-    if (sheared)
+    /* How the light map's nodes will lie (docs/lightmap.md, "Sheared grid"). */
+    struct light_settings ls;
+    effects_light_settings(&cfg, &e, &ls);
+    struct light_grid grid;
+    if (!light_grid_init(&grid, sun, &box, ls.resolution, ls.grid))
+        return EXIT_BAD_INPUT;
+    double plane_m = grid.step[2] * fabs(grid.w[2]);
+    if (grid.sheared)
         printf("  light grid     sheared: horizontal node planes %.0f m apart (a flat volume; "
                "lightmap.grid = \"upright\" to stand them across the light)\n",
                plane_m);
     else
         printf("  light grid     upright: node planes across the light%s\n",
-               cfg.lightmap.grid == 1 ? " (lightmap.grid)" : "");
+               ls.grid == LIGHT_GRID_UPRIGHT ? " (lightmap.grid)" : "");
     return EXIT_OK;
 }

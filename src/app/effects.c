@@ -408,7 +408,7 @@ void effects_light_settings(const struct config *cfg, const struct effects *e,
     s->peripheral = e->on[EFFECT_PERIPHERAL];
     s->multiple = e->on[EFFECT_MULTIPLE];
     s->lateral = e->on[EFFECT_LATERAL];
-    s->grid = cfg->lightmap.grid == 1 ? LIGHT_GRID_UPRIGHT : LIGHT_GRID_AUTO;
+    s->grid = (enum light_grid_kind)cfg->lightmap.grid; /* names in enum order */
     s->epsilon = cfg->lightmap.epsilon;
     light_settings_set_optics(s, &cfg->optics.params, cfg->lightmap.forward_angle_deg);
     if (!e->on[EFFECT_PHASE])

@@ -62,6 +62,26 @@ static bool box_valid(const struct grid3 *b)
     return true;
 }
 
+/* Corner C (bits: x, y, z) of BOX, metres. */
+static void box_corner(const struct grid3 *box, int c, double p[3])
+{
+    for (int a = 0; a < 3; a++)
+        p[a] = box->origin[a] + ((c >> a) & 1) * box->n[a] * box->spacing[a];
+}
+
+/* Node spacing from the bounds; false (logged) when an axis has no extent. */
+static bool set_steps(struct light_grid *g)
+{
+    for (int a = 0; a < 3; a++) {
+        g->step[a] = (g->hi[a] - g->lo[a]) / (g->n[a] - 1);
+        if (!(g->step[a] > 0.0)) {
+            log_error("light map: volume box has no extent across the light");
+            return false;
+        }
+    }
+    return true;
+}
+
 /* M^-1 of the 3 x 3 matrix whose columns are A, B, C; false when singular. */
 static bool invert_columns(const double a[3], const double b[3], const double c[3],
                            double inv[3][3])
@@ -103,8 +123,7 @@ static bool sheared_init(struct light_grid *g, const struct grid3 *box)
     }
     for (int c = 0; c < 8; c++) {
         double p[3];
-        for (int a = 0; a < 3; a++)
-            p[a] = box->origin[a] + ((c >> a) & 1) * box->n[a] * box->spacing[a];
+        box_corner(box, c, p);
         double t = (p[2] - first) / g->w[2]; /* p = entry + t w */
         double e[3] = {p[0] - t * g->w[0], p[1] - t * g->w[1], first};
         double du = dot3(g->u, e), dv = dot3(g->v, e);
@@ -115,13 +134,8 @@ static bool sheared_init(struct light_grid *g, const struct grid3 *box)
     }
     g->lo[2] = 0.0;
     g->hi[2] = path;
-    for (int a = 0; a < 3; a++) {
-        g->step[a] = (g->hi[a] - g->lo[a]) / (n[a] - 1);
-        if (!(g->step[a] > 0.0)) {
-            log_error("light map: volume box has no extent across the light");
-            return false;
-        }
-    }
+    if (!set_steps(g))
+        return false;
     double o[3], du[3], dv[3], dw[3];
     for (int a = 0; a < 3; a++) {
         o[a] = g->lo[0] * g->u[a] + g->lo[1] * g->v[a];
@@ -210,21 +224,15 @@ bool light_grid_init(struct light_grid *g, const double sun[3], const struct gri
     }
     for (int c = 0; c < 8; c++) {
         double p[3];
-        for (int a = 0; a < 3; a++)
-            p[a] = box->origin[a] + ((c >> a) & 1) * box->n[a] * box->spacing[a];
+        box_corner(box, c, p);
         for (int a = 0; a < 3; a++) {
             double d = dot3(axes[a], p);
             g->lo[a] = fmin(g->lo[a], d);
             g->hi[a] = fmax(g->hi[a], d);
         }
     }
-    for (int a = 0; a < 3; a++) {
-        g->step[a] = (g->hi[a] - g->lo[a]) / (n[a] - 1);
-        if (!(g->step[a] > 0.0)) {
-            log_error("light map: volume box has no extent across the light");
-            return false;
-        }
-    }
+    if (!set_steps(g))
+        return false;
 
     double origin[3];
     light_grid_node_world(g, 0, 0, 0, origin);

@@ -248,7 +248,8 @@ float light_lateral_escape(float gamma, float rx, float ry)
 
 void light_lateral_rates(const struct ext_volume *vol, float *out)
 {
-    /* One row at a time, as shaders/light_lateral.comp does it. */
+    /* One row at a time, each run's width summed in the order shaders/light_lateral.comp
+     * sums it, so both give the same floats. */
     const int *n = vol->grid.n;
     const size_t plane = (size_t)n[0] * n[1];
     for (int axis = 0; axis < 2; axis++) {

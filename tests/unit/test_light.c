@@ -147,6 +147,37 @@ static void test_sun_direction(void **state)
     assert_float_equal(d[2], 0.5, 1e-12);
 }
 
+/* What every grid must do: nodes map to texel centres, the float32 frame the transport uses
+ * agrees with the double one, and every box corner maps inside the texel-centre range. */
+static void check_grid_mapping(const struct light_grid *g, const struct grid3 *box)
+{
+    const int *n = g->n;
+    for (int t = 0; t < 20; t++) {
+        int i = (int)(rnd() * n[0]), j = (int)(rnd() * n[1]), k = (int)(rnd() * n[2]);
+        double p[3], tex[3];
+        light_grid_node_world(g, i, j, k, p);
+        light_grid_world_to_tex(g, p, tex);
+        assert_float_equal(tex[0], (i + 0.5) / n[0], 2e-6);
+        assert_float_equal(tex[1], (j + 0.5) / n[1], 2e-6);
+        assert_float_equal(tex[2], (k + 0.5) / n[2], 2e-6);
+        for (int a = 0; a < 3; a++) {
+            double pf =
+                g->origin[a] + (double)i * g->du[a] + (double)j * g->dv[a] + (double)k * g->dw[a];
+            assert_float_equal(pf, p[a], 1e-2);
+        }
+    }
+    for (int c = 0; c < 8; c++) {
+        double p[3], tex[3];
+        for (int a = 0; a < 3; a++)
+            p[a] = box->origin[a] + ((c >> a) & 1) * box->n[a] * box->spacing[a];
+        light_grid_world_to_tex(g, p, tex);
+        for (int a = 0; a < 3; a++) {
+            assert_true(tex[a] >= 0.5 / n[a] - 1e-6);
+            assert_true(tex[a] <= 1.0 - 0.5 / n[a] + 1e-6);
+        }
+    }
+}
+
 static void test_grid_frame_and_mapping(void **state)
 {
     struct grid3 box = {
@@ -183,31 +214,7 @@ static void test_grid_frame_and_mapping(void **state)
             assert_true(isfinite(g.lo[a]) && g.step[a] > 0.0);
         }
         /* Nodes map to texel centres; every box corner maps inside the texel-centre range. */
-        for (int t = 0; t < 20; t++) {
-            int i = (int)(rnd() * n[0]), j = (int)(rnd() * n[1]), k = (int)(rnd() * n[2]);
-            double p[3], tex[3];
-            light_grid_node_world(&g, i, j, k, p);
-            light_grid_world_to_tex(&g, p, tex);
-            assert_float_equal(tex[0], (i + 0.5) / n[0], 2e-6);
-            assert_float_equal(tex[1], (j + 0.5) / n[1], 2e-6);
-            assert_float_equal(tex[2], (k + 0.5) / n[2], 2e-6);
-            /* The float32 node position the transport uses agrees with the double one. */
-            for (int a = 0; a < 3; a++) {
-                double pf =
-                    g.origin[a] + (double)i * g.du[a] + (double)j * g.dv[a] + (double)k * g.dw[a];
-                assert_float_equal(pf, p[a], 1e-2);
-            }
-        }
-        for (int c = 0; c < 8; c++) {
-            double p[3], tex[3];
-            for (int a = 0; a < 3; a++)
-                p[a] = box.origin[a] + ((c >> a) & 1) * box.n[a] * box.spacing[a];
-            light_grid_world_to_tex(&g, p, tex);
-            for (int a = 0; a < 3; a++) {
-                assert_true(tex[a] >= 0.5 / n[a] - 1e-6);
-                assert_true(tex[a] <= 1.0 - 0.5 / n[a] + 1e-6);
-            }
-        }
+        check_grid_mapping(&g, &box);
     }
 }
 
@@ -697,30 +704,7 @@ static void test_sheared_grid_frame(void **state)
             assert_float_equal(p[2], z, 1e-6);
             assert_float_equal(q[2], z, 1e-6);
         }
-        for (int r = 0; r < 20; r++) {
-            int i = (int)(rnd() * n[0]), j = (int)(rnd() * n[1]), k = (int)(rnd() * n[2]);
-            double p[3], tex[3];
-            light_grid_node_world(&g, i, j, k, p);
-            light_grid_world_to_tex(&g, p, tex);
-            assert_float_equal(tex[0], (i + 0.5) / n[0], 2e-6);
-            assert_float_equal(tex[1], (j + 0.5) / n[1], 2e-6);
-            assert_float_equal(tex[2], (k + 0.5) / n[2], 2e-6);
-            for (int a = 0; a < 3; a++) {
-                double pf =
-                    g.origin[a] + (double)i * g.du[a] + (double)j * g.dv[a] + (double)k * g.dw[a];
-                assert_float_equal(pf, p[a], 1e-2);
-            }
-        }
-        for (int c = 0; c < 8; c++) {
-            double p[3], tex[3];
-            for (int a = 0; a < 3; a++)
-                p[a] = box.origin[a] + ((c >> a) & 1) * box.n[a] * box.spacing[a];
-            light_grid_world_to_tex(&g, p, tex);
-            for (int a = 0; a < 3; a++) {
-                assert_true(tex[a] >= 0.5 / n[a] - 1e-6);
-                assert_true(tex[a] <= 1.0 - 0.5 / n[a] + 1e-6);
-            }
-        }
+        check_grid_mapping(&g, &box);
         /* Forced upright, the same sun gives the orthonormal frame. */
         assert_true(light_grid_init(&g, suns[t], &box, n, LIGHT_GRID_UPRIGHT));
         assert_false(g.sheared);
