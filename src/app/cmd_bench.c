@@ -46,9 +46,10 @@ static int usage(FILE *out)
             "  views    frame cost of 1, 2, 8 and 12 views sharing one light map against the\n"
             "           same views each rebuilding it\n"
             "  quality  each quality knob swept around the defaults on named scenes: GPU ms per\n"
-            "           light build and per view, error against the Monte Carlo reference\n"
-            "  -o DIR       where views.md, accuracy.csv, accuracy.md and accuracy.png go\n"
-            "               (default docs/bench)\n"
+            "           light build and per view, error against the Monte Carlo reference;\n"
+            "           then a uniform cloud layer seen from 16 directions against Monte Carlo\n"
+            "  -o DIR       where views.md, accuracy.csv, accuracy-table.md, accuracy.png and\n"
+            "               angles-table.md go (default docs/bench)\n"
             "  --cache DIR  Monte Carlo references are kept here (default: bench-cache beside\n"
             "               the anvil binary)\n"
             "  --spp N      reference samples per pixel (default 256, --quick 32; the sphere\n"
@@ -419,8 +420,8 @@ static bool run_scene(const struct bench_options *o, const char *name, struct re
             goto done;
     }
     out->n = n;
-    /* Timings round-robin over the variants: 3 builds and 5 views each (1 and 1 quick). */
-    int rounds = o->quick ? 1 : 5, build_rounds = o->quick ? 1 : 3;
+    /* Timings round-robin over the variants: 5 builds and 5 views each (1 and 1 quick). */
+    int rounds = o->quick ? 1 : 5, build_rounds = rounds;
     for (int k = 0; k < rounds; k++) {
         for (int i = 0; i < n; i++) {
             if (!bench_time_once(r, lg, &sc, k < build_rounds, &out->res[i]))
