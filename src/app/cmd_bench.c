@@ -520,6 +520,18 @@ done:
     return ok;
 }
 
+/* The head of a table with one column per relative azimuth. */
+static void angles_header(FILE *f)
+{
+    fprintf(f, "| elevation |");
+    for (int j = 0; j < N_AZIM; j++)
+        fprintf(f, " azimuth %g |", angle_azimuths[j]);
+    fprintf(f, "\n|---:|");
+    for (int j = 0; j < N_AZIM; j++)
+        fprintf(f, "---:|");
+    fprintf(f, "\n");
+}
+
 static bool run_angles(const struct bench_options *o, const char *device, struct renderer *r,
                        struct light_gpu *lg)
 {
@@ -543,13 +555,7 @@ static bool run_angles(const struct bench_options *o, const char *device, struct
                "Monte Carlo reference's (%d samples per pixel), and the scattering angle "
                "between the sunlight and the light reaching the camera.\n\n",
             device, o->spp);
-    fprintf(f, "| elevation |");
-    for (int j = 0; j < N_AZIM; j++)
-        fprintf(f, " azimuth %g |", angle_azimuths[j]);
-    fprintf(f, "\n|---:|");
-    for (int j = 0; j < N_AZIM; j++)
-        fprintf(f, "---:|");
-    fprintf(f, "\n");
+    angles_header(f);
     for (int i = 0; i < N_ELEV; i++) {
         fprintf(f, "| %g |", angle_elevations[i]);
         for (int j = 0; j < N_AZIM; j++) {
@@ -560,13 +566,8 @@ static bool run_angles(const struct bench_options *o, const char *device, struct
         }
         fprintf(f, "\n");
     }
-    fprintf(f, "\nMonte Carlo means (linear radiance):\n\n| elevation |");
-    for (int j = 0; j < N_AZIM; j++)
-        fprintf(f, " azimuth %g |", angle_azimuths[j]);
-    fprintf(f, "\n|---:|");
-    for (int j = 0; j < N_AZIM; j++)
-        fprintf(f, "---:|");
-    fprintf(f, "\n");
+    fprintf(f, "\nMonte Carlo means (linear radiance):\n\n");
+    angles_header(f);
     for (int i = 0; i < N_ELEV; i++) {
         fprintf(f, "| %g |", angle_elevations[i]);
         for (int j = 0; j < N_AZIM; j++)
