@@ -434,7 +434,7 @@ static bool run_scene(const struct bench_options *o, const char *name, struct re
                  variants[i].knob, variants[i].value, out->res[i].build_ms,
                  out->res[i].view_ms, out->res[i].rmse, out->res[i].rmse_rel);
     }
-    bench_pool_builds(out->res, out->n);
+    bench_pool_timings(out->res, out->n);
     bench_pareto(out->res, out->n);
     ok = true;
 done:
@@ -700,7 +700,9 @@ static bool run_quality(const struct bench_options *o, const char *device, struc
             o->quick ? " --quick" : "");
     fprintf(f, "Device: %s.%s  Reference: %d samples per pixel (64 times that for the sphere), "
                "no sky, no ground.  ms are medians (± 1.48 × the median absolute deviation), "
-               "repeats taken round-robin over the rows.  σ is the reference's own RMS "
+               "repeats taken round-robin over the rows; rows that do the same work (the "
+               "same shaders, grids and ray step: the forward angle is a constant of one "
+               "shader) share their repeats.  σ is the reference's own RMS "
                "standard error per pixel and channel; the model RMSE is sqrt(RMSE² − σ²), the "
                "part of the RMSE the reference's noise does not explain.\n\n", device,
             strstr(device, "llvmpipe") ? "  **A CPU rasteriser: read the milliseconds as "

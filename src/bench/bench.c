@@ -355,7 +355,12 @@ bool bench_render(struct renderer *r, struct light_gpu *lg, const struct bench_s
     return ok;
 }
 
-static bool same_light_map(const struct bench_variant *a, const struct bench_variant *b)
+/* Whether A's and B's light builds do the same work: the same shader variant over the same
+ * grid and storage.  The forward angle and the CP it gives are uniforms of one variant
+ * (whether the two phases' terms are equal is not: it compiles the mix out), so maps that
+ * differ only in them take the same time, and what their timings differ by is the machine's
+ * load. */
+static bool same_build_work(const struct bench_variant *a, const struct bench_variant *b)
 {
     if (a->shadows != b->shadows)
         return false;
@@ -367,25 +372,57 @@ static bool same_light_map(const struct bench_variant *a, const struct bench_var
            memcmp(x->resolution, y->resolution, sizeof(x->resolution)) == 0 &&
            x->forward == y->forward && per_x == per_y && x->multiple == y->multiple &&
            (!x->multiple || x->lateral == y->lateral) && x->grid == y->grid &&
-           x->forward_angle_deg == y->forward_angle_deg && x->substeps == y->substeps &&
-           memcmp(&x->cp, &y->cp, sizeof(x->cp)) == 0 &&
+           x->substeps == y->substeps &&
+           light_settings_phases_equal(x) == light_settings_phases_equal(y) &&
            (a->mode == LIGHT_GPU_DENSE || x->epsilon == y->epsilon);
 }
 
-void bench_pool_builds(struct bench_result *res, int n)
+bool bench_same_work(const struct bench_variant *a, const struct bench_variant *b)
 {
+    return same_build_work(a, b) && a->step_m == b->step_m;
+}
+
+/* Each of RES's medians over the samples of every result that does the same work as it (SAME),
+ * the build's (VIEW false) or the view's. */
+static void pool(struct bench_result *res, int n, bool view,
+                 bool (*same)(const struct bench_variant *, const struct bench_variant *))
+{
+    double *medians = malloc(sizeof(double) * 2 * (size_t)n);
+    if (!medians)
+        return; /* the results keep their own medians */
     for (int i = 0; i < n; i++) {
-        double pool[32 * 32];
+        double samples[32 * REPEATS_MAX];
         int count = 0;
         for (int j = 0; j < n; j++) {
-            if (!same_light_map(&res[i].v, &res[j].v))
+            if (!same(&res[i].v, &res[j].v))
                 continue;
-            for (int k = 0; k < res[j].n_build_samples && count < 32 * 32; k++)
-                pool[count++] = res[j].build_samples[k];
+            int m = view ? res[j].n_view_samples : res[j].n_build_samples;
+            const double *from = view ? res[j].view_samples : res[j].build_samples;
+            for (int k = 0; k < m && count < 32 * REPEATS_MAX; k++)
+                samples[count++] = from[k];
         }
+        medians[2 * i] = view ? res[i].view_ms : res[i].build_ms;
+        medians[2 * i + 1] = view ? res[i].view_spread : res[i].build_spread;
         if (count > 0)
-            res[i].build_ms = median(pool, count, &res[i].build_spread);
+            medians[2 * i] = median(samples, count, &medians[2 * i + 1]);
     }
+    /* Written after every pool is taken, so that no result pools another's pooled median. */
+    for (int i = 0; i < n; i++) {
+        if (view) {
+            res[i].view_ms = medians[2 * i];
+            res[i].view_spread = medians[2 * i + 1];
+        } else {
+            res[i].build_ms = medians[2 * i];
+            res[i].build_spread = medians[2 * i + 1];
+        }
+    }
+    free(medians);
+}
+
+void bench_pool_timings(struct bench_result *res, int n)
+{
+    pool(res, n, false, same_build_work);
+    pool(res, n, true, bench_same_work);
 }
 
 /* The relative timing noise of R: the robust spread of its repeats over its time. */

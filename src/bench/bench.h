@@ -53,8 +53,8 @@ struct bench_variant {
 
 struct bench_result {
     struct bench_variant v;
-    double build_ms, view_ms;         /* medians over the repeats (build: over every result
-                                         with the same light map, bench_pool_builds) */
+    double build_ms, view_ms;         /* medians over the repeats of every result doing the
+                                         same work (bench_pool_timings) */
     double build_samples[32];         /* the build times measured for this result */
     int n_build_samples;
     double view_samples[32];          /* ... and the view times */
@@ -104,10 +104,15 @@ void bench_timings_finish(struct bench_result *out);
 bool bench_render(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
                   const struct bench_variant *v, struct image *out);
 
-/* Results whose light maps are the same (settings and storage) share their build samples:
- * each one's build_ms becomes the median of all of them (a light build does not depend on
- * the eye pass's knobs, so this only removes noise). */
-void bench_pool_builds(struct bench_result *res, int n);
+/* Whether A and B do the same work, build and view: the same light map shader variant, grid
+ * and storage (the forward angle, a uniform, may differ) and the same ray step. */
+bool bench_same_work(const struct bench_variant *a, const struct bench_variant *b);
+
+/* Results that do the same work share their timings, so that the machine's load does not
+ * decide between them: each one's build_ms (and spread) becomes the median of the build
+ * samples of every result whose build does the same work (a build does not depend on the eye
+ * pass's knobs), its view_ms that of the view samples of every result with bench_same_work. */
+void bench_pool_timings(struct bench_result *res, int n);
 
 /* Marks the results (N of one scene) that no other result beats: another result beats one
  * when it is no worse in both milliseconds (build + view) and error, and better in one, by

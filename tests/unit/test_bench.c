@@ -1,0 +1,181 @@
+/* The quality benchmark's verdicts (bench/bench.h): which settings do the same work, how
+ * their timings are pooled, and when one setting beats another on the Pareto front. */
+#include <math.h>
+#include <string.h>
+
+#include "testutil.h"
+
+#include "bench/bench.h"
+#include "common/log.h"
+
+/* A dense 64^3 map with forward, peripheral and multiple scattering, the default ray step,
+ * and two phases whose forward-scattering terms differ (the mix is compiled in). */
+static struct bench_variant variant(double theta)
+{
+    struct bench_variant v;
+    memset(&v, 0, sizeof(v));
+    v.shadows = true;
+    v.mode = LIGHT_GPU_DENSE;
+    light_settings_defaults(&v.light);
+    for (int a = 0; a < 3; a++)
+        v.light.resolution[a] = 64;
+    v.light.forward_angle_deg = theta;
+    v.light.cp.water_ctr = 0.01 * theta;
+    v.light.cp.water_per = 0.005 * theta;
+    v.light.cp.ice_ctr = 0.008 * theta;
+    v.light.cp.ice_per = 0.004 * theta;
+    v.light.multiple = true;
+    return v;
+}
+
+static struct bench_result result(struct bench_variant v, const double *build, int n_build,
+                                  const double *view, int n_view)
+{
+    struct bench_result r;
+    memset(&r, 0, sizeof(r));
+    r.v = v;
+    memcpy(r.build_samples, build, sizeof(double) * (size_t)n_build);
+    r.n_build_samples = n_build;
+    memcpy(r.view_samples, view, sizeof(double) * (size_t)n_view);
+    r.n_view_samples = n_view;
+    bench_timings_finish(&r);
+    return r;
+}
+
+static void test_same_work(void **state)
+{
+    (void)state;
+    struct bench_variant a = variant(20.0), b = variant(30.0);
+    /* The forward angle only changes constants of one shader. */
+    assert_true(bench_same_work(&a, &b));
+    assert_true(bench_same_work(&b, &a));
+
+    struct bench_variant c = b;
+    c.step_m = 100.0f; /* another ray step: another eye pass */
+    assert_false(bench_same_work(&a, &c));
+    c = b;
+    c.light.resolution[2] = 128;
+    assert_false(bench_same_work(&a, &c));
+    c = b;
+    c.light.peripheral = false; /* compiled out */
+    assert_false(bench_same_work(&a, &c));
+    c = b;
+    c.mode = LIGHT_GPU_COMPRESSED;
+    assert_false(bench_same_work(&a, &c));
+    c = b;
+    c.light.multiple = false;
+    assert_false(bench_same_work(&a, &c));
+    /* One phase for both species compiles the mix out: not the same shader. */
+    c = b;
+    c.light.cp.ice_ctr = c.light.cp.water_ctr;
+    c.light.cp.ice_per = c.light.cp.water_per;
+    assert_true(light_settings_phases_equal(&c.light));
+    assert_false(bench_same_work(&a, &c));
+    /* Without a light map nothing of the map matters. */
+    a.shadows = c.shadows = false;
+    assert_true(bench_same_work(&a, &c));
+}
+
+static void test_pool_timings(void **state)
+{
+    (void)state;
+    const double slow[] = {80.0, 90.0, 100.0}, fast[] = {60.0, 62.0, 64.0};
+    const double other[] = {50.0, 52.0, 54.0};
+    const double view_a[] = {10.0, 11.0, 12.0}, view_b[] = {7.0, 8.0, 9.0};
+    struct bench_variant per_off = variant(20.0), fine = variant(20.0);
+    per_off.light.peripheral = false;
+    fine.step_m = 50.0f;
+    struct bench_result res[4] = {
+        result(variant(20.0), slow, 3, view_a, 3), /* the default, under load */
+        result(variant(30.0), fast, 3, view_b, 3), /* the same work, a quiet moment */
+        result(per_off, other, 3, view_b, 3),      /* less work */
+        result(fine, fast, 3, view_a, 3),          /* the default's map, a finer eye pass */
+    };
+    assert_true(fabs(res[0].build_ms - 90.0) <= 1e-12);
+    assert_true(fabs(res[1].build_ms - 62.0) <= 1e-12);
+    bench_pool_timings(res, 4);
+    /* The default, theta 30 and the finer eye pass build the same map: all nine samples,
+     * sorted 60 60 62 62 64 64 80 90 100, median 64. */
+    assert_true(fabs(res[0].build_ms - 64.0) <= 1e-12);
+    assert_true(fabs(res[1].build_ms - 64.0) <= 1e-12);
+    assert_true(fabs(res[3].build_ms - 64.0) <= 1e-12);
+    assert_true(res[0].build_spread > 0.0);
+    /* Their views: the default and theta 30 pool (7 8 9 10 11 12, median 9.5); the finer
+     * step keeps its own, and so does the map without its peripheral ring. */
+    assert_true(fabs(res[0].view_ms - 9.5) <= 1e-12);
+    assert_true(fabs(res[1].view_ms - 9.5) <= 1e-12);
+    assert_true(fabs(res[3].view_ms - 11.0) <= 1e-12);
+    assert_true(fabs(res[2].build_ms - 52.0) <= 1e-12);
+    assert_true(fabs(res[2].view_ms - 8.0) <= 1e-12);
+    /* The samples themselves are left as measured. */
+    assert_true(res[0].build_samples[0] == 80.0 && res[1].build_samples[0] == 60.0);
+}
+
+static struct bench_result timed(double ms, double spread, double err)
+{
+    struct bench_result r;
+    memset(&r, 0, sizeof(r));
+    r.build_ms = ms;
+    r.build_spread = spread;
+    r.rmse_model = err;
+    r.self_rmse = 2.0 * err;
+    return r;
+}
+
+static void test_beats_beyond_noise(void **state)
+{
+    (void)state;
+    struct bench_result a = timed(100.0, 0.0, 1.0);
+    /* Faster by more than the 10 % floor, no worse: beats. */
+    struct bench_result b = timed(85.0, 0.0, 1.0);
+    assert_true(bench_beats(&b, &a, false));
+    assert_true(bench_beats(&b, &a, true));
+    assert_false(bench_beats(&a, &b, false));
+    /* Within the floor: a tie. */
+    b = timed(95.0, 0.0, 1.0);
+    assert_false(bench_beats(&b, &a, false));
+    assert_true(bench_no_worse(&b, &a, false));
+    /* The repeats' spread widens the margin: 15 % faster, but a spread of 20 %. */
+    b = timed(85.0, 17.0, 1.0);
+    assert_false(bench_beats(&b, &a, false));
+    /* Better error beyond 1 % at the same time: beats; within 1 %: a tie. */
+    b = timed(100.0, 0.0, 0.98);
+    assert_true(bench_beats(&b, &a, false));
+    b = timed(100.0, 0.0, 0.995);
+    assert_false(bench_beats(&b, &a, false));
+    /* Faster but worse: neither beats the other. */
+    b = timed(50.0, 0.0, 1.2);
+    assert_false(bench_beats(&b, &a, false));
+    assert_false(bench_beats(&a, &b, false));
+}
+
+static void test_pareto(void **state)
+{
+    (void)state;
+    struct bench_result res[4] = {
+        timed(100.0, 0.0, 1.0), /* beaten by the next */
+        timed(80.0, 0.0, 0.9),
+        timed(40.0, 0.0, 2.0),  /* fastest */
+        timed(400.0, 0.0, 0.5), /* most accurate */
+    };
+    bench_pareto(res, 4);
+    assert_false(res[0].pareto);
+    assert_true(res[1].pareto && res[2].pareto && res[3].pareto);
+    /* Pooled equal timings leave a tie to the error: 0.995 is within its noise. */
+    res[0] = timed(80.0, 0.0, 0.995);
+    res[1] = timed(80.0, 0.0, 1.0);
+    bench_pareto(res, 2);
+    assert_true(res[0].pareto && res[1].pareto);
+}
+
+int main(void)
+{
+    log_set_level(LOG_WARN);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_same_work),
+        cmocka_unit_test(test_pool_timings),
+        cmocka_unit_test(test_beats_beyond_noise),
+        cmocka_unit_test(test_pareto),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
