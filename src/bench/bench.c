@@ -50,10 +50,16 @@ int bench_variants(const struct bench_scene *sc, bool quick, struct bench_varian
     } while (0)
 
     ADD(snprintf(v->knob, sizeof(v->knob), "default"); v->is_default = true;
-        snprintf(v->value, sizeof(v->value), "%d^3 %s, step %.2g voxel, theta %.0f",
+        char step[32];
+        /* Step 0 is not a length: half of what each ray takes to cross a voxel (and one
+         * light map node), longer than half the smallest spacing for oblique rays. */
+        if (sc->settings.step_m > 0)
+            snprintf(step, sizeof(step), "step %.2g voxel", sc->settings.step_m / voxel);
+        else
+            snprintf(step, sizeof(step), "step 1/2 crossing");
+        snprintf(v->value, sizeof(v->value), "%d^3 %s, %s, theta %.0f",
                  sc->light.resolution[0], sc->mode == LIGHT_GPU_DENSE ? "dense" : "compressed",
-                 (sc->settings.step_m > 0 ? sc->settings.step_m : 0.5f * voxel) / voxel,
-                 sc->light.forward_angle_deg));
+                 step, sc->light.forward_angle_deg));
     static const float steps[] = {0.25f, 1.0f, 2.0f};
     for (int i = 0; i < 3; i++)
         ADD(snprintf(v->knob, sizeof(v->knob), "ray step");
