@@ -55,6 +55,16 @@ check "table records the device" grep -q "Device: " "$tmp/b/accuracy-table.md"
 # The sphere's reference gets 64 times the base samples (32 with --quick).
 check "reference cached" test -n "$(ls "$tmp/cache"/ref-sphere-2048-*.pfm 2>/dev/null)"
 check "table says the model RMSE" grep -q "model RMSE" "$tmp/b/accuracy-table.md"
+# The forward angle is a constant of the default's shaders: its rows do the same work and
+# take the default's pooled timings (build and view ms), so load cannot decide between them.
+times() { grep "^| $1 |" "$tmp/b/accuracy-table.md" | awk -F'|' '{ print $4 "|" $5 }'; }
+default_times=$(times '\*\*default\*\*')
+check "default row has timings" test -n "$default_times"
+check "three forward angle rows" test "$(times 'forward angle' | wc -l)" -eq 3
+for t in $(times 'forward angle' | tr -d ' '); do
+    check "forward angle row shares the default's timings ($t)" \
+        test "$t" = "$(echo "$default_times" | tr -d ' ')"
+done
 # The layer seen from four elevations and four azimuths: two tables of four rows.  Seen from
 # nearly overhead the diffuse light comes out within 25 % of Monte Carlo from every azimuth
 # (measured 1.01 - 1.06); the grazing views are where the model is known to be off.
