@@ -388,14 +388,11 @@ bool bench_same_work(const struct bench_variant *a, const struct bench_variant *
     return same_build_work(a, b) && a->step_m == b->step_m;
 }
 
-/* Each of RES's medians over the samples of every result that does the same work as it (SAME),
- * the build's (VIEW false) or the view's. */
+/* Each of RES's build (VIEW false) or view medians over the samples of every result that does
+ * the same work as it (SAME).  Only the samples are read, so each result is set in turn. */
 static void pool(struct bench_result *res, int n, bool view,
                  bool (*same)(const struct bench_variant *, const struct bench_variant *))
 {
-    double *medians = malloc(sizeof(double) * 2 * (size_t)n);
-    if (!medians)
-        return; /* the results keep their own medians */
     for (int i = 0; i < n; i++) {
         double samples[32 * REPEATS_MAX];
         int count = 0;
@@ -407,22 +404,13 @@ static void pool(struct bench_result *res, int n, bool view,
             for (int k = 0; k < m && count < 32 * REPEATS_MAX; k++)
                 samples[count++] = from[k];
         }
-        medians[2 * i] = view ? res[i].view_ms : res[i].build_ms;
-        medians[2 * i + 1] = view ? res[i].view_spread : res[i].build_spread;
-        if (count > 0)
-            medians[2 * i] = median(samples, count, &medians[2 * i + 1]);
+        if (count == 0)
+            continue;
+        if (view)
+            res[i].view_ms = median(samples, count, &res[i].view_spread);
+        else
+            res[i].build_ms = median(samples, count, &res[i].build_spread);
     }
-    /* Written after every pool is taken, so that no result pools another's pooled median. */
-    for (int i = 0; i < n; i++) {
-        if (view) {
-            res[i].view_ms = medians[2 * i];
-            res[i].view_spread = medians[2 * i + 1];
-        } else {
-            res[i].build_ms = medians[2 * i];
-            res[i].build_spread = medians[2 * i + 1];
-        }
-    }
-    free(medians);
 }
 
 void bench_pool_timings(struct bench_result *res, int n)
