@@ -1,6 +1,9 @@
 // Eye pass: one invocation per pixel marches the view ray front to back through the
 // extinction volume and adds the sunlight single-scattered toward the eye (Nes eq. 5.18):
 //   L = T(0,e) L_bg + sum_s T(0,s) (1 - T_s) P_v(psi) L_l(s)
+// with L_l(s) read where the step's light is scattered on average (scattering_depth), not at
+// the step's middle, and without MULTIPLE (1 - T_s) L_l(s) the exact integral over the step of
+// a beam exponential between the step's ends (beam_step).
 // Variants (#define): LIGHTMAP 0 = unshadowed sunlight; 1 = dense light volume;
 // 2 = compressed deep light map.  GROUND_SHADOW 1 = the ground reads the light map too.
 // OPAQUE 1 = opaque geometry was drawn first (render/opaque.c): rays stop at its distance and
@@ -66,6 +69,35 @@ vec2 eye_phase(float cos_psi)
     return texture(phase_tex, u).rg;
 }
 
+// The share of the light entering a step of optical depth TAU that the step scatters out of
+// a beam falling exponentially from NEAR at its near end to FAR at its far end (both floored
+// at 1e-30): integral_0^tau e^-t NEAR e^-(kappa t / tau) dt with kappa = ln(NEAR / FAR)
+// = tau (NEAR - FAR e^-tau) / (tau + kappa).  A constant beam gives
+// NEAR (1 - e^-tau), the midpoint rule's value; no exponential overflows.
+float beam_step(float near, float far, float tau)
+{
+    float a = max(near, 1e-30), b = max(far, 1e-30);
+    float kappa = log(a / b); // within +-69
+    tau = min(tau, 1e30);
+    float z = tau + kappa;
+    if (abs(z) < 1e-4)
+        return a * tau * (1.0 - 0.5 * z);
+    return tau * (a - b * exp(-tau)) / z;
+}
+
+// Where in a step of optical depth TAU its scattering happens on average, as a fraction of the
+// step: the mean of t e^-t over [0, tau], 1/2 for a thin step, 1/tau for a thick one.
+float scattering_depth(float tau)
+{
+    tau = min(tau, 1e30);
+    if (tau < 1e-3)
+        return 0.5 - tau / 12.0;
+    if (tau > 40.0)
+        return 1.0 / tau;
+    float e = exp(-tau);
+    return 1.0 / tau - e / (1.0 - e);
+}
+
 void main()
 {
     ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
@@ -118,6 +150,13 @@ void main()
         }
         int n = clamp(int(ceil(len / step)), 1, max_steps);
         float ds = len / float(n);
+        // Two light map reads a step in cloud, placed for a step of any optical depth
+        // (docs/architecture.md, "The eye pass"): at the top of a thick cloud a step can hold
+        // tens of optical depths, and a read at its middle would find the light deep below
+        // where all of that step's light is scattered.  With the diffuse light (MULTIPLE) the
+        // beam and the diffuse light are read where the step's scattering happens on average
+        // (scattering_depth); without it the beam is read at the step's two ends and
+        // integrated exactly as an exponential between them (beam_step).
         for (int i = 0; i < n; i++) {
             vec3 p = origin + dir * (t0 + (float(i) + 0.5) * ds);
             vec2 b = texture(beta_tex, (p - box_min) / box_size).rg;
@@ -132,7 +171,8 @@ void main()
             float beta = b.r + b.g;
             if (beta <= 0.0)
                 continue;
-            float ts = transmittance(beta * ds);
+            float tau = beta * ds;
+            float ts = transmittance(tau);
 #if PHASE_MIX
             float pv = (b.r * phase.r + b.g * phase.g) / beta; // Nes eq. 5.12
 #elif PHASE_ICE
@@ -140,18 +180,23 @@ void main()
 #else
             float pv = phase.g;
 #endif
-            float beam = lightmap_light(p);
-            float light = pv * beam;
 #if MULTIPLE
+            vec3 q = origin + dir * (t0 + (float(i) + scattering_depth(tau)) * ds);
+            float beam = lightmap_light(q);
             float g = (b.r * mean_cosine.x + b.g * mean_cosine.y) / beta;
-            light += diffuse_scattered(lightmap_diffuse(p), g,
-                                       diffuse_mu_eye(dir, sun_dir, beam, g));
+            float diffuse = diffuse_scattered(lightmap_diffuse(q), g,
+                                              diffuse_mu_eye(dir, sun_dir, beam, g));
+            float light = (1.0 - ts) * (pv * beam + diffuse);
+#else
+            float light = pv * beam_step(lightmap_light(origin + dir * (t0 + float(i) * ds)),
+                                         lightmap_light(origin + dir * (t0 + float(i + 1) * ds)),
+                                         tau);
 #endif
 #if TINT
             vec3 tint = texture(tint_tex, (p - box_min) / box_size).rgb;
-            radiance += trans * (1.0 - ts) * light * sun_radiance * tint;
+            radiance += trans * light * sun_radiance * tint;
 #else
-            radiance += trans * (1.0 - ts) * light * sun_radiance;
+            radiance += trans * light * sun_radiance;
 #endif
             trans *= ts;
             if (trans < termination) {

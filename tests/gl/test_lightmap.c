@@ -489,6 +489,66 @@ static void test_multiple_scattering_layer_matches_reference(void **state)
     }
 }
 
+/* Centre pixel (channel 0) of a 10 x 10 x 1 km slab of optical depth 20 seen straight down,
+ * lit at ELEVATION, at ray step STEP_M, with the light map's beam alone (forward and multiple
+ * scattering off) or with SHADOWS "off" (every point sees the full sun). */
+static double slab_nadir(double elevation, double step_m, const char *shadows)
+{
+    char sun[48], step[48], shadow[48];
+    snprintf(sun, sizeof(sun), "light.elevation=%g", elevation);
+    snprintf(step, sizeof(step), "render.step=%g", step_m);
+    snprintf(shadow, sizeof(shadow), "effects.shadows=%s", shadows);
+    struct config cfg;
+    struct ext_volume vol = {0};
+    const char *sets[] = {"scene.kind=slab", "scene.size=[16,16,16]", "scene.extent=[10,10,1]",
+                          "scene.tau=20", "scene.phase=water", sun, step, shadow,
+                          "effects.forward=off", "effects.multiple=off",
+                          "camera.position=[5,5,3]", "camera.target=[5,5,0]",
+                          "camera.up=[0,1,0]", "camera.fov=2", "render.width=8",
+                          "render.height=8", "render.sky=[0,0,0]", "render.ground_on=false",
+                          "lightmap.resolution=[16,16,128]"};
+    test_config_from(&cfg, sets, 19);
+    test_upload_scene(renderer, &cfg, &vol);
+    struct app_light al;
+    struct image img;
+    assert_true(app_light_init(&al, &cfg));
+    render(&cfg, &al, NULL, NULL, &img);
+    double v = img.rgba[4 * (4 * 8 + 4)];
+    assert_true(isfinite(v) && v > 0.0);
+    image_finish(&img);
+    app_light_finish(&al);
+    ext_volume_finish(&vol);
+    return v;
+}
+
+static void test_single_scattering_exact_at_thick_steps(void **state)
+{
+    /* Looking straight down into a uniform slab lit at elevation e, the light scattered once
+     * toward the eye from optical depth t (along the vertical) is P e^-t e^-t/mu0 per unit t,
+     * mu0 = sin e, so the picture is P (1 - e^-tau (1 + 1/mu0)) / (1 + 1/mu0) against the
+     * unshadowed P (1 - e^-tau): their ratio is mu0 / (1 + mu0) for a thick slab, whatever
+     * the phase.  Steps of 0.25, 2 and 5 optical depths (extinction 0.02 per metre): a
+     * sample of the beam at each step's middle reads the sun overhead at 0.35 instead of 0.5
+     * at 2 optical depths a step (measured) and about 0.16 at 5; the eye pass integrates the
+     * beam exactly between the step's ends, so only the light map's linear interpolation between
+     * its nodes is left (128 planes through the slab: 0.16 optical depths apart along the
+     * vertical, 0.31 along the light at 30 degrees, where it adds 0.8 %). */
+    const double elevations[] = {90.0, 30.0};
+    const double steps[] = {12.5, 100.0, 250.0};
+    for (int e = 0; e < 2; e++) {
+        double mu0 = sin(elevations[e] * M_PI / 180.0);
+        double expect = mu0 / (1.0 + mu0);
+        for (int k = 0; k < 3; k++) {
+            double lit = slab_nadir(elevations[e], steps[k], "on");
+            double bare = slab_nadir(elevations[e], steps[k], "off");
+            print_message("slab, sun at %g degrees, step %g m (%g optical depths): shadowed / "
+                          "unshadowed %.4f, exact %.4f\n", elevations[e], steps[k],
+                          0.02 * steps[k], lit / bare, expect);
+            assert_true(fabs(lit / bare / expect - 1.0) < 0.02);
+        }
+    }
+}
+
 static double ground_under(const char *mode, double x_km, double y_km)
 {
     struct config cfg;
@@ -556,6 +616,7 @@ int main(void)
         cmocka_unit_test(test_multiple_scattering_brightens_shadow),
         cmocka_unit_test(test_cloud_shadows_the_ground),
         cmocka_unit_test(test_multiple_scattering_layer_matches_reference),
+        cmocka_unit_test(test_single_scattering_exact_at_thick_steps),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     renderer_destroy(renderer);
