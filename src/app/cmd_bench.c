@@ -47,7 +47,8 @@ static int usage(FILE *out)
             "           same views each rebuilding it\n"
             "  quality  each quality knob swept around the defaults on named scenes: GPU ms per\n"
             "           light build and per view, error against the Monte Carlo reference;\n"
-            "           then a uniform cloud layer seen from 16 directions against Monte Carlo\n"
+            "           then a uniform cloud layer seen from 16 directions and a uniform\n"
+            "           wall under 4 suns against Monte Carlo\n"
             "  -o DIR       where views.md, accuracy.csv, accuracy-table.md, accuracy.png and\n"
             "               angles-table.md go (default docs/bench)\n"
             "  --cache DIR  Monte Carlo references are kept here (default: bench-cache beside\n"
@@ -461,32 +462,20 @@ struct angle_result {
     double scattering_deg;       /* between the sunlight and the light heading to the camera */
 };
 
-static bool run_angle(const struct bench_options *o, struct renderer *r, struct light_gpu *lg,
-                      double elevation, double rel_azimuth, struct angle_result *out)
+/* The means of scene NAME (the config overrides SETS) at the default settings and of its
+ * Monte Carlo reference, W x H pixels, into OUT (its scattering_deg is left alone). */
+static bool scene_means(const struct bench_options *o, struct renderer *r, struct light_gpu *lg,
+                        const char *name, char **sets, int n_sets, int w, int h,
+                        struct angle_result *out)
 {
-    const double sun_az = 120.0, sun_el = 40.0, dist_km = 300.0;
-    const double target[3] = {240.0, 240.0, 1.0};
-    double d[3], sun[3];
-    camera_direction(sun_az + rel_azimuth, elevation, d);
-    camera_direction(sun_az, sun_el, sun);
-    char sun_set[2][48], cam_set[80];
-    snprintf(sun_set[0], sizeof(sun_set[0]), "light.azimuth=%g", sun_az);
-    snprintf(sun_set[1], sizeof(sun_set[1]), "light.elevation=%g", sun_el);
-    snprintf(cam_set, sizeof(cam_set), "camera.position=[%.4f,%.4f,%.4f]",
-             target[0] + dist_km * d[0], target[1] + dist_km * d[1], target[2] + dist_km * d[2]);
-    char *sets[] = {"scene.kind=slab", "scene.size=[64,64,16]", "scene.extent=[480,480,2]",
-                    "scene.tau=20", "scene.phase=water", sun_set[0], sun_set[1], cam_set,
-                    "camera.target=[240,240,1]", "camera.fov=8", "camera.far=5000",
-                    "render.sky=[0,0,0]", "render.ground_on=false"};
     struct config cfg;
-    if (!app_load_config(NULL, sets, (int)(sizeof(sets) / sizeof(sets[0])), &cfg))
+    if (!app_load_config(NULL, sets, n_sets, &cfg))
         return false;
-    int w = o->quick ? 16 : 32, h = o->quick ? 12 : 24;
     struct ext_volume vol = {0};
     struct bench_scene sc;
     struct image ref = {0}, err = {0}, img = {0};
     bool ok = false;
-    if (!scene_prepare("layer", &cfg, w, h, &vol, &sc))
+    if (!scene_prepare(name, &cfg, w, h, &vol, &sc))
         goto done;
     if (!bench_reference(&sc, o->spp, o->cache, &ref, &err, NULL))
         goto done;
@@ -506,11 +495,6 @@ static bool run_angle(const struct bench_options *o, struct renderer *r, struct 
     out->model = a / n;
     out->traced = b / n;
     out->sigma = sqrt(var) / n;
-    /* Sunlight travels along -sun; the light reaching the camera travels along +d. */
-    double c = -(sun[0] * d[0] + sun[1] * d[1] + sun[2] * d[2]);
-    out->scattering_deg = acos(fmax(-1.0, fmin(1.0, c))) * (180.0 / 3.14159265358979323846);
-    log_info("bench: layer seen from elevation %g, azimuth %g from the sun: %.4g against "
-             "%.4g +- %.2g", elevation, rel_azimuth, out->model, out->traced, out->sigma);
     ok = true;
 done:
     image_finish(&ref);
@@ -518,6 +502,61 @@ done:
     image_finish(&img);
     ext_volume_finish(&vol);
     return ok;
+}
+
+static bool run_angle(const struct bench_options *o, struct renderer *r, struct light_gpu *lg,
+                      double elevation, double rel_azimuth, struct angle_result *out)
+{
+    const double sun_az = 120.0, sun_el = 40.0, dist_km = 300.0;
+    const double target[3] = {240.0, 240.0, 1.0};
+    double d[3], sun[3];
+    camera_direction(sun_az + rel_azimuth, elevation, d);
+    camera_direction(sun_az, sun_el, sun);
+    char sun_set[2][48], cam_set[80];
+    snprintf(sun_set[0], sizeof(sun_set[0]), "light.azimuth=%g", sun_az);
+    snprintf(sun_set[1], sizeof(sun_set[1]), "light.elevation=%g", sun_el);
+    snprintf(cam_set, sizeof(cam_set), "camera.position=[%.4f,%.4f,%.4f]",
+             target[0] + dist_km * d[0], target[1] + dist_km * d[1], target[2] + dist_km * d[2]);
+    char *sets[] = {"scene.kind=slab", "scene.size=[64,64,16]", "scene.extent=[480,480,2]",
+                    "scene.tau=20", "scene.phase=water", sun_set[0], sun_set[1], cam_set,
+                    "camera.target=[240,240,1]", "camera.fov=8", "camera.far=5000",
+                    "render.sky=[0,0,0]", "render.ground_on=false"};
+    int w = o->quick ? 16 : 32, h = o->quick ? 12 : 24;
+    if (!scene_means(o, r, lg, "layer", sets, (int)(sizeof(sets) / sizeof(sets[0])), w, h, out))
+        return false;
+    /* Sunlight travels along -sun; the light reaching the camera travels along +d. */
+    double c = -(sun[0] * d[0] + sun[1] * d[1] + sun[2] * d[2]);
+    out->scattering_deg = acos(fmax(-1.0, fmin(1.0, c))) * (180.0 / 3.14159265358979323846);
+    log_info("bench: layer seen from elevation %g, azimuth %g from the sun: %.4g against "
+             "%.4g +- %.2g", elevation, rel_azimuth, out->model, out->traced, out->sigma);
+    return true;
+}
+
+/* A uniform wall: a box 2 km thick, 60 km long and 10 km high of water cloud (optical depth
+ * 20 across), its long face toward the sun's azimuth, seen square-on from 50 km at 10 degrees
+ * of elevation with the sun behind the camera, at each sun elevation.  Every light column is
+ * solved as a layer lit at the sun's elevation (docs/lightmap.md), which is a deck's slant and
+ * not a wall's: the table shows what that costs a tower's sunlit side (docs/accuracy.md). */
+static const double wall_elevations[] = {10.0, 20.0, 45.0, 70.0};
+#define N_WALL (int)(sizeof(wall_elevations) / sizeof(wall_elevations[0]))
+
+static bool run_wall(const struct bench_options *o, struct renderer *r, struct light_gpu *lg,
+                     double sun_el, struct angle_result *out)
+{
+    char sun_set[48];
+    snprintf(sun_set, sizeof(sun_set), "light.elevation=%g", sun_el);
+    char *sets[] = {"scene.kind=slab", o->quick ? "scene.size=[8,32,32]" : "scene.size=[16,64,64]",
+                    "scene.extent=[2,60,10]", "scene.tau=100", "scene.phase=water",
+                    "light.azimuth=270", sun_set, "camera.position=[-50,30,13.8164]",
+                    "camera.target=[0,30,5]", "camera.fov=8", "camera.far=5000",
+                    "render.sky=[0,0,0]", "render.ground_on=false"};
+    int w = o->quick ? 16 : 32, h = o->quick ? 12 : 24;
+    if (!scene_means(o, r, lg, "wall", sets, (int)(sizeof(sets) / sizeof(sets[0])), w, h, out))
+        return false;
+    out->scattering_deg = 0.0;
+    log_info("bench: wall under a sun at elevation %g: %.4g against %.4g +- %.2g", sun_el,
+             out->model, out->traced, out->sigma);
+    return true;
 }
 
 /* The head of a table with one column per relative azimuth. */
@@ -573,6 +612,28 @@ static bool run_angles(const struct bench_options *o, const char *device, struct
         for (int j = 0; j < N_AZIM; j++)
             fprintf(f, " %.3g ± %.2g |", res[i][j].traced, res[i][j].sigma);
         fprintf(f, "\n");
+    }
+    struct angle_result wall[N_WALL];
+    for (int i = 0; i < N_WALL; i++) {
+        if (!run_wall(o, r, lg, wall_elevations[i], &wall[i])) {
+            fclose(f);
+            free(buf);
+            return false;
+        }
+    }
+    fprintf(f, "\nA uniform wall of the same cloud: a box 2 km thick, 60 km long and 10 km high "
+               "(optical depth 20 across), its long face toward the sun's azimuth, seen "
+               "square-on from 50 km at 10 degrees of elevation with the sun behind the camera, "
+               "under each sun elevation (rows).  Every light column is a layer lit at the "
+               "sun's elevation, a deck's slant and not this face's.\n\n");
+    fprintf(f, "| sun elevation | picture over Monte Carlo | Monte Carlo mean |\n"
+               "|---:|---:|---:|\n");
+    for (int i = 0; i < N_WALL; i++) {
+        const struct angle_result *a = &wall[i];
+        double ratio = a->traced > 0.0 ? a->model / a->traced : 0.0;
+        double rel = a->traced > 0.0 ? a->sigma / a->traced : 0.0;
+        fprintf(f, "| %g | %.2f ± %.2f | %.3g ± %.2g |\n", wall_elevations[i], ratio,
+                ratio * rel, a->traced, a->sigma);
     }
     fclose(f);
     bool ok = write_text(o->out, "angles-table.md", buf, len);
