@@ -419,11 +419,14 @@ void bench_pool_timings(struct bench_result *res, int n)
     pool(res, n, true, bench_same_work);
 }
 
-/* The relative timing noise of R: the robust spread of its repeats over its time. */
-static double time_noise(const struct bench_result *r)
+/* The relative timing noise of R against another result: the robust spread of its repeats
+ * over its time, leaving out a build (BUILD_SHARED) or a view (VIEW_SHARED) whose pooled
+ * median the two share, which cannot make one look faster than the other. */
+static double time_noise(const struct bench_result *r, bool build_shared, bool view_shared)
 {
     double t = r->build_ms + r->view_ms;
-    return t > 0.0 ? (r->build_spread + r->view_spread) / t : 0.0;
+    double s = (build_shared ? 0.0 : r->build_spread) + (view_shared ? 0.0 : r->view_spread);
+    return t > 0.0 ? s / t : 0.0;
 }
 
 double bench_error(const struct bench_result *r, bool self)
@@ -431,10 +434,14 @@ double bench_error(const struct bench_result *r, bool self)
     return self ? r->self_rmse : r->rmse_model;
 }
 
-/* Time noise of a comparison: the larger of the floor and what either's repeats scattered. */
+/* Time noise of a comparison: the larger of the floor and what either's repeats scattered in
+ * the parts the two do not share (bench_pool_timings gives rows that do the same work one
+ * median). */
 static double pair_time_noise(const struct bench_result *a, const struct bench_result *b)
 {
-    return fmax(BENCH_TIME_NOISE, fmax(time_noise(a), time_noise(b)));
+    bool build = same_build_work(&a->v, &b->v), view = bench_same_work(&a->v, &b->v);
+    return fmax(BENCH_TIME_NOISE,
+                fmax(time_noise(a, build, view), time_noise(b, build, view)));
 }
 
 bool bench_no_worse(const struct bench_result *b, const struct bench_result *a, bool self)

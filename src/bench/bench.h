@@ -123,7 +123,9 @@ void bench_pool_timings(struct bench_result *res, int n);
 
 /* Whether B beats A: no slower and no worse beyond the noise, and faster or better beyond
  * it.  The time noise is the larger of BENCH_TIME_NOISE and the relative spread of either's
- * repeats (a shared machine scatters far more than a quiet GPU). */
+ * repeats (a shared machine scatters far more than a quiet GPU), counting only the build or
+ * view that the two do not share: rows that do the same work carry one pooled median
+ * (bench_pool_timings), whose scatter is common to both. */
 bool bench_beats(const struct bench_result *b, const struct bench_result *a, bool self);
 /* The same with "no slower and no worse" only (ties allowed): a setting that dominates on
  * every scene must tie or win on each and win on one. */

@@ -111,10 +111,14 @@ static void test_pool_timings(void **state)
     assert_true(res[0].build_samples[0] == 80.0 && res[1].build_samples[0] == 60.0);
 }
 
+/* A result of MS milliseconds (all of it the build, scattering by SPREAD) and error ERR; results
+ * of different times build different maps, so none shares another's timings. */
 static struct bench_result timed(double ms, double spread, double err)
 {
     struct bench_result r;
     memset(&r, 0, sizeof(r));
+    r.v = variant(20.0);
+    r.v.light.resolution[2] = 16 + (int)ms;
     r.build_ms = ms;
     r.build_spread = spread;
     r.rmse_model = err;
@@ -149,6 +153,35 @@ static void test_beats_beyond_noise(void **state)
     assert_false(bench_beats(&a, &b, false));
 }
 
+static void test_shared_timings_do_not_widen_the_margin(void **state)
+{
+    (void)state;
+    /* The default and a coarser ray step build the same map: pooled, their build is one
+     * median (80 ms) whatever its scatter (1.48 x MAD 20 = 29.6 ms, 30 %).  The coarser step's
+     * view is 15 ms faster, 15 % of the whole: beyond the 10 % floor, it beats the default. */
+    const double builds[] = {50.0, 110.0, 80.0, 60.0, 100.0};
+    const double fine[] = {20.0, 21.0, 19.0, 20.0, 20.0}, coarse[] = {5.0, 5.0, 6.0, 5.0, 4.0};
+    struct bench_variant dv = variant(20.0), cv = variant(20.0);
+    cv.step_m = 500.0f;
+    struct bench_result res[2] = {result(dv, builds, 5, fine, 5), result(cv, builds, 5, coarse, 5)};
+    bench_pool_timings(res, 2);
+    assert_true(fabs(res[0].build_ms - 80.0) <= 1e-12 && fabs(res[1].build_ms - 80.0) <= 1e-12);
+    assert_true(res[0].build_spread > 0.25 * 100.0);
+    for (int self = 0; self < 2; self++) {
+        res[0].rmse_model = res[1].rmse_model = 1.0;
+        res[0].self_rmse = res[1].self_rmse = 1.0;
+        assert_true(bench_beats(&res[1], &res[0], self));
+    }
+    /* Another map, as scattered: its build's spread counts, and 15 % is inside it. */
+    cv.light.resolution[2] = 128;
+    struct bench_result other[2] = {result(dv, builds, 5, fine, 5),
+                                    result(cv, builds, 5, coarse, 5)};
+    bench_pool_timings(other, 2);
+    other[0].rmse_model = other[1].rmse_model = 1.0;
+    assert_false(bench_beats(&other[1], &other[0], false));
+    assert_true(bench_no_worse(&other[1], &other[0], false));
+}
+
 static void test_pareto(void **state)
 {
     (void)state;
@@ -175,6 +208,7 @@ int main(void)
         cmocka_unit_test(test_same_work),
         cmocka_unit_test(test_pool_timings),
         cmocka_unit_test(test_beats_beyond_noise),
+        cmocka_unit_test(test_shared_timings_do_not_widen_the_margin),
         cmocka_unit_test(test_pareto),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
