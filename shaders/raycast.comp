@@ -89,7 +89,6 @@ float beam_step(float near, float far, float tau)
 // step: the mean of t e^-t over [0, tau], 1/2 for a thin step, 1/tau for a thick one.
 float scattering_depth(float tau)
 {
-    tau = min(tau, 1e30);
     if (tau < 1e-3)
         return 0.5 - tau / 12.0;
     if (tau > 40.0)

@@ -185,6 +185,21 @@ static void render(const struct config *cfg, struct app_light *al, struct app_st
     gpu_texture_finish(&out);
 }
 
+/* The config's camera rendered with the light map it asks for, from the N config overrides
+ * SETS alone: the volume and the light map last only as long as the picture takes. */
+static void render_sets(const char **sets, int n, struct image *img)
+{
+    struct config cfg;
+    struct ext_volume vol = {0};
+    test_config_from(&cfg, sets, n);
+    test_upload_scene(renderer, &cfg, &vol);
+    struct app_light al;
+    assert_true(app_light_init(&al, &cfg));
+    render(&cfg, &al, NULL, NULL, img);
+    app_light_finish(&al);
+    ext_volume_finish(&vol);
+}
+
 static void test_compressed_within_epsilon_of_dense(void **state)
 {
     struct config cfg;
@@ -283,20 +298,14 @@ static void test_silver_lining(void **state)
 {
     /* A thick sphere between the eye and the sun: its rim glows, its centre is dark (the
      * light map's forward peak alone: multiple scattering off). */
-    struct config cfg;
-    struct ext_volume vol = {0};
     const char *sets[] = {"scene.kind=sphere", "scene.size=[40,40,40]",
                           "scene.extent=[10,10,10]", "scene.tau=40", "light.azimuth=0",
                           "light.elevation=10", "render.sky=[0,0,0]", "render.ground_on=false",
                           "camera.position=[5,-40,-2.05]", "camera.target=[5,5,5]",
                           "camera.fov=16", "render.width=96", "render.height=96",
                           "lightmap.resolution=[64,64,96]", "effects.multiple=off"};
-    test_config_from(&cfg, sets, 15);
-    test_upload_scene(renderer, &cfg, &vol);
-    struct app_light al;
     struct image img;
-    assert_true(app_light_init(&al, &cfg));
-    render(&cfg, &al, NULL, NULL, &img);
+    render_sets(sets, 15, &img);
     /* The sphere's radius in pixels: 5 km at 45.5 km with a 16 degree field of view. */
     double r = 5.0 / 45.55 / tan(8.0 * M_PI / 180.0) * 48.0;
     double centre = ring_mean(&img, r, 0.0, 0.3);
@@ -305,29 +314,19 @@ static void test_silver_lining(void **state)
     assert_true(rim > 3.0 * centre);
     assert_true(rim > 0.01);
     image_finish(&img);
-    app_light_finish(&al);
-    ext_volume_finish(&vol);
 }
 
 /* A thick sphere (tau 20 along its diameter) lit from the east at ELEVATION (a config
  * override, "light.elevation=..."), seen from the south: MODE is one more config override. */
 static void side_lit_sphere(const char *mode, const char *elevation, struct image *img)
 {
-    struct config cfg;
-    struct ext_volume vol = {0};
     const char *sets[] = {"scene.kind=sphere", "scene.size=[32,32,32]",
                           "scene.extent=[10,10,10]", "scene.tau=20", "light.azimuth=90",
                           elevation, "render.sky=[0,0,0]", "render.ground_on=false",
                           "camera.position=[5,-40,5]", "camera.target=[5,5,5]",
                           "camera.fov=16", "render.width=64", "render.height=64",
                           "lightmap.resolution=[48,48,64]", mode};
-    test_config_from(&cfg, sets, 15);
-    test_upload_scene(renderer, &cfg, &vol);
-    struct app_light al;
-    assert_true(app_light_init(&al, &cfg));
-    render(&cfg, &al, NULL, NULL, img);
-    app_light_finish(&al);
-    ext_volume_finish(&vol);
+    render_sets(sets, 15, img);
 }
 
 /* The sphere's radius in pixels in side_lit_sphere: 5 km at 45 km, 16 degrees over 64. */
@@ -498,8 +497,6 @@ static double slab_nadir(double elevation, double step_m, const char *shadows)
     snprintf(sun, sizeof(sun), "light.elevation=%g", elevation);
     snprintf(step, sizeof(step), "render.step=%g", step_m);
     snprintf(shadow, sizeof(shadow), "effects.shadows=%s", shadows);
-    struct config cfg;
-    struct ext_volume vol = {0};
     const char *sets[] = {"scene.kind=slab", "scene.size=[16,16,16]", "scene.extent=[10,10,1]",
                           "scene.tau=20", "scene.phase=water", sun, step, shadow,
                           "effects.forward=off", "effects.multiple=off",
@@ -507,17 +504,11 @@ static double slab_nadir(double elevation, double step_m, const char *shadows)
                           "camera.up=[0,1,0]", "camera.fov=2", "render.width=8",
                           "render.height=8", "render.sky=[0,0,0]", "render.ground_on=false",
                           "lightmap.resolution=[16,16,128]"};
-    test_config_from(&cfg, sets, 19);
-    test_upload_scene(renderer, &cfg, &vol);
-    struct app_light al;
     struct image img;
-    assert_true(app_light_init(&al, &cfg));
-    render(&cfg, &al, NULL, NULL, &img);
+    render_sets(sets, 19, &img);
     double v = img.rgba[4 * (4 * 8 + 4)];
     assert_true(isfinite(v) && v > 0.0);
     image_finish(&img);
-    app_light_finish(&al);
-    ext_volume_finish(&vol);
     return v;
 }
 

@@ -964,6 +964,18 @@ static void two_stream_rhs(const struct two_stream *p, double t, const double y[
     dy[1] = c + p->a * y[1] - p->sb * src;
 }
 
+/* The water column's two-stream problem for the pass's terms D (no lateral escape). */
+static struct two_stream water_two_stream(const struct light_settings *s,
+                                          const struct light_diffuse_terms *d)
+{
+    struct two_stream p = {0};
+    p.gamma = s->cp.water_gamma;
+    p.k = d->loss[0];
+    p.kappa = d->loss[0] / d->mu0;
+    p.sb = d->back[0] / d->loss[0];
+    return p;
+}
+
 /* RK4 from t = 0 (U = 0, V = V0) to TAU in STEPS steps; with NODES > 0 also records M and N at
  * NODES equally spaced depths (STEPS a multiple of NODES - 1) into MN. */
 static void two_stream_shoot(const struct two_stream *p, double v0, double tau, int steps,
@@ -1007,11 +1019,7 @@ static void test_diffuse_column_matches_ode(void **state)
     for (int e = 0; e < 2; e++) {
         struct light_diffuse_terms d;
         terms_at(&s, e ? 35.0 : 90.0, &d);
-        struct two_stream p = {0};
-        p.gamma = s.cp.water_gamma;
-        p.k = d.loss[0];
-        p.kappa = d.loss[0] / d.mu0;
-        p.sb = d.back[0] / d.loss[0];
+        struct two_stream p = water_two_stream(&s, &d);
         assert_true(p.sb > 0.0 && p.sb < 1.0);
         for (size_t a = 0; a < sizeof taus / sizeof taus[0]; a++) {
             double tau = taus[a], e0[2], e1[2], end[2], mn[2 * N];
@@ -1056,11 +1064,7 @@ static void test_diffuse_column_escape_matches_ode(void **state)
     for (int e = 0; e < 2; e++) {
         struct light_diffuse_terms d;
         terms_at(&s, e ? 35.0 : 90.0, &d);
-        struct two_stream p = {0};
-        p.gamma = s.cp.water_gamma;
-        p.k = d.loss[0];
-        p.kappa = d.loss[0] / d.mu0;
-        p.sb = d.back[0] / d.loss[0];
+        struct two_stream p = water_two_stream(&s, &d);
         for (int r = 0; r < 2; r++) {
             p.a = light_lateral_escape((float)p.gamma, rates[r], 0.0f);
             assert_true(p.a > 0.0);
