@@ -22,6 +22,9 @@ uniform vec2 mean_cosine;    // g of the ice and the water phase (MULTIPLE)
 #ifndef PHASE_MIX
 #define PHASE_MIX 1
 #endif
+#ifndef THICK_STEP
+#define THICK_STEP 0.3
+#endif
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -97,6 +100,61 @@ float scattering_depth(float tau)
     return 1.0 / tau - e / (1.0 - e);
 }
 
+
+// beta at P: NaN and negative read as empty, infinity as the largest float, as in the light
+// pass (docs/stability.md); with TEMPORAL the blend of the two time steps.
+vec2 beta_at(vec3 p)
+{
+    vec2 b = texture(beta_tex, (p - box_min) / box_size).rg;
+    b = vec2(b.x >= 0.0 ? min(b.x, 1e30) : 0.0, b.y >= 0.0 ? min(b.y, 1e30) : 0.0);
+#if TEMPORAL
+    vec2 bn = texture(beta_next_tex, (p - box_min) / box_size).rg;
+    bn = vec2(bn.x >= 0.0 ? min(bn.x, 1e30) : 0.0, bn.y >= 0.0 ? min(bn.y, 1e30) : 0.0);
+    b = mix(b, bn, temporal_f);
+#endif
+    return b;
+}
+
+// One step of the ray ORIGIN + t DIR over [TA, TA + DS] with beta B (ice phase, water phase)
+// and the eye phases PHASE: adds what it scatters toward the eye to RADIANCE and takes its
+// transmittance off TRANS.
+void march_step(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
+                inout vec3 radiance, inout float trans)
+{
+    float beta = b.r + b.g;
+    if (beta <= 0.0)
+        return;
+    float tau = beta * ds;
+    float ts = transmittance(tau);
+#if PHASE_MIX
+    float pv = (b.r * phase.r + b.g * phase.g) / beta; // Nes eq. 5.12
+#elif PHASE_ICE
+    float pv = phase.r;
+#else
+    float pv = phase.g;
+#endif
+#if MULTIPLE
+    vec3 q = origin + dir * (ta + scattering_depth(tau) * ds);
+    float beam = lightmap_light(q);
+    float g = (b.r * mean_cosine.x + b.g * mean_cosine.y) / beta;
+    float diffuse = diffuse_scattered(lightmap_diffuse(q), g,
+                                      diffuse_mu_eye(dir, sun_dir, beam, g));
+    float light = (1.0 - ts) * (pv * beam + diffuse);
+#else
+    float light = pv * beam_step(lightmap_light(origin + dir * ta),
+                                 lightmap_light(origin + dir * (ta + ds)),
+                                 tau);
+#endif
+#if TINT
+    vec3 p = origin + dir * (ta + 0.5 * ds);
+    vec3 tint = texture(tint_tex, (p - box_min) / box_size).rgb;
+    radiance += trans * light * sun_radiance * tint;
+#else
+    radiance += trans * light * sun_radiance;
+#endif
+    trans *= ts;
+}
+
 void main()
 {
     ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
@@ -130,6 +188,7 @@ void main()
     if (t1 > t0) {
         float len = t1 - t0;
         float step = step_len;
+        int parts = 1;
         if (step <= 0.0) {
             // Half the shortest distance the ray takes to cross one voxel along any axis: a
             // horizontal ray through a flat grid (Isabel: 4 km x 4 km x 200 m) takes steps
@@ -137,14 +196,11 @@ void main()
             vec3 cross = voxel_size / max(abs(dir), vec3(1e-6));
             step = 0.5 * min(cross.x, min(cross.y, cross.z));
 #if LIGHTMAP != 0
-            // ... cut into as many equal parts as it takes to stay within the distance in
-            // which the ray crosses one light map node: a sheared map of a flat volume has
-            // node planes a fraction of a voxel apart (docs/lightmap.md).  Equal parts keep
-            // the samples where the voxel rule puts them, so a homogeneous path stays exact.
+            // In thick cloud, steps as short as it takes to stay within the distance in which
+            // the ray crosses one light map node (PARTS to a step): a sheared map of a flat
+            // volume has node planes a fraction of a voxel apart (docs/lightmap.md).
             vec3 nodes = abs(mat3(light_world_to_tex) * dir) * vec3(light_n);
-            float fastest = max(nodes.x, max(nodes.y, nodes.z));
-            if (fastest > 0.0 && 1.0 / fastest < step)
-                step /= ceil(step * fastest);
+            parts = int(ceil(step * max(nodes.x, max(nodes.y, nodes.z))));
 #endif
         }
         int n = clamp(int(ceil(len / step)), 1, max_steps);
@@ -156,53 +212,39 @@ void main()
         // beam and the diffuse light are read where the step's scattering happens on average
         // (scattering_depth); without it the beam is read at the step's two ends and
         // integrated exactly as an exponential between them (beam_step).
-        for (int i = 0; i < n; i++) {
-            vec3 p = origin + dir * (t0 + (float(i) + 0.5) * ds);
-            vec2 b = texture(beta_tex, (p - box_min) / box_size).rg;
-            // NaN and negative read as empty, infinity as the largest float, as in the light
-            // pass (docs/stability.md).
-            b = vec2(b.x >= 0.0 ? min(b.x, 1e30) : 0.0, b.y >= 0.0 ? min(b.y, 1e30) : 0.0);
-#if TEMPORAL
-            vec2 bn = texture(beta_next_tex, (p - box_min) / box_size).rg;
-            bn = vec2(bn.x >= 0.0 ? min(bn.x, 1e30) : 0.0, bn.y >= 0.0 ? min(bn.y, 1e30) : 0.0);
-            b = mix(b, bn, temporal_f);
-#endif
-            float beta = b.r + b.g;
-            if (beta <= 0.0)
-                continue;
-            float tau = beta * ds;
-            float ts = transmittance(tau);
-#if PHASE_MIX
-            float pv = (b.r * phase.r + b.g * phase.g) / beta; // Nes eq. 5.12
-#elif PHASE_ICE
-            float pv = phase.r;
-#else
-            float pv = phase.g;
-#endif
-#if MULTIPLE
-            vec3 q = origin + dir * (t0 + (float(i) + scattering_depth(tau)) * ds);
-            float beam = lightmap_light(q);
-            float g = (b.r * mean_cosine.x + b.g * mean_cosine.y) / beta;
-            float diffuse = diffuse_scattered(lightmap_diffuse(q), g,
-                                              diffuse_mu_eye(dir, sun_dir, beam, g));
-            float light = (1.0 - ts) * (pv * beam + diffuse);
-#else
-            float light = pv * beam_step(lightmap_light(origin + dir * (t0 + float(i) * ds)),
-                                         lightmap_light(origin + dir * (t0 + float(i + 1) * ds)),
-                                         tau);
-#endif
-#if TINT
-            vec3 tint = texture(tint_tex, (p - box_min) / box_size).rgb;
-            radiance += trans * light * sun_radiance * tint;
-#else
-            radiance += trans * light * sun_radiance;
-#endif
-            trans *= ts;
-            if (trans < termination) {
-                trans = 0.0;
-                break;
+        if (parts <= 1) {
+            for (int i = 0; i < n; i++) {
+                march_step(origin, dir, t0 + float(i) * ds, ds,
+                           beta_at(origin + dir * (t0 + (float(i) + 0.5) * ds)), phase, radiance,
+                           trans);
+                if (trans < termination)
+                    break;
+            }
+        } else {
+            // A step whose beta at its middle or its far end makes it optically thick is
+            // taken in PARTS parts, one at a time: clear air and thin cloud go at the voxel
+            // rule's pace.
+            float fine = ds / float(min(parts, 64));
+            float t = t0;
+            for (int i = 0; i < max_steps; i++) {
+                float left = t1 - t;
+                if (left <= 0.01 * fine)
+                    break;
+                float d = min(ds, left);
+                vec2 b = beta_at(origin + dir * (t + 0.5 * d));
+                vec2 be = beta_at(origin + dir * (t + d));
+                if (max(b.r + b.g, be.r + be.g) * d > THICK_STEP) {
+                    d = min(fine, left);
+                    b = beta_at(origin + dir * (t + 0.5 * d));
+                }
+                march_step(origin, dir, t, d, b, phase, radiance, trans);
+                t += d;
+                if (trans < termination)
+                    break;
             }
         }
+        if (trans < termination)
+            trans = 0.0;
     }
 
     vec3 background;
