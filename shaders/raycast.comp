@@ -22,6 +22,8 @@ uniform vec2 mean_cosine;    // g of the ice and the water phase (MULTIPLE)
 #ifndef PHASE_MIX
 #define PHASE_MIX 1
 #endif
+// The automatic step is taken in light-map-node parts where beta at its middle or its far end
+// makes it optically thicker than this.
 #ifndef THICK_STEP
 #define THICK_STEP 0.3
 #endif
@@ -196,15 +198,19 @@ void main()
             vec3 cross = voxel_size / max(abs(dir), vec3(1e-6));
             step = 0.5 * min(cross.x, min(cross.y, cross.z));
 #if LIGHTMAP != 0
-            // In thick cloud, steps as short as it takes to stay within the distance in which
-            // the ray crosses one light map node (PARTS to a step): a sheared map of a flat
-            // volume has node planes a fraction of a voxel apart (docs/lightmap.md).
+            // An optically thick step is taken in PARTS equal parts, as many as it takes to
+            // stay within the distance in which the ray crosses one light map node: a sheared
+            // map of a flat volume has node planes a fraction of a voxel apart
+            // (docs/lightmap.md), and through a cloud top the step's one beta sample would
+            // put its scattering far from where it happens.
             vec3 nodes = abs(mat3(light_world_to_tex) * dir) * vec3(light_n);
-            parts = int(ceil(step * max(nodes.x, max(nodes.y, nodes.z))));
+            // (A step within 0.1 % of one node is not cut: rounding must not halve it.)
+            parts = int(ceil(0.999 * step * max(nodes.x, max(nodes.y, nodes.z))));
 #endif
         }
         int n = clamp(int(ceil(len / step)), 1, max_steps);
         float ds = len / float(n);
+        parts = clamp(parts, 1, max(max_steps / n, 1)); // every part of the ray within max_steps
         // Two light map reads a step in cloud, placed for a step of any optical depth
         // (docs/architecture.md, "The eye pass"): at the top of a thick cloud a step can hold
         // tens of optical depths, and a read at its middle would find the light deep below
@@ -222,9 +228,8 @@ void main()
             }
         } else {
             // A step whose beta at its middle or its far end makes it optically thick is
-            // taken in PARTS parts, one at a time: clear air and thin cloud go at the voxel
-            // rule's pace.
-            float fine = ds / float(min(parts, 64));
+            // taken one part at a time; clear air and thin cloud go at the voxel rule's pace.
+            float fine = ds / float(parts);
             float t = t0;
             for (int i = 0; i < max_steps; i++) {
                 float left = t1 - t;

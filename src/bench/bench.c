@@ -51,8 +51,9 @@ int bench_variants(const struct bench_scene *sc, bool quick, struct bench_varian
 
     ADD(snprintf(v->knob, sizeof(v->knob), "default"); v->is_default = true;
         char step[32];
-        /* Step 0 is not a length: half of what each ray takes to cross a voxel (and one
-         * light map node), longer than half the smallest spacing for oblique rays. */
+        /* Step 0 is not a length: half of what each ray takes to cross a voxel (a thick step
+         * in parts of one light map node), longer than half the smallest spacing for oblique
+         * rays. */
         if (sc->settings.step_m > 0)
             snprintf(step, sizeof(step), "step %.2g voxel", sc->settings.step_m / voxel);
         else

@@ -189,8 +189,8 @@ static const struct setting settings[] = {
     INT("render.width", render.width, 1, 16384, 640, "image width, pixels"),
     INT("render.height", render.height, 1, 16384, 480, "image height, pixels"),
     DBL("render.step", render.step_m, 0, 1e5, 0, 0.0,
-        "ray step, m; 0 = half the voxel crossing along each ray, in equal parts of at most "
-        "one light map node (at most 16384 steps a ray)"),
+        "ray step, m; 0 = half the voxel crossing along each ray, an optically thick step "
+        "taken in parts of at most one light map node (at most 16384 steps a ray)"),
     DBL("render.exposure", render.exposure, 0, 1e6, F_MIN_OPEN, 1.0,
         "multiplies radiance before tone mapping"),
     DBL3("render.sky", render.sky, 0, 1e6, 0, 0.30, 0.45, 0.75, "background radiance, linear RGB"),

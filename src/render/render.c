@@ -304,8 +304,8 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
         box_size[i] = (float)(g->n[i] * g->spacing[i]);
         voxel[i] = (float)g->spacing[i];
     }
-    /* 0: the shader takes half the voxel crossing along each ray, in equal parts of at most
-     * one light map node. */
+    /* 0: the shader takes half the voxel crossing along each ray, and an optically thick step
+     * in parts of at most one light map node. */
     float step = s->step_m > 0.0f ? s->step_m : 0.0f;
     int image_size[2] = {view->width, view->height};
 
