@@ -9,7 +9,6 @@
 #include "app/app.h"
 #include "bench/reference.h"
 #include "common/log.h"
-#include "config/config.h"
 #include "gpu/gpu.h"
 #include "light/light.h"
 #include "light/light_gpu.h"
@@ -186,19 +185,24 @@ static void render(const struct config *cfg, struct app_light *al, struct app_st
     gpu_texture_finish(&out);
 }
 
-/* The config's camera rendered with the light map it asks for, from the N config overrides
- * SETS alone: the volume and the light map last only as long as the picture takes. */
-static void render_sets(const char **sets, int n, struct image *img)
+/* The config's camera rendered with the light map it asks for, from the config file PATH
+ * (NULL: the defaults) with the N overrides SETS: the volume and the light map last only as long as the picture takes. */
+static void render_file_sets(const char *path, const char **sets, int n, struct image *img)
 {
     struct config cfg;
     struct ext_volume vol = {0};
-    test_config_from(&cfg, sets, n);
+    test_config_file(&cfg, path, sets, n);
     test_upload_scene(renderer, &cfg, &vol);
     struct app_light al;
     assert_true(app_light_init(&al, &cfg));
     render(&cfg, &al, NULL, NULL, img);
     app_light_finish(&al);
     ext_volume_finish(&vol);
+}
+
+static void render_sets(const char **sets, int n, struct image *img)
+{
+    render_file_sets(NULL, sets, n, img);
 }
 
 static void test_compressed_within_epsilon_of_dense(void **state)
@@ -550,19 +554,7 @@ static void katrina_picture(double step_m, struct image *img)
     snprintf(step, sizeof(step), "render.step=%g", step_m);
     const char *sets[] = {"map.terrain=false", "map.coastlines=false", "render.sky=[0,0,0]",
                           "render.ground_on=false", "render.width=64", "render.height=48", step};
-    struct config cfg;
-    config_defaults(&cfg);
-    assert_true(config_load(path, &cfg));
-    for (size_t i = 0; i < sizeof(sets) / sizeof(sets[0]); i++)
-        assert_true(config_set(&cfg, sets[i]));
-    assert_true(config_validate(&cfg));
-    struct ext_volume vol = {0};
-    test_upload_scene(renderer, &cfg, &vol);
-    struct app_light al;
-    assert_true(app_light_init(&al, &cfg));
-    render(&cfg, &al, NULL, NULL, img);
-    app_light_finish(&al);
-    ext_volume_finish(&vol);
+    render_file_sets(path, sets, 7, img);
 }
 
 static void test_automatic_step_resolves_cloud_tops(void **state)

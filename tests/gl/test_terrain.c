@@ -20,12 +20,7 @@ static struct gpu_context *ctx;
 
 static void load(const char *path, const char **sets, int n, struct config *cfg)
 {
-    config_defaults(cfg);
-    if (path)
-        assert_true(config_load(path, cfg));
-    for (int i = 0; i < n; i++)
-        assert_true(config_set(cfg, sets[i]));
-    assert_true(config_validate(cfg));
+    test_config_file(cfg, path, sets, n);
 }
 
 /* Renders CFG's volume with its light map, plus MESH (may be NULL), from VIEW into IMG. */

@@ -78,7 +78,14 @@ struct gpu_context *test_gl_context_or_skip(void)
 
 void test_config_from(struct config *cfg, const char **sets, int n)
 {
+    test_config_file(cfg, NULL, sets, n);
+}
+
+void test_config_file(struct config *cfg, const char *path, const char **sets, int n)
+{
     config_defaults(cfg);
+    if (path)
+        assert_true(config_load(path, cfg));
     for (int i = 0; i < n; i++)
         assert_true(config_set(cfg, sets[i]));
     assert_true(config_validate(cfg));

@@ -41,6 +41,9 @@ struct ext_volume;
 /* CFG = the defaults with the N "path=value" overrides SETS applied, validated (asserts). */
 void test_config_from(struct config *cfg, const char **sets, int n);
 
+/* The same over the config file PATH (NULL: the defaults alone). */
+void test_config_file(struct config *cfg, const char *path, const char **sets, int n);
+
 /* Builds CFG's volume into VOL (the caller finishes it) and uploads it and the optics to R. */
 void test_upload_scene(struct renderer *r, const struct config *cfg, struct ext_volume *vol);
 
