@@ -29,6 +29,7 @@ struct render_options {
     const char *transfers; /* --transfers DIR: where the menu saves transfer functions */
     const char *wand;      /* --wand NAME: an OpenHMD controller as the wand ("null") */
     bool menu;             /* --menu: start with the menu shown (render) */
+    const char *format;    /* --format png|pfm: the image files of a display render */
 };
 
 static int parse_options(int argc, char **argv, struct render_options *o, bool need_output)
@@ -45,6 +46,7 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         {"transfers", required_argument, NULL, 'F'},
         {"wand", required_argument, NULL, 'W'},
         {"menu", no_argument, NULL, 'M'},
+        {"format", required_argument, NULL, 'P'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -95,6 +97,13 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
             break;
         case 'M':
             o->menu = true;
+            break;
+        case 'P':
+            if (strcmp(optarg, "png") != 0 && strcmp(optarg, "pfm") != 0) {
+                log_error("--format %s: expected png or pfm", optarg);
+                return EXIT_USAGE;
+            }
+            o->format = optarg;
             break;
         case 'h':
             return -1;
@@ -219,7 +228,7 @@ static int usage_render(void)
     fprintf(stderr, "usage: anvil render [CONFIG] -o FILE.png|FILE.pfm [--set PATH=VALUE]... "
                     "[--stats FILE.json] [--quiet]\n"
                     "       anvil render [CONFIG] --display DISPLAY.cfg [--time SECONDS] "
-                    "-o FOLDER/ [...]\n"
+                    "-o FOLDER/ [--format png|pfm] [...]\n"
                     "       anvil render --display help\n");
     return EXIT_USAGE;
 }
@@ -412,7 +421,8 @@ static int render_display(struct session *s, const struct render_options *o, dou
     if (rc == EXIT_OK) {
         rc = EXIT_FAILED;
         if (display_frame(s, d) &&
-            display_write_images(d, o->output, (float)s->cfg.render.exposure,
+            display_write_images(d, o->output, o->format ? o->format : "png",
+                                 (float)s->cfg.render.exposure,
                                  &s->stats.nonfinite_pixels))
             rc = EXIT_OK;
     }

@@ -345,7 +345,7 @@ static bool make_dir(const char *dir)
 }
 
 static bool write_texture(const struct gpu_texture *tex, const char *dir, const char *name,
-                          float exposure, struct image *keep, size_t *nonfinite)
+                          const char *ext, float exposure, struct image *keep, size_t *nonfinite)
 {
     struct image img = {0};
     if (!renderer_read(tex, &img))
@@ -353,7 +353,7 @@ static bool write_texture(const struct gpu_texture *tex, const char *dir, const 
     if (nonfinite)
         *nonfinite += image_count_nonfinite(&img);
     char path[1200];
-    snprintf(path, sizeof(path), "%s/%s.png", dir, name);
+    snprintf(path, sizeof(path), "%s/%s.%s", dir, name, ext);
     bool ok = image_write(&img, path, exposure);
     if (ok)
         log_info("wrote %s (%dx%d)", path, img.width, img.height);
@@ -392,7 +392,7 @@ bool display_contact_sheet(const struct image *images, int n, int columns, int g
     return true;
 }
 
-bool display_write_images(struct display *d, const char *dir, float exposure,
+bool display_write_images(struct display *d, const char *dir, const char *ext, float exposure,
                           size_t *nonfinite)
 {
     if (!make_dir(dir))
@@ -435,10 +435,11 @@ bool display_write_images(struct display *d, const char *dir, float exposure,
             log_warn("view %s was not drawn (the eye is behind its wall)", v->name);
             continue;
         }
-        ok = write_texture(&v->target, dir, v->name, exposure, &images[k], nonfinite);
+        ok = write_texture(&v->target, dir, v->name, ext, exposure, &images[k], nonfinite);
     }
     for (int i = 0; i < d->output_count && ok; i++)
-        ok = write_texture(&d->outputs[i].hdr, dir, d->outputs[i].name, exposure, NULL, NULL);
+        ok = write_texture(&d->outputs[i].hdr, dir, d->outputs[i].name, ext, exposure, NULL,
+                           NULL);
     if (ok) {
         /* Empty cells (no view) become blank images of the first view's size. */
         int cw = 1, ch = 1;
@@ -460,7 +461,7 @@ bool display_write_images(struct display *d, const char *dir, float exposure,
         const float bg[4] = {0.0f, 0.0f, 0.0f, 1.0f};
         if (ok && display_contact_sheet(images, n, walls, 2, bg, &sheet)) {
             char path[1200];
-            snprintf(path, sizeof(path), "%s/contact.png", dir);
+            snprintf(path, sizeof(path), "%s/contact.%s", dir, ext);
             ok = image_write(&sheet, path, exposure);
             if (ok)
                 log_info("wrote %s (%dx%d, %d views)", path, sheet.width, sheet.height,

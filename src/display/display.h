@@ -170,11 +170,11 @@ bool display_navigation_changed(struct display *d);
  * display_update applies it.  Valid until display_destroy. */
 struct display_navigation *display_navigation(struct display *d);
 
-/* Writes every drawn view as DIR/NAME.png, every composed output likewise, and a contact
- * sheet DIR/contact.png of all views (walls across, eyes down).  Creates DIR.  Returns false
- * (logged) on a failed write.  NONFINITE (may be NULL) receives the count of non-finite
- * pixels over all views. */
-bool display_write_images(struct display *d, const char *dir, float exposure,
+/* Writes every drawn view as DIR/NAME.EXT (EXT "png": tone-mapped, "pfm": linear radiance),
+ * every composed output likewise, and a contact sheet DIR/contact.EXT of all views (walls
+ * across, eyes down).  Creates DIR.  Returns false (logged) on a failed write.  NONFINITE (may
+ * be NULL) receives the count of non-finite pixels over all views. */
+bool display_write_images(struct display *d, const char *dir, const char *ext, float exposure,
                           size_t *nonfinite);
 
 /* Arranges IMAGES (N of them) in a grid of COLUMNS, row 0 at the top, with GAP pixels of

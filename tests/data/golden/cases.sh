@@ -1,0 +1,33 @@
+#!/bin/sh
+# The pictures that must not change when the program's structure does: each case renders
+# headless into OUT.  tests/gl/test_golden.c runs this script and compares every PFM it writes
+# with the one of the same name in this folder (made by the same script, at the commit that
+# the file's own history names).
+#   sh tests/data/golden/cases.sh ANVIL_BINARY SOURCE_DIR OUT_DIR
+set -e
+anvil=$1
+src=$2
+out=$3
+mkdir -p "$out"
+small="--set render.width=64 --set render.height=48"
+"$anvil" render -q "$src/configs/default.cfg" $small -o "$out/default.pfm"
+"$anvil" render -q "$src/configs/katrina.cfg" $small -o "$out/katrina.pfm"
+"$anvil" render -q "$src/configs/default.cfg" --set render.height=32 \
+    --display "$src/displays/cave4.cfg" --format pfm -o "$out/cave4"
+"$anvil" render -q "$src/configs/default.cfg" --set render.height=32 \
+    --display "$src/displays/hmd.cfg" --format pfm -o "$out/hmd"
+"$anvil" render -q "$src/configs/default.cfg" --set render.height=32 \
+    --display "$src/displays/desktop-stereo.cfg" --format pfm -o "$out/stereo"
+# The menu in the world (a still render with the menu shown).
+"$anvil" render -q "$src/configs/default.cfg" --set render.width=96 --set render.height=72 \
+    --set 'scene.size=[32,32,16]' --set 'lightmap.resolution=[32,32,32]' --menu \
+    -o "$out/menu.pfm"
+# Scripted playback of a WRF-convention series with temporal blending: the script pauses
+# between two steps, so the picture is a blend of two volumes and two light maps.
+"$anvil" --quiet synth -o "$out/series.nc" --steps 4 --size 16x16x8 >/dev/null
+printf 'scene = { kind = "data"; };\ndata = { format = "wrf"; files = ["series.nc"]; };\nplayback = { speed = 1.0; loop = false; };\n' \
+    >"$out/series.cfg"
+printf 'fps 10\n0 key play\n14 key play\n' >"$out/play.txt"
+"$anvil" render -q "$out/series.cfg" $small --set 'lightmap.resolution=[32,32,32]' \
+    --input "$out/play.txt" -o "$out/playback.pfm"
+rm -f "$out/series.nc" "$out/series.cfg" "$out/play.txt" "$out"/*/contact.pfm
