@@ -14,8 +14,10 @@
 #include <unistd.h>
 
 #include "app/app.h"
+#include "session/scene.h"
+#include "session/stats.h"
 #include "app/cmd_bench.h"
-#include "app/effects.h"
+#include "session/effects.h"
 #include "bench/bench.h"
 #include "common/log.h"
 #include "data/extfile.h"
@@ -180,7 +182,7 @@ static bool scene_config(const char *name, bool quick, const char **extra, int n
     }
     for (int i = 0; i < n_extra && n < 16; i++)
         sets[n++] = (char *)extra[i];
-    return app_load_config(file ? path : NULL, sets, n, cfg);
+    return config_load_overrides(file ? path : NULL, sets, n, cfg);
 }
 
 /* The scene as anvil render draws it (effects decided from the scene), at W x H. */
@@ -189,10 +191,10 @@ static bool scene_prepare(const char *name, const struct config *cfg, int w, int
 {
     memset(sc, 0, sizeof(*sc));
     snprintf(sc->name, sizeof(sc->name), "%s", name);
-    if (!app_build_volume(cfg, vol))
+    if (!scene_build_volume(cfg, vol))
         return false;
     camera_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sc->sun);
-    app_camera_view(cfg, w, h, &sc->view);
+    scene_camera_view(cfg, w, h, &sc->view);
     struct effects_facts facts;
     effects_facts_init(&facts);
     if (!effects_measure_volume(vol, sc->sun, &cfg->optics.params, &facts))
@@ -202,7 +204,7 @@ static bool scene_prepare(const char *name, const struct config *cfg, int w, int
     facts.ground_visible = cfg->render.ground_on && effects_view_sees_ground(&sc->view);
     struct effects e;
     effects_decide(cfg, &facts, &e);
-    app_render_settings(cfg, &sc->settings);
+    scene_render_settings(cfg, &sc->settings);
     effects_apply_render(&e, &sc->settings);
     effects_light_settings(cfg, &e, &sc->light);
     sc->shadows = e.on[EFFECT_SHADOWS];
@@ -477,7 +479,7 @@ static bool scene_means(const struct bench_options *o, struct renderer *r, struc
                         struct angle_result *out)
 {
     struct config cfg;
-    if (!app_load_config(NULL, sets, n_sets, &cfg))
+    if (!config_load_overrides(NULL, sets, n_sets, &cfg))
         return false;
     struct ext_volume vol = {0};
     struct bench_scene sc;

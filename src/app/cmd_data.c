@@ -6,57 +6,14 @@
 #include <string.h>
 
 #include "app/app.h"
-#include "app/effects.h"
+#include "session/scene.h"
+#include "session/stats.h"
+#include "session/effects.h"
 #include "common/log.h"
 #include "data/extfile.h"
 #include "data/synth.h"
 #include "data/wrf.h"
 #include "data/wrf_write.h"
-
-void cmd_data_source_desc(const struct config *cfg, const char **file_ptrs,
-                          struct data_source_desc *out)
-{
-    const struct config_data *cd = &cfg->data;
-    memset(out, 0, sizeof(*out));
-    out->format = cd->format == DATA_ISABEL       ? DATA_SOURCE_ISABEL
-                  : cd->format == DATA_EXTINCTION ? DATA_SOURCE_EXTINCTION
-                                                  : DATA_SOURCE_WRF;
-    for (int i = 0; i < cd->file_count; i++)
-        file_ptrs[i] = cd->files[i];
-    out->files = file_ptrs;
-    out->file_count = cd->file_count;
-    wrf_desc_defaults(&out->wrf);
-    out->wrf.levels = cd->levels;
-    out->wrf.top_m = cd->top_km * 1000.0;
-    for (int a = 0; a < 3; a++)
-        out->wrf.stride[a] = cd->stride[a];
-    for (int i = 0; i < 6; i++)
-        out->wrf.crop[i] = cd->crop[i];
-    out->wrf.memory_mb = cd->memory_mb;
-    for (int a = 0; a < 3; a++) {
-        out->isabel.n[a] = cd->isabel_size[a];
-        out->isabel.extent_m[a] = cd->isabel_extent_km[a] * 1000.0;
-    }
-    out->optics = cfg->optics.params;
-    for (int f = 0; f < SPECIES_COUNT; f++) {
-        out->select.enabled[f] = cfg->optics.enabled[f];
-        out->select.scale[f] = cfg->optics.scale[f];
-    }
-    cmd_data_detail_desc(cfg, &out->detail);
-    out->height_scale = cfg->scene.height_exaggeration;
-}
-
-void cmd_data_detail_desc(const struct config *cfg, struct detail_desc *out)
-{
-    memset(out, 0, sizeof(*out));
-    struct effects e;
-    effects_decide(cfg, NULL, &e); /* detail depends on no measured fact */
-    out->on = e.on[EFFECT_DETAIL];
-    for (int f = 0; f < SPECIES_COUNT; f++)
-        out->amount[f] = cfg->detail.amount[f];
-    out->scale_m = cfg->detail.scale_km * 1000.0;
-    out->seed = cfg->detail.seed;
-}
 
 /* ---- anvil info ------------------------------------------------------------------------- */
 
@@ -414,7 +371,7 @@ int cmd_convert(int argc, char **argv)
     }
     bool from_config = n_inputs == 1 && !is_netcdf(inputs[0]);
     if (from_config) {
-        if (!app_load_config(inputs[0], sets, n_sets, cfg)) {
+        if (!config_load_overrides(inputs[0], sets, n_sets, cfg)) {
             free(cfg);
             return EXIT_BAD_INPUT;
         }
@@ -424,7 +381,7 @@ int cmd_convert(int argc, char **argv)
             return EXIT_BAD_INPUT;
         }
     } else {
-        if (!app_load_config(NULL, sets, n_sets, cfg)) {
+        if (!config_load_overrides(NULL, sets, n_sets, cfg)) {
             free(cfg);
             return EXIT_BAD_INPUT;
         }
@@ -440,7 +397,7 @@ int cmd_convert(int argc, char **argv)
     }
     const char *ptrs[CONFIG_MAX_FILES];
     struct data_source_desc sd;
-    cmd_data_source_desc(cfg, ptrs, &sd);
+    scene_source_desc(cfg, ptrs, &sd);
     sd.height_scale = 1.0; /* a file keeps physical heights; detail, like species, is baked */
     struct data_source *src = data_source_open(&sd);
     if (!src) {

@@ -5,8 +5,10 @@
 #include <string.h>
 
 #include "app/app.h"
+#include "session/scene.h"
+#include "session/stats.h"
 #include "app/cmd_bench.h"
-#include "app/effects.h"
+#include "session/effects.h"
 #include "common/log.h"
 #include "config/display_config.h"
 #include "display/display.h"
@@ -92,10 +94,10 @@ int cmd_effects(int argc, char **argv)
         return usage(stderr);
     }
     struct config cfg;
-    if (!app_load_config(config, sets, n_sets, &cfg))
+    if (!config_load_overrides(config, sets, n_sets, &cfg))
         return EXIT_BAD_INPUT;
     struct ext_volume vol = {0};
-    if (!app_build_volume(&cfg, &vol))
+    if (!scene_build_volume(&cfg, &vol))
         return EXIT_BAD_INPUT;
     struct effects_facts facts;
     effects_facts_init(&facts);
@@ -106,7 +108,7 @@ int cmd_effects(int argc, char **argv)
     ext_volume_finish(&vol);
     if (!ok)
         return EXIT_BAD_INPUT;
-    facts.time_steps = app_time_steps(&cfg);
+    facts.time_steps = scene_time_steps(&cfg);
     facts.sun_moves = run && !display;
     facts.playback = run || input;
 
@@ -127,7 +129,7 @@ int cmd_effects(int argc, char **argv)
                 views[n++] = set.views[i].rv;
         }
     } else if (known) {
-        app_camera_view(&cfg, cfg.render.width, cfg.render.height, &views[0]);
+        scene_camera_view(&cfg, cfg.render.width, cfg.render.height, &views[0]);
         n = 1;
     }
     facts.views_known = known;

@@ -6,8 +6,11 @@
 #include <string.h>
 
 #include "app/app.h"
+#include "session/scene.h"
+#include "session/stats.h"
 #include "app/cmd_bench.h"
 #include "bench/reference.h"
+#include "config/config.h"
 #include "common/log.h"
 
 #define MAX_SETS 64
@@ -156,20 +159,20 @@ int cmd_reference(int argc, char **argv)
         return rc;
 
     struct config cfg;
-    if (!app_load_config(o.config, o.sets, o.n_sets, &cfg))
+    if (!config_load_overrides(o.config, o.sets, o.n_sets, &cfg))
         return EXIT_BAD_INPUT;
     double start = time_now_ms();
     struct ext_volume vol = {0};
-    if (!app_build_volume(&cfg, &vol))
+    if (!scene_build_volume(&cfg, &vol))
         return EXIT_BAD_INPUT;
 
     struct render_settings settings;
-    app_render_settings(&cfg, &settings);
+    scene_render_settings(&cfg, &settings);
     struct reference_desc desc;
     reference_desc_from_render(&settings, &cfg.optics.params, &desc);
     desc.albedo = o.albedo;
     struct render_view view;
-    app_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
+    scene_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
 
     rc = EXIT_FAILED;
     char *err_path = stderr_path(o.output);

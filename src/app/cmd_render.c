@@ -8,8 +8,8 @@
 #include <GLFW/glfw3.h>
 
 #include "app/app.h"
-#include "app/interact.h"
-#include "app/map.h"
+#include "session/interact.h"
+#include "session/map.h"
 #include "common/log.h"
 #include "config/display_config.h"
 #include "display/display.h"
@@ -136,12 +136,12 @@ struct session {
     struct config cfg;
     struct renderer *renderer;
     struct render_settings settings;
-    struct app_stats stats;
-    struct app_light light;
+    struct session_stats stats;
+    struct lightmaps light;
     struct effects_facts facts; /* measured by session_start, views added by session_effects */
     struct effects effects;
-    struct app_map *map; /* terrain, coastlines, graticule (app/map.h) */
-    struct app_interact *interact; /* menu, input, playback (app/interact.h), or NULL */
+    struct scene_map *map; /* terrain, coastlines, graticule (app/map.h) */
+    struct interact *interact; /* menu, input, playback (app/interact.h), or NULL */
     struct display_navigation nav_home; /* --display: the navigation a reset goes back to */
 };
 
@@ -157,22 +157,22 @@ static void session_effects(struct session *s, const struct render_view *views, 
     for (int e = 0; e < EFFECT_COUNT; e++)
         log_debug("effect %s: %s (%s)", effects_name(e), s->effects.on[e] ? "on" : "off",
                   s->effects.reason[e]);
-    app_light_set_effects(&s->light, &s->effects);
+    lightmaps_set_effects(&s->light, &s->effects);
     effects_apply_render(&s->effects, &s->settings);
 }
 
 /* Builds the light map if the sun, volume or settings changed since the last build. */
 static bool session_light(struct session *s)
 {
-    return app_light_update(&s->light, &s->cfg, s->renderer, &s->stats);
+    return lightmaps_update(&s->light, &s->cfg, s->renderer, &s->stats);
 }
 
 static void session_finish(struct session *s)
 {
-    app_interact_destroy(s->interact); /* its meshes leave the renderer */
+    interact_destroy(s->interact); /* its meshes leave the renderer */
     s->interact = NULL;
-    app_light_finish(&s->light);
-    app_map_destroy(s->map, s->renderer);
+    lightmaps_finish(&s->light);
+    scene_map_destroy(s->map, s->renderer);
     s->map = NULL;
     renderer_destroy(s->renderer);
     s->renderer = NULL;
@@ -182,13 +182,13 @@ static int session_start(struct session *s, const struct render_options *o)
 {
     struct ext_volume vol = {0};
     double t = time_now_ms();
-    if (!app_build_volume(&s->cfg, &vol))
+    if (!scene_build_volume(&s->cfg, &vol))
         return EXIT_BAD_INPUT;
     s->stats.volume_ms = time_now_ms() - t;
     double sun[3];
     light_sun_direction(s->cfg.light.azimuth_deg, s->cfg.light.elevation_deg, sun);
     effects_facts_init(&s->facts);
-    s->facts.time_steps = app_time_steps(&s->cfg);
+    s->facts.time_steps = scene_time_steps(&s->cfg);
     /* anvil run plays time; a render plays only when a script drives it. */
     s->facts.playback = strcmp(s->stats.command, "run") == 0 || o->input != NULL;
     if (!effects_measure_volume(&vol, sun, &s->cfg.optics.params, &s->facts)) {
@@ -212,13 +212,13 @@ static int session_start(struct session *s, const struct render_options *o)
     if (!ok)
         return EXIT_FAILED;
     s->stats.upload_ms = renderer_stats(s->renderer)->upload_ms;
-    if (!app_light_init(&s->light, &s->cfg))
+    if (!lightmaps_init(&s->light, &s->cfg))
         return EXIT_FAILED;
-    s->map = app_map_create(&s->cfg, s->renderer);
+    s->map = scene_map_create(&s->cfg, s->renderer);
     if (!s->map)
         return EXIT_FAILED;
-    app_render_settings(&s->cfg, &s->settings);
-    app_map_apply_settings(s->map, &s->settings);
+    scene_render_settings(&s->cfg, &s->settings);
+    scene_map_apply_settings(s->map, &s->settings);
     s->stats.device = gpu_renderer_name();
     return EXIT_OK;
 }
@@ -297,7 +297,7 @@ static bool display_frame(struct session *s, struct display *d)
     for (int i = 0; i < display_view_count(d); i++) {
         const struct view *v = display_view(d, i);
         if (v->visible)
-            app_stats_add_view(&s->stats, v->ms);
+            session_stats_add_view(&s->stats, v->ms);
     }
     return display_present(d, s->renderer, (float)s->cfg.render.exposure);
 }
@@ -307,8 +307,8 @@ static bool display_frame(struct session *s, struct display *d)
 static int session_interact(struct session *s, const struct render_options *o, bool tracker,
                             void *window)
 {
-    s->interact = app_interact_create(&s->cfg, s->renderer, &s->light, &s->stats,
-                                      &(struct app_interact_desc){
+    s->interact = interact_create(&s->cfg, s->renderer, &s->light, &s->stats,
+                                      &(struct interact_desc){
                                           .script = o->input,
                                           .transfers_dir = o->transfers,
                                           .tracker_space = tracker,
@@ -325,7 +325,7 @@ static double frame_dt(struct session *s, double *last_ms)
 {
     double now = time_now_ms(), dt = (now - *last_ms) * 1e-3;
     *last_ms = now;
-    double script = s->interact ? app_interact_script_dt(s->interact) : 0.0;
+    double script = s->interact ? interact_script_dt(s->interact) : 0.0;
     if (s->stats.frame_ms_max < dt * 1e3 && s->stats.frames > 1)
         s->stats.frame_ms_max = dt * 1e3;
     return script > 0.0 ? script : dt;
@@ -337,7 +337,7 @@ static bool display_interact(struct session *s, struct display *d, double dt, bo
     if (!s->interact)
         return true;
     const struct display_config *dc = display_get_config(d);
-    struct app_interact_frame f = {
+    struct interact_frame f = {
         .dt = dt,
         .nav = display_navigation(d),
         .nav_home = &s->nav_home,
@@ -353,7 +353,7 @@ static bool display_interact(struct session *s, struct display *d, double dt, bo
         f.height = v0->rv.height;
     }
     bool redraw = false, nav = false;
-    if (!app_interact_frame(s->interact, &f, &s->settings, &redraw, &nav))
+    if (!interact_frame(s->interact, &f, &s->settings, &redraw, &nav))
         return false;
     *dirty = *dirty || redraw || nav;
     return true;
@@ -363,7 +363,7 @@ static bool display_interact(struct session *s, struct display *d, double dt, bo
 static bool display_script(struct session *s, struct display *d, double time)
 {
     double last = time_now_ms();
-    for (long n = 0; !app_interact_script_done(s->interact); n++) {
+    for (long n = 0; !interact_script_done(s->interact); n++) {
         bool dirty = false;
         s->stats.frames++;
         if (n > 1000000 || !display_interact(s, d, frame_dt(s, &last), &dirty) ||
@@ -371,7 +371,7 @@ static bool display_script(struct session *s, struct display *d, double time)
             return false;
     }
     bool dirty = false;
-    return app_interact_settle(s->interact) && display_interact(s, d, 0.0, &dirty) &&
+    return interact_settle(s->interact) && display_interact(s, d, 0.0, &dirty) &&
            display_update(d, time);
 }
 
@@ -383,22 +383,22 @@ static int view_script(struct session *s, const struct render_options *o,
     int rc = session_interact(s, o, false, NULL);
     if (rc != EXIT_OK)
         return rc;
-    struct app_interact_frame f = {.have_camera = true, .width = view->width,
+    struct interact_frame f = {.have_camera = true, .width = view->width,
                                    .height = view->height};
     memcpy(f.view, view->view, sizeof(f.view));
     memcpy(f.proj, view->proj, sizeof(f.proj));
     double last = time_now_ms();
     bool redraw, nav;
-    for (long n = 0; o->input && !app_interact_script_done(s->interact); n++) {
+    for (long n = 0; o->input && !interact_script_done(s->interact); n++) {
         f.dt = frame_dt(s, &last);
         s->stats.frames++;
-        if (n > 1000000 || !app_interact_frame(s->interact, &f, &s->settings, &redraw, &nav) ||
+        if (n > 1000000 || !interact_frame(s->interact, &f, &s->settings, &redraw, &nav) ||
             !session_light(s) || !renderer_draw(s->renderer, &s->settings, view, target))
             return EXIT_FAILED;
     }
     f.dt = 0.0;
-    if ((o->input && !app_interact_settle(s->interact)) ||
-        !app_interact_frame(s->interact, &f, &s->settings, &redraw, &nav))
+    if ((o->input && !interact_settle(s->interact)) ||
+        !interact_frame(s->interact, &f, &s->settings, &redraw, &nav))
         return EXIT_FAILED;
     return EXIT_OK;
 }
@@ -431,7 +431,7 @@ static int render_display(struct session *s, const struct render_options *o, dou
     if (d) {
         s->stats.gpu_bytes = gpu_bytes_allocated();
         s->stats.total_ms = time_now_ms() - start;
-        if (rc == EXIT_OK && o->stats && !app_stats_write(&s->stats, o->stats))
+        if (rc == EXIT_OK && o->stats && !session_stats_write(&s->stats, o->stats))
             rc = EXIT_FAILED;
     }
     session_finish(s);
@@ -475,7 +475,7 @@ static int run_display(struct session *s, const struct render_options *o, double
     if (d) {
         s->stats.gpu_bytes = gpu_bytes_allocated();
         s->stats.total_ms = time_now_ms() - start;
-        if (rc == EXIT_OK && o->stats && !app_stats_write(&s->stats, o->stats))
+        if (rc == EXIT_OK && o->stats && !session_stats_write(&s->stats, o->stats))
             rc = EXIT_FAILED;
     }
     session_finish(s);
@@ -499,7 +499,7 @@ static int command_begin(int argc, char **argv, bool need_output, int (*usage)(v
         return usage();
     if (o->display && strcmp(o->display, "help") == 0)
         return display_help();
-    if (!app_load_config(o->config, o->sets, o->n_sets, &s->cfg))
+    if (!config_load_overrides(o->config, o->sets, o->n_sets, &s->cfg))
         return EXIT_BAD_INPUT;
     return -1;
 }
@@ -523,7 +523,7 @@ int cmd_render(int argc, char **argv)
         goto done;
 
     struct render_view view;
-    app_camera_view(&s.cfg, s.cfg.render.width, s.cfg.render.height, &view);
+    scene_camera_view(&s.cfg, s.cfg.render.width, s.cfg.render.height, &view);
     session_effects(&s, &view, 1);
     struct gpu_texture target = {0};
     struct image img = {0};
@@ -533,7 +533,7 @@ int cmd_render(int argc, char **argv)
     if (!session_light(&s) || !renderer_draw(s.renderer, &s.settings, &view, &target))
         goto done_target;
     const struct render_stats *rs = renderer_stats(s.renderer);
-    app_stats_add_view(&s.stats, rs->view_ms_total);
+    session_stats_add_view(&s.stats, rs->view_ms_total);
     if (!renderer_read(&target, &img))
         goto done_target;
     s.stats.nonfinite_pixels = image_count_nonfinite(&img);
@@ -548,7 +548,7 @@ int cmd_render(int argc, char **argv)
     s.stats.gpu_bytes = gpu_bytes_allocated();
     s.stats.total_ms = time_now_ms() - start;
     rc = EXIT_OK;
-    if (o.stats && !app_stats_write(&s.stats, o.stats))
+    if (o.stats && !session_stats_write(&s.stats, o.stats))
         rc = EXIT_FAILED;
 done_image:
     image_finish(&img);
@@ -726,8 +726,8 @@ int cmd_run(int argc, char **argv)
         if (st.sun_dirty) {
             s.cfg.light.azimuth_deg = st.sun_az;
             s.cfg.light.elevation_deg = st.sun_el;
-            app_render_settings(&s.cfg, &s.settings);
-            app_map_apply_settings(s.map, &s.settings);
+            scene_render_settings(&s.cfg, &s.settings);
+            scene_map_apply_settings(s.map, &s.settings);
             effects_apply_render(&s.effects, &s.settings);
             st.sun_dirty = false;
         }
@@ -740,12 +740,12 @@ int cmd_run(int argc, char **argv)
         camera_look_at(eye, st.orbit.target, s.cfg.camera.up, s.cfg.camera.fov_deg,
                        s.cfg.camera.near_m, s.cfg.camera.far_km * 1000.0, w > 0 ? w : 1,
                        h > 0 ? h : 1, &view);
-        struct app_interact_frame f = {.dt = frame_dt(&s, &last), .have_camera = true,
+        struct interact_frame f = {.dt = frame_dt(&s, &last), .have_camera = true,
                                        .width = w, .height = h};
         memcpy(f.view, view.view, sizeof(f.view));
         memcpy(f.proj, view.proj, sizeof(f.proj));
         bool redraw = false, nav = false;
-        if (!app_interact_frame(s.interact, &f, &s.settings, &redraw, &nav)) {
+        if (!interact_frame(s.interact, &f, &s.settings, &redraw, &nav)) {
             rc = EXIT_FAILED;
             break;
         }
@@ -762,7 +762,7 @@ int cmd_run(int argc, char **argv)
                 rc = EXIT_FAILED;
                 break;
             }
-            app_stats_add_view(&s.stats, renderer_stats(s.renderer)->view_ms_total - before);
+            session_stats_add_view(&s.stats, renderer_stats(s.renderer)->view_ms_total - before);
             gpu_present(&ldr, 0, 0, w, h, 0);
             gpu_context_swap(ctx);
             st.dirty = false;
@@ -778,7 +778,7 @@ int cmd_run(int argc, char **argv)
     gpu_texture_finish(&ldr);
     s.stats.gpu_bytes = gpu_bytes_allocated();
     s.stats.total_ms = time_now_ms() - start;
-    if (o.stats && !app_stats_write(&s.stats, o.stats))
+    if (o.stats && !session_stats_write(&s.stats, o.stats))
         rc = EXIT_FAILED;
 done:
     session_finish(&s);

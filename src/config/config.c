@@ -1469,3 +1469,15 @@ void config_write_reference(FILE *out)
         }
     }
 }
+
+bool config_load_overrides(const char *config_path, char **sets, int n_sets, struct config *cfg)
+{
+    config_defaults(cfg);
+    if (config_path && !config_load(config_path, cfg))
+        return false;
+    for (int i = 0; i < n_sets; i++) {
+        if (!config_set(cfg, sets[i]))
+            return false;
+    }
+    return config_validate(cfg);
+}

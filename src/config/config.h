@@ -185,6 +185,11 @@ bool config_load(const char *path, struct config *cfg);
  * failure logs "--set PATH: expected ..." and returns false. */
 bool config_set(struct config *cfg, const char *assignment);
 
+/* Loads CONFIG_PATH (or the defaults alone when NULL), applies the N_SETS --set overrides SETS
+ * and validates: config_load, config_set, config_validate in turn.  False (logged) on the first
+ * problem. */
+bool config_load_overrides(const char *config_path, char **sets, int n_sets, struct config *cfg);
+
 /* Checks cross-setting constraints (e.g. camera position differs from target; data.files
  * present when scene.kind = "data").  Logs and returns false on the first problem. */
 bool config_validate(const struct config *cfg);

@@ -6,7 +6,9 @@
 
 #include "testutil.h"
 
-#include "app/app.h"
+#include "session/lightmaps.h"
+#include "session/scene.h"
+#include "session/stats.h"
 #include "bench/reference.h"
 #include "common/log.h"
 #include "gpu/gpu.h"
@@ -168,17 +170,17 @@ static void test_gpu_matches_cpu_diffuse(void **state)
 
 /* Renders the config's camera (or VIEW when given) with the light map the config asks for;
  * the number of builds goes to *BUILDS. */
-static void render(const struct config *cfg, struct app_light *al, struct app_stats *st,
+static void render(const struct config *cfg, struct lightmaps *al, struct session_stats *st,
                    const struct render_view *view, struct image *img)
 {
     struct render_settings rs;
-    app_render_settings(cfg, &rs);
+    scene_render_settings(cfg, &rs);
     struct render_view v;
     if (view)
         v = *view;
     else
-        app_camera_view(cfg, cfg->render.width, cfg->render.height, &v);
-    assert_true(app_light_update(al, cfg, renderer, st));
+        scene_camera_view(cfg, cfg->render.width, cfg->render.height, &v);
+    assert_true(lightmaps_update(al, cfg, renderer, st));
     struct gpu_texture out = {0};
     assert_true(renderer_draw(renderer, &rs, &v, &out));
     assert_true(renderer_read(&out, img));
@@ -193,10 +195,10 @@ static void render_file_sets(const char *path, const char **sets, int n, struct 
     struct ext_volume vol = {0};
     test_config_file(&cfg, path, sets, n);
     test_upload_scene(renderer, &cfg, &vol);
-    struct app_light al;
-    assert_true(app_light_init(&al, &cfg));
+    struct lightmaps al;
+    assert_true(lightmaps_init(&al, &cfg));
     render(&cfg, &al, NULL, NULL, img);
-    app_light_finish(&al);
+    lightmaps_finish(&al);
     ext_volume_finish(&vol);
 }
 
@@ -214,10 +216,10 @@ static void test_compressed_within_epsilon_of_dense(void **state)
                           "render.sky=[0,0,0]", "render.ground_on=false"};
     test_config_from(&cfg, sets, 7);
     test_upload_scene(renderer, &cfg, &vol);
-    struct app_light al;
-    struct app_stats st = {0};
+    struct lightmaps al;
+    struct session_stats st = {0};
     struct image dense, comp;
-    assert_true(app_light_init(&al, &cfg));
+    assert_true(lightmaps_init(&al, &cfg));
     render(&cfg, &al, &st, NULL, &dense);
     cfg.lightmap.mode = LIGHTMAP_COMPRESSED;
     render(&cfg, &al, &st, NULL, &comp);
@@ -242,7 +244,7 @@ static void test_compressed_within_epsilon_of_dense(void **state)
     assert_true(worst <= bound);
     image_finish(&dense);
     image_finish(&comp);
-    app_light_finish(&al);
+    lightmaps_finish(&al);
     ext_volume_finish(&vol);
 }
 
@@ -254,9 +256,9 @@ static void test_twelve_views_one_build(void **state)
                           "render.width=32", "render.height=24"};
     test_config_from(&cfg, sets, 4);
     test_upload_scene(renderer, &cfg, &vol);
-    struct app_light al;
-    struct app_stats st = {0};
-    assert_true(app_light_init(&al, &cfg));
+    struct lightmaps al;
+    struct session_stats st = {0};
+    assert_true(lightmaps_init(&al, &cfg));
     for (int i = 0; i < 12; i++) {
         struct camera_orbit o = {{30e3, 30e3, 6e3}, 30.0 * i, 10.0 + i, 50e3};
         double eye[3];
@@ -276,7 +278,7 @@ static void test_twelve_views_one_build(void **state)
     render(&cfg, &al, &st, NULL, &img);
     assert_int_equal(st.light_builds, 2);
     image_finish(&img);
-    app_light_finish(&al);
+    lightmaps_finish(&al);
     ext_volume_finish(&vol);
 }
 
@@ -428,20 +430,20 @@ static void layer_means(const char *multiple, double elevation, double *rendered
                           "render.sky=[0,0,0]", "render.ground_on=false", mode};
     test_config_from(&cfg, sets, 15);
     test_upload_scene(renderer, &cfg, &vol);
-    struct app_light al;
+    struct lightmaps al;
     struct image img, ref, ref_err;
-    assert_true(app_light_init(&al, &cfg));
+    assert_true(lightmaps_init(&al, &cfg));
     render(&cfg, &al, NULL, NULL, &img);
-    app_light_finish(&al);
+    lightmaps_finish(&al);
 
     struct render_settings rs;
-    app_render_settings(&cfg, &rs);
+    scene_render_settings(&cfg, &rs);
     struct reference_desc desc;
     reference_desc_from_render(&rs, &cfg.optics.params, &desc);
     struct reference *tracer = reference_create(&vol, &desc);
     assert_non_null(tracer);
     struct render_view v;
-    app_camera_view(&cfg, cfg.render.width, cfg.render.height, &v);
+    scene_camera_view(&cfg, cfg.render.width, cfg.render.height, &v);
     struct reference_image_desc id = {.spp = 64, .threads = 0, .seed = 1, .jitter = false};
     assert_true(reference_render(tracer, &v, &id, &ref, &ref_err));
     double a = 0.0, b = 0.0, var = 0.0;
@@ -604,13 +606,13 @@ static double ground_under(const char *mode, double x_km, double y_km)
     double up[3] = {0, 1, 0};
     struct render_view v;
     camera_look_at(eye, target, up, 2.0, 10.0, 1e6, 16, 16, &v);
-    struct app_light al;
+    struct lightmaps al;
     struct image img;
-    assert_true(app_light_init(&al, &cfg));
+    assert_true(lightmaps_init(&al, &cfg));
     render(&cfg, &al, NULL, &v, &img);
     double value = img.rgba[4 * (8 * 16 + 8)];
     image_finish(&img);
-    app_light_finish(&al);
+    lightmaps_finish(&al);
     ext_volume_finish(&vol);
     return value;
 }

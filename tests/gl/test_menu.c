@@ -10,7 +10,7 @@
 
 #include <cglm/cglm.h>
 
-#include "app/interact.h"
+#include "session/interact.h"
 #include "common/log.h"
 #include "config/display_config.h"
 #include "display/display.h"
@@ -62,9 +62,9 @@ static void test_menu_in_cave4(void **state)
     display_navigation_matrix(&display_get_config(d)->navigation, nav);
     memcpy(n, nav, sizeof(n));
     glm_mat4_inv(n, to_world);
-    struct app_menu_view *mv = app_menu_view_create(r);
+    struct menu_view *mv = menu_view_create(r);
     assert_non_null(mv);
-    assert_true(app_menu_view_update(mv, m, (const float *)to_world, 1.0f));
+    assert_true(menu_view_update(mv, m, (const float *)to_world, 1.0f));
 
     struct render_settings s = {.sun_dir = {0, 0, 1}, .sun_radiance = {1, 1, 1},
                                 .sky = {0.3f, 0.45f, 0.75f}, .termination = 0.001f};
@@ -109,7 +109,7 @@ static void test_menu_in_cave4(void **state)
                 int iy = (int)((ny + 1.0f) * 0.5f * img.height);
                 const float *got = &img.rgba[4 * ((size_t)iy * img.width + ix)];
                 float want[3];
-                app_menu_texel_radiance(&px[4 * (ty * pw + tx)], 1.0f, want);
+                menu_view_texel_radiance(&px[4 * (ty * pw + tx)], 1.0f, want);
                 seen++;
                 bool same = true;
                 for (int k = 0; k < 3; k++)
@@ -135,7 +135,7 @@ static void test_menu_in_cave4(void **state)
     assert_true(views_seeing >= 2 * walls); /* both eyes of each */
     assert_true(total > 50);
 
-    app_menu_view_destroy(mv, r);
+    menu_view_destroy(mv, r);
     menu_destroy(m);
     renderer_destroy(r);
     display_destroy(d);

@@ -4,7 +4,9 @@
 
 #include "testutil.h"
 
-#include "app/app.h"
+#include "session/lightmaps.h"
+#include "session/scene.h"
+#include "session/stats.h"
 #include "common/log.h"
 #include "gpu/gpu.h"
 #include "render/camera.h"
@@ -37,13 +39,13 @@ static void draw(const char **sets, int n, struct image *img)
     for (int i = 0; i < n; i++)
         assert_true(config_set(&cfg, sets[i]));
     struct ext_volume vol = {0};
-    assert_true(app_build_volume(&cfg, &vol));
+    assert_true(scene_build_volume(&cfg, &vol));
     assert_true(renderer_set_volume(renderer, &vol));
     ext_volume_finish(&vol);
     struct render_settings s;
-    app_render_settings(&cfg, &s);
+    scene_render_settings(&cfg, &s);
     struct render_view view;
-    app_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
+    scene_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
     renderer_set_light(renderer, NULL);
     struct gpu_texture out = {0};
     assert_true(renderer_draw(renderer, &s, &view, &out));

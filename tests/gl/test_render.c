@@ -5,7 +5,9 @@
 
 #include "testutil.h"
 
-#include "app/app.h"
+#include "session/lightmaps.h"
+#include "session/scene.h"
+#include "session/stats.h"
 #include "common/log.h"
 #include "gpu/gpu.h"
 #include "render/render.h"
@@ -21,14 +23,14 @@ static void render_config(struct config *cfg, const char **sets, int n, struct i
         assert_true(config_set(cfg, sets[i]));
     assert_true(config_validate(cfg));
     struct ext_volume vol = {0};
-    assert_true(app_build_volume(cfg, &vol));
+    assert_true(scene_build_volume(cfg, &vol));
     assert_true(renderer_set_volume(renderer, &vol));
     assert_true(renderer_set_optics(renderer, &cfg->optics.params));
     ext_volume_finish(&vol);
     struct render_settings s;
-    app_render_settings(cfg, &s);
+    scene_render_settings(cfg, &s);
     struct render_view view;
-    app_camera_view(cfg, cfg->render.width, cfg->render.height, &view);
+    scene_camera_view(cfg, cfg->render.width, cfg->render.height, &view);
     struct gpu_texture out = {0};
     assert_true(renderer_draw(renderer, &s, &view, &out));
     assert_true(renderer_read(&out, img));

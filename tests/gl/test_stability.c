@@ -9,7 +9,9 @@
 
 #include "testutil.h"
 
-#include "app/app.h"
+#include "session/lightmaps.h"
+#include "session/scene.h"
+#include "session/stats.h"
 #include "common/log.h"
 #include "gpu/gpu.h"
 #include "light/light.h"
@@ -26,16 +28,16 @@ static void draw(const struct config *cfg, const struct render_view *view, bool 
                  struct image *img)
 {
     struct render_settings rs;
-    app_render_settings(cfg, &rs);
+    scene_render_settings(cfg, &rs);
     struct render_view v;
     if (view)
         v = *view;
     else
-        app_camera_view(cfg, cfg->render.width, cfg->render.height, &v);
-    struct app_light al;
-    assert_true(app_light_init(&al, cfg));
+        scene_camera_view(cfg, cfg->render.width, cfg->render.height, &v);
+    struct lightmaps al;
+    assert_true(lightmaps_init(&al, cfg));
     if (light)
-        assert_true(app_light_update(&al, cfg, renderer, NULL));
+        assert_true(lightmaps_update(&al, cfg, renderer, NULL));
     else
         renderer_set_light(renderer, NULL);
     struct gpu_texture out = {0};
@@ -43,7 +45,7 @@ static void draw(const struct config *cfg, const struct render_view *view, bool 
     assert_true(renderer_read(&out, img));
     gpu_texture_finish(&out);
     renderer_set_light(renderer, NULL);
-    app_light_finish(&al);
+    lightmaps_finish(&al);
 }
 
 /* Largest eye phase P_v over the table: single scattering sum T (1 - T_s) P_v L_l L_sun can
@@ -504,7 +506,7 @@ static void test_bad_values_in_the_volume(void **state)
                           "lightmap.resolution=[8,8,8]"};
     test_config_from(&cfg, sets, 9);
     struct ext_volume vol = {0};
-    assert_true(app_build_volume(&cfg, &vol));
+    assert_true(scene_build_volume(&cfg, &vol));
     const float bad[] = {NAN, INFINITY, -1.0f, -INFINITY, 9.96921e36f};
     for (int i = 0; i < 64; i++) {
         vol.beta[2 * i] = bad[i % 5];

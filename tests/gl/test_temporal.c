@@ -7,8 +7,10 @@
 
 #include "testutil.h"
 
-#include "app/app.h"
-#include "app/effects.h"
+#include "session/lightmaps.h"
+#include "session/scene.h"
+#include "session/stats.h"
+#include "session/effects.h"
 #include "common/log.h"
 #include "gpu/gpu.h"
 #include "render/render.h"
@@ -31,12 +33,12 @@ static void setup_scene(const char *mode)
     assert_true(config_validate(&cfg));
     ext_volume_finish(&step_a);
     ext_volume_finish(&step_b);
-    assert_true(app_build_volume(&cfg, &step_a));
+    assert_true(scene_build_volume(&cfg, &step_a));
     assert_true(config_set(&cfg, "scene.time=0.9"));
-    assert_true(app_build_volume(&cfg, &step_b));
+    assert_true(scene_build_volume(&cfg, &step_b));
     assert_true(config_set(&cfg, "scene.time=0.5"));
     assert_true(renderer_set_optics(renderer, &cfg.optics.params));
-    app_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
+    scene_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
 }
 
 static void draw(const struct render_settings *s, struct image *img)
@@ -59,7 +61,7 @@ static void playing_effects(struct effects *e)
 }
 
 /* Renders VOL alone (no next volume) with its own plain light map (LIGHT NULL: none). */
-static void draw_plain(const struct ext_volume *vol, struct app_light *light, struct image *img)
+static void draw_plain(const struct ext_volume *vol, struct lightmaps *light, struct image *img)
 {
     assert_true(renderer_set_volume(renderer, vol));
     assert_true(renderer_set_next_volume(renderer, NULL));
@@ -67,10 +69,10 @@ static void draw_plain(const struct ext_volume *vol, struct app_light *light, st
     if (light) {
         light->generation++;
         light->temporal = false;
-        assert_true(app_light_update(light, &cfg, renderer, NULL));
+        assert_true(lightmaps_update(light, &cfg, renderer, NULL));
     }
     struct render_settings s;
-    app_render_settings(&cfg, &s);
+    scene_render_settings(&cfg, &s);
     draw(&s, img);
 }
 
@@ -103,7 +105,7 @@ static void test_extinction_blend(void **state)
     assert_true(renderer_set_next_volume(renderer, &step_b));
     assert_true(renderer_has_next(renderer));
     struct render_settings s;
-    app_render_settings(&cfg, &s);
+    scene_render_settings(&cfg, &s);
     s.temporal = true;
     s.temporal_f = 0.0f;
     draw(&s, &t);
@@ -146,9 +148,9 @@ static void light_pair_blend(const char *mode)
     setup_scene(mode);
     struct effects e;
     playing_effects(&e);
-    struct app_light plain;
-    assert_true(app_light_init(&plain, &cfg));
-    app_light_set_effects(&plain, &e);
+    struct lightmaps plain;
+    assert_true(lightmaps_init(&plain, &cfg));
+    lightmaps_set_effects(&plain, &e);
     struct image a, b, t, avg;
     draw_plain(&step_a, &plain, &a);
     draw_plain(&step_b, &plain, &b);
@@ -158,22 +160,22 @@ static void light_pair_blend(const char *mode)
         mean.beta[i] = 0.5f * (step_a.beta[i] + step_b.beta[i]);
     draw_plain(&mean, &plain, &avg); /* the exact answer: the mean volume with its own map */
     ext_volume_finish(&mean);
-    app_light_finish(&plain);
+    lightmaps_finish(&plain);
 
-    struct app_light light;
-    assert_true(app_light_init(&light, &cfg));
-    app_light_set_effects(&light, &e);
-    struct app_stats st = {0};
+    struct lightmaps light;
+    assert_true(lightmaps_init(&light, &cfg));
+    lightmaps_set_effects(&light, &e);
+    struct session_stats st = {0};
     assert_true(renderer_set_volume(renderer, &step_a));
     assert_true(renderer_set_next_volume(renderer, &step_b));
     light.temporal = true;
-    light.step_id = app_light_step_id(0, 0);
-    light.next_id = app_light_step_id(1, 0);
+    light.step_id = lightmaps_step_id(0, 0);
+    light.next_id = lightmaps_step_id(1, 0);
     struct render_settings s;
-    app_render_settings(&cfg, &s);
+    scene_render_settings(&cfg, &s);
     s.temporal = true;
     s.temporal_f = 0.0f;
-    assert_true(app_light_update(&light, &cfg, renderer, &st));
+    assert_true(lightmaps_update(&light, &cfg, renderer, &st));
     assert_int_equal(st.light_builds, 2); /* one map per step: k and k + 1 */
     draw(&s, &t);
     assert_memory_equal(t.rgba, a.rgba, sizeof(float) * 4 * a.width * a.height);
@@ -188,7 +190,7 @@ static void light_pair_blend(const char *mode)
     image_finish(&t);
 
     s.temporal_f = 0.5f;
-    assert_true(app_light_update(&light, &cfg, renderer, &st));
+    assert_true(lightmaps_update(&light, &cfg, renderer, &st));
     assert_int_equal(st.light_builds, 2); /* f changes nothing the maps depend on */
     draw(&s, &t);
     double scale = fmax(largest(&a), largest(&b));
@@ -221,23 +223,23 @@ static void light_pair_blend(const char *mode)
     for (int k = 1; k < steps; k++) {
         assert_true(renderer_set_volume(renderer, k % 2 ? &step_b : &step_a));
         assert_true(renderer_set_next_volume(renderer, k % 2 ? &step_a : &step_b));
-        light.step_id = app_light_step_id(k, 0);
-        light.next_id = app_light_step_id(k + 1, 0);
+        light.step_id = lightmaps_step_id(k, 0);
+        light.next_id = lightmaps_step_id(k + 1, 0);
         for (int frame = 0; frame < 5; frame++) {
             s.temporal_f = (float)frame / 5.0f;
-            assert_true(app_light_update(&light, &cfg, renderer, &st));
+            assert_true(lightmaps_update(&light, &cfg, renderer, &st));
             draw(&s, &t);
             image_finish(&t);
         }
     }
     assert_int_equal(st.light_builds, steps + 1);
     /* A look change (new generation) rebuilds both maps once. */
-    light.step_id = app_light_step_id(steps - 1, 1);
-    light.next_id = app_light_step_id(steps, 1);
-    assert_true(app_light_update(&light, &cfg, renderer, &st));
-    assert_true(app_light_update(&light, &cfg, renderer, &st));
+    light.step_id = lightmaps_step_id(steps - 1, 1);
+    light.next_id = lightmaps_step_id(steps, 1);
+    assert_true(lightmaps_update(&light, &cfg, renderer, &st));
+    assert_true(lightmaps_update(&light, &cfg, renderer, &st));
     assert_int_equal(st.light_builds, steps + 3);
-    app_light_finish(&light);
+    lightmaps_finish(&light);
     assert_true(renderer_set_next_volume(renderer, NULL));
     assert_false(renderer_has_next(renderer));
 }

@@ -7,8 +7,10 @@
 
 #include "testutil.h"
 
-#include "app/app.h"
-#include "app/map.h"
+#include "session/lightmaps.h"
+#include "session/scene.h"
+#include "session/stats.h"
+#include "session/map.h"
 #include "common/log.h"
 #include "data/terrain.h"
 #include "gpu/gpu.h"
@@ -30,23 +32,23 @@ static void render(const struct config *cfg, struct render_mesh *mesh, bool grou
     struct renderer *r = renderer_create();
     assert_non_null(r);
     struct ext_volume vol = {0};
-    assert_true(app_build_volume(cfg, &vol));
+    assert_true(scene_build_volume(cfg, &vol));
     assert_true(renderer_set_optics(r, &cfg->optics.params));
     assert_true(renderer_set_volume(r, &vol));
     ext_volume_finish(&vol);
-    struct app_light light;
-    assert_true(app_light_init(&light, cfg));
-    assert_true(app_light_update(&light, cfg, r, NULL));
+    struct lightmaps light;
+    assert_true(lightmaps_init(&light, cfg));
+    assert_true(lightmaps_update(&light, cfg, r, NULL));
     if (mesh)
         assert_true(renderer_add_mesh(r, mesh));
     struct render_settings s;
-    app_render_settings(cfg, &s);
+    scene_render_settings(cfg, &s);
     s.ground_on = ground_on;
     struct gpu_texture out = {0};
     assert_true(renderer_draw(r, &s, view, &out));
     assert_true(renderer_read(&out, img));
     gpu_texture_finish(&out);
-    app_light_finish(&light);
+    lightmaps_finish(&light);
     renderer_destroy(r);
 }
 
@@ -154,7 +156,7 @@ static void render_storm(const char **sets, int n, struct image *img)
     struct config cfg;
     load(NULL, base, 3 + n, &cfg);
     struct render_view view;
-    app_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
+    scene_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
     render(&cfg, NULL, true, &view, img);
 }
 
@@ -194,24 +196,24 @@ static void test_katrina_map(void **state)
     struct renderer *r = renderer_create();
     assert_non_null(r);
     struct ext_volume vol = {0};
-    assert_true(app_build_volume(&cfg, &vol));
+    assert_true(scene_build_volume(&cfg, &vol));
     assert_true(renderer_set_volume(r, &vol));
     ext_volume_finish(&vol);
 
-    struct app_map *m = app_map_create(&cfg, r);
+    struct scene_map *m = scene_map_create(&cfg, r);
     assert_non_null(m);
-    struct app_map_info info;
-    app_map_get_info(m, &info);
+    struct scene_map_info info;
+    scene_map_get_info(m, &info);
     assert_true(info.terrain && info.placed);
     assert_true(info.coast_segments > 50); /* the Yucatan coast within the 300 km margin */
     assert_true(info.graticule_segments > 0 && info.labels >= 4);
     assert_float_equal(info.step_deg, 2.0, 0.0);
     struct render_settings s;
-    app_render_settings(&cfg, &s);
-    app_map_apply_settings(m, &s);
+    scene_render_settings(&cfg, &s);
+    scene_map_apply_settings(m, &s);
     assert_false(s.ground_on); /* the terrain and its skirt are the ground */
     struct render_view view;
-    app_camera_view(&cfg, 64, 48, &view);
+    scene_camera_view(&cfg, 64, 48, &view);
     struct gpu_texture out = {0};
     assert_true(renderer_draw(r, &s, &view, &out));
     struct image img;
@@ -219,28 +221,28 @@ static void test_katrina_map(void **state)
     assert_int_equal(image_count_nonfinite(&img), 0);
     image_finish(&img);
     gpu_texture_finish(&out);
-    app_map_destroy(m, r);
+    scene_map_destroy(m, r);
 
     /* No GSHHG files: a message, no coastlines, the rest as before. */
     setenv("ANVIL_GSHHG_DIR", test_tmp_path("no_gshhg_here"), 1);
-    m = app_map_create(&cfg, r);
+    m = scene_map_create(&cfg, r);
     unsetenv("ANVIL_GSHHG_DIR");
     assert_non_null(m);
-    app_map_get_info(m, &info);
+    scene_map_get_info(m, &info);
     assert_int_equal(info.coast_segments, 0);
     assert_true(info.terrain);
-    app_map_destroy(m, r);
+    scene_map_destroy(m, r);
 
     /* Terrain off: the analytic flat ground stays. */
     assert_true(config_set(&cfg, "map.terrain=false"));
-    m = app_map_create(&cfg, r);
+    m = scene_map_create(&cfg, r);
     assert_non_null(m);
-    app_map_get_info(m, &info);
+    scene_map_get_info(m, &info);
     assert_false(info.terrain);
-    app_render_settings(&cfg, &s);
-    app_map_apply_settings(m, &s);
+    scene_render_settings(&cfg, &s);
+    scene_map_apply_settings(m, &s);
     assert_true(s.ground_on);
-    app_map_destroy(m, r);
+    scene_map_destroy(m, r);
     renderer_destroy(r);
 }
 
@@ -254,21 +256,21 @@ static void test_synthetic_storm_placed_by_origin(void **state)
     assert_non_null(r);
     struct ext_volume vol = {0};
     load(NULL, plain, 1, &cfg);
-    assert_true(app_build_volume(&cfg, &vol));
+    assert_true(scene_build_volume(&cfg, &vol));
     assert_true(renderer_set_volume(r, &vol));
     ext_volume_finish(&vol);
-    struct app_map *m = app_map_create(&cfg, r);
-    struct app_map_info info;
-    app_map_get_info(m, &info);
+    struct scene_map *m = scene_map_create(&cfg, r);
+    struct scene_map_info info;
+    scene_map_get_info(m, &info);
     assert_false(info.placed || info.terrain);
     assert_int_equal(info.coast_segments + info.graticule_segments, 0);
-    app_map_destroy(m, r);
+    scene_map_destroy(m, r);
     load(NULL, placed, 3, &cfg);
-    m = app_map_create(&cfg, r);
-    app_map_get_info(m, &info);
+    m = scene_map_create(&cfg, r);
+    scene_map_get_info(m, &info);
     assert_true(info.placed && !info.terrain);
     assert_true(info.coast_segments > 10 && info.graticule_segments > 0);
-    app_map_destroy(m, r);
+    scene_map_destroy(m, r);
     renderer_destroy(r);
 }
 

@@ -6,7 +6,9 @@
 
 #include "testutil.h"
 
-#include "app/app.h"
+#include "session/lightmaps.h"
+#include "session/scene.h"
+#include "session/stats.h"
 #include "common/log.h"
 #include "config/display_config.h"
 #include "display/display.h"
@@ -26,11 +28,11 @@ static void scene(const char **sets, int n)
         assert_true(config_set(&cfg, sets[i]));
     assert_true(config_validate(&cfg));
     struct ext_volume vol = {0};
-    assert_true(app_build_volume(&cfg, &vol));
+    assert_true(scene_build_volume(&cfg, &vol));
     assert_true(renderer_set_volume(renderer, &vol));
     assert_true(renderer_set_optics(renderer, &cfg.optics.params));
     ext_volume_finish(&vol);
-    app_render_settings(&cfg, &settings);
+    scene_render_settings(&cfg, &settings);
 }
 
 static struct display *open_display(const struct display_config *cfg, int height)
@@ -183,34 +185,34 @@ static void test_light_map_builds_once_for_12_views(void **state)
         assert_true(config_set(&cfg, sets[i]));
     assert_true(config_validate(&cfg));
     struct ext_volume vol = {0};
-    assert_true(app_build_volume(&cfg, &vol));
+    assert_true(scene_build_volume(&cfg, &vol));
     assert_true(renderer_set_volume(renderer, &vol));
     ext_volume_finish(&vol);
-    app_render_settings(&cfg, &settings);
-    struct app_light light = {0};
-    struct app_stats stats = {0};
-    assert_true(app_light_init(&light, &cfg));
+    scene_render_settings(&cfg, &settings);
+    struct lightmaps light = {0};
+    struct session_stats stats = {0};
+    assert_true(lightmaps_init(&light, &cfg));
     light.generation++;
     struct display_config dcfg;
     load_display("cave6.cfg", &dcfg);
     struct display *d = open_display(&dcfg, 16);
     for (int frame = 0; frame < 3; frame++) {
-        assert_true(app_light_update(&light, &cfg, renderer, &stats));
+        assert_true(lightmaps_update(&light, &cfg, renderer, &stats));
         assert_true(display_update(d, frame * 0.1));
         assert_true(display_draw(d, renderer, &settings));
     }
     assert_int_equal(display_view_count(d), 12);
     assert_int_equal(stats.light_builds, 1);
     cfg.light.elevation_deg = 20.0;
-    app_render_settings(&cfg, &settings);
+    scene_render_settings(&cfg, &settings);
     for (int frame = 0; frame < 2; frame++) {
-        assert_true(app_light_update(&light, &cfg, renderer, &stats));
+        assert_true(lightmaps_update(&light, &cfg, renderer, &stats));
         assert_true(display_draw(d, renderer, &settings));
     }
     assert_int_equal(stats.light_builds, 2);
     display_destroy(d);
     renderer_set_light(renderer, NULL);
-    app_light_finish(&light);
+    lightmaps_finish(&light);
 }
 
 /* A headless display with one horizontal screen 0.1 tracker m above (UP) or below the head at

@@ -1,6 +1,8 @@
 #include "testutil.h"
 
-#include "app/app.h"
+#include "session/lightmaps.h"
+#include "session/scene.h"
+#include "session/stats.h"
 #include "gpu/gpu.h"
 #include "render/render.h"
 
@@ -93,7 +95,7 @@ void test_config_file(struct config *cfg, const char *path, const char **sets, i
 
 void test_upload_scene(struct renderer *r, const struct config *cfg, struct ext_volume *vol)
 {
-    assert_true(app_build_volume(cfg, vol));
+    assert_true(scene_build_volume(cfg, vol));
     assert_true(renderer_set_volume(r, vol));
     assert_true(renderer_set_optics(r, &cfg->optics.params));
 }

@@ -5,7 +5,7 @@
 
 #include "testutil.h"
 
-#include "app/effects.h"
+#include "session/effects.h"
 #include "common/log.h"
 #include "data/synth.h"
 #include "light/light.h"

@@ -9,7 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "app/interact.h"
+#include "session/interact.h"
 #include "common/log.h"
 #include "input/input.h"
 #include "menu/menu.h"
@@ -33,7 +33,7 @@ static struct menu *make_menu(int steps, double speed)
 
 /* Runs FRAMES frames of the script at fps 10 through the menu into PB; returns the step at
  * each frame in STEPS. */
-static void run_script(struct input_source *src, struct menu *m, struct app_playback *pb,
+static void run_script(struct input_source *src, struct menu *m, struct playback *pb,
                        int frames, int *steps)
 {
     struct input_queue q;
@@ -49,7 +49,7 @@ static void run_script(struct input_source *src, struct menu *m, struct app_play
             pb->playing = md->playing;
             pb->speed = md->speed;
         }
-        app_playback_tick(pb, 1.0 / input_script_fps(src), always, NULL);
+        playback_tick(pb, 1.0 / input_script_fps(src), always, NULL);
         md->step = pb->step;
         steps[f] = pb->step;
     }
@@ -73,8 +73,8 @@ static void test_script_play_pause(void **state)
     assert_float_equal(input_script_fps(src), 10.0, 0);
     assert_int_equal(input_script_last_frame(src), 42);
     struct menu *m = make_menu(100, 2.0);
-    struct app_playback pb;
-    app_playback_init(&pb, 100, 0, 2.0, false);
+    struct playback pb;
+    playback_init(&pb, 100, 0, 2.0, false);
     int steps[80];
     run_script(src, m, &pb, 80, steps);
     assert_int_equal(steps[1], 0);
@@ -101,8 +101,8 @@ static void test_script_speed_and_end(void **state)
     struct input_source *src = input_script_open(path);
     assert_non_null(src);
     struct menu *m = make_menu(6, 2.0);
-    struct app_playback pb;
-    app_playback_init(&pb, 6, 0, 2.0, false);
+    struct playback pb;
+    playback_init(&pb, 6, 0, 2.0, false);
     int steps[40];
     run_script(src, m, &pb, 40, steps);
     assert_float_equal(menu_model(m)->speed, 10.0, 1e-9);
@@ -151,25 +151,25 @@ static void test_slow_reader_never_blocks(void **state)
     cfg->data.file_count = 1;
     snprintf(cfg->data.files[0], sizeof(cfg->data.files[0]), "%s", nc);
     cfg->data.prefetch = 2;
-    struct app_player *p = app_player_create(cfg, &(struct app_player_desc){.delay_ms = 80.0});
+    struct player *p = player_create(cfg, &(struct player_desc){.delay_ms = 80.0});
     assert_non_null(p);
-    assert_int_equal(app_player_step_count(p), 6);
-    struct app_playback pb;
-    app_playback_init(&pb, 6, 0, 50.0, false); /* 50 steps/s: far faster than the reader */
+    assert_int_equal(player_step_count(p), 6);
+    struct playback pb;
+    playback_init(&pb, 6, 0, 50.0, false); /* 50 steps/s: far faster than the reader */
     pb.playing = true;
     double worst = 0.0;
     int shown = 0, uploads = 0;
     for (int f = 0; f < 400 && (pb.playing || shown != pb.step); f++) {
         double t0 = time_now_ms();
-        app_playback_tick(&pb, 0.01, (bool (*)(void *, int))app_player_ready, p);
-        if (app_player_poll(p, pb.step, &shown))
+        playback_tick(&pb, 0.01, (bool (*)(void *, int))player_ready, p);
+        if (player_poll(p, pb.step, &shown))
             uploads++;
         double ms = time_now_ms() - t0;
         worst = ms > worst ? ms : worst;
         usleep(10000);
     }
-    struct app_stats st = {0};
-    app_player_stats(p, &st);
+    struct session_stats st = {0};
+    player_stats(p, &st);
     assert_true(worst < 40.0); /* a load takes 80 ms: no frame waited for one */
     assert_int_equal(st.frames_waited, 0);
     assert_int_equal(shown, 5);
@@ -177,7 +177,7 @@ static void test_slow_reader_never_blocks(void **state)
     assert_true(pb.stalls > 0);   /* it did outrun the reader */
     assert_true(uploads >= 5);    /* every step was shown on the way */
     assert_true(st.load_ms >= 80.0 * 5);
-    app_player_destroy(p);
+    player_destroy(p);
     free(cfg);
 }
 

@@ -9,8 +9,8 @@
  * the view matrices.  The renderer and the light map turn an effect that is off into a shader
  * variant without its code (docs/effects.md).
  */
-#ifndef ANVIL_APP_EFFECTS_H
-#define ANVIL_APP_EFFECTS_H
+#ifndef ANVIL_SESSION_EFFECTS_H
+#define ANVIL_SESSION_EFFECTS_H
 
 #include <stdbool.h>
 

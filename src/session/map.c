@@ -1,12 +1,12 @@
 /* The session's ground and map: terrain, coastlines, graticule and labels as opaque meshes. */
-#include "app/map.h"
+#include "session/map.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "app/cmd_data.h"
+#include "session/scene.h"
 #include "common/log.h"
 #include "data/coast.h"
 #include "data/source.h"
@@ -20,7 +20,7 @@ static const float coast_albedo[3] = {0.85f, 0.80f, 0.55f};
 static const float graticule_albedo[3] = {0.55f, 0.55f, 0.55f};
 static const float label_albedo[3] = {0.9f, 0.9f, 0.9f};
 
-struct app_map {
+struct scene_map {
     struct geo_map geo;
     struct terrain terrain;
     bool have_terrain;
@@ -30,7 +30,7 @@ struct app_map {
     double max_segment;  /* lines are cut into pieces this long, to follow the terrain */
     struct render_mesh *terrain_mesh, *coast_mesh, *graticule_mesh;
     struct render_text *labels;
-    struct app_map_info info;
+    struct scene_map_info info;
 };
 
 /* A growing list of segments (x0, y0, z0, x1, y1, z1). */
@@ -40,7 +40,7 @@ struct segments {
     bool failed;
 };
 
-static double ground_z(const struct app_map *m, double x, double y)
+static double ground_z(const struct scene_map *m, double x, double y)
 {
     if (!m->have_terrain)
         return 0.0;
@@ -100,7 +100,7 @@ static bool clip(const double r[4], double a[2], double b[2])
 }
 
 /* Adds segment A-B of a line on the ground: clipped to the map, cut to follow the terrain. */
-static void add_ground_segment(const struct app_map *m, struct segments *s, const double a_in[2],
+static void add_ground_segment(const struct scene_map *m, struct segments *s, const double a_in[2],
                                const double b_in[2])
 {
     double a[2] = {a_in[0], a_in[1]}, b[2] = {b_in[0], b_in[1]};
@@ -122,11 +122,11 @@ static void add_ground_segment(const struct app_map *m, struct segments *s, cons
 }
 
 /* Where the terrain and the map come from: the WRF metadata of a data scene. */
-static void load_wrf_meta(const struct config *cfg, const struct grid3 *box, struct app_map *m)
+static void load_wrf_meta(const struct config *cfg, const struct grid3 *box, struct scene_map *m)
 {
     const char *files[CONFIG_MAX_FILES];
     struct data_source_desc desc;
-    cmd_data_source_desc(cfg, files, &desc);
+    scene_source_desc(cfg, files, &desc);
     struct data_source *src = data_source_open(&desc);
     if (!src)
         return; /* the volume was read, so this does not happen short of a race; logged */
@@ -139,7 +139,7 @@ static void load_wrf_meta(const struct config *cfg, const struct grid3 *box, str
     data_source_close(src);
 }
 
-static void build_coastlines(const struct config *cfg, struct app_map *m)
+static void build_coastlines(const struct config *cfg, struct scene_map *m)
 {
     static const char res[] = {'c', 'l', 'i'};
     double box[4];
@@ -208,7 +208,7 @@ static bool inside(const double r[4], const double p[2], double pad)
     return p[0] >= r[0] + pad && p[0] <= r[1] - pad && p[1] >= r[2] + pad && p[1] <= r[3] - pad;
 }
 
-static void build_graticule(const struct config *cfg, struct app_map *m)
+static void build_graticule(const struct config *cfg, struct scene_map *m)
 {
     double box[4];
     if (!geo_map_box(&m->geo, m->rect, box))
@@ -268,9 +268,9 @@ static void build_graticule(const struct config *cfg, struct app_map *m)
     log_info("map: graticule every %g degrees, %d labels", step, m->info.labels);
 }
 
-struct app_map *app_map_create(const struct config *cfg, struct renderer *r)
+struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r)
 {
-    struct app_map *m = calloc(1, sizeof(*m));
+    struct scene_map *m = calloc(1, sizeof(*m));
     if (!m) {
         log_error("out of memory");
         return NULL;
@@ -330,11 +330,11 @@ struct app_map *app_map_create(const struct config *cfg, struct renderer *r)
     return m;
 
 error:
-    app_map_destroy(m, r);
+    scene_map_destroy(m, r);
     return NULL;
 }
 
-void app_map_destroy(struct app_map *m, struct renderer *r)
+void scene_map_destroy(struct scene_map *m, struct renderer *r)
 {
     if (!m)
         return;
@@ -353,20 +353,20 @@ void app_map_destroy(struct app_map *m, struct renderer *r)
     free(m);
 }
 
-void app_map_apply_settings(const struct app_map *m, struct render_settings *s)
+void scene_map_apply_settings(const struct scene_map *m, struct render_settings *s)
 {
     if (m && m->terrain_mesh)
         s->ground_on = false; /* the terrain and its skirt are the ground */
 }
 
-void app_map_get_info(const struct app_map *m, struct app_map_info *out)
+void scene_map_get_info(const struct scene_map *m, struct scene_map_info *out)
 {
     memset(out, 0, sizeof(*out));
     if (m)
         *out = m->info;
 }
 
-const struct geo_map *app_map_geo(const struct app_map *m)
+const struct geo_map *scene_map_geo(const struct scene_map *m)
 {
     return &m->geo;
 }

@@ -3,12 +3,13 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "app/app.h"
+#include "session/lightmaps.h"
+#include "session/scene.h"
 #include "common/log.h"
 #include "light/light_gpu.h"
 #include "render/camera.h"
 
-bool app_light_init(struct app_light *al, const struct config *cfg)
+bool lightmaps_init(struct lightmaps *al, const struct config *cfg)
 {
     memset(al, 0, sizeof(*al));
     if (cfg->effects.mode[EFFECT_SHADOWS] == EFFECT_OFF)
@@ -17,7 +18,7 @@ bool app_light_init(struct app_light *al, const struct config *cfg)
     return al->gpu != NULL;
 }
 
-void app_light_set_effects(struct app_light *al, const struct effects *e)
+void lightmaps_set_effects(struct lightmaps *al, const struct effects *e)
 {
     al->effects = *e;
     al->have_effects = true;
@@ -26,7 +27,7 @@ void app_light_set_effects(struct app_light *al, const struct effects *e)
 /* The generation of every temporal map's key: step ids never meet the plain map's keys. */
 #define TEMPORAL_GENERATION (UINT64_C(1) << 63)
 
-uint64_t app_light_step_id(int step, uint64_t gen)
+uint64_t lightmaps_step_id(int step, uint64_t gen)
 {
     return (gen << 32) ^ (uint64_t)(step + 1);
 }
@@ -34,8 +35,8 @@ uint64_t app_light_step_id(int step, uint64_t gen)
 /* The temporal pair's hook: step k's map as the light map, step k + 1's as the second. */
 static void bind_pair(const struct render_light *light, const struct gpu_program *prog)
 {
-    const struct app_light *al =
-        (const struct app_light *)((const char *)light - offsetof(struct app_light, pair));
+    const struct lightmaps *al =
+        (const struct lightmaps *)((const char *)light - offsetof(struct lightmaps, pair));
     const struct light_gpu *maps[2] = {al->gpu, al->spare};
     light_gpu_bind(maps[al->pair_first], prog, false);
     light_gpu_bind(maps[1 - al->pair_first], prog, true);
@@ -44,7 +45,7 @@ static void bind_pair(const struct render_light *light, const struct gpu_program
 /* Builds LG for SRC when stale; logs and counts a build. */
 static bool build(struct light_gpu *lg, const struct light_gpu_source *src, const double sun[3],
                   const struct light_settings *s, enum light_gpu_mode mode,
-                  const struct effects *e, struct app_stats *st)
+                  const struct effects *e, struct session_stats *st)
 {
     bool built = false;
     if (!light_gpu_update(lg, src, sun, s, mode, &built)) {
@@ -57,7 +58,7 @@ static bool build(struct light_gpu *lg, const struct light_gpu_source *src, cons
         return true;
     double ms = light_gpu_last_build_ms(lg);
     if (st)
-        app_stats_add_build(st, ms);
+        session_stats_add_build(st, ms);
     size_t dense, compressed;
     light_gpu_bytes(lg, &dense, &compressed);
     if (st) {
@@ -78,9 +79,9 @@ static bool build(struct light_gpu *lg, const struct light_gpu_source *src, cons
 /* effects.temporal: one map per step in the ring {gpu, spare}.  The map that already holds
  * step k (or else the one not holding k + 1) serves k, the other k + 1: advancing a step finds
  * the new k built as the old next and builds only the new next. */
-static bool update_temporal(struct app_light *al, struct renderer *r, const double sun[3],
+static bool update_temporal(struct lightmaps *al, struct renderer *r, const double sun[3],
                             const struct light_settings *s, enum light_gpu_mode mode,
-                            const struct effects *e, struct app_stats *st)
+                            const struct effects *e, struct session_stats *st)
 {
     bool pair = al->next_id != 0 && renderer_has_next(r);
     if (pair && !al->spare && !(al->spare = light_gpu_create()))
@@ -125,8 +126,8 @@ static bool update_temporal(struct app_light *al, struct renderer *r, const doub
     return true;
 }
 
-bool app_light_update(struct app_light *al, const struct config *cfg, struct renderer *r,
-                      struct app_stats *st)
+bool lightmaps_update(struct lightmaps *al, const struct config *cfg, struct renderer *r,
+                      struct session_stats *st)
 {
     struct effects decided;
     const struct effects *e = &al->effects;
@@ -159,7 +160,7 @@ bool app_light_update(struct app_light *al, const struct config *cfg, struct ren
     return true;
 }
 
-void app_light_finish(struct app_light *al)
+void lightmaps_finish(struct lightmaps *al)
 {
     light_gpu_destroy(al->gpu);
     light_gpu_destroy(al->spare);

@@ -1,11 +1,12 @@
-/* Time playback: the cursor (app_playback) and the player over the time series cache. */
+/* Time playback: the cursor (playback) and the player over the time series cache. */
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "app/cmd_data.h"
-#include "app/interact.h"
+#include "session/player.h"
+#include "session/scene.h"
+#include "session/interact.h"
 #include "common/log.h"
 #include "data/detail.h"
 #include "data/series.h"
@@ -16,7 +17,7 @@
 #define LUT_SIZE 256
 #define DATE_LEN 64
 
-void app_playback_init(struct app_playback *pb, int count, int step, double speed, bool loop)
+void playback_init(struct playback *pb, int count, int step, double speed, bool loop)
 {
     memset(pb, 0, sizeof(*pb));
     pb->count = count > 0 ? count : 1;
@@ -25,7 +26,7 @@ void app_playback_init(struct app_playback *pb, int count, int step, double spee
     pb->loop = loop;
 }
 
-bool app_playback_tick(struct app_playback *pb, double dt, bool (*ready)(void *user, int step),
+bool playback_tick(struct playback *pb, double dt, bool (*ready)(void *user, int step),
                        void *user)
 {
     if (!pb->playing || pb->count < 2 || !(dt > 0.0))
@@ -59,7 +60,7 @@ bool app_playback_tick(struct app_playback *pb, double dt, bool (*ready)(void *u
 
 enum player_kind { PLAYER_STORM, PLAYER_FIELDS, PLAYER_EXTINCTION, PLAYER_TEST_SCENE };
 
-struct app_player {
+struct player {
     const struct config *cfg;
     enum player_kind kind;
     struct series *series;
@@ -70,7 +71,7 @@ struct app_player {
     struct data_source *src; /* read by the series' thread only (after create) */
 
     pthread_mutex_t lock; /* guards look, look_gen, present */
-    struct app_look look;
+    struct look look;
     uint64_t look_gen;
     bool present[SPECIES_COUNT];
 
@@ -82,7 +83,7 @@ struct app_player {
     double upload_ms;
 };
 
-void app_look_from_config(const struct config *cfg, struct app_look *look)
+void look_from_config(const struct config *cfg, struct look *look)
 {
     memset(look, 0, sizeof(*look));
     for (int f = 0; f < SPECIES_COUNT; f++) {
@@ -152,11 +153,11 @@ static void storm_desc(const struct config *cfg, struct synth_desc *d)
 }
 
 /* Mass ratios -> extinction with the look (on the series' thread). */
-static bool convert(struct app_player *p, struct field_volume *fv, const struct app_look *look,
+static bool convert(struct player *p, struct field_volume *fv, const struct look *look,
                     struct ext_volume *out)
 {
     struct detail_desc detail;
-    cmd_data_detail_desc(p->cfg, &detail);
+    scene_detail_desc(p->cfg, &detail);
     detail_apply_fields(&detail, fv);
     bool ok;
     if (look->transfer_on) {
@@ -193,8 +194,8 @@ static bool convert(struct app_player *p, struct field_volume *fv, const struct 
 static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
                  double *convert_ms)
 {
-    struct app_player *p = user;
-    struct app_look *look = malloc(sizeof(*look));
+    struct player *p = user;
+    struct look *look = malloc(sizeof(*look));
     if (!look) {
         log_error("out of memory");
         return false;
@@ -210,7 +211,7 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
         struct config *c = malloc(sizeof(*c));
         if (c) {
             *c = *p->cfg;
-            ok = app_build_volume(c, out);
+            ok = scene_build_volume(c, out);
             free(c);
         }
         *load_ms += time_now_ms() - t0;
@@ -250,9 +251,9 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
     return ok;
 }
 
-struct app_player *app_player_create(const struct config *cfg, const struct app_player_desc *d)
+struct player *player_create(const struct config *cfg, const struct player_desc *d)
 {
-    struct app_player *p = calloc(1, sizeof(*p));
+    struct player *p = calloc(1, sizeof(*p));
     if (!p) {
         log_error("out of memory");
         return NULL;
@@ -264,7 +265,7 @@ struct app_player *app_player_create(const struct config *cfg, const struct app_
         free(p);
         return NULL;
     }
-    app_look_from_config(cfg, &p->look);
+    look_from_config(cfg, &p->look);
     for (int f = 0; f < SPECIES_COUNT; f++)
         p->present[f] = true;
     if (cfg->scene.kind == SCENE_STORM) {
@@ -275,7 +276,7 @@ struct app_player *app_player_create(const struct config *cfg, const struct app_
             p->present[f] = false;
     } else {
         p->kind = cfg->data.format == DATA_EXTINCTION ? PLAYER_EXTINCTION : PLAYER_FIELDS;
-        cmd_data_source_desc(cfg, p->files, &p->src_desc);
+        scene_source_desc(cfg, p->files, &p->src_desc);
         p->src_desc.wrf.qvapor = true;
         p->src = data_source_open(&p->src_desc);
         if (!p->src)
@@ -308,11 +309,11 @@ struct app_player *app_player_create(const struct config *cfg, const struct app_
     return p;
 
 error:
-    app_player_destroy(p);
+    player_destroy(p);
     return NULL;
 }
 
-void app_player_destroy(struct app_player *p)
+void player_destroy(struct player *p)
 {
     if (!p)
         return;
@@ -323,34 +324,34 @@ void app_player_destroy(struct app_player *p)
     free(p);
 }
 
-int app_player_step_count(const struct app_player *p)
+int player_step_count(const struct player *p)
 {
     return p->steps;
 }
 
-const char *app_player_step_date(struct app_player *p, int step)
+const char *player_step_date(struct player *p, int step)
 {
     return step >= 0 && step < p->steps ? p->dates[step] : "";
 }
 
-bool app_player_ready(struct app_player *p, int step)
+bool player_ready(struct player *p, int step)
 {
     return series_ready(p->series, step);
 }
 
-bool app_player_has_fields(const struct app_player *p)
+bool player_has_fields(const struct player *p)
 {
     return p->kind == PLAYER_STORM || p->kind == PLAYER_FIELDS;
 }
 
-void app_player_species_present(const struct app_player *p, bool present[SPECIES_COUNT])
+void player_species_present(const struct player *p, bool present[SPECIES_COUNT])
 {
     pthread_mutex_lock((pthread_mutex_t *)&p->lock);
     memcpy(present, p->present, sizeof(p->present));
     pthread_mutex_unlock((pthread_mutex_t *)&p->lock);
 }
 
-void app_player_set_look(struct app_player *p, const struct app_look *look)
+void player_set_look(struct player *p, const struct look *look)
 {
     pthread_mutex_lock(&p->lock);
     p->look = *look;
@@ -359,7 +360,7 @@ void app_player_set_look(struct app_player *p, const struct app_look *look)
     series_invalidate(p->series);
 }
 
-const struct ext_volume *app_player_poll(struct app_player *p, int want, int *shown)
+const struct ext_volume *player_poll(struct player *p, int want, int *shown)
 {
     const struct ext_volume *v = NULL;
     if (want != p->shown || p->shown_gen != p->look_gen) {
@@ -374,7 +375,7 @@ const struct ext_volume *app_player_poll(struct app_player *p, int want, int *sh
     return v;
 }
 
-const struct ext_volume *app_player_wait(struct app_player *p, int want, int *shown)
+const struct ext_volume *player_wait(struct player *p, int want, int *shown)
 {
     const struct ext_volume *v = NULL;
     if (want != p->shown || p->shown_gen != p->look_gen) {
@@ -389,7 +390,7 @@ const struct ext_volume *app_player_wait(struct app_player *p, int want, int *sh
     return v;
 }
 
-const struct ext_volume *app_player_poll_next(struct app_player *p, int want, bool wait,
+const struct ext_volume *player_poll_next(struct player *p, int want, bool wait,
                                               int *held)
 {
     const struct ext_volume *v = NULL;
@@ -405,21 +406,21 @@ const struct ext_volume *app_player_poll_next(struct app_player *p, int want, bo
     return v;
 }
 
-uint64_t app_player_step_id(const struct app_player *p, bool next)
+uint64_t player_step_id(const struct player *p, bool next)
 {
     if (next)
         return p->next_shown < 0 || p->next_gen != p->look_gen
                    ? 0
-                   : app_light_step_id(p->next_shown, p->next_gen);
-    return app_light_step_id(p->shown, p->shown_gen);
+                   : lightmaps_step_id(p->next_shown, p->next_gen);
+    return lightmaps_step_id(p->shown, p->shown_gen);
 }
 
-bool app_player_settled(const struct app_player *p, int want)
+bool player_settled(const struct player *p, int want)
 {
     return want == p->shown && p->shown_gen == p->look_gen;
 }
 
-void app_player_stats(struct app_player *p, struct app_stats *st)
+void player_stats(struct player *p, struct session_stats *st)
 {
     struct series_stats ss;
     series_get_stats(p->series, &ss);

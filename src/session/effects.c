@@ -1,5 +1,5 @@
 /* Effect decisions: facts about the scene -> on/off per effect, with the reason. */
-#include "app/effects.h"
+#include "session/effects.h"
 
 #include <math.h>
 #include <stdarg.h>

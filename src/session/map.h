@@ -6,8 +6,8 @@
  * Missing pieces (no HGT, no XLAT/XLONG, no GSHHG file, no font) are reported with a warning
  * and left out; the built-in flat ground plane remains.
  */
-#ifndef ANVIL_APP_MAP_H
-#define ANVIL_APP_MAP_H
+#ifndef ANVIL_SESSION_MAP_H
+#define ANVIL_SESSION_MAP_H
 
 #include <stdbool.h>
 
@@ -15,21 +15,21 @@
 #include "data/geo.h"
 #include "render/render.h"
 
-struct app_map;
+struct scene_map;
 
 /* Builds the map for the volume the renderer holds (renderer_grid: already stretched by the
  * height exaggeration) and adds its meshes to R.  Returns NULL only when out of memory or GL
  * fails (logged); a map with nothing in it is fine.  Needs the GL context current.  Destroy it
- * with app_map_destroy before the renderer. */
-struct app_map *app_map_create(const struct config *cfg, struct renderer *r);
-void app_map_destroy(struct app_map *m, struct renderer *r); /* NULL is fine */
+ * with scene_map_destroy before the renderer. */
+struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r);
+void scene_map_destroy(struct scene_map *m, struct renderer *r); /* NULL is fine */
 
 /* Turns the analytic ground plane off where the terrain mesh (with its skirt) replaces it.
- * Call after every app_render_settings. */
-void app_map_apply_settings(const struct app_map *m, struct render_settings *s);
+ * Call after every scene_render_settings. */
+void scene_map_apply_settings(const struct scene_map *m, struct render_settings *s);
 
 /* What the map holds, for tests and --verbose. */
-struct app_map_info {
+struct scene_map_info {
     bool terrain;          /* a terrain mesh from HGT */
     bool placed;           /* lat/lon known (XLAT/XLONG or map.use_origin) */
     int coast_segments;    /* line segments drawn */
@@ -37,8 +37,8 @@ struct app_map_info {
     int labels;
     double step_deg;       /* graticule spacing */
 };
-void app_map_get_info(const struct app_map *m, struct app_map_info *out);
-/* The lat/lon placement (kind GEO_NONE when not placed); valid until app_map_destroy. */
-const struct geo_map *app_map_geo(const struct app_map *m);
+void scene_map_get_info(const struct scene_map *m, struct scene_map_info *out);
+/* The lat/lon placement (kind GEO_NONE when not placed); valid until scene_map_destroy. */
+const struct geo_map *scene_map_geo(const struct scene_map *m);
 
 #endif

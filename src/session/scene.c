@@ -3,8 +3,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "app/app.h"
-#include "app/cmd_data.h"
+#include "session/scene.h"
+#include "session/effects.h"
 #include "common/log.h"
 #include "data/detail.h"
 #include "data/source.h"
@@ -12,24 +12,12 @@
 #include "light/light.h"
 #include "render/camera.h"
 
-bool app_load_config(const char *config_path, char **sets, int n_sets, struct config *cfg)
-{
-    config_defaults(cfg);
-    if (config_path && !config_load(config_path, cfg))
-        return false;
-    for (int i = 0; i < n_sets; i++) {
-        if (!config_set(cfg, sets[i]))
-            return false;
-    }
-    return config_validate(cfg);
-}
-
 /* One time step (data.step) of the files the config names, as extinction. */
 static bool load_data_step(const struct config *cfg, struct ext_volume *out)
 {
     const char *files[CONFIG_MAX_FILES];
     struct data_source_desc desc;
-    cmd_data_source_desc(cfg, files, &desc);
+    scene_source_desc(cfg, files, &desc);
     struct data_source *src = data_source_open(&desc);
     if (!src)
         return false;
@@ -49,7 +37,7 @@ static bool load_data_step(const struct config *cfg, struct ext_volume *out)
     return ok;
 }
 
-bool app_build_volume(const struct config *cfg, struct ext_volume *out)
+bool scene_build_volume(const struct config *cfg, struct ext_volume *out)
 {
     const struct config_scene *sc = &cfg->scene;
     struct synth_desc d = {0};
@@ -93,7 +81,7 @@ bool app_build_volume(const struct config *cfg, struct ext_volume *out)
     }
     /* Detail and height exaggeration as data sources apply them (data_source_load). */
     struct detail_desc detail;
-    cmd_data_detail_desc(cfg, &detail);
+    scene_detail_desc(cfg, &detail);
     if (d.kind != SYNTH_STORM) {
         if (!synth_extinction(&d, &cfg->optics.params, out))
             return false;
@@ -124,7 +112,7 @@ bool app_build_volume(const struct config *cfg, struct ext_volume *out)
  * (Kasten and Young's formula, finite at the horizon).  Normalised to the sun overhead, so that
  * light.color stays the noon colour.  An approximation: no ozone, no multiple scattering, one
  * standard clear atmosphere. */
-void app_sun_transmittance(double elevation_deg, double rgb[3])
+void scene_sun_transmittance(double elevation_deg, double rgb[3])
 {
     static const double tau[3] = {0.036 + 0.05, 0.097 + 0.06, 0.236 + 0.07};
     double el = fmax(elevation_deg, 0.0);
@@ -133,13 +121,13 @@ void app_sun_transmittance(double elevation_deg, double rgb[3])
         rgb[c] = exp(-tau[c] * (air_mass - 1.0));
 }
 
-int app_time_steps(const struct config *cfg)
+int scene_time_steps(const struct config *cfg)
 {
     if (cfg->scene.kind != SCENE_DATA)
         return 1;
     const char *files[CONFIG_MAX_FILES];
     struct data_source_desc desc;
-    cmd_data_source_desc(cfg, files, &desc);
+    scene_source_desc(cfg, files, &desc);
     struct data_source *src = data_source_open(&desc);
     if (!src)
         return 0;
@@ -148,13 +136,13 @@ int app_time_steps(const struct config *cfg)
     return steps;
 }
 
-void app_render_settings(const struct config *cfg, struct render_settings *s)
+void scene_render_settings(const struct config *cfg, struct render_settings *s)
 {
     memset(s, 0, sizeof(*s));
     double sun[3];
     light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
     double air[3];
-    app_sun_transmittance(cfg->light.elevation_deg, air);
+    scene_sun_transmittance(cfg->light.elevation_deg, air);
     for (int i = 0; i < 3; i++) {
         s->sun_dir[i] = (float)sun[i];
         s->sun_radiance[i] = (float)(cfg->light.intensity * cfg->light.color[i]);
@@ -168,7 +156,7 @@ void app_render_settings(const struct config *cfg, struct render_settings *s)
     s->termination = (float)cfg->render.termination;
 }
 
-void app_camera_view(const struct config *cfg, int width, int height, struct render_view *view)
+void scene_camera_view(const struct config *cfg, int width, int height, struct render_view *view)
 {
     const struct config_camera *c = &cfg->camera;
     double eye[3], target[3];
@@ -180,68 +168,49 @@ void app_camera_view(const struct config *cfg, int width, int height, struct ren
                    height, view);
 }
 
-void app_stats_add_view(struct app_stats *st, double ms)
-{
-    st->views++;
-    if (st->n_view_ms < sizeof(st->view_ms) / sizeof(st->view_ms[0]))
-        st->view_ms[st->n_view_ms++] = ms;
-}
 
-void app_stats_add_build(struct app_stats *st, double ms)
+void scene_source_desc(const struct config *cfg, const char **file_ptrs,
+                          struct data_source_desc *out)
 {
-    st->light_builds++;
-    if (st->n_build_ms < sizeof(st->build_ms) / sizeof(st->build_ms[0]))
-        st->build_ms[st->n_build_ms++] = ms;
-}
-
-static void write_list(FILE *f, const double *v, unsigned n)
-{
-    fputc('[', f);
-    for (unsigned i = 0; i < n; i++)
-        fprintf(f, "%s%.4f", i ? ", " : "", v[i]);
-    fputc(']', f);
-}
-
-bool app_stats_write(const struct app_stats *st, const char *path)
-{
-    char *buf = NULL;
-    size_t len = 0;
-    FILE *f = open_memstream(&buf, &len);
-    if (!f) {
-        log_error("%s: out of memory", path);
-        return false;
+    const struct config_data *cd = &cfg->data;
+    memset(out, 0, sizeof(*out));
+    out->format = cd->format == DATA_ISABEL       ? DATA_SOURCE_ISABEL
+                  : cd->format == DATA_EXTINCTION ? DATA_SOURCE_EXTINCTION
+                                                  : DATA_SOURCE_WRF;
+    for (int i = 0; i < cd->file_count; i++)
+        file_ptrs[i] = cd->files[i];
+    out->files = file_ptrs;
+    out->file_count = cd->file_count;
+    wrf_desc_defaults(&out->wrf);
+    out->wrf.levels = cd->levels;
+    out->wrf.top_m = cd->top_km * 1000.0;
+    for (int a = 0; a < 3; a++)
+        out->wrf.stride[a] = cd->stride[a];
+    for (int i = 0; i < 6; i++)
+        out->wrf.crop[i] = cd->crop[i];
+    out->wrf.memory_mb = cd->memory_mb;
+    for (int a = 0; a < 3; a++) {
+        out->isabel.n[a] = cd->isabel_size[a];
+        out->isabel.extent_m[a] = cd->isabel_extent_km[a] * 1000.0;
     }
-    fprintf(f, "{\n  \"command\": \"%s\",\n", st->command ? st->command : "");
-    fprintf(f, "  \"device\": \"");
-    for (const char *p = st->device ? st->device : ""; *p; p++) {
-        if (*p == '"' || *p == '\\')
-            fputc('\\', f);
-        fputc(*p, f);
+    out->optics = cfg->optics.params;
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        out->select.enabled[f] = cfg->optics.enabled[f];
+        out->select.scale[f] = cfg->optics.scale[f];
     }
-    fprintf(f, "\",\n  \"views\": %u,\n  \"light_map_builds\": %u,\n", st->views,
-            st->light_builds);
-    fprintf(f, "  \"view_ms\": ");
-    write_list(f, st->view_ms, st->n_view_ms);
-    fprintf(f, ",\n  \"build_ms\": ");
-    write_list(f, st->build_ms, st->n_build_ms);
-    fprintf(f, ",\n  \"light_map_bytes_dense\": %.0f,\n", st->light_bytes_dense);
-    fprintf(f, "  \"light_map_bytes_compressed\": %.0f,\n", st->light_bytes_compressed);
-    fprintf(f, "  \"gpu_bytes\": %zu,\n  \"nonfinite_pixels\": %zu,\n", st->gpu_bytes,
-            st->nonfinite_pixels);
-    fprintf(f, "  \"frames\": %u,\n  \"time_step\": %d,\n", st->frames, st->time_step);
-    fprintf(f, "  \"cache_hits\": %u,\n  \"cache_misses\": %u,\n", st->cache_hits,
-            st->cache_misses);
-    fprintf(f, "  \"cache_loads\": %u,\n  \"frames_waited\": %u,\n  \"frames_stale\": %u,\n",
-            st->cache_loads, st->frames_waited, st->frames_stale);
-    fprintf(f, "  \"volume_uploads\": %u,\n  \"load_ms\": %.3f,\n  \"convert_ms\": %.3f,\n",
-            st->volume_uploads, st->load_ms, st->convert_ms);
-    fprintf(f, "  \"wait_ms\": %.3f,\n  \"upload_ms_total\": %.3f,\n", st->wait_ms,
-            st->upload_ms_total);
-    fprintf(f, "  \"frame_ms_max\": %.3f,\n", st->frame_ms_max);
-    fprintf(f, "  \"volume_ms\": %.3f,\n  \"upload_ms\": %.3f,\n  \"total_ms\": %.3f\n}\n",
-            st->volume_ms, st->upload_ms, st->total_ms);
-    fclose(f);
-    bool ok = file_write_atomic(path, buf, len);
-    free(buf);
-    return ok;
+    scene_detail_desc(cfg, &out->detail);
+    out->height_scale = cfg->scene.height_exaggeration;
 }
+
+void scene_detail_desc(const struct config *cfg, struct detail_desc *out)
+{
+    memset(out, 0, sizeof(*out));
+    struct effects e;
+    effects_decide(cfg, NULL, &e); /* detail depends on no measured fact */
+    out->on = e.on[EFFECT_DETAIL];
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        out->amount[f] = cfg->detail.amount[f];
+    out->scale_m = cfg->detail.scale_km * 1000.0;
+    out->seed = cfg->detail.seed;
+}
+

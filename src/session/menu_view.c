@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "app/interact.h"
+#include "session/interact.h"
 #include "common/log.h"
 #include "gpu/gpu.h"
 #include "menu/menu.h"
@@ -13,7 +13,7 @@
  * then sRGB, shows the menu's own sRGB colours. */
 #define PANEL_MAX_DISPLAY 0.99
 
-struct app_menu_view {
+struct menu_view {
     struct renderer *renderer; /* borrowed */
     struct render_mesh *panel, *ray;
     struct gpu_texture texture;
@@ -34,7 +34,7 @@ static double srgb_to_linear(double c)
     return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
 }
 
-static void build_lut(struct app_menu_view *v)
+static void build_lut(struct menu_view *v)
 {
     double g = -log(1.0 - PANEL_MAX_DISPLAY);
     for (int i = 0; i < 256; i++) {
@@ -44,9 +44,9 @@ static void build_lut(struct app_menu_view *v)
     }
 }
 
-void app_menu_texel_radiance(const uint8_t rgba[4], float exposure, float out[3])
+void menu_view_texel_radiance(const uint8_t rgba[4], float exposure, float out[3])
 {
-    struct app_menu_view tmp;
+    struct menu_view tmp;
     build_lut(&tmp);
     for (int c = 0; c < 3; c++)
         out[c] = tmp.lut[rgba[c]] / 255.0f * gain(exposure);
@@ -70,9 +70,9 @@ static struct render_mesh *panel_mesh(float exposure)
     return render_mesh_create(quad, 4, idx, 6, false, true);
 }
 
-struct app_menu_view *app_menu_view_create(struct renderer *r)
+struct menu_view *menu_view_create(struct renderer *r)
 {
-    struct app_menu_view *v = calloc(1, sizeof(*v));
+    struct menu_view *v = calloc(1, sizeof(*v));
     if (!v) {
         log_error("menu: out of memory");
         return NULL;
@@ -89,7 +89,7 @@ struct app_menu_view *app_menu_view_create(struct renderer *r)
     v->ray = render_mesh_create(line, 2, line_idx, 2, true, true);
     if (!v->panel || !v->ray || !renderer_add_mesh(r, v->panel) ||
         !renderer_add_mesh(r, v->ray)) {
-        app_menu_view_destroy(v, r);
+        menu_view_destroy(v, r);
         return NULL;
     }
     render_mesh_set_visible(v->panel, false);
@@ -97,7 +97,7 @@ struct app_menu_view *app_menu_view_create(struct renderer *r)
     return v;
 }
 
-void app_menu_view_destroy(struct app_menu_view *v, struct renderer *r)
+void menu_view_destroy(struct menu_view *v, struct renderer *r)
 {
     if (!v)
         return;
@@ -139,7 +139,7 @@ static void basis(const float x[3], const float y[3], const float z[3], const fl
     out[15] = 1.0f;
 }
 
-bool app_menu_view_update(struct app_menu_view *v, struct menu *m, const float to_world[16],
+bool menu_view_update(struct menu_view *v, struct menu *m, const float to_world[16],
                           float exposure)
 {
     if (exposure != v->exposure) {

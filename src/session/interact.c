@@ -6,7 +6,7 @@
 
 #include <cglm/cglm.h>
 
-#include "app/interact.h"
+#include "session/interact.h"
 #include "common/log.h"
 #include "config/transfer_file.h"
 #include "display/display.h"
@@ -17,19 +17,19 @@
 #define FLY_SPEED 1.0  /* tracker metres per second at full deflection */
 #define TURN_SPEED 45.0 /* degrees per second */
 
-struct app_interact {
+struct interact {
     struct config *cfg;
     struct renderer *renderer;
-    struct app_light *light;
-    struct app_stats *stats;
-    struct app_interact_desc desc;
+    struct lightmaps *light;
+    struct session_stats *stats;
+    struct interact_desc desc;
     char transfers_dir[CONFIG_PATH_MAX];
 
-    struct app_player *player;
-    struct app_playback playback;
-    struct app_look look;
+    struct player *player;
+    struct playback playback;
+    struct look look;
     struct menu *menu;
-    struct app_menu_view *view;
+    struct menu_view *view;
     struct input_source *sources[SOURCES_MAX];
     int n_sources;
     struct input_source *script, *glfw;
@@ -49,10 +49,10 @@ struct app_interact {
 
 static const char *date_of(void *user, int step)
 {
-    return app_player_step_date(user, step);
+    return player_step_date(user, step);
 }
 
-static void model_from_session(struct app_interact *ia, struct menu_model *m)
+static void model_from_session(struct interact *ia, struct menu_model *m)
 {
     const struct config *cfg = ia->cfg;
     memset(m, 0, sizeof(*m));
@@ -61,7 +61,7 @@ static void model_from_session(struct app_interact *ia, struct menu_model *m)
     m->speed = ia->playback.speed;
     m->step = ia->playback.step;
     m->step_count = ia->playback.count;
-    app_player_species_present(ia->player, m->species_present);
+    player_species_present(ia->player, m->species_present);
     for (int f = 0; f < SPECIES_COUNT; f++) {
         m->species_on[f] = ia->look.select.enabled[f];
         m->species_scale[f] = ia->look.select.scale[f];
@@ -86,13 +86,13 @@ static void model_from_session(struct app_interact *ia, struct menu_model *m)
  * with it (on unless the config turns it off: the scene's narrow share was decided for the
  * multiple scattering it had).  The next frame builds the map, and so picks the eye pass's
  * variant, accordingly. */
-static void set_diffuse(struct app_interact *ia, bool on)
+static void set_diffuse(struct interact *ia, bool on)
 {
-    struct app_light *al = ia->light;
+    struct lightmaps *al = ia->light;
     if (!al->have_effects) {
         struct effects e;
         effects_decide(ia->cfg, NULL, &e);
-        app_light_set_effects(al, &e);
+        lightmaps_set_effects(al, &e);
     }
     struct effects *e = &al->effects;
     if (on == e->on[EFFECT_MULTIPLE] || (on && !e->on[EFFECT_SHADOWS]))
@@ -110,11 +110,11 @@ static void set_diffuse(struct app_interact *ia, bool on)
     log_info("menu: diffuse light (multiple scattering) %s", on ? "on" : "off");
 }
 
-struct app_interact *app_interact_create(struct config *cfg, struct renderer *r,
-                                         struct app_light *light, struct app_stats *st,
-                                         const struct app_interact_desc *d)
+struct interact *interact_create(struct config *cfg, struct renderer *r,
+                                         struct lightmaps *light, struct session_stats *st,
+                                         const struct interact_desc *d)
 {
-    struct app_interact *ia = calloc(1, sizeof(*ia));
+    struct interact *ia = calloc(1, sizeof(*ia));
     if (!ia) {
         log_error("out of memory");
         return NULL;
@@ -127,14 +127,14 @@ struct app_interact *app_interact_create(struct config *cfg, struct renderer *r,
         ia->desc = *d;
     snprintf(ia->transfers_dir, sizeof(ia->transfers_dir), "%s",
              ia->desc.transfers_dir ? ia->desc.transfers_dir : ".");
-    ia->player = app_player_create(cfg, NULL);
+    ia->player = player_create(cfg, NULL);
     if (!ia->player)
         goto error;
-    app_playback_init(&ia->playback, app_player_step_count(ia->player),
+    playback_init(&ia->playback, player_step_count(ia->player),
                       cfg->scene.kind == SCENE_DATA ? cfg->data.step : 0, cfg->playback.speed,
                       cfg->playback.loop);
     ia->shown = ia->playback.step;
-    app_look_from_config(cfg, &ia->look);
+    look_from_config(cfg, &ia->look);
     if (ia->desc.script) {
         ia->script = input_script_open(ia->desc.script);
         if (!ia->script)
@@ -160,47 +160,47 @@ struct app_interact *app_interact_create(struct config *cfg, struct renderer *r,
         goto error;
     menu_set_visible(ia->menu, ia->desc.show_menu);
     menu_take_changes(ia->menu);
-    ia->view = app_menu_view_create(r);
+    ia->view = menu_view_create(r);
     if (!ia->view)
         goto error;
     return ia;
 
 error:
-    app_interact_destroy(ia);
+    interact_destroy(ia);
     return NULL;
 }
 
-void app_interact_destroy(struct app_interact *ia)
+void interact_destroy(struct interact *ia)
 {
     if (!ia)
         return;
-    app_menu_view_destroy(ia->view, ia->renderer);
+    menu_view_destroy(ia->view, ia->renderer);
     menu_destroy(ia->menu);
     for (int i = 0; i < ia->n_sources; i++)
         input_source_destroy(ia->sources[i]);
-    app_player_destroy(ia->player);
+    player_destroy(ia->player);
     free(ia);
 }
 
-struct menu *app_interact_menu(struct app_interact *ia)
+struct menu *interact_menu(struct interact *ia)
 {
     return ia->menu;
 }
 
-int app_interact_step(const struct app_interact *ia)
+int interact_step(const struct interact *ia)
 {
     return ia->shown;
 }
 
-double app_interact_script_dt(const struct app_interact *ia)
+double interact_script_dt(const struct interact *ia)
 {
     return ia->script ? 1.0 / input_script_fps(ia->script) : 0.0;
 }
 
-bool app_interact_script_done(struct app_interact *ia)
+bool interact_script_done(struct interact *ia)
 {
     return ia->script && input_source_finished(ia->script) &&
-           app_player_settled(ia->player, ia->playback.step);
+           player_settled(ia->player, ia->playback.step);
 }
 
 /* ---- applying the menu's changes ------------------------------------------------------ */
@@ -208,18 +208,18 @@ bool app_interact_script_done(struct app_interact *ia)
 static void sun_settings(const struct config *cfg, struct render_settings *s)
 {
     struct render_settings fresh;
-    app_render_settings(cfg, &fresh);
+    scene_render_settings(cfg, &fresh);
     memcpy(s->sun_dir, fresh.sun_dir, sizeof(s->sun_dir));
     memcpy(s->sun_radiance, fresh.sun_radiance, sizeof(s->sun_radiance));
 }
 
-static void transfer_path(const struct app_interact *ia, int slot, char *buf, size_t size)
+static void transfer_path(const struct interact *ia, int slot, char *buf, size_t size)
 {
     snprintf(buf, size, "%s/tf-%d.cfg", ia->transfers_dir, slot + 1);
 }
 
-static void apply_changes(struct app_interact *ia, unsigned ch, struct render_settings *s,
-                          const struct app_interact_frame *f, bool *nav_changed)
+static void apply_changes(struct interact *ia, unsigned ch, struct render_settings *s,
+                          const struct interact_frame *f, bool *nav_changed)
 {
     struct menu_model *m = menu_model(ia->menu);
     struct config *cfg = ia->cfg;
@@ -244,8 +244,8 @@ static void apply_changes(struct app_interact *ia, unsigned ch, struct render_se
         }
         ia->look.transfer_on = m->transfer_on;
         ia->look.transfer = m->transfer;
-        if (app_player_has_fields(ia->player))
-            app_player_set_look(ia->player, &ia->look);
+        if (player_has_fields(ia->player))
+            player_set_look(ia->player, &ia->look);
         else
             menu_set_status(ia->menu, "this scene has no mass ratios to change");
     }
@@ -276,8 +276,8 @@ static void apply_changes(struct app_interact *ia, unsigned ch, struct render_se
             if (ok) {
                 m->transfer = tf;
                 ia->look.transfer = tf;
-                if (app_player_has_fields(ia->player))
-                    app_player_set_look(ia->player, &ia->look);
+                if (player_has_fields(ia->player))
+                    player_set_look(ia->player, &ia->look);
             }
             snprintf(status, sizeof(status), ok ? "loaded %s" : "kept the current one: %s",
                      ok ? path : log_last_error());
@@ -293,7 +293,7 @@ static void apply_changes(struct app_interact *ia, unsigned ch, struct render_se
 
 /* ---- navigation (tracker space) ------------------------------------------------------- */
 
-static void navigate(struct app_interact *ia, const struct app_interact_frame *f,
+static void navigate(struct interact *ia, const struct interact_frame *f,
                      bool *nav_changed)
 {
     struct display_navigation *nav = f->nav;
@@ -320,7 +320,7 @@ static void navigate(struct app_interact *ia, const struct app_interact_frame *f
 
 /* ---- frames --------------------------------------------------------------------------- */
 
-static void place_menu(struct app_interact *ia, const struct app_interact_frame *f)
+static void place_menu(struct interact *ia, const struct interact_frame *f)
 {
     if (ia->desc.tracker_space) {
         if (ia->placed)
@@ -352,7 +352,7 @@ static void place_menu(struct app_interact *ia, const struct app_interact_frame 
 }
 
 /* Menu space -> world, and world -> menu space. */
-static void menu_matrices(const struct app_interact *ia, const struct app_interact_frame *f,
+static void menu_matrices(const struct interact *ia, const struct interact_frame *f,
                           mat4 to_world, mat4 from_world)
 {
     if (ia->desc.tracker_space && f->nav) {
@@ -366,7 +366,7 @@ static void menu_matrices(const struct app_interact *ia, const struct app_intera
     }
 }
 
-static void to_menu_space(const struct app_interact *ia, mat4 from_world, struct input_event *e)
+static void to_menu_space(const struct interact *ia, mat4 from_world, struct input_event *e)
 {
     bool world_menu = !ia->desc.tracker_space;
     if ((e->space == INPUT_SPACE_WORLD) == world_menu)
@@ -388,7 +388,7 @@ static void to_menu_space(const struct app_interact *ia, mat4 from_world, struct
     e->space = INPUT_SPACE_TRACKER;
 }
 
-static bool upload(struct app_interact *ia, const struct ext_volume *v)
+static bool upload(struct interact *ia, const struct ext_volume *v)
 {
     if (!renderer_set_volume(ia->renderer, v))
         return false;
@@ -401,9 +401,9 @@ static bool upload(struct app_interact *ia, const struct ext_volume *v)
 /* effects.temporal: keeps step k + 1 in the renderer's next volume and asks the eye pass to
  * blend it in at the playback position's fraction f (the light map pair follows: app_light).
  * Until k + 1 is on the GPU (or while step k itself is still loading) f is 0: step k. */
-static bool temporal_frame(struct app_interact *ia, struct render_settings *s, bool *redraw)
+static bool temporal_frame(struct interact *ia, struct render_settings *s, bool *redraw)
 {
-    const struct app_playback *pb = &ia->playback;
+    const struct playback *pb = &ia->playback;
     int next = -1;
     if (pb->count > 1 && ia->shown == pb->step) {
         next = pb->step + 1;
@@ -412,16 +412,16 @@ static bool temporal_frame(struct app_interact *ia, struct render_settings *s, b
     }
     int held = -1;
     const struct ext_volume *v =
-        app_player_poll_next(ia->player, next, ia->desc.wait_for_volumes, &held);
+        player_poll_next(ia->player, next, ia->desc.wait_for_volumes, &held);
     if (v) {
         if (!renderer_set_next_volume(ia->renderer, v))
             return false;
         ia->stats->volume_uploads++;
         *redraw = true;
     }
-    uint64_t next_id = next >= 0 && held == next ? app_player_step_id(ia->player, true) : 0;
+    uint64_t next_id = next >= 0 && held == next ? player_step_id(ia->player, true) : 0;
     ia->light->temporal = true;
-    ia->light->step_id = app_player_step_id(ia->player, false);
+    ia->light->step_id = player_step_id(ia->player, false);
     ia->light->next_id = next_id;
     double f = pb->acc < 0.0 ? 0.0 : pb->acc > 1.0 ? 1.0 : pb->acc;
     s->temporal = next_id != 0;
@@ -431,10 +431,10 @@ static bool temporal_frame(struct app_interact *ia, struct render_settings *s, b
 
 static bool ready(void *user, int step)
 {
-    return app_player_ready(user, step);
+    return player_ready(user, step);
 }
 
-bool app_interact_frame(struct app_interact *ia, const struct app_interact_frame *f,
+bool interact_frame(struct interact *ia, const struct interact_frame *f,
                         struct render_settings *s, bool *redraw, bool *nav_changed)
 {
     *redraw = false;
@@ -492,7 +492,7 @@ bool app_interact_frame(struct app_interact *ia, const struct app_interact_frame
     /* Playback: the cursor advances only onto loaded steps; the volume follows it. */
     struct menu_model *m = menu_model(ia->menu);
     int old_step = ia->playback.step;
-    app_playback_tick(&ia->playback, f->dt, ia->desc.wait_for_volumes ? NULL : ready,
+    playback_tick(&ia->playback, f->dt, ia->desc.wait_for_volumes ? NULL : ready,
                       ia->player);
     if (ia->playback.step != old_step || m->playing != ia->playback.playing) {
         m->step = ia->playback.step;
@@ -500,30 +500,30 @@ bool app_interact_frame(struct app_interact *ia, const struct app_interact_frame
         menu_model_changed(ia->menu);
     }
     bool present[SPECIES_COUNT];
-    app_player_species_present(ia->player, present);
+    player_species_present(ia->player, present);
     if (memcmp(present, m->species_present, sizeof(present)) != 0) {
         memcpy(m->species_present, present, sizeof(present));
         menu_model_changed(ia->menu);
     }
     const struct ext_volume *v =
-        ia->desc.wait_for_volumes ? app_player_wait(ia->player, ia->playback.step, &ia->shown)
-                                  : app_player_poll(ia->player, ia->playback.step, &ia->shown);
+        ia->desc.wait_for_volumes ? player_wait(ia->player, ia->playback.step, &ia->shown)
+                                  : player_poll(ia->player, ia->playback.step, &ia->shown);
     if (v) {
         if (!upload(ia, v))
             return false;
         *redraw = true;
-    } else if (!app_player_settled(ia->player, ia->playback.step)) {
+    } else if (!player_settled(ia->player, ia->playback.step)) {
         ia->stats->frames_stale++;
     }
     if (ia->light->have_effects && ia->light->effects.on[EFFECT_TEMPORAL] &&
         !temporal_frame(ia, s, redraw))
         return false;
-    app_player_stats(ia->player, ia->stats);
+    player_stats(ia->player, ia->stats);
     ia->stats->time_step = ia->shown;
 
     float tw[16];
     memcpy(tw, to_world, sizeof(tw));
-    if (!app_menu_view_update(ia->view, ia->menu, tw, (float)ia->cfg->render.exposure))
+    if (!menu_view_update(ia->view, ia->menu, tw, (float)ia->cfg->render.exposure))
         return false;
     unsigned after = 0;
     menu_pixels(ia->menu, &(int){0}, &(int){0}, &after);
@@ -532,14 +532,14 @@ bool app_interact_frame(struct app_interact *ia, const struct app_interact_frame
     return true;
 }
 
-bool app_interact_settle(struct app_interact *ia)
+bool interact_settle(struct interact *ia)
 {
-    if (app_player_settled(ia->player, ia->playback.step))
+    if (player_settled(ia->player, ia->playback.step))
         return true;
-    const struct ext_volume *v = app_player_wait(ia->player, ia->playback.step, &ia->shown);
-    app_player_stats(ia->player, ia->stats);
+    const struct ext_volume *v = player_wait(ia->player, ia->playback.step, &ia->shown);
+    player_stats(ia->player, ia->stats);
     ia->stats->time_step = ia->shown;
     if (!v)
-        return app_player_settled(ia->player, ia->playback.step);
+        return player_settled(ia->player, ia->playback.step);
     return upload(ia, v);
 }

@@ -1,0 +1,49 @@
+/*
+ * session/lightmaps: the deep light map(s) of a session.  Built on the GPU when the effects ask
+ * for one, rebuilt only when the sun, the volume (GENERATION), the optics or the light map
+ * settings change; with effects.temporal one map per time step in a ring of two, blended by
+ * the eye pass.  Needs the GL context current.  Knows nothing of views or windows.
+ */
+#ifndef ANVIL_SESSION_LIGHTMAPS_H
+#define ANVIL_SESSION_LIGHTMAPS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "config/config.h"
+#include "render/render.h"
+#include "session/effects.h"
+#include "session/stats.h"
+
+struct light_gpu;
+
+struct lightmaps {
+    struct light_gpu *gpu; /* NULL when effects.shadows = "off" */
+    uint64_t generation;   /* bump when the volume on the GPU changes */
+    struct effects effects; /* valid when have_effects (lightmaps_set_effects) */
+    bool have_effects;
+    /* effects.temporal, set each frame: the time steps in the renderer's volume and next
+     * volume (lightmaps_step_id; 0: none, the plain single map).  A light map is built per
+     * step and kept keyed by it in a ring of two (gpu, spare), so a step change builds only
+     * the new next step's; the eye pass blends the pair (LIGHTMAP_PAIR). */
+    bool temporal;
+    uint64_t step_id, next_id;
+    struct light_gpu *spare; /* the second map of the ring (made on first use) */
+    uint64_t held[2];        /* the step each of gpu, spare was last built for */
+    int pair_first;          /* which of them holds step_id while the pair is bound */
+    struct render_light pair; /* the hook that binds both */
+    char pair_defines[96];
+};
+
+/* The identity of time step STEP made with look generation GEN (never 0). */
+uint64_t lightmaps_step_id(int step, uint64_t gen);
+
+bool lightmaps_init(struct lightmaps *al, const struct config *cfg);
+/* Uses the decisions E (copied) from now on; without them every auto effect is on. */
+void lightmaps_set_effects(struct lightmaps *al, const struct effects *e);
+/* Builds when stale and points the renderer at the light map; counts builds in ST. */
+bool lightmaps_update(struct lightmaps *al, const struct config *cfg, struct renderer *r,
+                      struct session_stats *st);
+void lightmaps_finish(struct lightmaps *al);
+
+#endif

@@ -1,0 +1,92 @@
+/*
+ * session/player: time playback.  The cursor (playback_*: pure logic) and the player over the
+ * time series cache (player_*): the scene's time steps made as extinction volumes with the
+ * look (species, tints, transfer function) on the series' background thread.  No GL.
+ */
+#ifndef ANVIL_SESSION_PLAYER_H
+#define ANVIL_SESSION_PLAYER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "config/config.h"
+#include "data/volume.h"
+#include "optics/transfer.h"
+#include "session/stats.h"
+
+/* ---- playback: the time cursor (pure logic, no I/O) ----------------------------------- */
+
+struct playback {
+    int step, count;
+    bool playing, loop;
+    double speed;   /* steps per second */
+    double acc;     /* fraction of a step accumulated */
+    unsigned stalls; /* frames that wanted the next step before it was loaded */
+};
+
+void playback_init(struct playback *pb, int count, int step, double speed, bool loop);
+/* Advances by DT seconds.  The cursor moves to the next step only once READY says it is loaded
+ * (it waits there, counting stalls, rather than skip or block); at the end it stops (pausing)
+ * unless LOOP.  Returns true when the step changed. */
+bool playback_tick(struct playback *pb, double dt, bool (*ready)(void *user, int step),
+                       void *user);
+
+/* ---- the player: the time series cache over the scene's data --------------------------- */
+
+/* How the volume is made from mass ratios (changed by the menu). */
+struct look {
+    struct species_select select;
+    struct species_tint tint;
+    bool transfer_on;
+    struct transfer_function transfer;
+};
+
+void look_from_config(const struct config *cfg, struct look *look);
+
+struct player;
+
+struct player_desc {
+    int prefetch;       /* -1: none; 0: default */
+    double memory_mb;   /* 0: data.cache_memory */
+    double delay_ms;    /* test hook: a slow reader */
+};
+
+/* Opens the scene's time steps behind a series cache (data.cache_memory, data.prefetch,
+ * playback.loop), showing data.step.  CFG must outlive the player.  NULL (logged) on
+ * failure.  No GL. */
+struct player *player_create(const struct config *cfg, const struct player_desc *d);
+void player_destroy(struct player *p);
+
+int player_step_count(const struct player *p);
+/* "2005-08-28_06:00:00" or "" (static per player, valid until destroy). */
+const char *player_step_date(struct player *p, int step);
+bool player_ready(struct player *p, int step);
+/* Whether the look can change the volume (storm and WRF/Isabel data: yes; test scenes and
+ * extinction files: no). */
+bool player_has_fields(const struct player *p);
+/* Species the data holds. */
+void player_species_present(const struct player *p, bool present[SPECIES_COUNT]);
+
+/* Changes the look: cached steps are dropped and made again in the background. */
+void player_set_look(struct player *p, const struct look *look);
+
+/* The volume to show for WANT when it differs from what was last returned (a new step or a
+ * new look) and is loaded; NULL otherwise (nothing new, or not loaded yet: never blocks).
+ * *SHOWN receives the step on screen.  The pointer is valid until the next call. */
+const struct ext_volume *player_poll(struct player *p, int want, int *shown);
+/* As player_poll but waits for the load (the end of a scripted run). */
+const struct ext_volume *player_wait(struct player *p, int want, int *shown);
+/* Whether the step on screen is WANT with the current look. */
+bool player_settled(const struct player *p, int want);
+/* effects.temporal: the next volume, tracked apart from the one shown.  As player_poll
+ * (or with WAIT as player_wait) for step WANT (-1: none wanted); *HELD is the step the
+ * caller's next volume holds, -1 none. */
+const struct ext_volume *player_poll_next(struct player *p, int want, bool wait,
+                                              int *held);
+/* The identity (lightmaps_step_id) of the volume shown, or with NEXT of the next volume (0
+ * when it is none, or made with an older look). */
+uint64_t player_step_id(const struct player *p, bool next);
+
+void player_stats(struct player *p, struct session_stats *st);
+
+#endif

@@ -1,0 +1,73 @@
+/* --stats FILE.json: what a run did. */
+#include "session/stats.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "common/log.h"
+
+void session_stats_add_view(struct session_stats *st, double ms)
+{
+    st->views++;
+    if (st->n_view_ms < sizeof(st->view_ms) / sizeof(st->view_ms[0]))
+        st->view_ms[st->n_view_ms++] = ms;
+}
+
+void session_stats_add_build(struct session_stats *st, double ms)
+{
+    st->light_builds++;
+    if (st->n_build_ms < sizeof(st->build_ms) / sizeof(st->build_ms[0]))
+        st->build_ms[st->n_build_ms++] = ms;
+}
+
+static void write_list(FILE *f, const double *v, unsigned n)
+{
+    fputc('[', f);
+    for (unsigned i = 0; i < n; i++)
+        fprintf(f, "%s%.4f", i ? ", " : "", v[i]);
+    fputc(']', f);
+}
+
+bool session_stats_write(const struct session_stats *st, const char *path)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    if (!f) {
+        log_error("%s: out of memory", path);
+        return false;
+    }
+    fprintf(f, "{\n  \"command\": \"%s\",\n", st->command ? st->command : "");
+    fprintf(f, "  \"device\": \"");
+    for (const char *p = st->device ? st->device : ""; *p; p++) {
+        if (*p == '"' || *p == '\\')
+            fputc('\\', f);
+        fputc(*p, f);
+    }
+    fprintf(f, "\",\n  \"views\": %u,\n  \"light_map_builds\": %u,\n", st->views,
+            st->light_builds);
+    fprintf(f, "  \"view_ms\": ");
+    write_list(f, st->view_ms, st->n_view_ms);
+    fprintf(f, ",\n  \"build_ms\": ");
+    write_list(f, st->build_ms, st->n_build_ms);
+    fprintf(f, ",\n  \"light_map_bytes_dense\": %.0f,\n", st->light_bytes_dense);
+    fprintf(f, "  \"light_map_bytes_compressed\": %.0f,\n", st->light_bytes_compressed);
+    fprintf(f, "  \"gpu_bytes\": %zu,\n  \"nonfinite_pixels\": %zu,\n", st->gpu_bytes,
+            st->nonfinite_pixels);
+    fprintf(f, "  \"frames\": %u,\n  \"time_step\": %d,\n", st->frames, st->time_step);
+    fprintf(f, "  \"cache_hits\": %u,\n  \"cache_misses\": %u,\n", st->cache_hits,
+            st->cache_misses);
+    fprintf(f, "  \"cache_loads\": %u,\n  \"frames_waited\": %u,\n  \"frames_stale\": %u,\n",
+            st->cache_loads, st->frames_waited, st->frames_stale);
+    fprintf(f, "  \"volume_uploads\": %u,\n  \"load_ms\": %.3f,\n  \"convert_ms\": %.3f,\n",
+            st->volume_uploads, st->load_ms, st->convert_ms);
+    fprintf(f, "  \"wait_ms\": %.3f,\n  \"upload_ms_total\": %.3f,\n", st->wait_ms,
+            st->upload_ms_total);
+    fprintf(f, "  \"frame_ms_max\": %.3f,\n", st->frame_ms_max);
+    fprintf(f, "  \"volume_ms\": %.3f,\n  \"upload_ms\": %.3f,\n  \"total_ms\": %.3f\n}\n",
+            st->volume_ms, st->upload_ms, st->total_ms);
+    fclose(f);
+    bool ok = file_write_atomic(path, buf, len);
+    free(buf);
+    return ok;
+}

@@ -1,0 +1,41 @@
+/*
+ * session/stats: what a run did, written by --stats FILE.json: views and their times, light
+ * map builds, memory, playback and the time series cache.  Plain data; no GL.
+ */
+#ifndef ANVIL_SESSION_STATS_H
+#define ANVIL_SESSION_STATS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+struct session_stats {
+    const char *command;
+    const char *device;
+    unsigned views;
+    unsigned light_builds;
+    double view_ms[64];
+    unsigned n_view_ms;
+    double build_ms[64];
+    unsigned n_build_ms;
+    double light_bytes_dense, light_bytes_compressed;
+    size_t gpu_bytes;
+    size_t nonfinite_pixels;
+    double volume_ms, upload_ms, total_ms;
+    /* Playback: the time series cache and the frames. */
+    unsigned frames;          /* frames drawn */
+    int time_step;            /* the time step on screen at the end */
+    unsigned cache_hits, cache_misses, cache_loads;
+    unsigned frames_waited;   /* frames that blocked on a load (only a scripted run's end) */
+    unsigned frames_stale;    /* frames that showed an older step: the wanted one was loading */
+    unsigned volume_uploads;  /* volumes uploaded after the first (with effects.temporal
+                                 also each next step's, into the second texture) */
+    double load_ms, convert_ms, wait_ms, upload_ms_total;
+    double frame_ms_max;      /* longest frame of the loop */
+};
+
+void session_stats_add_view(struct session_stats *st, double ms);
+void session_stats_add_build(struct session_stats *st, double ms);
+/* Writes ST as JSON to PATH (atomically).  False (logged) on failure. */
+bool session_stats_write(const struct session_stats *st, const char *path);
+
+#endif
