@@ -41,7 +41,7 @@ static int display_views(const struct display_config *dcfg, int height, struct v
     struct display_pose head;
     display_pose_from_euler(dcfg->head.position, dcfg->head.orientation_deg, &head);
     memset(set, 0, sizeof(*set));
-    view_set_layout(set, dcfg, &head, (const int(*)[2])sizes);
+    view_set_layout(set, dcfg, &dcfg->navigation, &head, (const int(*)[2])sizes);
     return set->count;
 }
 

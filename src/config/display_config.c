@@ -16,7 +16,8 @@
 
 #include "common/log.h"
 
-static const char *const type_names[] = {"headless", "desktop", "stereo", "cave", "hmd", NULL};
+static const char *const type_names[] = {"headless", "desktop", "stereo", "cave",
+                                         "hmd",      "orbit",   NULL};
 static const char *const stereo_names[] = {"mono", "side-by-side", "anaglyph", "quad-buffer",
                                            NULL};
 static const char *const head_names[] = {"fixed", "path", "openhmd", NULL};
@@ -279,7 +280,7 @@ static bool read_group(const struct reader *rd, const config_setting_t *group, c
 /* clang-format off */
 static const struct field display_fields[] = {
     {"type", K_ENUM, 1, DC(type), .names = type_names,
-     .help = "backend: headless, desktop, stereo, cave or hmd"},
+     .help = "backend: headless, desktop, stereo, cave, hmd or orbit"},
     {"mode", K_ENUM, 1, DC(stereo), .names = stereo_names,
      .help = "stereo mode of every wall that does not name its own"},
     {"eye_separation", K_DOUBLE, 1, DC(eye_separation), 0, 1,

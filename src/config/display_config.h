@@ -27,6 +27,8 @@ enum display_type {
     DISPLAY_TYPE_STEREO,   /* "stereo": one window, side-by-side / anaglyph / quad-buffer */
     DISPLAY_TYPE_CAVE,     /* "cave": one window per wall, or viewports of one window */
     DISPLAY_TYPE_HMD,      /* "hmd": OpenHMD device, per-eye views and lens warp */
+    DISPLAY_TYPE_ORBIT,    /* "orbit": the scene's own camera in one window (anvil run and
+                              render without --display) */
 };
 
 enum display_stereo {

@@ -128,7 +128,9 @@ error:
     return NULL;
 }
 
-static bool cave_layout(struct display *d, const struct display_pose *head)
+static bool cave_layout(struct display *d, const struct display_pose *head,
+                        const struct display_navigation *nav,
+                        const struct display_camera *camera)
 {
     struct cave *c = (struct cave *)d;
     int sizes[DISPLAY_MAX_WALLS][2];
@@ -150,7 +152,7 @@ static bool cave_layout(struct display *d, const struct display_pose *head)
                 sizes[w][1] = 1;
         }
     }
-    view_set_layout(&d->set, &d->cfg, head, (const int(*)[2])sizes);
+    view_set_layout(&d->set, &d->cfg, nav, head, (const int(*)[2])sizes);
     return true;
 }
 

@@ -9,6 +9,7 @@
 
 #include "common/log.h"
 #include "display/display_impl.h"
+#include "render/camera.h"
 
 struct desktop {
     struct display base;
@@ -40,11 +41,13 @@ static void desktop_destroy(struct display *d)
     free(k);
 }
 
-static bool headless_layout(struct display *d, const struct display_pose *head)
+static bool headless_layout(struct display *d, const struct display_pose *head,
+                            const struct display_navigation *nav,
+                            const struct display_camera *camera)
 {
     int sizes[DISPLAY_MAX_WALLS][2];
     display_offscreen_sizes(d, sizes);
-    view_set_layout(&d->set, &d->cfg, head, (const int(*)[2])sizes);
+    view_set_layout(&d->set, &d->cfg, nav, head, (const int(*)[2])sizes);
     return true;
 }
 
@@ -129,7 +132,9 @@ static struct display *stereo_create(const struct display *base)
     return single_create(base, true);
 }
 
-static bool single_layout(struct display *d, const struct display_pose *head)
+static bool single_layout(struct display *d, const struct display_pose *head,
+                          const struct display_navigation *nav,
+                          const struct display_camera *camera)
 {
     struct desktop *k = (struct desktop *)d;
     int sizes[DISPLAY_MAX_WALLS][2];
@@ -147,7 +152,7 @@ static bool single_layout(struct display *d, const struct display_pose *head)
         sizes[0][1] = h;
         fit_aspect(&cfg.walls[0], (double)w / h);
     }
-    view_set_layout(&d->set, &cfg, head, (const int(*)[2])sizes);
+    view_set_layout(&d->set, &cfg, nav, head, (const int(*)[2])sizes);
     return true;
 }
 
@@ -213,4 +218,69 @@ const struct display_impl display_stereo_impl = {
     .destroy = desktop_destroy,
     .layout = single_layout,
     .present = single_present,
+};
+
+/* ---- orbit: the scene's own camera ------------------------------------------------------ */
+
+/* One mono view of the world camera the caller gives (anvil run and render without
+ * --display): a window of display.window_size (the scene's render.width x render.height), or
+ * offscreen an image of that size. */
+static struct display *orbit_create(const struct display *base)
+{
+    struct desktop *k = calloc(1, sizeof(*k));
+    if (!k)
+        return NULL;
+    k->base = *base;
+    struct display *d = &k->base;
+    d->cfg.wall_count = 0;
+    k->mode = DISPLAY_STEREO_MONO;
+    if (!display_open_primary(d, d->cfg.window_size[0], d->cfg.window_size[1], d->cfg.monitor,
+                              false, "anvil")) {
+        free(k);
+        return NULL;
+    }
+    return d;
+}
+
+static bool orbit_layout(struct display *d, const struct display_pose *head,
+                         const struct display_navigation *nav, const struct display_camera *camera)
+{
+    int w = d->cfg.window_size[0], h = d->cfg.window_size[1];
+    if (!d->desc.offscreen)
+        gpu_context_size(d->context, &w, &h);
+    struct view *v = &d->set.views[0];
+    snprintf(v->name, sizeof(v->name), "view");
+    v->wall = 0;
+    v->eye = VIEW_EYE_MONO;
+    v->visible = w > 0 && h > 0; /* a minimised window draws nothing */
+    camera_look_at(camera->eye, camera->target, camera->up, camera->fov_deg, camera->near_m,
+                   camera->far_m, w > 0 ? w : 1, h > 0 ? h : 1, &v->rv);
+    for (int i = 0; i < 3; i++)
+        v->eye_tracker[i] = (float)camera->eye[i];
+    d->set.count = 1;
+    return true;
+}
+
+static bool orbit_present(struct display *d, struct renderer *r, float exposure)
+{
+    struct desktop *k = (struct desktop *)d;
+    const struct view *v = &d->set.views[0];
+    if (d->desc.offscreen || !v->visible || !v->target.id)
+        return true;
+    int fw, fh;
+    gpu_context_size(d->context, &fw, &fh);
+    if (!display_show(r, &v->target, exposure, &k->scratch, 0, 0, fw, fh, 0))
+        return false;
+    gpu_context_swap(d->context);
+    return true;
+}
+
+const struct display_impl display_orbit_impl = {
+    .name = "orbit",
+    .description = "one window of the scene's own camera (camera.*), orbiting its target: "
+                   "anvil run and render without --display",
+    .create = orbit_create,
+    .destroy = desktop_destroy,
+    .layout = orbit_layout,
+    .present = orbit_present,
 };

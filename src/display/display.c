@@ -11,13 +11,14 @@
 #include <sys/stat.h>
 
 #include <GLFW/glfw3.h>
+#include <cglm/cglm.h>
 
 #include "common/log.h"
 #include "display/display_impl.h"
 
 static const struct display_impl *const backends[] = {
     &display_headless_impl, &display_desktop_impl, &display_stereo_impl,
-    &display_cave_impl,     &display_hmd_impl,
+    &display_cave_impl,     &display_hmd_impl,     &display_orbit_impl,
 };
 
 #define BACKEND_COUNT ((int)(sizeof(backends) / sizeof(backends[0])))
@@ -48,12 +49,7 @@ struct display *display_create(const struct display_config *cfg, const struct di
     struct display *d = impl->create(&base);
     if (!d)
         return NULL;
-    /* The HMD backend reads its own device's pose; everything else uses the tracker. */
-    bool own_pose = impl == &display_hmd_impl && cfg->head.source == DISPLAY_HEAD_OPENHMD;
-    struct display_head head_cfg = cfg->head;
-    if (own_pose)
-        head_cfg.source = DISPLAY_HEAD_FIXED;
-    if (!display_head_tracker_init(&d->head, &head_cfg))
+    if (!display_head_tracker_init(&d->head, &cfg->head))
         goto error;
     if (!gpu_program_init(&d->compose, "display_compose.comp", NULL))
         goto error;
@@ -90,13 +86,33 @@ const struct display_config *display_get_config(const struct display *d)
     return &d->cfg;
 }
 
+bool display_sample_head(struct display *d, double t, struct display_pose *head)
+{
+    d->time = t;
+    return display_head_tracker_pose(&d->head, t, head);
+}
+
+bool display_layout(struct display *d, const struct display_pose *head,
+                    const struct display_navigation *nav, const struct display_camera *camera)
+{
+    return d->impl->layout(d, head, nav, camera);
+}
+
 bool display_update(struct display *d, double t)
 {
     struct display_pose head;
-    d->time = t;
-    if (!display_head_tracker_pose(&d->head, t, &head))
-        return false;
-    return d->impl->layout(d, &head);
+    return display_sample_head(d, t, &head) &&
+           display_layout(d, &head, &d->cfg.navigation, &d->desc.camera);
+}
+
+bool display_uses_camera(const struct display *d)
+{
+    return d->impl == &display_orbit_impl;
+}
+
+bool display_head_moves(const struct display *d)
+{
+    return d->cfg.head.source != DISPLAY_HEAD_FIXED;
 }
 
 int display_view_count(const struct display *d)
@@ -231,89 +247,245 @@ bool display_show(struct renderer *r, const struct gpu_texture *in, float exposu
     return true;
 }
 
-/* ---- windows: close keys and flying ---------------------------------------------------- */
+/* ---- windows: the one key table, and window events as input events -------------------- */
+
+/* A window key, what it means everywhere, and whether holding it repeats. */
+static const struct {
+    int glfw;
+    enum input_key key;
+    bool repeats;
+    const char *label;
+} keys[] = {
+    {GLFW_KEY_W, INPUT_KEY_MOVE_FORWARD, true, "W"},
+    {GLFW_KEY_S, INPUT_KEY_MOVE_BACK, true, "S"},
+    {GLFW_KEY_A, INPUT_KEY_MOVE_LEFT, true, "A"},
+    {GLFW_KEY_D, INPUT_KEY_MOVE_RIGHT, true, "D"},
+    {GLFW_KEY_R, INPUT_KEY_MOVE_UP, true, "R"},
+    {GLFW_KEY_PAGE_UP, INPUT_KEY_MOVE_UP, true, "Page Up"},
+    {GLFW_KEY_F, INPUT_KEY_MOVE_DOWN, true, "F"},
+    {GLFW_KEY_PAGE_DOWN, INPUT_KEY_MOVE_DOWN, true, "Page Down"},
+    {GLFW_KEY_LEFT, INPUT_KEY_TURN_LEFT, true, "Left"},
+    {GLFW_KEY_RIGHT, INPUT_KEY_TURN_RIGHT, true, "Right"},
+    {GLFW_KEY_UP, INPUT_KEY_TURN_UP, true, "Up"},
+    {GLFW_KEY_DOWN, INPUT_KEY_TURN_DOWN, true, "Down"},
+    {GLFW_KEY_EQUAL, INPUT_KEY_ZOOM_IN, true, "+"},
+    {GLFW_KEY_KP_ADD, INPUT_KEY_ZOOM_IN, true, "keypad +"},
+    {GLFW_KEY_MINUS, INPUT_KEY_ZOOM_OUT, true, "-"},
+    {GLFW_KEY_KP_SUBTRACT, INPUT_KEY_ZOOM_OUT, true, "keypad -"},
+    {GLFW_KEY_J, INPUT_KEY_SUN_LEFT, true, "J"},
+    {GLFW_KEY_L, INPUT_KEY_SUN_RIGHT, true, "L"},
+    {GLFW_KEY_I, INPUT_KEY_SUN_UP, true, "I"},
+    {GLFW_KEY_K, INPUT_KEY_SUN_DOWN, true, "K"},
+    {GLFW_KEY_SPACE, INPUT_KEY_PLAY, false, "Space"},
+    {GLFW_KEY_COMMA, INPUT_KEY_STEP_BACK, true, ","},
+    {GLFW_KEY_PERIOD, INPUT_KEY_STEP_FORWARD, true, "."},
+    {GLFW_KEY_TAB, INPUT_KEY_MENU, false, "Tab"},
+    {GLFW_KEY_M, INPUT_KEY_MENU, false, "M"},
+    {GLFW_KEY_RIGHT_BRACKET, INPUT_KEY_PAGE_NEXT, false, "]"},
+    {GLFW_KEY_LEFT_BRACKET, INPUT_KEY_PAGE_PREV, false, "["},
+    {GLFW_KEY_ESCAPE, INPUT_KEY_QUIT, false, "Esc"},
+    {GLFW_KEY_Q, INPUT_KEY_QUIT, false, "Q"},
+};
+
+#define KEY_COUNT ((int)(sizeof(keys) / sizeof(keys[0])))
+
+void display_list_keys(void (*print)(const char *keys, enum input_key key, void *user),
+                       void *user)
+{
+    /* One line per meaning, its keys joined: "R, Page Up". */
+    for (int i = 0; i < KEY_COUNT; i++) {
+        bool first = true;
+        for (int j = 0; j < i; j++)
+            first = first && keys[j].key != keys[i].key;
+        if (!first)
+            continue;
+        char labels[64] = "";
+        size_t len = 0;
+        for (int j = i; j < KEY_COUNT; j++) {
+            if (keys[j].key == keys[i].key)
+                len += (size_t)snprintf(labels + len, sizeof(labels) - len, "%s%s",
+                                        len ? ", " : "", keys[j].label);
+        }
+        print(labels, keys[i].key, user);
+    }
+}
+
+static void push(struct display *d, const struct input_event *e)
+{
+    input_queue_push(&d->pending, e);
+}
+
+static void push_button(struct display *d, enum input_button b, bool down)
+{
+    push(d, &(struct input_event){.type = INPUT_BUTTON, .button = b, .down = down});
+}
 
 static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 {
     struct display *d = glfwGetWindowUserPointer(w);
     if (!d || action == GLFW_RELEASE)
         return;
-    struct display_navigation *nav = &d->cfg.navigation;
-    const double step = 0.1; /* tracker metres per key press */
-    switch (key) {
-    case GLFW_KEY_ESCAPE:
-    case GLFW_KEY_Q:
-        d->should_close = true;
-        return;
-    case GLFW_KEY_W: /* fly forward: the world comes toward the viewer */
-        nav->position[2] += step;
-        break;
-    case GLFW_KEY_S:
-        nav->position[2] -= step;
-        break;
-    case GLFW_KEY_A:
-        nav->position[0] += step;
-        break;
-    case GLFW_KEY_D:
-        nav->position[0] -= step;
-        break;
-    case GLFW_KEY_PAGE_UP:
-    case GLFW_KEY_R:
-        nav->position[1] -= step;
-        break;
-    case GLFW_KEY_PAGE_DOWN:
-    case GLFW_KEY_F:
-        nav->position[1] += step;
-        break;
-    case GLFW_KEY_LEFT:
-        nav->orientation_deg[0] = fmod(nav->orientation_deg[0] - 5.0, 360.0);
-        break;
-    case GLFW_KEY_RIGHT:
-        nav->orientation_deg[0] = fmod(nav->orientation_deg[0] + 5.0, 360.0);
-        break;
-    case GLFW_KEY_EQUAL:
-    case GLFW_KEY_KP_ADD:
-        nav->scale *= 1.25;
-        break;
-    case GLFW_KEY_MINUS:
-    case GLFW_KEY_KP_SUBTRACT:
-        nav->scale /= 1.25;
-        break;
-    default:
+    if (key == GLFW_KEY_HOME && action == GLFW_PRESS) {
+        push_button(d, INPUT_BUTTON_RESET, true);
+        push_button(d, INPUT_BUTTON_RESET, false);
         return;
     }
-    d->nav_changed = true;
+    for (int i = 0; i < KEY_COUNT; i++) {
+        if (keys[i].glfw == key && (action == GLFW_PRESS || keys[i].repeats)) {
+            push(d, &(struct input_event){.type = INPUT_KEY, .key = keys[i].key});
+            return;
+        }
+    }
+}
+
+static void on_button(GLFWwindow *w, int button, int action, int mods)
+{
+    struct display *d = glfwGetWindowUserPointer(w);
+    if (!d)
+        return;
+    bool down = action == GLFW_PRESS;
+    if (button == GLFW_MOUSE_BUTTON_LEFT) {
+        push_button(d, INPUT_BUTTON_TRIGGER, down);
+        d->dragging = down;
+        glfwGetCursorPos(w, &d->drag_from[0], &d->drag_from[1]);
+    } else if (button == GLFW_MOUSE_BUTTON_MIDDLE) {
+        push_button(d, INPUT_BUTTON_GRAB, down);
+    } else if (button == GLFW_MOUSE_BUTTON_RIGHT && down) {
+        push(d, &(struct input_event){.type = INPUT_KEY, .key = INPUT_KEY_MENU});
+    }
+}
+
+static void on_cursor(GLFWwindow *w, double x, double y)
+{
+    struct display *d = glfwGetWindowUserPointer(w);
+    if (!d)
+        return;
+    d->cursor[0] = x;
+    d->cursor[1] = y;
+    if (!d->dragging)
+        return;
+    push(d, &(struct input_event){.type = INPUT_DRAG, .u = (float)(x - d->drag_from[0]),
+                                  .v = (float)(y - d->drag_from[1])});
+    d->drag_from[0] = x;
+    d->drag_from[1] = y;
+}
+
+static void on_scroll(GLFWwindow *w, double dx, double dy)
+{
+    struct display *d = glfwGetWindowUserPointer(w);
+    if (d && dy != 0.0)
+        push(d, &(struct input_event){.type = INPUT_SCROLL, .value = (float)dy});
+}
+
+static void on_close(GLFWwindow *w)
+{
+    struct display *d = glfwGetWindowUserPointer(w);
+    if (!d)
+        return;
+    d->should_close = true;
+    push(d, &(struct input_event){.type = INPUT_KEY, .key = INPUT_KEY_QUIT});
 }
 
 void display_watch_window(struct display *d, void *window)
 {
     glfwSetWindowUserPointer(window, d);
     glfwSetKeyCallback(window, on_key);
+    glfwSetMouseButtonCallback(window, on_button);
+    glfwSetCursorPosCallback(window, on_cursor);
+    glfwSetScrollCallback(window, on_scroll);
+    glfwSetWindowCloseCallback(window, on_close);
 }
 
-void display_poll(struct display *d, double timeout_s)
+static void unproject(const float m[16], float x, float y, float z, float out[3])
 {
+    float v[4];
+    for (int r = 0; r < 4; r++)
+        v[r] = m[r] * x + m[4 + r] * y + m[8 + r] * z + m[12 + r];
+    for (int i = 0; i < 3; i++)
+        out[i] = v[i] / v[3];
+}
+
+/* The ray through the pointer in the first view, world space: the desktop wand. */
+static void push_pointer(struct display *d, struct input_queue *q)
+{
+    if (d->set.count < 1 || !(d->impl == &display_orbit_impl || d->impl == &display_desktop_impl ||
+                              d->impl == &display_stereo_impl))
+        return;
+    const struct view *v = &d->set.views[0];
+    int ww, wh;
+    glfwGetWindowSize(gpu_context_window(d->context), &ww, &wh);
+    if (ww <= 0 || wh <= 0)
+        return;
+    mat4 view, proj, vp, inv;
+    memcpy(view, v->rv.view, sizeof(view));
+    memcpy(proj, v->rv.proj, sizeof(proj));
+    glm_mat4_mul(proj, view, vp);
+    glm_mat4_inv(vp, inv);
+    float x = (float)((d->cursor[0] + 0.5) / ww * 2.0 - 1.0);
+    float y = (float)(1.0 - (d->cursor[1] + 0.5) / wh * 2.0);
+    struct input_event e = {.type = INPUT_POSE, .space = INPUT_SPACE_WORLD};
+    float far[3], len = 0.0f;
+    unproject((float *)inv, x, y, -1.0f, e.position);
+    unproject((float *)inv, x, y, 1.0f, far);
+    for (int i = 0; i < 3; i++) {
+        e.direction[i] = far[i] - e.position[i];
+        len += e.direction[i] * e.direction[i];
+    }
+    len = sqrtf(len);
+    if (!(len > 0.0f) || !isfinite(len))
+        return;
+    for (int i = 0; i < 3; i++)
+        e.direction[i] /= len;
+    input_queue_push(q, &e);
+}
+
+static void poll_joystick(struct display *d, struct input_queue *q)
+{
+    if (!glfwJoystickPresent(GLFW_JOYSTICK_1))
+        return;
+    int nb = 0, na = 0;
+    const unsigned char *buttons = glfwGetJoystickButtons(GLFW_JOYSTICK_1, &nb);
+    const float *axes = glfwGetJoystickAxes(GLFW_JOYSTICK_1, &na);
+    for (int b = 0; b < INPUT_BUTTON_COUNT && b < nb; b++) {
+        if (buttons[b] != d->joy_buttons[b]) {
+            d->joy_buttons[b] = buttons[b];
+            input_queue_push(q, &(struct input_event){.type = INPUT_BUTTON,
+                                                      .button = (enum input_button)b,
+                                                      .down = buttons[b] == GLFW_PRESS});
+        }
+    }
+    /* Left stick: up flies forward, sideways turns. */
+    float want[INPUT_AXIS_COUNT] = {na > 1 ? -axes[1] : 0.0f, na > 0 ? axes[0] : 0.0f};
+    for (int a = 0; a < INPUT_AXIS_COUNT; a++) {
+        float v = fabsf(want[a]) < 0.15f ? 0.0f : want[a]; /* dead zone */
+        if (v != d->joy_axes[a]) {
+            d->joy_axes[a] = v;
+            input_queue_push(q, &(struct input_event){.type = INPUT_AXIS,
+                                                      .axis = (enum input_axis)a, .value = v});
+        }
+    }
+}
+
+void display_poll_input(struct display *d, double timeout_s, struct input_queue *q)
+{
+    if (d->desc.offscreen || !gpu_context_window(d->context))
+        return;
     if (timeout_s > 0.0)
         glfwWaitEventsTimeout(timeout_s);
     else
         glfwPollEvents();
+    /* The pose first, then what the callbacks saw, so a click acts where the pointer is. */
+    push_pointer(d, q);
+    for (int i = 0; i < d->pending.count; i++)
+        input_queue_push(q, &d->pending.events[i]);
+    q->dropped += d->pending.dropped;
+    input_queue_clear(&d->pending);
+    poll_joystick(d, q);
 }
 
 bool display_should_close(const struct display *d)
 {
     return d->should_close;
-}
-
-struct display_navigation *display_navigation(struct display *d)
-{
-    return &d->cfg.navigation;
-}
-
-bool display_navigation_changed(struct display *d)
-{
-    bool changed = d->nav_changed;
-    d->nav_changed = false;
-    return changed;
 }
 
 /* ---- files --------------------------------------------------------------------------- */

@@ -10,6 +10,14 @@
  * loop (display_draw) calls only renderer_draw.  This part knows nothing about how the volume
  * or the light map is made, and calls no GL itself (src/gpu does).
  *
+ * The display owns its windows: it alone installs window callbacks, and it hands what they
+ * report on as input events (display_poll_input), keys mapped through one table so that a key
+ * means the same on every display.  Where the viewer is (head pose, navigation, the orbit
+ * camera) is the caller's frame state: display_sample_head reads the head tracker, and
+ * display_layout places the views for a given state.
+ *
+ * Must not know: the physics, the volume, the light map, the menu, the session.
+ *
  * Frames: world metres (x east, y north, z up) -> navigation transform -> tracker metres
  * (x right, y up, z toward the viewer) -> eye.  Pure math (navigation, head poses, Kooima's
  * generalized perspective) is in view.c and head.c and needs no GL context.
@@ -21,6 +29,7 @@
 
 #include "config/display_config.h"
 #include "gpu/gpu.h"
+#include "input/input.h"
 #include "render/image.h"
 #include "render/render.h"
 
@@ -77,6 +86,13 @@ void display_path_finish(struct display_path *path);
  * surrounding poses; clamped to the first and last. */
 void display_path_eval(const struct display_path *path, double t, struct display_pose *out);
 
+/* The world camera of the orbit display (anvil run without --display): world metres, z up. */
+struct display_camera {
+    double eye[3], target[3], up[3];
+    double fov_deg;       /* vertical */
+    double near_m, far_m;
+};
+
 /* ---- views --------------------------------------------------------------------------- */
 
 enum view_eye { VIEW_EYE_MONO, VIEW_EYE_LEFT, VIEW_EYE_RIGHT };
@@ -102,10 +118,11 @@ struct view_set {
 
 /* Lays out the walls of CFG (one view per wall for mono walls, left and right for stereo
  * ones) for the head pose HEAD.  SIZES gives each wall's image [w, h].  Matrices map world
- * metres through CFG's navigation transform.  Textures already in SET are kept when the layout
- * is unchanged.  No GL. */
+ * metres through the navigation transform NAV.  Textures already in SET are kept when the
+ * layout is unchanged.  No GL. */
 void view_set_layout(struct view_set *set, const struct display_config *cfg,
-                     const struct display_pose *head, const int (*sizes)[2]);
+                     const struct display_navigation *nav, const struct display_pose *head,
+                     const int (*sizes)[2]);
 
 /* Image size of wall W: walls[w].size, else HEIGHT pixels high and the wall's aspect wide. */
 void view_set_wall_size(const struct display_config *cfg, int w, int height, int out[2]);
@@ -122,6 +139,8 @@ struct display_desc {
     struct gpu_context *context; /* offscreen: use this context (not owned); NULL: create an
                                     EGL one */
     int height;                  /* image height of walls without a size (render.height) */
+    struct display_camera camera; /* the orbit display's camera until display_layout is given
+                                     another (the scene's camera) */
 };
 
 /* Lists the backends (name, one-line description) for --display help. */
@@ -138,8 +157,24 @@ void display_destroy(struct display *d);
  * display_destroy. */
 struct gpu_context *display_context(struct display *d);
 
-/* Reads the head pose at time T (seconds) and recomputes every view's matrices. */
+/* The head pose at time T (seconds) from the display's head tracker (fixed, a scripted path,
+ * an OpenHMD device).  False (logged) when the device fails. */
+bool display_sample_head(struct display *d, double t, struct display_pose *head);
+
+/* Places every view for HEAD, the navigation NAV (tracker displays) and CAMERA (the orbit
+ * display), each taken as given: the caller owns them. */
+bool display_layout(struct display *d, const struct display_pose *head,
+                    const struct display_navigation *nav, const struct display_camera *camera);
+
+/* display_sample_head at T, then display_layout with the display config's navigation and
+ * the home camera (for callers without a frame state of their own: tests, one-off views). */
 bool display_update(struct display *d, double t);
+
+/* Whether the display's views come from the orbit camera (world space) rather than from a
+ * head in tracker space. */
+bool display_uses_camera(const struct display *d);
+/* Whether the head moves by itself (a path or a device): then every frame is drawn. */
+bool display_head_moves(const struct display *d);
 
 /* The views of the current frame.  Pointers stay valid until display_destroy. */
 int display_view_count(const struct display *d);
@@ -160,15 +195,18 @@ bool display_present(struct display *d, struct renderer *r, float exposure);
 int display_output_count(const struct display *d);
 const struct gpu_texture *display_output(const struct display *d, int i, const char **name);
 
-/* Windows: events, and whether the user asked to close (Esc, Q, a window's close button). */
-void display_poll(struct display *d, double timeout_s);
+/* Windows: waits up to TIMEOUT_S for events (0: none), then appends to Q what the windows
+ * reported since the last call, in order: keys (INPUT_KEY, through the one key table), mouse
+ * buttons (left: trigger, middle: grab, right: the menu key), drags and the wheel, the
+ * pointer's ray through the first view (world space) on displays with a pointer, and the
+ * first joystick's buttons and left stick (fly, turn).  A window's close button is a
+ * INPUT_KEY_QUIT.  Offscreen displays append nothing. */
+void display_poll_input(struct display *d, double timeout_s, struct input_queue *q);
+/* The key table for help texts: each meaning once, with the names of its keys ("R, Page Up"). */
+void display_list_keys(void (*print)(const char *keys, enum input_key key, void *user),
+                       void *user);
+/* Whether a window's close button was pressed. */
 bool display_should_close(const struct display *d);
-/* Keyboard flying in the windows moves the navigation; true once since the last call when it
- * did (the next display_update uses it). */
-bool display_navigation_changed(struct display *d);
-/* The navigation the views use, for the wand to change (fly, grab, reset); the next
- * display_update applies it.  Valid until display_destroy. */
-struct display_navigation *display_navigation(struct display *d);
 
 /* Writes every drawn view as DIR/NAME.EXT (EXT "png": tone-mapped, "pfm": linear radiance),
  * every composed output likewise, and a contact sheet DIR/contact.EXT of all views (walls

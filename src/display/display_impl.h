@@ -6,8 +6,6 @@
 #ifndef ANVIL_DISPLAY_IMPL_H
 #define ANVIL_DISPLAY_IMPL_H
 
-#include <openhmd.h>
-
 #include "display/display.h"
 
 #define DISPLAY_MAX_OUTPUTS 4
@@ -21,8 +19,9 @@ struct display_impl {
      * primary context must be current on return.  BASE holds the copied config and desc. */
     struct display *(*create)(const struct display *base);
     void (*destroy)(struct display *d);
-    /* Fills d->views for head pose HEAD (NULL: the backend's default layout). */
-    bool (*layout)(struct display *d, const struct display_pose *head);
+    /* Fills d->set for head pose HEAD, navigation NAV and orbit camera CAMERA. */
+    bool (*layout)(struct display *d, const struct display_pose *head,
+                   const struct display_navigation *nav, const struct display_camera *camera);
     /* Composes and shows the drawn views. */
     bool (*present)(struct display *d, struct renderer *r, float exposure);
 };
@@ -37,8 +36,7 @@ struct display_head_tracker {
     enum display_head_source source;
     struct display_pose fixed;   /* fixed; also the offset added to a device's position */
     struct display_path path;
-    ohmd_context *ohmd;
-    ohmd_device *device;
+    struct ohmd_device *device; /* the process's OpenHMD context's (input_ohmd_open) */
 };
 
 struct display {
@@ -53,8 +51,13 @@ struct display {
     int output_count;
     struct gpu_program compose; /* shaders/display_compose.comp */
     bool should_close;
-    bool nav_changed;
     double time;
+    /* Window events since the last display_poll_input (callbacks push here). */
+    struct input_queue pending;
+    bool dragging;
+    double cursor[2], drag_from[2];
+    unsigned char joy_buttons[INPUT_BUTTON_COUNT];
+    float joy_axes[INPUT_AXIS_COUNT];
 };
 
 extern const struct display_impl display_headless_impl;
@@ -62,6 +65,7 @@ extern const struct display_impl display_desktop_impl;
 extern const struct display_impl display_stereo_impl;
 extern const struct display_impl display_cave_impl;
 extern const struct display_impl display_hmd_impl;
+extern const struct display_impl display_orbit_impl;
 
 /* Shared by backends. */
 
@@ -89,14 +93,10 @@ bool display_open_primary(struct display *d, int w, int h, int monitor, bool ste
 /* Closes the primary context if the display made it. */
 void display_close_primary(struct display *d);
 
-/* Sets up keyboard flying and close on Esc/Q for WINDOW (a GLFWwindow). */
+/* Makes D the owner of WINDOW (a GLFWwindow): its keys, buttons, pointer, wheel and close
+ * button become D's input events (display_poll_input).  The only place that installs window
+ * callbacks. */
 void display_watch_window(struct display *d, void *window);
-
-/* OpenHMD: opens the device named NAME ("null": the Null HMD; else a product name, matched
- * case-insensitively as a substring) of class CLASS (OHMD_DEVICE_CLASS_*), or -1 for any
- * class.  Returns false (logged with the devices found) when none matches. */
-bool display_ohmd_open(const char *name, int device_class, ohmd_context **ctx,
-                       ohmd_device **device);
 
 /* Head trackers. */
 bool display_head_tracker_init(struct display_head_tracker *h, const struct display_head *cfg);

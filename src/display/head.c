@@ -1,6 +1,6 @@
 /*
- * Head poses: fixed, a scripted path of timed poses, or an OpenHMD device; and opening
- * OpenHMD devices by name (never by index: indices change with what is plugged in).
+ * Head poses: fixed, a scripted path of timed poses, or an OpenHMD device (opened by name in
+ * the process's one OpenHMD context, input_ohmd_open).
  */
 #include <ctype.h>
 #include <math.h>
@@ -9,6 +9,8 @@
 #include <strings.h>
 
 #include <cglm/cglm.h>
+
+#include <openhmd.h>
 
 #include "common/log.h"
 #include "display/display_impl.h"
@@ -130,68 +132,6 @@ void display_path_eval(const struct display_path *path, double t, struct display
     memcpy(out->rotation, q, sizeof(q));
 }
 
-/* ---- OpenHMD ------------------------------------------------------------------------- */
-
-static bool name_matches(const char *product, const char *want)
-{
-    size_t n = strlen(want);
-    for (const char *p = product; *p; p++) {
-        if (strncasecmp(p, want, n) == 0)
-            return true;
-    }
-    return false;
-}
-
-bool display_ohmd_open(const char *name, int device_class, ohmd_context **ctx,
-                       ohmd_device **device)
-{
-    *ctx = NULL;
-    *device = NULL;
-    ohmd_context *c = ohmd_ctx_create();
-    if (!c) {
-        log_error("OpenHMD: could not create a context");
-        return false;
-    }
-    int count = ohmd_ctx_probe(c);
-    bool want_null = strcasecmp(name, "null") == 0;
-    int found = -1;
-    for (int i = 0; i < count && found < 0; i++) {
-        int flags = 0, cls = 0;
-        ohmd_list_geti(c, i, OHMD_DEVICE_FLAGS, &flags);
-        ohmd_list_geti(c, i, OHMD_DEVICE_CLASS, &cls);
-        if (device_class >= 0 && cls != device_class)
-            continue;
-        const char *product = ohmd_list_gets(c, i, OHMD_PRODUCT);
-        if (want_null ? (flags & OHMD_DEVICE_FLAGS_NULL_DEVICE) != 0
-                      : name_matches(product ? product : "", name))
-            found = i;
-    }
-    if (found < 0) {
-        char list[512] = "";
-        size_t len = 0;
-        for (int i = 0; i < count && len < sizeof(list); i++) {
-            const char *product = ohmd_list_gets(c, i, OHMD_PRODUCT);
-            len += (size_t)snprintf(list + len, sizeof(list) - len, "%s\"%s\"", i ? ", " : "",
-                                    product ? product : "?");
-        }
-        log_error("OpenHMD: no device named \"%s\" (found: %s; \"null\" picks the Null HMD)",
-                  name, count > 0 ? list : "none");
-        ohmd_ctx_destroy(c);
-        return false;
-    }
-    ohmd_device *dev = ohmd_list_open_device(c, found);
-    if (!dev) {
-        log_error("OpenHMD: could not open \"%s\": %s", ohmd_list_gets(c, found, OHMD_PRODUCT),
-                  ohmd_ctx_get_error(c));
-        ohmd_ctx_destroy(c);
-        return false;
-    }
-    log_info("OpenHMD: opened \"%s\"", ohmd_list_gets(c, found, OHMD_PRODUCT));
-    *ctx = c;
-    *device = dev;
-    return true;
-}
-
 /* ---- head trackers ------------------------------------------------------------------- */
 
 bool display_head_tracker_init(struct display_head_tracker *h, const struct display_head *cfg)
@@ -205,7 +145,8 @@ bool display_head_tracker_init(struct display_head_tracker *h, const struct disp
     case DISPLAY_HEAD_PATH:
         return display_path_load(cfg->path, &h->path);
     case DISPLAY_HEAD_OPENHMD:
-        return display_ohmd_open(cfg->device, -1, &h->ohmd, &h->device);
+        h->device = input_ohmd_open(cfg->device, -1);
+        return h->device != NULL;
     }
     return false;
 }
@@ -215,8 +156,7 @@ void display_head_tracker_finish(struct display_head_tracker *h)
     if (!h)
         return;
     display_path_finish(&h->path);
-    if (h->ohmd)
-        ohmd_ctx_destroy(h->ohmd); /* closes its devices */
+    input_ohmd_close(h->device);
     memset(h, 0, sizeof(*h));
 }
 
@@ -231,7 +171,7 @@ bool display_head_tracker_pose(struct display_head_tracker *h, double t,
         display_path_eval(&h->path, t, out);
         return true;
     case DISPLAY_HEAD_OPENHMD: {
-        ohmd_ctx_update(h->ohmd);
+        input_ohmd_update();
         float q[4] = {0, 0, 0, 1}, p[3] = {0, 0, 0};
         ohmd_device_getf(h->device, OHMD_ROTATION_QUAT, q);
         ohmd_device_getf(h->device, OHMD_POSITION_VECTOR, p);

@@ -10,14 +10,14 @@
 #include <string.h>
 
 #include <cglm/cglm.h>
+#include <openhmd.h>
 
 #include "common/log.h"
 #include "display/display_impl.h"
 
 struct hmd {
     struct display base;
-    ohmd_context *ohmd;
-    ohmd_device *device;
+    ohmd_device *device; /* shared with a head tracker on the same device (input_ohmd_open) */
     int resolution[2];       /* panel pixels */
     float screen_size[2];    /* panel metres */
     float lens_separation;   /* metres */
@@ -39,8 +39,7 @@ static void hmd_destroy(struct display *d)
         gpu_texture_finish(&h->scratch);
     }
     display_close_primary(d);
-    if (h->ohmd)
-        ohmd_ctx_destroy(h->ohmd);
+    input_ohmd_close(h->device);
     free(h);
 }
 
@@ -52,7 +51,8 @@ static struct display *hmd_create(const struct display *base)
     h->base = *base;
     struct display *d = &h->base;
     const struct display_config *cfg = &d->cfg;
-    if (!display_ohmd_open(cfg->hmd.device, OHMD_DEVICE_CLASS_HMD, &h->ohmd, &h->device))
+    h->device = input_ohmd_open(cfg->hmd.device, OHMD_DEVICE_CLASS_HMD);
+    if (!h->device)
         goto error;
     ohmd_device_geti(h->device, OHMD_SCREEN_HORIZONTAL_RESOLUTION, &h->resolution[0]);
     ohmd_device_geti(h->device, OHMD_SCREEN_VERTICAL_RESOLUTION, &h->resolution[1]);
@@ -78,6 +78,11 @@ static struct display *hmd_create(const struct display *base)
     if (!d->desc.offscreen && cfg->head.source != DISPLAY_HEAD_OPENHMD)
         log_info("HMD: head pose from %s, not from the device",
                  display_head_source_name(cfg->head.source));
+    else if (cfg->head.source == DISPLAY_HEAD_OPENHMD && strcmp(cfg->head.device, "null") == 0 &&
+             strcmp(cfg->hmd.device, "null") != 0)
+        log_warn("%s: head.device = \"null\" with hmd.device = \"%s\": the head follows the "
+                 "Null device, not the headset (set head.device to the headset's name)",
+                 cfg->path, cfg->hmd.device);
     int w = cfg->window_size[0], hh = cfg->window_size[1];
     if (!display_open_primary(d, w, hh, cfg->monitor, false, "anvil: hmd"))
         goto error;
@@ -94,10 +99,10 @@ error:
     return NULL;
 }
 
-static bool hmd_layout(struct display *d, const struct display_pose *head)
+static bool hmd_layout(struct display *d, const struct display_pose *head,
+                       const struct display_navigation *nav, const struct display_camera *camera)
 {
     struct hmd *h = (struct hmd *)d;
-    const struct display_config *cfg = &d->cfg;
     int size[2];
     if (d->desc.offscreen) {
         size[1] = d->desc.height;
@@ -110,10 +115,12 @@ static bool hmd_layout(struct display *d, const struct display_pose *head)
         size[0] = 1;
     if (size[1] < 1)
         size[1] = 1;
-    mat4 nav; /* cglm needs its matrices aligned: locals, then copies */
-    display_navigation_matrix(&cfg->navigation, (float *)nav);
-    ohmd_ctx_update(h->ohmd);
-    bool from_device = cfg->head.source == DISPLAY_HEAD_OPENHMD;
+    mat4 nav_m; /* cglm needs its matrices aligned: locals, then copies */
+    display_navigation_matrix(nav, (float *)nav_m);
+    input_ohmd_update();
+    /* The eyes from the head pose (the device's own when head.source = "openhmd"), the
+     * device's lenses and IPD: the same matrices OpenHMD's eye model gives, from a pose that
+     * the frame state can carry. */
     float eyes[2][3];
     display_pose_eyes(head, h->ipd, eyes[0], eyes[1]);
     for (int e = 0; e < 2; e++) {
@@ -124,38 +131,20 @@ static bool hmd_layout(struct display *d, const struct display_pose *head)
         v->visible = true;
         v->rv.width = size[0];
         v->rv.height = size[1];
-        mat4 eye_view, view;
+        mat4 eye_view, view, pose;
         float proj[16];
         ohmd_device_getf(h->device,
                          e == 0 ? OHMD_LEFT_EYE_GL_PROJECTION_MATRIX
                                 : OHMD_RIGHT_EYE_GL_PROJECTION_MATRIX,
                          proj);
-        if (from_device) {
-            /* The device's eye matrices, its tracking origin at head.position in the room. */
-            mat4 mv, t, inv;
-            ohmd_device_getf(h->device,
-                             e == 0 ? OHMD_LEFT_EYE_GL_MODELVIEW_MATRIX
-                                    : OHMD_RIGHT_EYE_GL_MODELVIEW_MATRIX,
-                             (float *)mv);
-            glm_translate_make(t, (vec3){(float)-cfg->head.position[0],
-                                         (float)-cfg->head.position[1],
-                                         (float)-cfg->head.position[2]});
-            glm_mat4_mul(mv, t, eye_view);
-            glm_mat4_inv(eye_view, inv);
-            for (int i = 0; i < 3; i++)
-                v->eye_tracker[i] = inv[3][i];
-        } else {
-            /* Eyes from the head tracker, the device's lenses and IPD. */
-            mat4 pose;
-            versor q;
-            memcpy(q, head->rotation, sizeof(q));
-            glm_quat_mat4(q, pose);
-            for (int i = 0; i < 3; i++)
-                pose[3][i] = eyes[e][i];
-            glm_mat4_inv(pose, eye_view);
-            memcpy(v->eye_tracker, eyes[e], sizeof(v->eye_tracker));
-        }
-        glm_mat4_mul(eye_view, nav, view);
+        versor q;
+        memcpy(q, head->rotation, sizeof(q));
+        glm_quat_mat4(q, pose);
+        for (int i = 0; i < 3; i++)
+            pose[3][i] = eyes[e][i];
+        glm_mat4_inv(pose, eye_view);
+        memcpy(v->eye_tracker, eyes[e], sizeof(v->eye_tracker));
+        glm_mat4_mul(eye_view, nav_m, view);
         memcpy(v->rv.view, view, sizeof(view));
         memcpy(v->rv.proj, proj, sizeof(proj));
     }

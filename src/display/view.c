@@ -151,10 +151,11 @@ static void set_view(struct view *v, const char *name, int wall, enum view_eye e
 }
 
 void view_set_layout(struct view_set *set, const struct display_config *cfg,
-                     const struct display_pose *head, const int (*sizes)[2])
+                     const struct display_navigation *navigation, const struct display_pose *head,
+                     const int (*sizes)[2])
 {
     mat4 nav;
-    display_navigation_matrix(&cfg->navigation, (float *)nav);
+    display_navigation_matrix(navigation, (float *)nav);
     float eyes[2][3];
     display_pose_eyes(head, cfg->eye_separation, eyes[0], eyes[1]);
     int n = 0;

@@ -16,9 +16,29 @@ static const struct {
     const char *name;
     enum input_key key;
 } key_names[] = {
-    {"play", INPUT_KEY_PLAY},           {"back", INPUT_KEY_STEP_BACK},
-    {"forward", INPUT_KEY_STEP_FORWARD}, {"menu", INPUT_KEY_MENU},
-    {"next-page", INPUT_KEY_PAGE_NEXT}, {"prev-page", INPUT_KEY_PAGE_PREV},
+    {"play", INPUT_KEY_PLAY},
+    {"back", INPUT_KEY_STEP_BACK},
+    {"forward", INPUT_KEY_STEP_FORWARD},
+    {"menu", INPUT_KEY_MENU},
+    {"next-page", INPUT_KEY_PAGE_NEXT},
+    {"prev-page", INPUT_KEY_PAGE_PREV},
+    {"quit", INPUT_KEY_QUIT},
+    {"move-forward", INPUT_KEY_MOVE_FORWARD},
+    {"move-back", INPUT_KEY_MOVE_BACK},
+    {"move-left", INPUT_KEY_MOVE_LEFT},
+    {"move-right", INPUT_KEY_MOVE_RIGHT},
+    {"move-up", INPUT_KEY_MOVE_UP},
+    {"move-down", INPUT_KEY_MOVE_DOWN},
+    {"turn-left", INPUT_KEY_TURN_LEFT},
+    {"turn-right", INPUT_KEY_TURN_RIGHT},
+    {"turn-up", INPUT_KEY_TURN_UP},
+    {"turn-down", INPUT_KEY_TURN_DOWN},
+    {"zoom-in", INPUT_KEY_ZOOM_IN},
+    {"zoom-out", INPUT_KEY_ZOOM_OUT},
+    {"sun-left", INPUT_KEY_SUN_LEFT},
+    {"sun-right", INPUT_KEY_SUN_RIGHT},
+    {"sun-up", INPUT_KEY_SUN_UP},
+    {"sun-down", INPUT_KEY_SUN_DOWN},
 };
 
 void input_queue_clear(struct input_queue *q)
@@ -61,6 +81,14 @@ bool input_axis_from_name(const char *name, enum input_axis *out)
         }
     }
     return false;
+}
+
+const char *input_key_name(enum input_key k)
+{
+    for (size_t i = 0; i < sizeof(key_names) / sizeof(key_names[0]); i++)
+        if (key_names[i].key == k)
+            return key_names[i].name;
+    return "?";
 }
 
 bool input_key_from_name(const char *name, enum input_key *out)
@@ -169,7 +197,8 @@ static const char *parse_event(char **tok, int n, struct input_event *e)
     if (strcmp(kind, "key") == 0) {
         e->type = INPUT_KEY;
         if (n != 2 || !input_key_from_name(tok[1], &e->key))
-            return "\"key play|back|forward|menu|next-page|prev-page\"";
+            return "\"key NAME\" with a key of docs/menu.md (play, back, forward, menu, "
+                   "next-page, prev-page, quit, move-forward, ..., sun-down)";
         return NULL;
     }
     if (strcmp(kind, "axis") == 0) {

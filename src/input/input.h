@@ -1,12 +1,15 @@
 /*
- * input: devices turned into input events.  Backends — a scripted file of timed events (tests
- * and recorded demos), GLFW keyboard and mouse as a desktop wand (the mouse ray through the
- * pixel), GLFW joysticks, and OpenHMD controllers (the Null controllers in tests) — sit behind
- * one table and fill one queue per frame.  Whoever consumes the events (the menu, navigation)
- * never reads a device.  No GL: rays are computed from matrices the caller hands in.
+ * input: devices turned into input events.  Sources — a scripted file of timed events (tests
+ * and recorded demos) and OpenHMD controllers (the Null controllers in tests) — sit behind one
+ * table and fill one queue per frame; the windows' keyboard, mouse and joystick reach the same
+ * queue from the display that owns the windows (display_poll_input).  Whoever consumes the
+ * events (the menu, navigation) never reads a device.  One OpenHMD context serves the whole
+ * process (input_ohmd_open).  No GL, no windows.
  *
  * Spaces: a pose is in tracker metres (CAVE, HMD: the wand as the tracker reports it) or in
  * world metres (the desktop window, where the mouse ray comes from the camera).
+ *
+ * Must not know: GL, windows, the menu, the session.
  */
 #ifndef ANVIL_INPUT_H
 #define ANVIL_INPUT_H
@@ -19,6 +22,8 @@ enum input_type {
     INPUT_AXIS,   /* a joystick axis moved (value in [-1, 1]) */
     INPUT_KEY,    /* a key was pressed (keyboard shortcuts) */
     INPUT_AIM,    /* scripted: point the ray at a named menu widget (target, u, v) */
+    INPUT_DRAG,   /* the pointer moved with the left button held (u, v: pixels right, down) */
+    INPUT_SCROLL, /* the wheel turned (value: notches, away from the user > 0) */
 };
 
 enum input_button {
@@ -33,15 +38,34 @@ enum input_axis { INPUT_AXIS_FLY, INPUT_AXIS_TURN, INPUT_AXIS_COUNT }; /* fly: f
 
 enum input_space { INPUT_SPACE_TRACKER, INPUT_SPACE_WORLD };
 
-/* Keys the menu and navigation know (backends map their own codes to these). */
+/* Keys the menu, navigation and the frame loop know; the display maps a window's key codes
+ * to these (one table, display.c), so a key means the same on every display. */
 enum input_key {
     INPUT_KEY_NONE,
-    INPUT_KEY_PLAY,       /* space: play / pause */
-    INPUT_KEY_STEP_BACK,  /* , */
+    INPUT_KEY_PLAY,         /* space: play / pause */
+    INPUT_KEY_STEP_BACK,    /* , */
     INPUT_KEY_STEP_FORWARD, /* . */
-    INPUT_KEY_MENU,       /* tab / m: show or hide the menu */
-    INPUT_KEY_PAGE_NEXT,  /* ] */
-    INPUT_KEY_PAGE_PREV,  /* [ */
+    INPUT_KEY_MENU,         /* tab / m: show or hide the menu */
+    INPUT_KEY_PAGE_NEXT,    /* ] */
+    INPUT_KEY_PAGE_PREV,    /* [ */
+    INPUT_KEY_QUIT,         /* Esc / q */
+    INPUT_KEY_MOVE_FORWARD, /* w: the viewer moves forward */
+    INPUT_KEY_MOVE_BACK,    /* s */
+    INPUT_KEY_MOVE_LEFT,    /* a */
+    INPUT_KEY_MOVE_RIGHT,   /* d */
+    INPUT_KEY_MOVE_UP,      /* r / Page Up */
+    INPUT_KEY_MOVE_DOWN,    /* f / Page Down */
+    INPUT_KEY_TURN_LEFT,    /* arrow left: the view turns (orbits) left */
+    INPUT_KEY_TURN_RIGHT,   /* arrow right */
+    INPUT_KEY_TURN_UP,      /* arrow up */
+    INPUT_KEY_TURN_DOWN,    /* arrow down */
+    INPUT_KEY_ZOOM_IN,      /* + / =: closer (orbit) or a larger storm (tracked displays) */
+    INPUT_KEY_ZOOM_OUT,     /* - */
+    INPUT_KEY_SUN_LEFT,     /* j: sun azimuth - 5 degrees */
+    INPUT_KEY_SUN_RIGHT,    /* l: + 5 degrees */
+    INPUT_KEY_SUN_UP,       /* i: sun elevation + 2 degrees */
+    INPUT_KEY_SUN_DOWN,     /* k: - 2 degrees */
+    INPUT_KEY_COUNT
 };
 
 #define INPUT_TARGET_MAX 32
@@ -57,7 +81,8 @@ struct input_event {
     float value;              /* INPUT_AXIS */
     enum input_key key;       /* INPUT_KEY */
     char target[INPUT_TARGET_MAX]; /* INPUT_AIM: widget name ("time.play") */
-    float u, v;               /* INPUT_AIM: where on the widget, [0, 1] each (0.5: centre) */
+    float u, v;               /* INPUT_AIM: where on the widget, [0, 1] each (0.5: centre);
+                                 INPUT_DRAG: pixels moved right and down */
 };
 
 #define INPUT_QUEUE_MAX 256
@@ -105,14 +130,6 @@ double input_script_fps(const struct input_source *s);
 /* The last frame the script names. */
 long input_script_last_frame(const struct input_source *s);
 
-/* The desktop wand: GLFW keyboard and mouse of WINDOW (a GLFWwindow *), the ray through the
- * pointer (world space), left button = trigger, middle = grab, and the first joystick's
- * buttons and axes.  Callbacks installed before are chained, except for the left button while
- * the menu captures it (input_glfw_capture).  Needs GLFW initialised; no GL. */
-struct input_source *input_glfw_create(void *window);
-/* While CAPTURE, left-button events go to the wand only (the pointer is over the menu). */
-void input_glfw_capture(struct input_source *s, bool capture);
-
 /* OpenHMD controllers: the device NAME ("null": OpenHMD's Null controller, chosen by its
  * OHMD_DEVICE_FLAGS_NULL_DEVICE flag; else a product name, substring, case-insensitive) of
  * the controller class.  Its pose is the wand (tracker space, plus OFFSET metres: the
@@ -120,8 +137,28 @@ void input_glfw_capture(struct input_source *s, bool capture);
  * (logged) when no such controller exists. */
 struct input_source *input_ohmd_create(const char *name, const double offset[3]);
 
+/* ---- OpenHMD devices: one context per process -------------------------------------------- */
+
+struct ohmd_device; /* OpenHMD's own type (openhmd.h) */
+
+/* Opens the device NAME ("null": the Null device of that class, chosen by its
+ * OHMD_DEVICE_FLAGS_NULL_DEVICE flag; else a product name, substring, case-insensitive) of
+ * DEVICE_CLASS (OHMD_DEVICE_CLASS_*, or -1 for any) in the process's one OpenHMD context,
+ * made on first use.  Opening the same device again returns it again (counted).  NULL (logged
+ * with the devices found) when none matches.  Close each open with input_ohmd_close; the
+ * context goes with the last. */
+struct ohmd_device *input_ohmd_open(const char *name, int device_class);
+void input_ohmd_close(struct ohmd_device *dev); /* NULL is fine */
+/* Reads the devices' new state (ohmd_ctx_update); harmless to call more than once a frame. */
+void input_ohmd_update(void);
+/* The product name of an open device (static storage of OpenHMD's). */
+const char *input_ohmd_product(const struct ohmd_device *dev);
+/* OpenHMD contexts open now: 0 or 1 (for tests). */
+int input_ohmd_contexts(void);
+
 /* Names of the buttons, keys ("trigger", "play") for scripts and messages. */
 const char *input_button_name(enum input_button b);
+const char *input_key_name(enum input_key k);
 bool input_button_from_name(const char *name, enum input_button *out);
 bool input_key_from_name(const char *name, enum input_key *out);
 bool input_axis_from_name(const char *name, enum input_axis *out);

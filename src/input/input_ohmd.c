@@ -2,7 +2,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 
 #include <openhmd.h>
 
@@ -11,19 +10,9 @@
 
 #define CONTROLS_MAX 64
 
-static bool contains_nocase(const char *hay, const char *needle)
-{
-    size_t n = strlen(needle);
-    for (; *hay; hay++)
-        if (strncasecmp(hay, needle, n) == 0)
-            return true;
-    return n == 0;
-}
-
 struct ohmd_input {
     struct input_source base;
-    ohmd_context *ctx;
-    ohmd_device *device;
+    ohmd_device *device; /* shared (input_ohmd_open) */
     double offset[3];
     int control_count;
     int hints[CONTROLS_MAX];
@@ -66,7 +55,7 @@ static bool ohmd_poll(struct input_source *s, const struct input_frame *frame,
                       struct input_queue *q)
 {
     struct ohmd_input *h = (struct ohmd_input *)s;
-    ohmd_ctx_update(h->ctx);
+    input_ohmd_update();
     float rot[4] = {0, 0, 0, 1}, pos[3] = {0, 0, 0};
     ohmd_device_getf(h->device, OHMD_ROTATION_QUAT, rot);
     ohmd_device_getf(h->device, OHMD_POSITION_VECTOR, pos);
@@ -100,8 +89,7 @@ static bool ohmd_poll(struct input_source *s, const struct input_frame *frame,
 static void ohmd_destroy(struct input_source *s)
 {
     struct ohmd_input *h = (struct ohmd_input *)s;
-    if (h->ctx)
-        ohmd_ctx_destroy(h->ctx); /* closes its devices */
+    input_ohmd_close(h->device);
     free(h);
 }
 
@@ -121,36 +109,9 @@ struct input_source *input_ohmd_create(const char *name, const double offset[3])
     h->base.impl = &ohmd_impl;
     for (int i = 0; i < 3 && offset; i++)
         h->offset[i] = offset[i];
-    h->ctx = ohmd_ctx_create();
-    if (!h->ctx) {
-        log_error("OpenHMD: could not create a context");
+    h->device = input_ohmd_open(name, OHMD_DEVICE_CLASS_CONTROLLER);
+    if (!h->device)
         goto error;
-    }
-    int count = ohmd_ctx_probe(h->ctx);
-    bool want_null = strcasecmp(name, "null") == 0;
-    int found = -1;
-    for (int i = 0; i < count && found < 0; i++) {
-        int flags = 0, cls = -1;
-        ohmd_list_geti(h->ctx, i, OHMD_DEVICE_FLAGS, &flags);
-        ohmd_list_geti(h->ctx, i, OHMD_DEVICE_CLASS, &cls);
-        if (cls != OHMD_DEVICE_CLASS_CONTROLLER)
-            continue;
-        const char *product = ohmd_list_gets(h->ctx, i, OHMD_PRODUCT);
-        bool null_device = (flags & OHMD_DEVICE_FLAGS_NULL_DEVICE) != 0;
-        if (want_null ? null_device : (product && contains_nocase(product, name)))
-            found = i;
-    }
-    if (found < 0) {
-        log_error("OpenHMD: no controller named \"%s\" (\"null\" picks the Null controller)",
-                  name);
-        goto error;
-    }
-    h->device = ohmd_list_open_device(h->ctx, found);
-    if (!h->device) {
-        log_error("OpenHMD: could not open the controller \"%s\": %s",
-                  ohmd_list_gets(h->ctx, found, OHMD_PRODUCT), ohmd_ctx_get_error(h->ctx));
-        goto error;
-    }
     ohmd_device_geti(h->device, OHMD_CONTROL_COUNT, &h->control_count);
     if (h->control_count > CONTROLS_MAX)
         h->control_count = CONTROLS_MAX;
@@ -159,7 +120,7 @@ struct input_source *input_ohmd_create(const char *name, const double offset[3])
         ohmd_device_geti(h->device, OHMD_CONTROLS_HINTS, hints);
         memcpy(h->hints, hints, sizeof(int) * (size_t)h->control_count);
     }
-    log_info("OpenHMD: wand \"%s\" (%d controls)", ohmd_list_gets(h->ctx, found, OHMD_PRODUCT),
+    log_info("OpenHMD: wand \"%s\" (%d controls)", input_ohmd_product(h->device),
              h->control_count);
     return &h->base;
 

@@ -1018,8 +1018,8 @@ static void key(struct menu *m, enum input_key k)
     case INPUT_KEY_PAGE_PREV:
         menu_set_page(m, (enum menu_page)((m->page + MENU_PAGE_COUNT - 1) % MENU_PAGE_COUNT));
         break;
-    case INPUT_KEY_NONE:
-        break;
+    default: /* navigation, the sun, quitting: not the menu's */
+        return;
     }
     m->dirty = true;
 }
@@ -1068,6 +1068,8 @@ void menu_handle(struct menu *m, const struct input_event *e)
         key(m, e->key);
         break;
     case INPUT_AXIS:
+    case INPUT_DRAG:
+    case INPUT_SCROLL:
         break;
     }
     if (hovered(m) != before)

@@ -44,8 +44,8 @@ static void bind_pair(const struct render_light *light, const struct gpu_program
 
 /* Builds LG for SRC when stale; logs and counts a build. */
 static bool build(struct light_gpu *lg, const struct light_gpu_source *src, const double sun[3],
-                  const struct light_settings *s, enum light_gpu_mode mode,
-                  const struct effects *e, struct session_stats *st)
+                  const struct light_settings *s, enum light_gpu_mode mode, bool one_phase,
+                  struct session_stats *st)
 {
     bool built = false;
     if (!light_gpu_update(lg, src, sun, s, mode, &built)) {
@@ -72,16 +72,15 @@ static bool build(struct light_gpu *lg, const struct light_gpu_source *src, cons
                         : ", shadow only",
              s->multiple ? (s->lateral ? ", diffuse light with lateral escape" : ", diffuse light")
                          : "",
-             e->on[EFFECT_PHASE] ? "" : ", one phase");
+             one_phase ? ", one phase" : "");
     return true;
 }
 
 /* effects.temporal: one map per step in the ring {gpu, spare}.  The map that already holds
  * step k (or else the one not holding k + 1) serves k, the other k + 1: advancing a step finds
  * the new k built as the old next and builds only the new next. */
-static bool update_temporal(struct lightmaps *al, struct renderer *r, const double sun[3],
-                            const struct light_settings *s, enum light_gpu_mode mode,
-                            const struct effects *e, struct session_stats *st)
+static bool update_temporal(struct lightmaps *al, struct renderer *r,
+                            const struct lightmaps_params *p, struct session_stats *st)
 {
     bool pair = al->next_id != 0 && renderer_has_next(r);
     if (pair && !al->spare && !(al->spare = light_gpu_create()))
@@ -99,7 +98,7 @@ static bool update_temporal(struct lightmaps *al, struct renderer *r, const doub
         .generation = TEMPORAL_GENERATION,
     };
     al->held[cur] = 0;
-    if (!build(maps[cur], &src, sun, s, mode, e, st))
+    if (!build(maps[cur], &src, p->sun, &p->light, p->mode, p->one_phase, st))
         return false;
     al->held[cur] = al->step_id;
     if (!pair) {
@@ -113,7 +112,7 @@ static bool update_temporal(struct lightmaps *al, struct renderer *r, const doub
         .generation = TEMPORAL_GENERATION,
     };
     al->held[1 - cur] = 0;
-    if (!build(maps[1 - cur], &next, sun, s, mode, e, st))
+    if (!build(maps[1 - cur], &next, p->sun, &p->light, p->mode, p->one_phase, st))
         return false;
     al->held[1 - cur] = al->next_id;
     al->pair_first = cur;
@@ -126,27 +125,31 @@ static bool update_temporal(struct lightmaps *al, struct renderer *r, const doub
     return true;
 }
 
-bool lightmaps_update(struct lightmaps *al, const struct config *cfg, struct renderer *r,
-                      struct session_stats *st)
+void lightmaps_params_from(const struct config *cfg, const struct effects *e, double azimuth_deg,
+                           double elevation_deg, struct lightmaps_params *out)
 {
     struct effects decided;
-    const struct effects *e = &al->effects;
-    if (!al->have_effects) {
+    if (!e) {
         effects_decide(cfg, NULL, &decided);
         e = &decided;
     }
-    if (!al->gpu || !e->on[EFFECT_SHADOWS]) {
+    memset(out, 0, sizeof(*out));
+    out->shadows = e->on[EFFECT_SHADOWS];
+    out->one_phase = !e->on[EFFECT_PHASE];
+    effects_light_settings(cfg, e, &out->light);
+    light_sun_direction(azimuth_deg, elevation_deg, out->sun);
+    out->mode = cfg->lightmap.mode == LIGHTMAP_COMPRESSED ? LIGHT_GPU_COMPRESSED : LIGHT_GPU_DENSE;
+}
+
+bool lightmaps_update_params(struct lightmaps *al, const struct lightmaps_params *p,
+                             struct renderer *r, struct session_stats *st)
+{
+    if (!al->gpu || !p->shadows) {
         renderer_set_light(r, NULL);
         return true;
     }
-    struct light_settings s;
-    effects_light_settings(cfg, e, &s);
-    double sun[3];
-    light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
-    enum light_gpu_mode mode =
-        cfg->lightmap.mode == LIGHTMAP_COMPRESSED ? LIGHT_GPU_COMPRESSED : LIGHT_GPU_DENSE;
     if (al->temporal && al->step_id != 0)
-        return update_temporal(al, r, sun, &s, mode, e, st);
+        return update_temporal(al, r, p, st);
     struct light_gpu_source src = {
         .beta = renderer_volume_texture(r),
         .grid = renderer_grid(r),
@@ -154,10 +157,19 @@ bool lightmaps_update(struct lightmaps *al, const struct config *cfg, struct ren
         .generation = al->generation,
     };
     al->held[0] = 0;
-    if (!build(al->gpu, &src, sun, &s, mode, e, st))
+    if (!build(al->gpu, &src, p->sun, &p->light, p->mode, p->one_phase, st))
         return false;
     renderer_set_light(r, light_gpu_render_light(al->gpu));
     return true;
+}
+
+bool lightmaps_update(struct lightmaps *al, const struct config *cfg, struct renderer *r,
+                      struct session_stats *st)
+{
+    struct lightmaps_params p;
+    lightmaps_params_from(cfg, al->have_effects ? &al->effects : NULL, cfg->light.azimuth_deg,
+                          cfg->light.elevation_deg, &p);
+    return lightmaps_update_params(al, &p, r, st);
 }
 
 void lightmaps_finish(struct lightmaps *al)

@@ -11,6 +11,8 @@
 #include <stdint.h>
 
 #include "config/config.h"
+#include "light/light.h"
+#include "light/light_gpu.h"
 #include "render/render.h"
 #include "session/effects.h"
 #include "session/stats.h"
@@ -35,13 +37,32 @@ struct lightmaps {
     char pair_defines[96];
 };
 
+/* What a build depends on besides the volume: the sun, the light map settings (the effects'
+ * and the session's quality), the storage. */
+struct lightmaps_params {
+    double sun[3];               /* toward the sun */
+    struct light_settings light; /* effects_light_settings, then the session's quality */
+    enum light_gpu_mode mode;
+    bool shadows;                /* effects.shadows: without it there is no light map */
+    bool one_phase;              /* effects.phase off (for the log) */
+};
+
+/* The parameters CFG's lightmap.* and E (NULL: decided without facts) ask for, with the sun at
+ * AZIMUTH_DEG, ELEVATION_DEG. */
+void lightmaps_params_from(const struct config *cfg, const struct effects *e, double azimuth_deg,
+                           double elevation_deg, struct lightmaps_params *out);
+
 /* The identity of time step STEP made with look generation GEN (never 0). */
 uint64_t lightmaps_step_id(int step, uint64_t gen);
 
 bool lightmaps_init(struct lightmaps *al, const struct config *cfg);
 /* Uses the decisions E (copied) from now on; without them every auto effect is on. */
 void lightmaps_set_effects(struct lightmaps *al, const struct effects *e);
-/* Builds when stale and points the renderer at the light map; counts builds in ST. */
+/* Builds when stale (the light key: sun, volume generation, optics, settings, storage) and
+ * points the renderer at the light map; counts builds in ST (may be NULL). */
+bool lightmaps_update_params(struct lightmaps *al, const struct lightmaps_params *p,
+                             struct renderer *r, struct session_stats *st);
+/* The same with the parameters of CFG, its sun and the decisions set (lightmaps_params_from). */
 bool lightmaps_update(struct lightmaps *al, const struct config *cfg, struct renderer *r,
                       struct session_stats *st);
 void lightmaps_finish(struct lightmaps *al);

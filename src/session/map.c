@@ -122,6 +122,17 @@ static void add_ground_segment(const struct scene_map *m, struct segments *s, co
 }
 
 /* Where the terrain and the map come from: the WRF metadata of a data scene. */
+static void use_wrf_meta(const struct config *cfg, const struct wrf_meta *meta,
+                         const struct grid3 *box, struct scene_map *m)
+{
+    if (cfg->map.terrain)
+        m->have_terrain = terrain_from_wrf(meta, box, &m->terrain);
+    if (meta->xlat && meta->xlong)
+        geo_map_init_grid(&m->geo, meta->xlat, meta->xlong, meta->nx, meta->ny, meta->dx,
+                          meta->dy);
+}
+
+/* The same when the caller has no open source: the files are opened for it. */
 static void load_wrf_meta(const struct config *cfg, const struct grid3 *box, struct scene_map *m)
 {
     const char *files[CONFIG_MAX_FILES];
@@ -130,12 +141,7 @@ static void load_wrf_meta(const struct config *cfg, const struct grid3 *box, str
     struct data_source *src = data_source_open(&desc);
     if (!src)
         return; /* the volume was read, so this does not happen short of a race; logged */
-    const struct wrf_meta *meta = wrf_get_meta(data_source_wrf(src));
-    if (cfg->map.terrain)
-        m->have_terrain = terrain_from_wrf(meta, box, &m->terrain);
-    if (meta->xlat && meta->xlong)
-        geo_map_init_grid(&m->geo, meta->xlat, meta->xlong, meta->nx, meta->ny, meta->dx,
-                          meta->dy);
+    use_wrf_meta(cfg, wrf_get_meta(data_source_wrf(src)), box, m);
     data_source_close(src);
 }
 
@@ -268,7 +274,8 @@ static void build_graticule(const struct config *cfg, struct scene_map *m)
     log_info("map: graticule every %g degrees, %d labels", step, m->info.labels);
 }
 
-struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r)
+struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r,
+                                   const struct wrf_meta *meta)
 {
     struct scene_map *m = calloc(1, sizeof(*m));
     if (!m) {
@@ -277,8 +284,12 @@ struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r)
     }
     const struct grid3 *g = renderer_grid(r);
     m->k = cfg->scene.height_exaggeration;
-    if (cfg->scene.kind == SCENE_DATA && cfg->data.format == DATA_WRF)
-        load_wrf_meta(cfg, g, m);
+    if (cfg->scene.kind == SCENE_DATA && cfg->data.format == DATA_WRF) {
+        if (meta)
+            use_wrf_meta(cfg, meta, g, m);
+        else
+            load_wrf_meta(cfg, g, m);
+    }
     if (m->geo.kind == GEO_NONE && cfg->map.use_origin)
         geo_map_init_local(&m->geo, cfg->map.origin_deg[0], cfg->map.origin_deg[1]);
     m->geo.offset[0] = cfg->map.offset_km[0] * 1000.0;

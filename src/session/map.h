@@ -13,15 +13,18 @@
 
 #include "config/config.h"
 #include "data/geo.h"
+#include "data/wrf.h"
 #include "render/render.h"
 
 struct scene_map;
 
 /* Builds the map for the volume the renderer holds (renderer_grid: already stretched by the
- * height exaggeration) and adds its meshes to R.  Returns NULL only when out of memory or GL
- * fails (logged); a map with nothing in it is fine.  Needs the GL context current.  Destroy it
- * with scene_map_destroy before the renderer. */
-struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r);
+ * height exaggeration) and adds its meshes to R.  META: the WRF metadata of the open data
+ * (player_wrf_meta), or NULL to read it from the config's files.  Returns NULL only when out
+ * of memory or GL fails (logged); a map with nothing in it is fine.  Needs the GL context
+ * current.  Destroy it with scene_map_destroy before the renderer. */
+struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r,
+                                   const struct wrf_meta *meta);
 void scene_map_destroy(struct scene_map *m, struct renderer *r); /* NULL is fine */
 
 /* Turns the analytic ground plane off where the terrain mesh (with its skirt) replaces it.

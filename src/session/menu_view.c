@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "session/interact.h"
+#include "session/menu_view.h"
 #include "common/log.h"
 #include "gpu/gpu.h"
 #include "menu/menu.h"

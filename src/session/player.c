@@ -4,14 +4,15 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "session/lightmaps.h"
 #include "session/player.h"
 #include "session/scene.h"
-#include "session/interact.h"
 #include "common/log.h"
 #include "data/detail.h"
 #include "data/series.h"
 #include "data/source.h"
 #include "data/synth.h"
+#include "data/wrf.h"
 #include "data/wrf_write.h"
 
 #define LUT_SIZE 256
@@ -60,15 +61,27 @@ bool playback_tick(struct playback *pb, double dt, bool (*ready)(void *user, int
 
 enum player_kind { PLAYER_STORM, PLAYER_FIELDS, PLAYER_EXTINCTION, PLAYER_TEST_SCENE };
 
-struct player {
-    const struct config *cfg;
+/* Everything the series' thread reads to make a step, copied from the config when the player
+ * is made and never written again: the loader sees neither the config nor the session. */
+struct player_load {
     enum player_kind kind;
-    struct series *series;
+    struct synth_desc synth;      /* the storm and the test scenes */
+    struct optics_params optics;
+    struct species_select select; /* the config's (test scenes; the look has its own) */
+    struct detail_desc detail;
+    double height_k;
+    char files[CONFIG_MAX_FILES][CONFIG_PATH_MAX];
+    const char *file_ptrs[CONFIG_MAX_FILES];
+    struct data_source_desc source; /* its files point into FILES above */
+};
+
+struct player {
+    struct player_load ld; /* immutable after player_create */
+    struct series *series; /* NULL for a still picture (player_desc.still) */
     int steps;
     char (*dates)[DATE_LEN];
-    const char *files[CONFIG_MAX_FILES];
-    struct data_source_desc src_desc;
-    struct data_source *src; /* read by the series' thread only (after create) */
+    struct data_source *src; /* read by the series' thread only once the series runs */
+    struct ext_volume first; /* the first step, made by player_create until taken */
 
     pthread_mutex_t lock; /* guards look, look_gen, present */
     struct look look;
@@ -80,7 +93,6 @@ struct player {
     int next_shown; /* effects.temporal: the step in the renderer's next volume, -1 none */
     uint64_t next_gen;
     bool wind_warned; /* the series' thread only */
-    double upload_ms;
 };
 
 void look_from_config(const struct config *cfg, struct look *look)
@@ -140,25 +152,12 @@ static float *transfer_scalar(const struct field_volume *fv, enum transfer_field
     return s;
 }
 
-static void storm_desc(const struct config *cfg, struct synth_desc *d)
-{
-    synth_desc_defaults(d);
-    d->kind = SYNTH_STORM;
-    for (int i = 0; i < 3; i++) {
-        d->n[i] = cfg->scene.size[i];
-        d->extent_m[i] = cfg->scene.extent_km[i] * 1000.0;
-    }
-    d->seed = cfg->scene.seed;
-    d->time = cfg->scene.time;
-}
-
 /* Mass ratios -> extinction with the look (on the series' thread). */
 static bool convert(struct player *p, struct field_volume *fv, const struct look *look,
                     struct ext_volume *out)
 {
-    struct detail_desc detail;
-    scene_detail_desc(p->cfg, &detail);
-    detail_apply_fields(&detail, fv);
+    const struct player_load *ld = &p->ld;
+    detail_apply_fields(&ld->detail, fv);
     bool ok;
     if (look->transfer_on) {
         float lut[4 * LUT_SIZE];
@@ -181,13 +180,11 @@ static bool convert(struct player *p, struct field_volume *fv, const struct look
                                     tf->density, out);
         free(scalar);
     } else {
-        ok = ext_volume_from_fields(fv, &p->cfg->optics.params, &look->select, out) &&
-             ext_volume_tint_from_fields(fv, &p->cfg->optics.params, &look->select, &look->tint,
-                                         out);
+        ok = ext_volume_from_fields(fv, &ld->optics, &look->select, out) &&
+             ext_volume_tint_from_fields(fv, &ld->optics, &look->select, &look->tint, out);
     }
-    double k = p->cfg->scene.height_exaggeration;
-    if (ok && k > 0.0)
-        ext_volume_stretch_height(out, k);
+    if (ok && ld->height_k > 0.0)
+        ext_volume_stretch_height(out, ld->height_k);
     return ok;
 }
 
@@ -195,6 +192,7 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
                  double *convert_ms)
 {
     struct player *p = user;
+    const struct player_load *ld = &p->ld;
     struct look *look = malloc(sizeof(*look));
     if (!look) {
         log_error("out of memory");
@@ -206,28 +204,20 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
     double t0 = time_now_ms();
     bool ok = false;
     struct field_volume fv = {0};
-    switch (p->kind) {
-    case PLAYER_TEST_SCENE: {
-        struct config *c = malloc(sizeof(*c));
-        if (c) {
-            *c = *p->cfg;
-            ok = scene_build_volume(c, out);
-            free(c);
-        }
+    switch (ld->kind) {
+    case PLAYER_TEST_SCENE:
+        ok = scene_build_synth(&ld->synth, &ld->optics, &ld->select, &ld->detail, ld->height_k,
+                               out);
         *load_ms += time_now_ms() - t0;
         free(look);
         return ok;
-    }
     case PLAYER_EXTINCTION:
         ok = data_source_load(p->src, step, out, load_ms, convert_ms);
         free(look);
         return ok;
-    case PLAYER_STORM: {
-        struct synth_desc d;
-        storm_desc(p->cfg, &d);
-        ok = synth_storm_fields(&d, &fv);
+    case PLAYER_STORM:
+        ok = synth_storm_fields(&ld->synth, &fv);
         break;
-    }
     case PLAYER_FIELDS: {
         enum transfer_field tff = look->transfer.field;
         ok = data_source_load_fields_extra(
@@ -251,6 +241,48 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
     return ok;
 }
 
+/* Copies what the loader needs out of CFG. */
+static bool load_desc(const struct config *cfg, struct player_load *ld)
+{
+    if (cfg->scene.kind == SCENE_DATA)
+        ld->kind = cfg->data.format == DATA_EXTINCTION ? PLAYER_EXTINCTION : PLAYER_FIELDS;
+    else
+        ld->kind = cfg->scene.kind == SCENE_STORM ? PLAYER_STORM : PLAYER_TEST_SCENE;
+    if (ld->kind == PLAYER_STORM || ld->kind == PLAYER_TEST_SCENE) {
+        if (!scene_synth_desc(cfg, &ld->synth))
+            return false;
+    }
+    ld->optics = cfg->optics.params;
+    scene_species_select(cfg, &ld->select);
+    scene_detail_desc(cfg, &ld->detail);
+    ld->height_k = cfg->scene.height_exaggeration;
+    const char *ptrs[CONFIG_MAX_FILES];
+    scene_source_desc(cfg, ptrs, &ld->source);
+    for (int i = 0; i < ld->source.file_count; i++) {
+        snprintf(ld->files[i], sizeof(ld->files[i]), "%s", ptrs[i]);
+        ld->file_ptrs[i] = ld->files[i];
+    }
+    ld->source.files = ld->file_ptrs;
+    ld->source.wrf.qvapor = true;
+    return true;
+}
+
+/* The first step on the caller's thread, the way a still render makes it (scene_build_volume),
+ * before the series' thread may touch the source. */
+static bool make_first(struct player *p, int step)
+{
+    const struct player_load *ld = &p->ld;
+    if (!p->src)
+        return scene_build_synth(&ld->synth, &ld->optics, &ld->select, &ld->detail,
+                                 ld->height_k, &p->first);
+    double load_ms = 0.0, convert_ms = 0.0;
+    if (!data_source_load(p->src, step, &p->first, &load_ms, &convert_ms))
+        return false;
+    log_info("time step %d (%s) read in %.0f ms, converted in %.0f ms", step,
+             data_source_step_date(p->src, step), load_ms, convert_ms);
+    return true;
+}
+
 struct player *player_create(const struct config *cfg, const struct player_desc *d)
 {
     struct player *p = calloc(1, sizeof(*p));
@@ -258,7 +290,6 @@ struct player *player_create(const struct config *cfg, const struct player_desc 
         log_error("out of memory");
         return NULL;
     }
-    p->cfg = cfg;
     p->steps = 1;
     p->next_shown = -1;
     if (pthread_mutex_init(&p->lock, NULL) != 0) {
@@ -267,18 +298,11 @@ struct player *player_create(const struct config *cfg, const struct player_desc 
     }
     look_from_config(cfg, &p->look);
     for (int f = 0; f < SPECIES_COUNT; f++)
-        p->present[f] = true;
-    if (cfg->scene.kind == SCENE_STORM) {
-        p->kind = PLAYER_STORM;
-    } else if (cfg->scene.kind != SCENE_DATA) {
-        p->kind = PLAYER_TEST_SCENE;
-        for (int f = 0; f < SPECIES_COUNT; f++)
-            p->present[f] = false;
-    } else {
-        p->kind = cfg->data.format == DATA_EXTINCTION ? PLAYER_EXTINCTION : PLAYER_FIELDS;
-        scene_source_desc(cfg, p->files, &p->src_desc);
-        p->src_desc.wrf.qvapor = true;
-        p->src = data_source_open(&p->src_desc);
+        p->present[f] = cfg->scene.kind == SCENE_STORM || cfg->scene.kind == SCENE_DATA;
+    if (!load_desc(cfg, &p->ld))
+        goto error;
+    if (cfg->scene.kind == SCENE_DATA) {
+        p->src = data_source_open(&p->ld.source);
         if (!p->src)
             goto error;
         p->steps = data_source_step_count(p->src);
@@ -289,8 +313,15 @@ struct player *player_create(const struct config *cfg, const struct player_desc 
     for (int i = 0; i < p->steps && p->src; i++)
         snprintf(p->dates[i], DATE_LEN, "%s", data_source_step_date(p->src, i));
     p->shown = cfg->scene.kind == SCENE_DATA ? cfg->data.step : 0;
-    if (p->shown >= p->steps)
-        p->shown = p->steps - 1;
+    if (p->shown < 0 || p->shown >= p->steps) {
+        log_error("%s: data.step: expected a time step in [0, %d], got %d", cfg->path,
+                  p->steps - 1, cfg->data.step);
+        goto error;
+    }
+    if (!(d && d->no_first) && !make_first(p, p->shown))
+        goto error;
+    if (d && d->still)
+        return p;
     struct series_desc sd = {
         .step_count = p->steps,
         .load = load,
@@ -304,7 +335,7 @@ struct player *player_create(const struct config *cfg, const struct player_desc 
     p->series = series_create(&sd);
     if (!p->series)
         goto error;
-    /* The step on screen was made by the session; start prefetching around it. */
+    /* The step on screen is the first volume; start prefetching around it. */
     series_try_acquire(p->series, p->shown);
     return p;
 
@@ -313,12 +344,28 @@ error:
     return NULL;
 }
 
+bool player_take_first(struct player *p, struct ext_volume *out)
+{
+    if (!p->first.beta)
+        return false;
+    *out = p->first;
+    memset(&p->first, 0, sizeof(p->first));
+    return true;
+}
+
+const struct wrf_meta *player_wrf_meta(struct player *p)
+{
+    struct wrf *w = p->src ? data_source_wrf(p->src) : NULL;
+    return w ? wrf_get_meta(w) : NULL;
+}
+
 void player_destroy(struct player *p)
 {
     if (!p)
         return;
     series_destroy(p->series); /* joins the thread before the source goes */
     data_source_close(p->src);
+    ext_volume_finish(&p->first);
     pthread_mutex_destroy(&p->lock);
     free(p->dates);
     free(p);
@@ -336,12 +383,12 @@ const char *player_step_date(struct player *p, int step)
 
 bool player_ready(struct player *p, int step)
 {
-    return series_ready(p->series, step);
+    return p->series ? series_ready(p->series, step) : step == p->shown;
 }
 
 bool player_has_fields(const struct player *p)
 {
-    return p->kind == PLAYER_STORM || p->kind == PLAYER_FIELDS;
+    return p->ld.kind == PLAYER_STORM || p->ld.kind == PLAYER_FIELDS;
 }
 
 void player_species_present(const struct player *p, bool present[SPECIES_COUNT])
@@ -357,13 +404,14 @@ void player_set_look(struct player *p, const struct look *look)
     p->look = *look;
     p->look_gen++;
     pthread_mutex_unlock(&p->lock);
-    series_invalidate(p->series);
+    if (p->series)
+        series_invalidate(p->series);
 }
 
 const struct ext_volume *player_poll(struct player *p, int want, int *shown)
 {
     const struct ext_volume *v = NULL;
-    if (want != p->shown || p->shown_gen != p->look_gen) {
+    if (p->series && (want != p->shown || p->shown_gen != p->look_gen)) {
         v = series_try_acquire(p->series, want);
         if (v) {
             p->shown = want;
@@ -378,7 +426,7 @@ const struct ext_volume *player_poll(struct player *p, int want, int *shown)
 const struct ext_volume *player_wait(struct player *p, int want, int *shown)
 {
     const struct ext_volume *v = NULL;
-    if (want != p->shown || p->shown_gen != p->look_gen) {
+    if (p->series && (want != p->shown || p->shown_gen != p->look_gen)) {
         v = series_acquire(p->series, want);
         if (v) {
             p->shown = want;
@@ -394,7 +442,7 @@ const struct ext_volume *player_poll_next(struct player *p, int want, bool wait,
                                               int *held)
 {
     const struct ext_volume *v = NULL;
-    if (want >= 0 && (want != p->next_shown || p->next_gen != p->look_gen)) {
+    if (p->series && want >= 0 && (want != p->next_shown || p->next_gen != p->look_gen)) {
         v = wait ? series_acquire(p->series, want) : series_try_acquire(p->series, want);
         if (v) {
             p->next_shown = want;
@@ -422,6 +470,8 @@ bool player_settled(const struct player *p, int want)
 
 void player_stats(struct player *p, struct session_stats *st)
 {
+    if (!p->series)
+        return;
     struct series_stats ss;
     series_get_stats(p->series, &ss);
     st->cache_hits = ss.hits;

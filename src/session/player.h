@@ -11,6 +11,7 @@
 
 #include "config/config.h"
 #include "data/volume.h"
+#include "data/wrf.h"
 #include "optics/transfer.h"
 #include "session/stats.h"
 
@@ -49,13 +50,22 @@ struct player_desc {
     int prefetch;       /* -1: none; 0: default */
     double memory_mb;   /* 0: data.cache_memory */
     double delay_ms;    /* test hook: a slow reader */
+    bool still;         /* nothing will play: no time series cache, no background thread */
+    bool no_first;      /* do not make the first step (player_take_first) */
 };
 
-/* Opens the scene's time steps behind a series cache (data.cache_memory, data.prefetch,
- * playback.loop), showing data.step.  CFG must outlive the player.  NULL (logged) on
- * failure.  No GL. */
+/* Opens the scene's time steps (the data files once), makes the step data.step on the
+ * calling thread (player_take_first) and, unless D->still, starts the time series cache behind
+ * it (data.cache_memory, data.prefetch, playback.loop).  What the loader needs is copied out of
+ * CFG here: CFG may go afterwards.  NULL (logged) on failure.  No GL. */
 struct player *player_create(const struct config *cfg, const struct player_desc *d);
 void player_destroy(struct player *p);
+
+/* Moves the first step's volume into OUT (the caller finishes it); false once it is taken. */
+bool player_take_first(struct player *p, struct ext_volume *out);
+/* The WRF metadata of a WRF scene (terrain, lat/lon), or NULL.  Immutable; valid until
+ * player_destroy; safe to read while the series' thread loads. */
+const struct wrf_meta *player_wrf_meta(struct player *p);
 
 int player_step_count(const struct player *p);
 /* "2005-08-28_06:00:00" or "" (static per player, valid until destroy). */

@@ -37,74 +37,95 @@ static bool load_data_step(const struct config *cfg, struct ext_volume *out)
     return ok;
 }
 
-bool scene_build_volume(const struct config *cfg, struct ext_volume *out)
+bool scene_synth_desc(const struct config *cfg, struct synth_desc *d)
 {
     const struct config_scene *sc = &cfg->scene;
-    struct synth_desc d = {0};
+    memset(d, 0, sizeof(*d));
     switch (sc->kind) {
     case SCENE_STORM:
-        d.kind = SYNTH_STORM;
+    case SCENE_DATA:
+        d->kind = SYNTH_STORM;
         break;
     case SCENE_SLAB:
-        d.kind = SYNTH_SLAB;
+        d->kind = SYNTH_SLAB;
         break;
     case SCENE_SPHERE:
-        d.kind = SYNTH_SPHERE;
+        d->kind = SYNTH_SPHERE;
         break;
     case SCENE_EMPTY:
-        d.kind = SYNTH_EMPTY;
+        d->kind = SYNTH_EMPTY;
         break;
     case SCENE_VOXEL:
-        d.kind = SYNTH_VOXEL;
+        d->kind = SYNTH_VOXEL;
         break;
-    case SCENE_DATA:
-        return load_data_step(cfg, out);
     }
     for (int i = 0; i < 3; i++) {
-        d.n[i] = sc->size[i];
-        d.extent_m[i] = sc->extent_km[i] * 1000.0;
+        d->n[i] = sc->size[i];
+        d->extent_m[i] = sc->extent_km[i] * 1000.0;
     }
-    d.tau = sc->tau;
-    d.ice_phase = sc->phase == PHASE_ICE;
-    d.seed = sc->seed;
-    d.time = sc->time;
+    d->tau = sc->tau;
+    d->ice_phase = sc->phase == PHASE_ICE;
+    d->seed = sc->seed;
+    d->time = sc->time;
     /* The same memory budget as data: the storm holds five mass ratios and the extinction
      * (7 floats a voxel), the test scenes the extinction alone. */
-    double voxels = (double)d.n[0] * d.n[1] * d.n[2];
-    double mib = voxels * (d.kind == SYNTH_STORM ? 7.0 : 2.0) * sizeof(float) / 1048576.0;
+    double voxels = (double)d->n[0] * d->n[1] * d->n[2];
+    double mib = voxels * (d->kind == SYNTH_STORM ? 7.0 : 2.0) * sizeof(float) / 1048576.0;
     if (mib > cfg->data.memory_mb) {
         log_error("%s%sscene.size [%d, %d, %d] needs %.0f MiB, more than data.memory (%.0f "
                   "MiB): lower scene.size or raise data.memory",
-                  cfg->path, cfg->path[0] ? ": " : "", d.n[0], d.n[1], d.n[2], mib,
+                  cfg->path, cfg->path[0] ? ": " : "", d->n[0], d->n[1], d->n[2], mib,
                   cfg->data.memory_mb);
         return false;
     }
+    return true;
+}
+
+bool scene_build_synth(const struct synth_desc *d, const struct optics_params *optics,
+                       const struct species_select *sel, const struct detail_desc *detail,
+                       double height_k, struct ext_volume *out)
+{
     /* Detail and height exaggeration as data sources apply them (data_source_load). */
-    struct detail_desc detail;
-    scene_detail_desc(cfg, &detail);
-    if (d.kind != SYNTH_STORM) {
-        if (!synth_extinction(&d, &cfg->optics.params, out))
+    if (d->kind != SYNTH_STORM) {
+        if (!synth_extinction(d, optics, out))
             return false;
-        detail_apply_ext(&detail, out);
-        ext_volume_stretch_height(out, cfg->scene.height_exaggeration);
+        detail_apply_ext(detail, out);
+        ext_volume_stretch_height(out, height_k);
         return true;
     }
-
     /* The storm goes through the species selection like real data does. */
     struct field_volume fields = {0};
-    if (!synth_storm_fields(&d, &fields))
+    if (!synth_storm_fields(d, &fields))
         return false;
-    struct species_select sel;
-    for (int f = 0; f < SPECIES_COUNT; f++) {
-        sel.enabled[f] = cfg->optics.enabled[f];
-        sel.scale[f] = cfg->optics.scale[f];
-    }
-    detail_apply_fields(&detail, &fields);
-    bool ok = ext_volume_from_fields(&fields, &cfg->optics.params, &sel, out);
+    detail_apply_fields(detail, &fields);
+    bool ok = ext_volume_from_fields(&fields, optics, sel, out);
     field_volume_finish(&fields);
     if (ok)
-        ext_volume_stretch_height(out, cfg->scene.height_exaggeration);
+        ext_volume_stretch_height(out, height_k);
     return ok;
+}
+
+void scene_species_select(const struct config *cfg, struct species_select *out)
+{
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        out->enabled[f] = cfg->optics.enabled[f];
+        out->scale[f] = cfg->optics.scale[f];
+    }
+}
+
+bool scene_build_volume(const struct config *cfg, struct ext_volume *out)
+{
+    if (cfg->scene.kind == SCENE_DATA)
+        return load_data_step(cfg, out);
+    struct synth_desc d;
+    if (!scene_synth_desc(cfg, &d))
+        return false;
+    struct detail_desc detail;
+    scene_detail_desc(cfg, &detail);
+    struct species_select sel;
+    scene_species_select(cfg, &sel);
+    return scene_build_synth(&d, &cfg->optics.params, &sel, &detail,
+                             cfg->scene.height_exaggeration, out);
 }
 
 /* Sunlight through the air (light.atmosphere): Rayleigh optical depths at the wavelengths we
@@ -136,24 +157,45 @@ int scene_time_steps(const struct config *cfg)
     return steps;
 }
 
-void scene_render_settings(const struct config *cfg, struct render_settings *s)
+void scene_sun_settings(const struct config *cfg, double azimuth_deg, double elevation_deg,
+                        struct render_settings *s)
 {
-    memset(s, 0, sizeof(*s));
     double sun[3];
-    light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
+    light_sun_direction(azimuth_deg, elevation_deg, sun);
     double air[3];
-    scene_sun_transmittance(cfg->light.elevation_deg, air);
+    scene_sun_transmittance(elevation_deg, air);
     for (int i = 0; i < 3; i++) {
         s->sun_dir[i] = (float)sun[i];
         s->sun_radiance[i] = (float)(cfg->light.intensity * cfg->light.color[i]);
         if (cfg->light.atmosphere)
             s->sun_radiance[i] *= (float)air[i];
+    }
+}
+
+void scene_render_settings(const struct config *cfg, struct render_settings *s)
+{
+    memset(s, 0, sizeof(*s));
+    scene_sun_settings(cfg, cfg->light.azimuth_deg, cfg->light.elevation_deg, s);
+    for (int i = 0; i < 3; i++) {
         s->sky[i] = (float)cfg->render.sky[i];
         s->ground[i] = (float)cfg->render.ground[i];
     }
     s->ground_on = cfg->render.ground_on;
     s->step_m = (float)cfg->render.step_m;
     s->termination = (float)cfg->render.termination;
+}
+
+void scene_camera(const struct config *cfg, struct display_camera *out)
+{
+    const struct config_camera *c = &cfg->camera;
+    for (int i = 0; i < 3; i++) {
+        out->eye[i] = c->position_km[i] * 1000.0;
+        out->target[i] = c->target_km[i] * 1000.0;
+        out->up[i] = c->up[i];
+    }
+    out->fov_deg = c->fov_deg;
+    out->near_m = c->near_m;
+    out->far_m = c->far_km * 1000.0;
 }
 
 void scene_camera_view(const struct config *cfg, int width, int height, struct render_view *view)

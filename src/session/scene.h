@@ -13,11 +13,25 @@
 #include "config/config.h"
 #include "data/detail.h"
 #include "data/source.h"
+#include "data/synth.h"
 #include "data/volume.h"
+#include "display/display.h"
 #include "render/render.h"
 
 /* Builds the volume the config describes as extinction (data: time step data.step). */
 bool scene_build_volume(const struct config *cfg, struct ext_volume *out);
+
+/* The synthetic scene of CFG's scene.* (the storm for scene.kind = "data" too).  False
+ * (logged) when it would need more than data.memory. */
+bool scene_synth_desc(const struct config *cfg, struct synth_desc *out);
+/* Makes the synthetic scene D as extinction: the storm through the species selection SEL like
+ * real data, the test scenes exactly; then DETAIL and the height exaggeration HEIGHT_K, as data
+ * sources apply them. */
+bool scene_build_synth(const struct synth_desc *d, const struct optics_params *optics,
+                       const struct species_select *sel, const struct detail_desc *detail,
+                       double height_k, struct ext_volume *out);
+/* species.<name>.enabled and .scale. */
+void scene_species_select(const struct config *cfg, struct species_select *out);
 
 /* Time steps the config's scene has: 1 for synthetic scenes, the data files' count for data
  * (0 when they cannot be opened; the reason is logged). */
@@ -34,6 +48,9 @@ void scene_render_settings(const struct config *cfg, struct render_settings *s);
  * AZIMUTH_DEG, ELEVATION_DEG with CFG's intensity and colour. */
 void scene_sun_settings(const struct config *cfg, double azimuth_deg, double elevation_deg,
                         struct render_settings *s);
+
+/* The config's camera (camera.*) in metres. */
+void scene_camera(const struct config *cfg, struct display_camera *out);
 
 /* The config's camera at WIDTH x HEIGHT. */
 void scene_camera_view(const struct config *cfg, int width, int height, struct render_view *view);

@@ -10,7 +10,7 @@
 
 #include <cglm/cglm.h>
 
-#include "session/interact.h"
+#include "session/menu_view.h"
 #include "common/log.h"
 #include "config/display_config.h"
 #include "display/display.h"

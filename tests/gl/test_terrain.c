@@ -200,7 +200,7 @@ static void test_katrina_map(void **state)
     assert_true(renderer_set_volume(r, &vol));
     ext_volume_finish(&vol);
 
-    struct scene_map *m = scene_map_create(&cfg, r);
+    struct scene_map *m = scene_map_create(&cfg, r, NULL);
     assert_non_null(m);
     struct scene_map_info info;
     scene_map_get_info(m, &info);
@@ -225,7 +225,7 @@ static void test_katrina_map(void **state)
 
     /* No GSHHG files: a message, no coastlines, the rest as before. */
     setenv("ANVIL_GSHHG_DIR", test_tmp_path("no_gshhg_here"), 1);
-    m = scene_map_create(&cfg, r);
+    m = scene_map_create(&cfg, r, NULL);
     unsetenv("ANVIL_GSHHG_DIR");
     assert_non_null(m);
     scene_map_get_info(m, &info);
@@ -235,7 +235,7 @@ static void test_katrina_map(void **state)
 
     /* Terrain off: the analytic flat ground stays. */
     assert_true(config_set(&cfg, "map.terrain=false"));
-    m = scene_map_create(&cfg, r);
+    m = scene_map_create(&cfg, r, NULL);
     assert_non_null(m);
     scene_map_get_info(m, &info);
     assert_false(info.terrain);
@@ -259,14 +259,14 @@ static void test_synthetic_storm_placed_by_origin(void **state)
     assert_true(scene_build_volume(&cfg, &vol));
     assert_true(renderer_set_volume(r, &vol));
     ext_volume_finish(&vol);
-    struct scene_map *m = scene_map_create(&cfg, r);
+    struct scene_map *m = scene_map_create(&cfg, r, NULL);
     struct scene_map_info info;
     scene_map_get_info(m, &info);
     assert_false(info.placed || info.terrain);
     assert_int_equal(info.coast_segments + info.graticule_segments, 0);
     scene_map_destroy(m, r);
     load(NULL, placed, 3, &cfg);
-    m = scene_map_create(&cfg, r);
+    m = scene_map_create(&cfg, r, NULL);
     scene_map_get_info(m, &info);
     assert_true(info.placed && !info.terrain);
     assert_true(info.coast_segments > 10 && info.graticule_segments > 0);

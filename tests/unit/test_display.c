@@ -65,7 +65,7 @@ static void layout(const struct display_config *cfg, const double head_pos[3],
     for (int w = 0; w < cfg->wall_count; w++)
         view_set_wall_size(cfg, w, 48, sizes[w]);
     memset(set, 0, sizeof(*set));
-    view_set_layout(set, cfg, &head, (const int(*)[2])sizes);
+    view_set_layout(set, cfg, &cfg->navigation, &head, (const int(*)[2])sizes);
 }
 
 static void test_cave6_centred_head_symmetric(void **state)

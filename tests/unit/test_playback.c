@@ -9,7 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "session/interact.h"
+#include "session/player.h"
 #include "common/log.h"
 #include "input/input.h"
 #include "menu/menu.h"

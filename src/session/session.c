@@ -1,0 +1,977 @@
+/* The session: what the program holds while it runs, changed only through its setters. */
+#include "session/session.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cglm/cglm.h>
+
+#include "common/log.h"
+#include "config/transfer_file.h"
+#include "gpu/gpu.h"
+#include "light/light.h"
+#include "menu/menu.h"
+#include "render/camera.h"
+#include "session/effects.h"
+#include "session/lightmaps.h"
+#include "session/map.h"
+#include "session/menu_view.h"
+#include "session/scene.h"
+
+#define SOURCES_MAX 2
+#define FLY_SPEED 1.0   /* tracker metres per second at full deflection */
+#define TURN_SPEED 45.0 /* degrees per second */
+#define NAV_STEP 0.1    /* tracker metres per key press */
+#define TURN_STEP 5.0   /* degrees per key press */
+#define DRAG_DEG 0.3    /* degrees per pixel dragged */
+
+struct session {
+    struct config cfg; /* read once by session_create; never written */
+    struct session_desc desc;
+    struct display_config display;
+    bool tracker; /* the views are in tracker space (not the orbit camera) */
+    char transfers_dir[CONFIG_PATH_MAX];
+
+    struct renderer *renderer;
+    struct render_settings base; /* from the config, the effects and the map */
+    struct session_stats stats;
+    struct lightmaps light;
+    struct effects effects;
+    struct scene_map *map;
+    struct player *player;
+
+    /* What the setters change. */
+    struct session_settings settings;
+    double sun_az, sun_el;
+    struct playback playback;
+    struct display_navigation nav, nav_home;
+    struct display_camera camera, camera_home;
+    bool quit;
+
+    /* What the last session_apply made the GPU hold. */
+    int shown;                /* the step on screen */
+    struct render_settings drawn; /* base with the frame's sun and temporal blend */
+    struct frame_state applied;
+    bool have_applied;
+
+    /* The menu and its sources (desc.menu). */
+    struct menu *menu;
+    struct menu_view *menu_view;
+    struct input_source *sources[SOURCES_MAX];
+    int n_sources;
+    struct input_source *script;
+    struct input_queue queue;
+    long frame;
+    int view_size[2]; /* the orbit view's, as last drawn: the world menu follows it */
+    bool placed;
+    bool grabbing, drag_blocked;
+    float grab_wand[3];
+    double grab_position[3];
+    float wand_pos[3], wand_dir[3];
+    bool have_wand;
+    float axis[INPUT_AXIS_COUNT];
+};
+
+/* ---- creation ------------------------------------------------------------------------- */
+
+static const char *date_of(void *user, int step)
+{
+    return player_step_date(user, step);
+}
+
+static void model_from_session(struct session *s, struct menu_model *m)
+{
+    memset(m, 0, sizeof(*m));
+    m->playing = s->playback.playing;
+    m->loop = s->playback.loop;
+    m->speed = s->playback.speed;
+    m->step = s->playback.step;
+    m->step_count = s->playback.count;
+    player_species_present(s->player, m->species_present);
+    const struct look *look = &s->settings.look;
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        m->species_on[f] = look->select.enabled[f];
+        m->species_scale[f] = look->select.scale[f];
+        memcpy(m->species_tint[f], look->tint.rgb[f], sizeof(m->species_tint[f]));
+    }
+    m->transfer_on = look->transfer_on;
+    m->transfer = look->transfer;
+    m->sun_azimuth = fmod(s->sun_az + 360.0, 360.0);
+    m->sun_elevation = s->sun_el;
+    m->step_m = s->settings.step_m;
+    const struct grid3 *g = renderer_grid(s->renderer);
+    double smin = fmin(g->spacing[0], fmin(g->spacing[1], g->spacing[2]));
+    m->step_max_m = smin > 0.0 ? 4.0 * smin : 2000.0;
+    m->light_resolution = s->settings.light_resolution[0];
+    m->epsilon = s->settings.epsilon;
+    m->diffuse_possible = s->effects.on[EFFECT_SHADOWS];
+    m->diffuse_on = m->diffuse_possible && s->settings.diffuse;
+}
+
+/* The facts, gathered once: the first volume, the display, what can change while running. */
+static bool decide_effects(struct session *s, const struct ext_volume *vol)
+{
+    struct effects_facts facts;
+    effects_facts_init(&facts);
+    facts.time_steps = player_step_count(s->player);
+    /* anvil run plays time and moves the sun; a render plays only when a script drives it. */
+    facts.playback = s->desc.interactive || s->desc.script;
+    facts.sun_moves = s->desc.interactive;
+    facts.hmd = s->display.type == DISPLAY_TYPE_HMD;
+    facts.hmd_warp = s->display.hmd.warp;
+    double sun[3];
+    light_sun_direction(s->cfg.light.azimuth_deg, s->cfg.light.elevation_deg, sun);
+    if (!effects_measure_volume(vol, sun, &s->cfg.optics.params, &facts))
+        return false;
+    facts.views_known = !s->desc.views_move;
+    for (int i = 0; facts.views_known && i < s->desc.view_count; i++)
+        facts.ground_visible |=
+            s->cfg.render.ground_on && effects_view_sees_ground(&s->desc.views[i]);
+    effects_decide(&s->cfg, &facts, &s->effects);
+    for (int e = 0; e < EFFECT_COUNT; e++)
+        log_debug("effect %s: %s (%s)", effects_name(e), s->effects.on[e] ? "on" : "off",
+                  s->effects.reason[e]);
+    lightmaps_set_effects(&s->light, &s->effects);
+    return true;
+}
+
+static bool create_menu(struct session *s)
+{
+    const struct session_desc *d = &s->desc;
+    if (d->script) {
+        s->script = input_script_open(d->script);
+        if (!s->script)
+            return false;
+        s->sources[s->n_sources++] = s->script;
+    }
+    if (d->wand) {
+        struct input_source *w = input_ohmd_create(d->wand, NULL);
+        if (!w)
+            return false;
+        s->sources[s->n_sources++] = w;
+    }
+    struct menu_model model;
+    model_from_session(s, &model);
+    s->menu = menu_create(&(struct menu_desc){.step_date = date_of, .user = s->player}, &model);
+    if (!s->menu)
+        return false;
+    menu_set_visible(s->menu, d->show_menu);
+    menu_take_changes(s->menu);
+    s->menu_view = menu_view_create(s->renderer);
+    return s->menu_view != NULL;
+}
+
+struct session *session_create(const struct config *cfg, const struct session_desc *d, int *rc)
+{
+    *rc = 4;
+    struct session *s = calloc(1, sizeof(*s));
+    if (!s) {
+        log_error("out of memory");
+        return NULL;
+    }
+    s->cfg = *cfg;
+    s->desc = *d;
+    s->stats.command = d->command;
+    if (d->display)
+        s->display = *d->display;
+    else
+        display_config_defaults(&s->display), s->display.type = DISPLAY_TYPE_ORBIT;
+    s->desc.display = &s->display;
+    s->tracker = s->display.type != DISPLAY_TYPE_ORBIT;
+    snprintf(s->transfers_dir, sizeof(s->transfers_dir), "%s",
+             d->transfers_dir ? d->transfers_dir : ".");
+    s->sun_az = cfg->light.azimuth_deg;
+    s->sun_el = cfg->light.elevation_deg;
+    s->nav = s->nav_home = s->display.navigation;
+    scene_camera(cfg, &s->camera);
+    s->camera_home = s->camera;
+    look_from_config(cfg, &s->settings.look);
+    s->settings.step_m = cfg->render.step_m;
+    memcpy(s->settings.light_resolution, cfg->lightmap.resolution,
+           sizeof(s->settings.light_resolution));
+    s->settings.epsilon = cfg->lightmap.epsilon;
+
+    /* The data, opened once: the first step now, the rest behind a cache when time can play. */
+    double t = time_now_ms();
+    s->player = player_create(cfg, &(struct player_desc){.still = !d->interactive && !d->script});
+    if (!s->player) {
+        *rc = 1;
+        goto error;
+    }
+    struct ext_volume vol = {0};
+    player_take_first(s->player, &vol);
+    s->stats.volume_ms = time_now_ms() - t;
+    log_info("volume %dx%dx%d (%.1f x %.1f x %.1f km) built in %.0f ms", vol.grid.n[0],
+             vol.grid.n[1], vol.grid.n[2], vol.grid.n[0] * vol.grid.spacing[0] / 1000.0,
+             vol.grid.n[1] * vol.grid.spacing[1] / 1000.0,
+             vol.grid.n[2] * vol.grid.spacing[2] / 1000.0, s->stats.volume_ms);
+    if (!decide_effects(s, &vol)) {
+        ext_volume_finish(&vol);
+        *rc = 1;
+        goto error;
+    }
+    s->settings.diffuse = s->effects.on[EFFECT_MULTIPLE];
+    s->renderer = renderer_create();
+    bool ok = s->renderer != NULL;
+    if (ok) {
+        renderer_set_timing(s->renderer, d->time_views);
+        ok = renderer_set_optics(s->renderer, &cfg->optics.params) &&
+             renderer_set_volume(s->renderer, &vol);
+    }
+    ext_volume_finish(&vol);
+    if (!ok)
+        goto error;
+    s->stats.upload_ms = renderer_stats(s->renderer)->upload_ms;
+    if (!lightmaps_init(&s->light, cfg))
+        goto error;
+    lightmaps_set_effects(&s->light, &s->effects);
+    s->map = scene_map_create(cfg, s->renderer, player_wrf_meta(s->player));
+    if (!s->map)
+        goto error;
+    scene_render_settings(cfg, &s->base);
+    scene_map_apply_settings(s->map, &s->base);
+    effects_apply_render(&s->effects, &s->base);
+    s->drawn = s->base;
+    s->stats.device = gpu_renderer_name();
+    playback_init(&s->playback, player_step_count(s->player),
+                  cfg->scene.kind == SCENE_DATA ? cfg->data.step : 0, cfg->playback.speed,
+                  cfg->playback.loop);
+    s->shown = s->playback.step;
+    s->view_size[0] = cfg->render.width;
+    s->view_size[1] = cfg->render.height;
+    if (d->menu && !create_menu(s)) {
+        *rc = 1;
+        goto error;
+    }
+    *rc = 0;
+    return s;
+
+error:
+    session_destroy(s);
+    return NULL;
+}
+
+void session_destroy(struct session *s)
+{
+    if (!s)
+        return;
+    menu_view_destroy(s->menu_view, s->renderer); /* its meshes leave the renderer */
+    menu_destroy(s->menu);
+    for (int i = 0; i < s->n_sources; i++)
+        input_source_destroy(s->sources[i]);
+    player_destroy(s->player);
+    lightmaps_finish(&s->light);
+    scene_map_destroy(s->map, s->renderer);
+    renderer_destroy(s->renderer);
+    free(s);
+}
+
+/* ---- setters -------------------------------------------------------------------------- */
+
+void session_get_settings(const struct session *s, struct session_settings *out)
+{
+    *out = s->settings;
+}
+
+void session_set_settings(struct session *s, const struct session_settings *in)
+{
+    bool look = memcmp(&in->look, &s->settings.look, sizeof(in->look)) != 0;
+    bool diffuse = in->diffuse && s->effects.on[EFFECT_SHADOWS];
+    if (diffuse != s->effects.on[EFFECT_MULTIPLE]) {
+        /* The diffuse light, and lateral escape with it (on unless the config turns it off:
+         * the scene's narrow share was decided for the multiple scattering it had). */
+        struct effects *e = &s->effects;
+        e->on[EFFECT_MULTIPLE] = diffuse;
+        snprintf(e->reason[EFFECT_MULTIPLE], sizeof(e->reason[EFFECT_MULTIPLE]),
+                 "%s from the menu", diffuse ? "on" : "off");
+        bool lateral = diffuse && s->cfg.effects.mode[EFFECT_LATERAL] != EFFECT_OFF;
+        if (lateral != e->on[EFFECT_LATERAL]) {
+            e->on[EFFECT_LATERAL] = lateral;
+            snprintf(e->reason[EFFECT_LATERAL], sizeof(e->reason[EFFECT_LATERAL]),
+                     "%s with the diffuse light, from the menu", lateral ? "on" : "off");
+        }
+        lightmaps_set_effects(&s->light, e);
+        log_info("diffuse light (multiple scattering) %s", diffuse ? "on" : "off");
+    }
+    s->settings = *in;
+    s->settings.diffuse = diffuse;
+    if (look) {
+        if (player_has_fields(s->player))
+            player_set_look(s->player, &s->settings.look);
+        else if (s->menu)
+            menu_set_status(s->menu, "this scene has no mass ratios to change");
+    }
+}
+
+void session_set_sun(struct session *s, double azimuth_deg, double elevation_deg)
+{
+    s->sun_az = fmod(azimuth_deg, 360.0);
+    s->sun_el = fmin(90.0, fmax(-10.0, elevation_deg));
+}
+
+void session_set_step(struct session *s, int step)
+{
+    s->playback.step = step < 0 ? 0 : step >= s->playback.count ? s->playback.count - 1 : step;
+    s->playback.acc = 0.0;
+}
+
+void session_set_playing(struct session *s, bool playing)
+{
+    struct playback *pb = &s->playback;
+    if (playing && !pb->playing && pb->step >= pb->count - 1 && !pb->loop)
+        pb->step = 0; /* play again from the start */
+    pb->playing = playing;
+    pb->acc = 0.0;
+}
+
+void session_set_navigation(struct session *s, const struct display_navigation *nav)
+{
+    s->nav = *nav;
+}
+
+void session_set_camera(struct session *s, const struct display_camera *camera)
+{
+    s->camera = *camera;
+}
+
+void session_reset_view(struct session *s)
+{
+    s->nav = s->nav_home;
+    s->camera = s->camera_home;
+}
+
+/* ---- the menu's changes --------------------------------------------------------------- */
+
+static void transfer_path(const struct session *s, int slot, char *buf, size_t size)
+{
+    snprintf(buf, size, "%s/tf-%d.cfg", s->transfers_dir, slot + 1);
+}
+
+static void apply_changes(struct session *s, unsigned ch)
+{
+    struct menu_model *m = menu_model(s->menu);
+    if (ch & MENU_CHANGE_PLAYBACK) {
+        s->playback.loop = m->loop;
+        s->playback.speed = m->speed;
+        session_set_playing(s, m->playing);
+    }
+    if (ch & MENU_CHANGE_STEP)
+        session_set_step(s, m->step);
+    struct session_settings set = s->settings;
+    if (ch & (MENU_CHANGE_SPECIES | MENU_CHANGE_TRANSFER)) {
+        for (int sp = 0; sp < SPECIES_COUNT; sp++) {
+            set.look.select.enabled[sp] = m->species_on[sp];
+            set.look.select.scale[sp] = m->species_scale[sp];
+            memcpy(set.look.tint.rgb[sp], m->species_tint[sp], sizeof(m->species_tint[sp]));
+        }
+        set.look.transfer_on = m->transfer_on;
+        set.look.transfer = m->transfer;
+    }
+    if (ch & MENU_CHANGE_SUN)
+        session_set_sun(s, m->sun_azimuth, m->sun_elevation);
+    if (ch & MENU_CHANGE_QUALITY) {
+        set.step_m = m->step_m;
+        for (int a = 0; a < 3; a++)
+            set.light_resolution[a] = m->light_resolution;
+        set.epsilon = m->epsilon;
+        set.diffuse = m->diffuse_on;
+    }
+    if (ch & (MENU_ACTION_SAVE | MENU_ACTION_LOAD)) {
+        char path[CONFIG_PATH_MAX + 32], status[128];
+        transfer_path(s, m->slot, path, sizeof(path));
+        if (ch & MENU_ACTION_SAVE) {
+            snprintf(m->transfer.name, sizeof(m->transfer.name), "tf-%d", m->slot + 1);
+            bool ok = transfer_file_save(path, &m->transfer);
+            snprintf(status, sizeof(status), ok ? "saved %s" : "not saved: %s",
+                     ok ? path : log_last_error());
+        } else {
+            struct transfer_function tf = m->transfer;
+            bool ok = transfer_file_load(path, &tf);
+            if (ok) {
+                m->transfer = tf;
+                set.look.transfer = tf;
+            }
+            snprintf(status, sizeof(status), ok ? "loaded %s" : "kept the current one: %s",
+                     ok ? path : log_last_error());
+        }
+        menu_set_status(s->menu, status);
+        menu_model_changed(s->menu);
+    }
+    if (memcmp(&set, &s->settings, sizeof(set)) != 0) {
+        set.revision++;
+        session_set_settings(s, &set);
+    }
+    if (ch & MENU_ACTION_RESET_VIEW)
+        session_reset_view(s);
+}
+
+/* ---- navigation ----------------------------------------------------------------------- */
+
+/* The orbit camera turned about its target by D_AZ (clockwise from above) and D_EL degrees,
+ * brought closer by ZOOM (< 1) and moved by MOVE (forward, right, up) times its distance. */
+static void orbit(struct display_camera *c, double d_az, double d_el, double zoom,
+                  const double move[3])
+{
+    struct camera_orbit o;
+    camera_orbit_from(c->eye, c->target, &o);
+    o.azimuth_deg += d_az;
+    o.elevation_deg = fmin(89.0, fmax(-89.0, o.elevation_deg + d_el));
+    o.distance_m *= zoom;
+    double f[3], r[3], len = 0.0;
+    for (int i = 0; i < 3; i++)
+        f[i] = c->target[i] - c->eye[i];
+    for (int i = 0; i < 3; i++)
+        len += f[i] * f[i];
+    len = sqrt(len);
+    for (int i = 0; i < 3; i++)
+        f[i] = len > 0.0 ? f[i] / len : 0.0;
+    r[0] = f[1] * c->up[2] - f[2] * c->up[1];
+    r[1] = f[2] * c->up[0] - f[0] * c->up[2];
+    r[2] = f[0] * c->up[1] - f[1] * c->up[0];
+    double rl = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    for (int i = 0; i < 3; i++) {
+        double dv = o.distance_m * (move[0] * f[i] + move[1] * (rl > 0.0 ? r[i] / rl : 0.0) +
+                                    move[2] * (i == 2 ? 1.0 : 0.0));
+        o.target[i] += dv;
+    }
+    camera_orbit_eye(&o, c->eye);
+    memcpy(c->target, o.target, sizeof(c->target));
+}
+
+/* A navigation key: the same meaning on every display. */
+static bool navigation_key(struct session *s, enum input_key k)
+{
+    static const struct {
+        enum input_key key;
+        double move[3]; /* forward, right, up: the viewer's */
+        double turn[2]; /* heading (left < 0), pitch (up > 0), degrees */
+        double zoom;    /* > 1: closer / larger */
+    } map[] = {
+        {INPUT_KEY_MOVE_FORWARD, {1, 0, 0}, {0, 0}, 1},
+        {INPUT_KEY_MOVE_BACK, {-1, 0, 0}, {0, 0}, 1},
+        {INPUT_KEY_MOVE_LEFT, {0, -1, 0}, {0, 0}, 1},
+        {INPUT_KEY_MOVE_RIGHT, {0, 1, 0}, {0, 0}, 1},
+        {INPUT_KEY_MOVE_UP, {0, 0, 1}, {0, 0}, 1},
+        {INPUT_KEY_MOVE_DOWN, {0, 0, -1}, {0, 0}, 1},
+        {INPUT_KEY_TURN_LEFT, {0, 0, 0}, {-TURN_STEP, 0}, 1},
+        {INPUT_KEY_TURN_RIGHT, {0, 0, 0}, {TURN_STEP, 0}, 1},
+        {INPUT_KEY_TURN_UP, {0, 0, 0}, {0, TURN_STEP}, 1},
+        {INPUT_KEY_TURN_DOWN, {0, 0, 0}, {0, -TURN_STEP}, 1},
+        {INPUT_KEY_ZOOM_IN, {0, 0, 0}, {0, 0}, 1.25},
+        {INPUT_KEY_ZOOM_OUT, {0, 0, 0}, {0, 0}, 1 / 1.25},
+    };
+    for (size_t i = 0; i < sizeof(map) / sizeof(map[0]); i++) {
+        if (map[i].key != k)
+            continue;
+        if (s->tracker) {
+            /* Moving the viewer moves the world the other way in the room. */
+            struct display_navigation *n = &s->nav;
+            n->position[2] += NAV_STEP * map[i].move[0];
+            n->position[0] -= NAV_STEP * map[i].move[1];
+            n->position[1] -= NAV_STEP * map[i].move[2];
+            n->orientation_deg[0] = fmod(n->orientation_deg[0] + map[i].turn[0], 360.0);
+            n->orientation_deg[1] =
+                fmin(89.0, fmax(-89.0, n->orientation_deg[1] - map[i].turn[1]));
+            n->scale *= map[i].zoom;
+        } else {
+            const double move[3] = {0.05 * map[i].move[0], 0.05 * map[i].move[1],
+                                    0.05 * map[i].move[2]};
+            /* Up and down arrows: the camera rises over (sinks under) its target. */
+            orbit(&s->camera, map[i].turn[0], map[i].turn[1], 1.0 / map[i].zoom, move);
+        }
+        return true;
+    }
+    return false;
+}
+
+static bool sun_key(struct session *s, enum input_key k)
+{
+    switch (k) {
+    case INPUT_KEY_SUN_LEFT:
+        session_set_sun(s, s->sun_az - 5.0, s->sun_el);
+        return true;
+    case INPUT_KEY_SUN_RIGHT:
+        session_set_sun(s, s->sun_az + 5.0, s->sun_el);
+        return true;
+    case INPUT_KEY_SUN_UP:
+        session_set_sun(s, s->sun_az, s->sun_el + 2.0);
+        return true;
+    case INPUT_KEY_SUN_DOWN:
+        session_set_sun(s, s->sun_az, s->sun_el - 2.0);
+        return true;
+    default:
+        return false;
+    }
+}
+
+/* The wand's grab, flying and turning (tracker space); a joystick flies the orbit camera. */
+static void navigate(struct session *s, double dt)
+{
+    float fly = s->axis[INPUT_AXIS_FLY], turn = s->axis[INPUT_AXIS_TURN];
+    if (!s->tracker) {
+        if ((fly != 0.0f || turn != 0.0f) && dt > 0.0)
+            orbit(&s->camera, turn * TURN_SPEED * dt, 0.0, 1.0,
+                  (const double[3]){0.5 * fly * dt, 0.0, 0.0});
+        return;
+    }
+    if (!s->have_wand)
+        return;
+    struct display_navigation *nav = &s->nav;
+    if (s->grabbing) {
+        for (int i = 0; i < 3; i++)
+            nav->position[i] = s->grab_position[i] + (s->wand_pos[i] - s->grab_wand[i]);
+    }
+    if (fly != 0.0f && dt > 0.0) {
+        /* Flying forward along the wand moves the world toward the user. */
+        for (int i = 0; i < 3; i++)
+            nav->position[i] -= s->wand_dir[i] * fly * FLY_SPEED * dt;
+    }
+    if (turn != 0.0f && dt > 0.0)
+        nav->orientation_deg[0] = fmod(nav->orientation_deg[0] + turn * TURN_SPEED * dt, 360.0);
+}
+
+/* ---- one frame: input -> state -------------------------------------------------------- */
+
+/* Menu space -> world, and world -> menu space, for the navigation NAV. */
+static void menu_matrices(const struct session *s, const struct display_navigation *nav,
+                          mat4 to_world, mat4 from_world)
+{
+    if (s->tracker) {
+        float n[16];
+        display_navigation_matrix(nav, n);
+        memcpy(from_world, n, sizeof(mat4));
+        glm_mat4_inv(from_world, to_world);
+    } else {
+        glm_mat4_identity(to_world);
+        glm_mat4_identity(from_world);
+    }
+}
+
+static void to_menu_space(const struct session *s, mat4 from_world, struct input_event *e)
+{
+    bool world_menu = !s->tracker;
+    if ((e->space == INPUT_SPACE_WORLD) == world_menu)
+        return;
+    if (world_menu) { /* a tracked wand without a tracker-space menu: not pointing at it */
+        e->type = INPUT_AXIS;
+        e->axis = INPUT_AXIS_COUNT;
+        return;
+    }
+    vec4 p = {e->position[0], e->position[1], e->position[2], 1.0f}, pt;
+    vec4 d = {e->direction[0], e->direction[1], e->direction[2], 0.0f}, dt;
+    glm_mat4_mulv(from_world, p, pt);
+    glm_mat4_mulv(from_world, d, dt);
+    float len = sqrtf(dt[0] * dt[0] + dt[1] * dt[1] + dt[2] * dt[2]);
+    for (int i = 0; i < 3; i++) {
+        e->position[i] = pt[i];
+        e->direction[i] = len > 0.0f ? dt[i] / len : 0.0f;
+    }
+    e->space = INPUT_SPACE_TRACKER;
+}
+
+/* Places the menu: once in front of the user in tracker space, or on the right of the orbit
+ * camera's view, following it. */
+static void place_menu(struct session *s, const struct display_camera *cam, int width,
+                       int height)
+{
+    if (s->tracker) {
+        if (s->placed)
+            return;
+        /* In front of the user, a little below the eyes, facing them. */
+        const double *h = s->display.head.position;
+        const float c[3] = {(float)h[0], (float)h[1] - 0.35f, (float)h[2] - 0.75f};
+        const float r[3] = {1, 0, 0}, u[3] = {0, 1, 0};
+        menu_set_pose(s->menu, c, r, u, 0.6f);
+        s->placed = true;
+        return;
+    }
+    struct render_view rv;
+    camera_look_at(cam->eye, cam->target, cam->up, cam->fov_deg, cam->near_m, cam->far_m,
+                   width > 0 ? width : 1, height > 0 ? height : 1, &rv);
+    mat4 view, inv;
+    memcpy(view, rv.view, sizeof(view));
+    glm_mat4_inv(view, inv);
+    float near = rv.proj[14] / (rv.proj[10] - 1.0f);
+    float dist = 3.0f * fabsf(near);
+    float half_h = dist / rv.proj[5], half_w = dist / rv.proj[0];
+    float w = fminf(0.85f * half_w, 1.8f * half_h / menu_aspect(s->menu));
+    float c[3], r[3], u[3];
+    for (int i = 0; i < 3; i++) {
+        r[i] = inv[0][i];
+        u[i] = inv[1][i];
+        c[i] = inv[3][i] - inv[2][i] * dist + r[i] * (half_w * 0.97f - 0.5f * w);
+    }
+    menu_set_pose(s->menu, c, r, u, w);
+}
+
+static bool ready(void *user, int step)
+{
+    return player_ready(user, step);
+}
+
+/* One event: the menu's, navigation's or the session's own. */
+static bool handle(struct session *s, mat4 from_world, struct input_event e)
+{
+    bool seen = true;
+    switch (e.type) {
+    case INPUT_POSE:
+        to_menu_space(s, from_world, &e);
+        if (e.type != INPUT_POSE)
+            return false;
+        /* The pointer's ray is part of the picture only where the menu shows it. */
+        seen = s->menu && menu_visible(s->menu) &&
+               (!s->have_wand || memcmp(s->wand_pos, e.position, sizeof(s->wand_pos)) != 0 ||
+                memcmp(s->wand_dir, e.direction, sizeof(s->wand_dir)) != 0);
+        memcpy(s->wand_pos, e.position, sizeof(s->wand_pos));
+        memcpy(s->wand_dir, e.direction, sizeof(s->wand_dir));
+        s->have_wand = true;
+        break;
+    case INPUT_AXIS:
+        if (e.axis < INPUT_AXIS_COUNT)
+            s->axis[e.axis] = e.value;
+        break;
+    case INPUT_BUTTON:
+        if (e.button == INPUT_BUTTON_GRAB && s->tracker) {
+            s->grabbing = e.down && s->have_wand;
+            memcpy(s->grab_wand, s->wand_pos, sizeof(s->grab_wand));
+            memcpy(s->grab_position, s->nav.position, sizeof(s->grab_position));
+        } else if (e.button == INPUT_BUTTON_TRIGGER && e.down) {
+            /* A press the menu takes is not a drag of the view. */
+            s->drag_blocked = s->menu && menu_captures(s->menu);
+        } else if (e.button == INPUT_BUTTON_RESET && e.down && !s->menu) {
+            session_reset_view(s);
+        }
+        break;
+    case INPUT_KEY:
+        if (e.key == INPUT_KEY_QUIT)
+            s->quit = true;
+        else if (!navigation_key(s, e.key) && !sun_key(s, e.key) && !s->menu)
+            seen = false;
+        break;
+    case INPUT_DRAG:
+        if (s->drag_blocked)
+            break;
+        if (s->tracker)
+            s->nav.orientation_deg[0] = fmod(s->nav.orientation_deg[0] + DRAG_DEG * e.u, 360.0);
+        else
+            orbit(&s->camera, DRAG_DEG * e.u, DRAG_DEG * e.v, 1.0, (const double[3]){0, 0, 0});
+        break;
+    case INPUT_SCROLL:
+        if (s->tracker)
+            s->nav.scale *= pow(1.1, e.value);
+        else
+            orbit(&s->camera, 0.0, 0.0, pow(0.9, e.value), (const double[3]){0, 0, 0});
+        break;
+    case INPUT_AIM:
+        break;
+    }
+    if (s->menu)
+        menu_handle(s->menu, &e);
+    return seen;
+}
+
+bool session_update(struct session *s, const struct input_queue *window_events, double dt,
+                    double time_s, struct frame_state *out, bool *redraw)
+{
+    *redraw = false;
+    struct display_navigation nav_before = s->nav;
+    struct display_camera cam_before = s->camera;
+    double sun_before[2] = {s->sun_az, s->sun_el};
+    mat4 to_world, from_world;
+    menu_matrices(s, &s->nav, to_world, from_world);
+    if (s->menu)
+        place_menu(s, &s->camera, s->view_size[0], s->view_size[1]);
+
+    input_queue_clear(&s->queue);
+    for (int i = 0; window_events && i < window_events->count; i++)
+        input_queue_push(&s->queue, &window_events->events[i]);
+    struct input_frame in = {.frame = s->frame};
+    for (int i = 0; i < s->n_sources; i++) {
+        if (!input_source_poll(s->sources[i], &in, &s->queue))
+            return false;
+    }
+    s->frame++;
+    unsigned before = 0, changes = 0;
+    if (s->menu)
+        menu_pixels(s->menu, &(int){0}, &(int){0}, &before);
+    bool events = false;
+    for (int i = 0; i < s->queue.count; i++)
+        events |= handle(s, from_world, s->queue.events[i]);
+    navigate(s, dt);
+    if (s->menu) {
+        changes = menu_take_changes(s->menu);
+        apply_changes(s, changes);
+    }
+
+    /* Playback: the cursor advances only onto loaded steps (a scripted render waits). */
+    bool wait = !s->desc.interactive;
+    int old_step = s->playback.step;
+    bool was_playing = s->playback.playing;
+    playback_tick(&s->playback, dt, wait ? NULL : ready, s->player);
+    if (s->menu) {
+        struct menu_model *m = menu_model(s->menu);
+        if (s->playback.step != m->step || s->playback.playing != m->playing) {
+            m->step = s->playback.step;
+            m->playing = s->playback.playing;
+            menu_model_changed(s->menu);
+        }
+        bool present[SPECIES_COUNT];
+        player_species_present(s->player, present);
+        if (memcmp(present, m->species_present, sizeof(present)) != 0) {
+            memcpy(m->species_present, present, sizeof(present));
+            menu_model_changed(s->menu);
+        }
+        if (s->sun_az != sun_before[0] || s->sun_el != sun_before[1]) {
+            m->sun_azimuth = fmod(s->sun_az + 360.0, 360.0);
+            m->sun_elevation = s->sun_el;
+            menu_model_changed(s->menu);
+        }
+    }
+
+    memset(out, 0, sizeof(*out));
+    out->frame = (uint64_t)(s->frame - 1);
+    out->time_s = time_s;
+    out->dt_s = dt > 0.0 ? dt : 0.0;
+    display_pose_from_euler(s->display.head.position, s->display.head.orientation_deg,
+                            &out->head);
+    out->nav = s->nav;
+    out->camera = s->camera;
+    if (s->menu)
+        out->wand_valid = menu_ray(s->menu, out->wand_position, out->wand_direction,
+                                   &(float){0});
+    out->time_step = s->playback.step;
+    double f = s->playback.acc;
+    out->step_fraction = (float)(f < 0.0 ? 0.0 : f > 1.0 ? 1.0 : f);
+    out->playing = s->playback.playing;
+    out->sun_azimuth_deg = s->sun_az;
+    out->sun_elevation_deg = s->sun_el;
+    out->menu_visible = s->menu && menu_visible(s->menu);
+    out->settings_revision = s->settings.revision;
+
+    unsigned after = 0;
+    if (s->menu)
+        menu_pixels(s->menu, &(int){0}, &(int){0}, &after);
+    *redraw = events || changes || after != before || s->playback.playing || was_playing ||
+              s->playback.step != old_step ||
+              memcmp(&nav_before, &s->nav, sizeof(nav_before)) != 0 ||
+              memcmp(&cam_before, &s->camera, sizeof(cam_before)) != 0;
+    return true;
+}
+
+/* ---- one frame: state -> GPU ---------------------------------------------------------- */
+
+static bool upload(struct session *s, const struct ext_volume *v)
+{
+    if (!renderer_set_volume(s->renderer, v))
+        return false;
+    s->light.generation++;
+    s->stats.volume_uploads++;
+    s->stats.upload_ms_total += renderer_stats(s->renderer)->upload_ms;
+    return true;
+}
+
+/* effects.temporal: keeps step k + 1 in the renderer's next volume and asks the eye pass to
+ * blend it in at the frame's fraction (the light map pair follows: lightmaps).  Until k + 1 is
+ * on the GPU (or while step k itself is still loading) the blend is 0: step k. */
+static bool temporal_frame(struct session *s, const struct frame_state *f, bool *changed)
+{
+    const struct playback *pb = &s->playback;
+    int next = -1;
+    if (pb->count > 1 && s->shown == f->time_step) {
+        next = f->time_step + 1;
+        if (next >= pb->count)
+            next = pb->loop ? 0 : -1;
+    }
+    int held = -1;
+    const struct ext_volume *v =
+        player_poll_next(s->player, next, !s->desc.interactive, &held);
+    if (v) {
+        if (!renderer_set_next_volume(s->renderer, v))
+            return false;
+        s->stats.volume_uploads++;
+        *changed = true;
+    }
+    uint64_t next_id = next >= 0 && held == next ? player_step_id(s->player, true) : 0;
+    s->light.temporal = true;
+    s->light.step_id = player_step_id(s->player, false);
+    s->light.next_id = next_id;
+    s->drawn.temporal = next_id != 0;
+    s->drawn.temporal_f = next_id != 0 ? f->step_fraction : 0.0f;
+    return true;
+}
+
+bool session_apply(struct session *s, const struct frame_state *f, bool *changed)
+{
+    bool uploaded = false;
+    int want = f->time_step < s->playback.count ? f->time_step : s->playback.count - 1;
+    const struct ext_volume *v = s->desc.interactive
+                                     ? player_poll(s->player, want, &s->shown)
+                                     : player_wait(s->player, want, &s->shown);
+    if (v) {
+        if (!upload(s, v))
+            return false;
+        uploaded = true;
+    } else if (!player_settled(s->player, want)) {
+        s->stats.frames_stale++;
+    }
+    s->drawn = s->base;
+    scene_sun_settings(&s->cfg, f->sun_azimuth_deg, f->sun_elevation_deg, &s->drawn);
+    s->drawn.step_m = (float)s->settings.step_m;
+    if (s->effects.on[EFFECT_TEMPORAL] && !temporal_frame(s, f, &uploaded))
+        return false;
+    player_stats(s->player, &s->stats);
+    s->stats.time_step = s->shown;
+    s->applied = *f;
+    s->have_applied = true;
+    if (changed)
+        *changed = uploaded;
+    return true;
+}
+
+bool session_light(struct session *s)
+{
+    double az = s->have_applied ? s->applied.sun_azimuth_deg : s->sun_az;
+    double el = s->have_applied ? s->applied.sun_elevation_deg : s->sun_el;
+    struct lightmaps_params p;
+    lightmaps_params_from(&s->cfg, &s->effects, az, el, &p);
+    memcpy(p.light.resolution, s->settings.light_resolution, sizeof(p.light.resolution));
+    p.light.epsilon = s->settings.epsilon;
+    return lightmaps_update_params(&s->light, &p, s->renderer, &s->stats);
+}
+
+bool session_draw(struct session *s, struct display *d, const struct frame_state *f)
+{
+    if (!display_layout(d, &f->head, &f->nav, &f->camera))
+        return false;
+    if (!s->tracker && display_view_count(d) > 0) {
+        s->view_size[0] = display_view(d, 0)->rv.width;
+        s->view_size[1] = display_view(d, 0)->rv.height;
+    }
+    if (s->menu) {
+        mat4 to_world, from_world;
+        menu_matrices(s, &f->nav, to_world, from_world);
+        float tw[16];
+        memcpy(tw, to_world, sizeof(tw));
+        if (!menu_view_update(s->menu_view, s->menu, tw, (float)s->cfg.render.exposure))
+            return false;
+    }
+    if (!display_draw(d, s->renderer, &s->drawn))
+        return false;
+    for (int i = 0; i < display_view_count(d); i++) {
+        const struct view *v = display_view(d, i);
+        if (v->visible)
+            session_stats_add_view(&s->stats, v->ms);
+    }
+    s->stats.frames++;
+    return display_present(d, s->renderer, (float)s->cfg.render.exposure);
+}
+
+/* ---- queries -------------------------------------------------------------------------- */
+
+bool session_quit_requested(const struct session *s)
+{
+    return s->quit;
+}
+
+bool session_script_done(struct session *s)
+{
+    return !s->script ||
+           (input_source_finished(s->script) && player_settled(s->player, s->playback.step));
+}
+
+double session_script_dt(const struct session *s)
+{
+    return s->script ? 1.0 / input_script_fps(s->script) : 0.0;
+}
+
+bool session_settle(struct session *s)
+{
+    if (player_settled(s->player, s->playback.step))
+        return true;
+    const struct ext_volume *v = player_wait(s->player, s->playback.step, &s->shown);
+    player_stats(s->player, &s->stats);
+    s->stats.time_step = s->shown;
+    if (!v)
+        return player_settled(s->player, s->playback.step);
+    return upload(s, v);
+}
+
+struct renderer *session_renderer(struct session *s)
+{
+    return s->renderer;
+}
+
+struct session_stats *session_stats(struct session *s)
+{
+    return &s->stats;
+}
+
+struct menu *session_menu(struct session *s)
+{
+    return s->menu;
+}
+
+const struct config *session_config(const struct session *s)
+{
+    return &s->cfg;
+}
+
+int session_step_shown(const struct session *s)
+{
+    return s->shown;
+}
+
+static const struct {
+    enum input_key key;
+    const char *what;
+} key_help[] = {
+    {INPUT_KEY_MOVE_FORWARD, "move forward (a tracked display: the storm comes closer)"},
+    {INPUT_KEY_MOVE_BACK, "move back"},
+    {INPUT_KEY_MOVE_LEFT, "move left"},
+    {INPUT_KEY_MOVE_RIGHT, "move right"},
+    {INPUT_KEY_MOVE_UP, "move up"},
+    {INPUT_KEY_MOVE_DOWN, "move down"},
+    {INPUT_KEY_TURN_LEFT, "turn left (the orbit camera: round its target)"},
+    {INPUT_KEY_TURN_RIGHT, "turn right"},
+    {INPUT_KEY_TURN_UP, "look up (the orbit camera: rise over its target)"},
+    {INPUT_KEY_TURN_DOWN, "look down"},
+    {INPUT_KEY_ZOOM_IN, "closer (the orbit camera) or a larger storm (tracked displays)"},
+    {INPUT_KEY_ZOOM_OUT, "farther, or a smaller storm"},
+    {INPUT_KEY_SUN_LEFT, "sun azimuth - 5 degrees"},
+    {INPUT_KEY_SUN_RIGHT, "sun azimuth + 5 degrees"},
+    {INPUT_KEY_SUN_UP, "sun elevation + 2 degrees"},
+    {INPUT_KEY_SUN_DOWN, "sun elevation - 2 degrees"},
+    {INPUT_KEY_PLAY, "play / pause the time steps"},
+    {INPUT_KEY_STEP_BACK, "one time step back"},
+    {INPUT_KEY_STEP_FORWARD, "one time step forward"},
+    {INPUT_KEY_MENU, "show / hide the menu (also the right mouse button)"},
+    {INPUT_KEY_PAGE_NEXT, "the menu's next page"},
+    {INPUT_KEY_PAGE_PREV, "the menu's previous page"},
+    {INPUT_KEY_QUIT, "quit"},
+};
+
+struct key_print {
+    void (*print)(const char *keys, const char *what, void *user);
+    void *user;
+};
+
+static void print_key(const char *keys, enum input_key key, void *user)
+{
+    const struct key_print *kp = user;
+    for (size_t i = 0; i < sizeof(key_help) / sizeof(key_help[0]); i++)
+        if (key_help[i].key == key)
+            kp->print(keys, key_help[i].what, kp->user);
+}
+
+void session_list_keys(void (*print)(const char *keys, const char *what, void *user),
+                       void *user)
+{
+    struct key_print kp = {print, user};
+    display_list_keys(print_key, &kp);
+    print("Home", "reset the view", user);
+    print("mouse", "left: choose in the menu, or drag to turn; middle: grab (tracked "
+                   "displays); wheel: zoom",
+          user);
+}

@@ -1,0 +1,132 @@
+/*
+ * session: everything that changes while the program runs.  A session owns the data source
+ * and the time cursor (player, playback), the volumes on the GPU and the renderer, the light
+ * map(s), the map geometry, the effects decisions (decided once, from facts gathered once),
+ * the look (species, tints, transfer function), the sun, the quality settings, navigation and
+ * the orbit camera, the menu and its input sources.  session_create reads the config once and
+ * keeps it unchanged; after that the menu, keys, joystick and wand change the session only
+ * through its setters, and nothing writes a config.
+ *
+ * A frame, in the order of the one frame loop (app/loop.c):
+ *
+ *   session_update   input -> menu -> setters -> playback: the frame state (frame.h)
+ *   session_apply    the frame state -> volumes on the GPU, the eye pass's settings
+ *   session_light    the light map, rebuilt only when its key changed
+ *   (the caller samples the head pose last: display_sample_head)
+ *   session_draw     layout, the menu's meshes, every view, present
+ *
+ * session_update only produces state and session_apply/session_draw only consume it, so a
+ * second session fed the same frame states draws the same pictures (a cluster's render nodes,
+ * a replay).
+ *
+ * Must not know: windows and devices (the display and input parts hand it events), files other
+ * than the scene's data and saved transfer functions, the command line.
+ */
+#ifndef ANVIL_SESSION_H
+#define ANVIL_SESSION_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "config/config.h"
+#include "config/display_config.h"
+#include "display/display.h"
+#include "input/input.h"
+#include "render/render.h"
+#include "session/frame.h"
+#include "session/player.h"
+#include "session/stats.h"
+
+struct menu;
+
+struct session_desc {
+    const char *command;                  /* "render", "run": --stats and the log */
+    const struct display_config *display; /* the display's config (copied); NULL: the orbit
+                                             display of the scene's own camera */
+    /* The display's first views (for the effects: does any see the ground?); NULL with
+     * views_move: the views change while the session runs. */
+    const struct render_view *views;
+    int view_count;
+    bool views_move;
+    bool interactive;          /* anvil run: the sun moves, time plays, loads never wait */
+    bool menu;                 /* make the menu and the input sources (run, --input, --menu) */
+    bool show_menu;            /* start with the menu shown */
+    const char *script;        /* --input FILE: scripted events, or NULL */
+    const char *transfers_dir; /* where named transfer functions are saved ("." default) */
+    const char *wand;          /* an OpenHMD controller as the wand ("null"), or NULL */
+    bool time_views;           /* time every view and build (they are reported) */
+};
+
+/* Builds the session for CFG (copied) on the current GL context: the first volume, the
+ * renderer, the light map, the map, the effects, the menu.  NULL (logged) on failure; *RC then
+ * holds the exit code's reason: 1 bad input, 4 anything else (out of memory, GL). */
+struct session *session_create(const struct config *cfg, const struct session_desc *d, int *rc);
+void session_destroy(struct session *s); /* NULL is fine; needs the GL context current */
+
+/* ---- one frame ------------------------------------------------------------------------ */
+
+/* Polls the session's own sources (script, wand), then handles WINDOW_EVENTS (may be NULL)
+ * and those: the menu, navigation, keys; applies what the menu committed through the setters;
+ * advances playback by DT seconds.  Fills OUT with the frame state (the head at the fixed
+ * pose: the caller samples the real one last) at display time TIME_S.  *REDRAW says whether
+ * the picture may have changed.  False on a failure (logged). */
+bool session_update(struct session *s, const struct input_queue *window_events, double dt,
+                    double time_s, struct frame_state *out, bool *redraw);
+
+/* Makes the GPU state match F: the volume of F's time step (and with effects.temporal the
+ * next one) when it is loaded (scripted renders wait for it), the sun and the temporal blend
+ * of the eye pass.  *CHANGED (may be NULL) is set when a volume was uploaded. */
+bool session_apply(struct session *s, const struct frame_state *f, bool *changed);
+
+/* Builds the light map if its key changed since the last build (once for every view). */
+bool session_light(struct session *s);
+
+/* Places D's views for F, the menu's panel and ray, draws every view and presents them. */
+bool session_draw(struct session *s, struct display *d, const struct frame_state *f);
+
+/* ---- state ---------------------------------------------------------------------------- */
+
+/* The look and quality: what the menu changes besides time, the sun and the view.  REVISION
+ * increases with every change (the frame state carries it). */
+struct session_settings {
+    struct look look;
+    double step_m;           /* render.step: eye pass ray step (0: automatic) */
+    int light_resolution[3]; /* lightmap.resolution */
+    double epsilon;          /* lightmap.epsilon */
+    bool diffuse;            /* effects.multiple (and lateral escape with it) */
+    uint32_t revision;
+};
+
+void session_get_settings(const struct session *s, struct session_settings *out);
+/* Takes IN (its revision too): a changed look makes the volumes again in the background. */
+void session_set_settings(struct session *s, const struct session_settings *in);
+
+void session_set_sun(struct session *s, double azimuth_deg, double elevation_deg);
+void session_set_step(struct session *s, int step);
+void session_set_playing(struct session *s, bool playing);
+void session_set_navigation(struct session *s, const struct display_navigation *nav);
+void session_set_camera(struct session *s, const struct display_camera *camera);
+/* Navigation and camera back to where they started. */
+void session_reset_view(struct session *s);
+
+/* Whether the user asked to quit (a quit key, a window's close button). */
+bool session_quit_requested(const struct session *s);
+/* Scripted runs: whether the script has delivered everything and the volume caught up; its
+ * frame time (1 / fps, or 0 without a script). */
+bool session_script_done(struct session *s);
+double session_script_dt(const struct session *s);
+/* Waits for the wanted volume and uploads it (the end of a scripted render). */
+bool session_settle(struct session *s);
+
+struct renderer *session_renderer(struct session *s);
+struct session_stats *session_stats(struct session *s);
+struct menu *session_menu(struct session *s); /* NULL without a menu */
+const struct config *session_config(const struct session *s);
+int session_step_shown(const struct session *s);
+
+/* The help text's lines for the keys and what they do here ("W  move forward"), through the
+ * display's key table. */
+void session_list_keys(void (*print)(const char *keys, const char *what, void *user),
+                       void *user);
+
+#endif
