@@ -260,6 +260,7 @@ static int command(int argc, char **argv, bool run)
                            .view_count = views_move ? 0 : n,
                            .views_move = views_move,
                            .interactive = run,
+                           .playback = run || o.input,
                            .menu = run || o.input || o.menu,
                            .show_menu = run ? !o.input || o.menu : o.menu,
                            .script = o.input,

@@ -55,10 +55,10 @@ enum input_key {
     INPUT_KEY_MOVE_RIGHT,   /* d */
     INPUT_KEY_MOVE_UP,      /* r / Page Up */
     INPUT_KEY_MOVE_DOWN,    /* f / Page Down */
-    INPUT_KEY_TURN_LEFT,    /* arrow left: the view turns (orbits) left */
+    INPUT_KEY_TURN_LEFT,    /* arrow left: the view turns (the orbit camera goes round) left */
     INPUT_KEY_TURN_RIGHT,   /* arrow right */
-    INPUT_KEY_TURN_UP,      /* arrow up */
-    INPUT_KEY_TURN_DOWN,    /* arrow down */
+    INPUT_KEY_TURN_UP,      /* arrow up: the storm tilts toward the viewer (its top shows) */
+    INPUT_KEY_TURN_DOWN,    /* arrow down: away */
     INPUT_KEY_ZOOM_IN,      /* + / =: closer (orbit) or a larger storm (tracked displays) */
     INPUT_KEY_ZOOM_OUT,     /* - */
     INPUT_KEY_SUN_LEFT,     /* j: sun azimuth - 5 degrees */

@@ -117,7 +117,7 @@ static bool decide_effects(struct session *s, const struct ext_volume *vol)
     effects_facts_init(&facts);
     facts.time_steps = player_step_count(s->player);
     /* anvil run plays time and moves the sun; a render plays only when a script drives it. */
-    facts.playback = s->desc.interactive || s->desc.script;
+    facts.playback = s->desc.playback;
     facts.sun_moves = s->desc.interactive;
     facts.hmd = s->display.type == DISPLAY_TYPE_HMD;
     facts.hmd_warp = s->display.hmd.warp;
@@ -195,7 +195,7 @@ struct session *session_create(const struct config *cfg, const struct session_de
 
     /* The data, opened once: the first step now, the rest behind a cache when time can play. */
     double t = time_now_ms();
-    s->player = player_create(cfg, &(struct player_desc){.still = !d->interactive && !d->script});
+    s->player = player_create(cfg, &(struct player_desc){.still = !d->playback});
     if (!s->player) {
         *rc = 1;
         goto error;
@@ -446,7 +446,7 @@ static bool navigation_key(struct session *s, enum input_key k)
     static const struct {
         enum input_key key;
         double move[3]; /* forward, right, up: the viewer's */
-        double turn[2]; /* heading (left < 0), pitch (up > 0), degrees */
+        double turn[2]; /* the storm seen turning: left < 0; tilting toward the viewer > 0 */
         double zoom;    /* > 1: closer / larger */
     } map[] = {
         {INPUT_KEY_MOVE_FORWARD, {1, 0, 0}, {0, 0}, 1},
@@ -473,12 +473,12 @@ static bool navigation_key(struct session *s, enum input_key k)
             n->position[1] -= NAV_STEP * map[i].move[2];
             n->orientation_deg[0] = fmod(n->orientation_deg[0] + map[i].turn[0], 360.0);
             n->orientation_deg[1] =
-                fmin(89.0, fmax(-89.0, n->orientation_deg[1] - map[i].turn[1]));
+                fmin(89.0, fmax(-89.0, n->orientation_deg[1] + map[i].turn[1]));
             n->scale *= map[i].zoom;
         } else {
             const double move[3] = {0.05 * map[i].move[0], 0.05 * map[i].move[1],
                                     0.05 * map[i].move[2]};
-            /* Up and down arrows: the camera rises over (sinks under) its target. */
+            /* The storm tilting toward the viewer: the camera rises over its target. */
             orbit(&s->camera, map[i].turn[0], map[i].turn[1], 1.0 / map[i].zoom, move);
         }
         return true;
@@ -933,10 +933,10 @@ static const struct {
     {INPUT_KEY_MOVE_RIGHT, "move right"},
     {INPUT_KEY_MOVE_UP, "move up"},
     {INPUT_KEY_MOVE_DOWN, "move down"},
-    {INPUT_KEY_TURN_LEFT, "turn left (the orbit camera: round its target)"},
+    {INPUT_KEY_TURN_LEFT, "turn left (the orbit camera goes round its target)"},
     {INPUT_KEY_TURN_RIGHT, "turn right"},
-    {INPUT_KEY_TURN_UP, "look up (the orbit camera: rise over its target)"},
-    {INPUT_KEY_TURN_DOWN, "look down"},
+    {INPUT_KEY_TURN_UP, "tilt the storm toward you (the orbit camera rises over it)"},
+    {INPUT_KEY_TURN_DOWN, "tilt it away"},
     {INPUT_KEY_ZOOM_IN, "closer (the orbit camera) or a larger storm (tracked displays)"},
     {INPUT_KEY_ZOOM_OUT, "farther, or a smaller storm"},
     {INPUT_KEY_SUN_LEFT, "sun azimuth - 5 degrees"},

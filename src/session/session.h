@@ -48,7 +48,9 @@ struct session_desc {
     const struct render_view *views;
     int view_count;
     bool views_move;
-    bool interactive;          /* anvil run: the sun moves, time plays, loads never wait */
+    bool interactive;          /* anvil run: the sun moves, loads never wait */
+    bool playback;             /* time can move (run, a script, frame states from elsewhere):
+                                  the time series cache runs behind the first step */
     bool menu;                 /* make the menu and the input sources (run, --input, --menu) */
     bool show_menu;            /* start with the menu shown */
     const char *script;        /* --input FILE: scripted events, or NULL */
