@@ -9,7 +9,7 @@
 #include "session/scene.h"
 #include "session/stats.h"
 #include "app/cmd_bench.h"
-#include "bench/reference.h"
+#include "reference/reference.h"
 #include "config/config.h"
 #include "common/log.h"
 

@@ -7,8 +7,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "bench/reference.h"
 #include "common/log.h"
+#include "reference/reference.h"
 #include "render/camera.h"
 
 /* Bump when the reference's estimator or the cache layout changes: old files are ignored. */
