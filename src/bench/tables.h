@@ -22,8 +22,8 @@ void bench_table_head(FILE *f, bool quick, const char *run);
 /* The views table (views-table.md, after its head): N rows measured on SC with views of
  * W x H, medians of REPEATS frames, on DEVICE (gpu_renderer_name). */
 void bench_write_views_table(FILE *f, const struct bench_scene *sc,
-                             const struct bench_views_row *rows, int n, int w, int h,
-                             int repeats, const char *device);
+                             const struct bench_views_row *rows, int n, int w, int h, int repeats,
+                             const char *device);
 
 /* The same rows in a few lines, for the terminal. */
 void bench_write_views_summary(FILE *f, const struct bench_views_row *rows, int n,
@@ -61,7 +61,6 @@ void bench_write_accuracy_table(FILE *f, const struct bench_scene_results *s, in
 
 /* angles-table.md after its head: the layer seen from every direction (the picture's mean
  * over Monte Carlo's, and Monte Carlo's means), then the wall under every sun. */
-void bench_write_angles_table(FILE *f, const struct bench_angles *a, const char *device,
-                              int spp);
+void bench_write_angles_table(FILE *f, const struct bench_angles *a, const char *device, int spp);
 
 #endif

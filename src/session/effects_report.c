@@ -70,8 +70,7 @@ bool effects_report_make(const struct config *cfg, const struct effects_report_d
 
     effects_decide(cfg, &facts, &out->effects);
     effects_light_settings(cfg, &out->effects, &out->light);
-    out->grid_ok = light_grid_init(&out->grid, sun, &box, out->light.resolution,
-                                   out->light.grid);
+    out->grid_ok = light_grid_init(&out->grid, sun, &box, out->light.resolution, out->light.grid);
     if (out->grid_ok)
         out->plane_m = out->grid.step[2] * fabs(out->grid.w[2]);
     return true;
