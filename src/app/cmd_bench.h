@@ -1,6 +1,6 @@
 /*
  * app/cmd_bench: the commands about accuracy and its cost.  anvil reference renders the Monte
- * Carlo reference image of a config (bench/reference) with its per-pixel standard error;
+ * Carlo reference image of a config (reference/) with its per-pixel standard error;
  * anvil effects says what a config simulates and why; anvil bench measures what accuracy
  * costs in time.
  */
@@ -13,13 +13,14 @@
 int cmd_reference(int argc, char **argv);
 
 /* anvil effects [CONFIG] [--display DISPLAY.cfg] [--run] [--set PATH=VALUE]...  Prints each
- * effect's decision and its reason (app/effects.h). */
+ * effect's decision and its reason (session/effects.h). */
 int cmd_effects(int argc, char **argv);
 
-/* anvil bench [--quick] [--views-only | --quality-only] [-o DIR] [--cache DIR] [--spp N]
- * [--scene NAME]...  Frame cost of many views with one light map against a build per view,
- * and the quality sweep: milliseconds and error against the Monte Carlo reference for each
- * quality knob on named scenes; writes CSV, markdown and PNG plots into DIR (bench/bench.h). */
+/* anvil bench [--quick] [--views-only | --quality-only] [-o DIR] [--cache DIR] [--configs DIR]
+ * [--spp N] [--scene NAME]... [--paraview]  Frame cost of many views with one light map
+ * against a build per view, and the quality sweep: milliseconds and error against the Monte
+ * Carlo reference for each quality knob on named scenes; writes CSV, markdown and PNG plots
+ * into DIR (bench/run.h). */
 int cmd_bench(int argc, char **argv);
 
 #endif

@@ -1,17 +1,15 @@
 /* anvil reference: the Monte Carlo reference image of a config and its standard error. */
-#include <errno.h>
 #include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "app/app.h"
-#include "session/scene.h"
-#include "session/stats.h"
 #include "app/cmd_bench.h"
-#include "bench/reference.h"
-#include "config/config.h"
 #include "common/log.h"
+#include "config/config.h"
+#include "session/scene.h"
+#include "session/traced.h"
 
 #define MAX_SETS 64
 
@@ -43,19 +41,6 @@ static int usage(FILE *out)
     return EXIT_USAGE;
 }
 
-static bool parse_long(const char *what, const char *s, long lo, long hi, long *out)
-{
-    char *end;
-    errno = 0;
-    long v = strtol(s, &end, 10);
-    if (errno || end == s || *end || v < lo || v > hi) {
-        log_error("reference: %s: expected an integer in [%ld, %ld], got \"%s\"", what, lo, hi, s);
-        return false;
-    }
-    *out = v;
-    return true;
-}
-
 static int parse_options(int argc, char **argv, struct reference_options *o)
 {
     static const struct option longopts[] = {
@@ -72,32 +57,27 @@ static int parse_options(int argc, char **argv, struct reference_options *o)
     optind = 1;
     int c;
     long v;
-    char *end;
     while ((c = getopt_long(argc, argv, "o:qh", longopts, NULL)) != -1) {
         switch (c) {
         case 'o':
             o->output = optarg;
             break;
         case 'n':
-            if (!parse_long("--spp", optarg, 1, 1L << 30, &o->spp))
+            if (!app_option_long("reference", "--spp", optarg, 1, 1L << 30, &o->spp))
                 return EXIT_BAD_INPUT;
             break;
         case 't':
-            if (!parse_long("--threads", optarg, 0, 4096, &o->threads))
+            if (!app_option_long("reference", "--threads", optarg, 0, 4096, &o->threads))
                 return EXIT_BAD_INPUT;
             break;
         case 'r':
-            if (!parse_long("--seed", optarg, 0, 0x7fffffffL, &v))
+            if (!app_option_long("reference", "--seed", optarg, 0, 0x7fffffffL, &v))
                 return EXIT_BAD_INPUT;
             o->seed = (unsigned long long)v;
             break;
         case 'a':
-            errno = 0;
-            o->albedo = strtod(optarg, &end);
-            if (errno || end == optarg || *end || !(o->albedo >= 0.0 && o->albedo <= 1.0)) {
-                log_error("reference: --albedo: expected a number in [0, 1], got \"%s\"", optarg);
+            if (!app_option_double("reference", "--albedo", optarg, 0.0, 1.0, &o->albedo))
                 return EXIT_BAD_INPUT;
-            }
             break;
         case 'j':
             o->jitter = true;
@@ -165,27 +145,16 @@ int cmd_reference(int argc, char **argv)
     struct ext_volume vol = {0};
     if (!scene_build_volume(&cfg, &vol))
         return EXIT_BAD_INPUT;
-
-    struct render_settings settings;
-    scene_render_settings(&cfg, &settings);
-    struct reference_desc desc;
-    reference_desc_from_render(&settings, &cfg.optics.params, &desc);
-    desc.albedo = o.albedo;
-    struct render_view view;
-    scene_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
-
     rc = EXIT_FAILED;
     char *err_path = stderr_path(o.output);
-    struct reference *ref = reference_create(&vol, &desc);
     struct image mean = {0}, err = {0};
-    if (!err_path || !ref)
+    struct traced_desc d = {
+        .image = {.spp = (int)o.spp, .threads = (int)o.threads, .seed = o.seed, .jitter = o.jitter},
+        .albedo = o.albedo,
+    };
+    double ms;
+    if (!err_path || !traced_render(&cfg, &vol, &d, &mean, &err, &ms))
         goto done;
-    struct reference_image_desc id = {
-        .spp = (int)o.spp, .threads = (int)o.threads, .seed = o.seed, .jitter = o.jitter};
-    double t = time_now_ms();
-    if (!reference_render(ref, &view, &id, &mean, &err))
-        goto done;
-    double ms = time_now_ms() - t;
     if (!image_write(&mean, o.output, (float)cfg.render.exposure) ||
         !image_write_pfm(&err, err_path))
         goto done;
@@ -195,7 +164,6 @@ int cmd_reference(int argc, char **argv)
 done:
     image_finish(&mean);
     image_finish(&err);
-    reference_destroy(ref);
     free(err_path);
     ext_volume_finish(&vol);
     return rc;

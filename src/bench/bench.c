@@ -1,14 +1,16 @@
 /* The views and quality benchmarks (bench.h): sweeps, timing, errors, the reference cache. */
 #include "bench/bench.h"
 
+#include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
-#include "bench/reference.h"
 #include "common/log.h"
+#include "reference/reference.h"
 #include "render/camera.h"
 
 /* Bump when the reference's estimator or the cache layout changes: old files are ignored. */
@@ -555,49 +557,22 @@ done:
     return ok;
 }
 
-/* ---- reports -------------------------------------------------------------------------- */
+/* ---- files ---------------------------------------------------------------------------- */
 
-void bench_write_csv(FILE *f, const char *scene, const struct bench_result *res, int n,
-                     bool header)
+bool bench_make_dir(const char *dir)
 {
-    if (header)
-        fprintf(f, "scene,knob,value,default,light_map,resolution,mode,epsilon,forward_angle,"
-                   "forward,peripheral,step_m,build_ms,build_noise_ms,view_ms,view_noise_ms,"
-                   "rmse,rmse_model,max_error,rmse_over_sigma,max_over_sigma,pareto,self_rmse,"
-                   "pareto_self\n");
-    for (int i = 0; i < n; i++) {
-        const struct bench_result *r = &res[i];
-        const struct bench_variant *v = &r->v;
-        fprintf(f, "%s,%s,\"%s\",%d,%d,%d,%s,%g,%g,%d,%d,%g,%.3f,%.3f,%.3f,%.3f,%.6g,%.6g,"
-                   "%.6g,%.4g,%.4g,%d,%.6g,%d\n",
-                scene, v->knob, v->value, v->is_default, v->shadows, v->light.resolution[0],
-                v->mode == LIGHT_GPU_DENSE ? "dense" : "compressed", v->light.epsilon,
-                v->light.forward_angle_deg, v->light.forward, v->light.forward &&
-                v->light.peripheral, v->step_m, r->build_ms, r->build_spread, r->view_ms,
-                r->view_spread, r->rmse, r->rmse_model, r->max_err, r->rmse_rel, r->max_rel,
-                r->pareto, r->self_rmse, r->pareto_self);
+    char tmp[PATH_MAX];
+    snprintf(tmp, sizeof(tmp), "%s", dir);
+    for (char *p = tmp + 1; *p; p++) {
+        if (*p == '/') {
+            *p = '\0';
+            mkdir(tmp, 0777);
+            *p = '/';
+        }
     }
-}
-
-void bench_write_markdown(FILE *f, const char *scene, const struct bench_result *res, int n)
-{
-    double base = 0.0;
-    for (int i = 0; i < n; i++) {
-        if (res[i].v.is_default)
-            base = res[i].build_ms + res[i].view_ms;
+    if (mkdir(tmp, 0777) != 0 && errno != EEXIST) {
+        log_error("%s: cannot create the folder: %s", dir, strerror(errno));
+        return false;
     }
-    fprintf(f, "| %s: knob | value | build ms | view ms | cost × default | RMSE | model RMSE | "
-               "max error | RMSE / σ | max / σ | Pareto | RMSE vs converged renderer | "
-               "Pareto |\n", scene);
-    fprintf(f, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|:---:|---:|:---:|\n");
-    for (int i = 0; i < n; i++) {
-        const struct bench_result *r = &res[i];
-        fprintf(f, "| %s%s%s | %s | %.1f ± %.1f | %.1f ± %.1f | %.2f | %.4g | %.4g | %.3g | "
-                   "%.3g | %.3g | %s | %.3g | %s |\n",
-                r->v.is_default ? "**" : "", r->v.knob, r->v.is_default ? "**" : "", r->v.value,
-                r->build_ms, r->build_spread, r->view_ms, r->view_spread,
-                base > 0 ? (r->build_ms + r->view_ms) / base : 0.0, r->rmse, r->rmse_model,
-                r->max_err, r->rmse_rel, r->max_rel, r->pareto ? "●" : "", r->self_rmse,
-                r->pareto_self ? "●" : "");
-    }
+    return true;
 }

@@ -1,6 +1,7 @@
 /*
- * bench: what accuracy costs in time.  Two benchmarks over scenes the caller prepares (app
- * builds volumes from configs; this part never reads a config):
+ * bench: what accuracy costs in time.  This header is the measuring kit, over scenes already
+ * prepared (struct bench_scene: bench/scenes.h makes them from configs; nothing here reads a
+ * config):
  *
  *  - views: the frame cost of N views sharing one deep light map against the same N views
  *    each rebuilding it (what a renderer that lights every view on its own pays);
@@ -8,11 +9,15 @@
  *    resolution, dense vs compressed and epsilon, forward angle, peripheral and forward
  *    scattering on/off, no light map at all), each measured in GPU milliseconds per light
  *    build and per view (timer queries, medians of repeats) and in error against the Monte
- *    Carlo reference (bench/reference.h), cached on disk.
+ *    Carlo reference (reference/reference.h), cached on disk;
+ *  - the Pareto front and the PNG plot of error against milliseconds.
  *
- * Results go to CSV, markdown and PNG plots (error against milliseconds, the Pareto front
- * marked) through bench_write_*.  Measuring needs the GL context current; the writers and
- * the Pareto front do not.  Nothing here prints: progress goes to the log.
+ * The rest of the part: bench/scenes.h (scenes from configs), bench/experiments.h (the layer
+ * from 16 directions, the wall under 4 suns), bench/tables.h (tables and verdicts as text),
+ * bench/paraview.h (ParaView's side of the views), bench/run.h (anvil bench's whole run,
+ * the one entry point of the command).  Measuring needs the GL context current; the Pareto
+ * front and the plot do not.  Nothing here prints: progress goes to the log.  It must not
+ * know windows or the command line.
  */
 #ifndef ANVIL_BENCH_BENCH_H
 #define ANVIL_BENCH_BENCH_H
@@ -70,6 +75,18 @@ struct bench_result {
                                          ray step and light map, the default model) */
     bool pareto;                      /* on the Pareto front of its scene (rmse) */
     bool pareto_self;                 /* ... with self_rmse as the error */
+};
+
+/* The most variants one sweep has (bench_variants' MAX for a whole sweep). */
+#define BENCH_MAX_VARIANTS 32
+
+/* The quality sweep's results on one scene, as the tables and plots report them. */
+struct bench_scene_results {
+    char name[32];
+    struct bench_result res[BENCH_MAX_VARIANTS];
+    int n;
+    double sigma; /* the reference's RMS standard error per pixel and channel */
+    int spp;      /* its samples per pixel */
 };
 
 /* The sweep around SC's defaults into OUT (at most MAX); QUICK leaves out the costliest
@@ -150,14 +167,13 @@ bool bench_views(struct renderer *r, struct light_gpu *lg, const struct bench_sc
                  const int *counts, int n_counts, int w, int h, int repeats,
                  struct bench_views_row *out);
 
-/* ---- reports ------------------------------------------------------------------------ */
+/* ---- files -------------------------------------------------------------------------- */
 
-/* Appends the results of one scene as CSV rows (HEADER: write the header line first). */
-void bench_write_csv(FILE *f, const char *scene, const struct bench_result *res, int n,
-                     bool header);
+/* Creates the folder DIR and its parents, as mkdir -p.  False (logged) when DIR cannot be
+ * made. */
+bool bench_make_dir(const char *dir);
 
-/* A markdown table of one scene's results. */
-void bench_write_markdown(FILE *f, const char *scene, const struct bench_result *res, int n);
+/* ---- plots -------------------------------------------------------------------------- */
 
 /* A plot of RMSE (SELF: self_rmse) against milliseconds (build + view, both axes
  * logarithmic), one panel per scene, the Pareto front joined and the default ringed, into a

@@ -9,11 +9,11 @@
 #include "session/lightmaps.h"
 #include "session/scene.h"
 #include "session/stats.h"
-#include "bench/reference.h"
 #include "common/log.h"
 #include "gpu/gpu.h"
 #include "light/light.h"
 #include "light/light_gpu.h"
+#include "reference/reference.h"
 #include "render/camera.h"
 #include "render/render.h"
 

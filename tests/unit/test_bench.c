@@ -1,11 +1,15 @@
-/* The quality benchmark's verdicts (bench/bench.h): which settings do the same work, how
- * their timings are pooled, and when one setting beats another on the Pareto front. */
+/* The quality benchmark's verdicts (bench/bench.h, bench/tables.h): which settings do the same
+ * work, how their timings are pooled, when one setting beats another on the Pareto front, and
+ * what the accuracy table says about it. */
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "testutil.h"
 
 #include "bench/bench.h"
+#include "bench/tables.h"
 #include "common/log.h"
 
 /* A dense 64^3 map with forward, peripheral and multiple scattering, the default ray step,
@@ -201,6 +205,68 @@ static void test_pareto(void **state)
     assert_true(res[0].pareto && res[1].pareto);
 }
 
+/* One scene of the accuracy table: a default of 100 ms and error 1, then the settings. */
+static void scene(struct bench_scene_results *s, const char *name, const struct bench_result *res,
+                  int n)
+{
+    memset(s, 0, sizeof(*s));
+    snprintf(s->name, sizeof(s->name), "%s", name);
+    for (int i = 0; i < n; i++) {
+        s->res[i] = res[i];
+        snprintf(s->res[i].v.knob, sizeof(s->res[i].v.knob), "%s", i ? "ray step" : "default");
+        snprintf(s->res[i].v.value, sizeof(s->res[i].v.value), "%d voxel", i);
+        s->res[i].v.is_default = i == 0;
+    }
+    s->n = n;
+    bench_pareto(s->res, n);
+}
+
+/* The verdicts as the accuracy table writes them. */
+static char *verdicts(const struct bench_scene_results *s, int n, bool self)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    for (int i = 0; i < n; i++)
+        bench_write_verdict(f, &s[i], self);
+    bench_write_verdict_across(f, s, n, self);
+    fclose(f);
+    return buf;
+}
+
+static void test_verdicts(void **state)
+{
+    (void)state;
+    static struct bench_scene_results s[2];
+    /* On the storm, "ray step 1 voxel" is 20 % faster and as accurate: the default is beaten;
+     * on the sphere it is as fast but worse: no verdict across the scenes. */
+    const struct bench_result storm[] = {timed(100.0, 0.0, 1.0), timed(80.0, 0.0, 1.0)};
+    const struct bench_result sphere[] = {timed(100.0, 0.0, 1.0), timed(100.0, 0.0, 1.5)};
+    scene(&s[0], "storm", storm, 2);
+    scene(&s[1], "sphere", sphere, 2);
+    char *text = verdicts(s, 2, false);
+    assert_string_equal(text,
+                        "- **storm**, against Monte Carlo: the default is *not* on the Pareto "
+                        "front; beaten by ray step 1 voxel (0.80× the time, error 1 vs 1);\n"
+                        "- **sphere**, against Monte Carlo: the default is on the Pareto front.\n"
+                        "- **Every scene**, against Monte Carlo: the defaults are on the Pareto "
+                        "front: no setting is as fast and as accurate on every scene and better "
+                        "on one.\n");
+    free(text);
+    /* Faster on the sphere too (within the noise in error): beaten on every scene. */
+    const struct bench_result both[] = {timed(100.0, 0.0, 1.0), timed(100.0, 0.0, 1.005)};
+    scene(&s[1], "sphere", both, 2);
+    text = verdicts(s, 2, true);
+    assert_non_null(strstr(text, "- **Every scene**, against the converged renderer: the "
+                                 "defaults are *not* on the Pareto front; beaten on every "
+                                 "scene by ray step 1 voxel;\n"));
+    free(text);
+    /* One scene: no verdict across scenes. */
+    text = verdicts(s, 1, false);
+    assert_null(strstr(text, "Every scene"));
+    free(text);
+}
+
 int main(void)
 {
     log_set_level(LOG_WARN);
@@ -210,6 +276,7 @@ int main(void)
         cmocka_unit_test(test_beats_beyond_noise),
         cmocka_unit_test(test_shared_timings_do_not_widen_the_margin),
         cmocka_unit_test(test_pareto),
+        cmocka_unit_test(test_verdicts),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

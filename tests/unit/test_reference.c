@@ -1,5 +1,5 @@
 /*
- * bench/reference: the Monte Carlo reference against closed forms.  Every stochastic check
+ * reference/: the Monte Carlo reference against closed forms.  Every stochastic check
  * compares an estimate with its own standard error: |estimate - exact| < 5 sigma (plus half a
  * unit of the last digit of a tabulated value).  Seeds are fixed, so a run is reproducible;
  * the tolerance is what makes a wrong estimator fail and a right one pass for any seed.
@@ -15,9 +15,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/reference.h"
 #include "data/volume.h"
 #include "optics/optics.h"
+#include "reference/reference.h"
 #include "render/camera.h"
 #include "testutil.h"
 

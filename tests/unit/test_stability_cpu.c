@@ -7,11 +7,11 @@
 
 #include "testutil.h"
 
-#include "bench/reference.h"
 #include "common/log.h"
 #include "data/synth.h"
 #include "light/light.h"
 #include "optics/optics.h"
+#include "reference/reference.h"
 
 static struct reference *slab_reference(int nx, int ny, int nz, double ex, double ey, double ez,
                                         double tau, struct ext_volume *vol)

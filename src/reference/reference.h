@@ -1,9 +1,11 @@
 /*
- * bench/reference: the Monte Carlo yardstick.  A CPU volumetric path tracer over the same
- * scene the renderer draws (extinction volume, sun, sky, ground, camera matrices) that
- * converges to the solution of the volume rendering equation (Elek eq. 2.11-2.13) which the
- * renderer's single-scattering eye pass and light map approximate: multiple scattering of any
- * order, the full (untruncated) phase functions, light from the sky as well as the sun.
+ * reference: the Monte Carlo yardstick, a renderer in its own right.  A CPU volumetric path
+ * tracer over the same scene the renderer draws (extinction volume, sun, sky, ground, camera
+ * matrices) that converges to the solution of the volume rendering equation (Elek eq.
+ * 2.11-2.13) which the renderer's single-scattering eye pass and light map approximate:
+ * multiple scattering of any order, the full (untruncated) phase functions, light from the
+ * sky as well as the sun.  The benchmark (bench/) measures the renderer's error against it;
+ * anvil reference writes its images.
  *
  * What it computes, in units and in relation to render_settings, is in docs/reference.md.
  * In short: the sun is a directional source of irradiance E [W/m^2 per unit area normal to
@@ -15,10 +17,18 @@
  * extinction (min and max over 8^3 voxels plus a one-voxel apron) traversed with a DDA;
  * importance-sampled Henyey-Greenstein (closed-form inversion, Elek eq. 2.5) and
  * Cornette-Shanks (exact rejection from an HG proposal); next-event estimation of the sun;
- * Russian roulette on throughput, no depth cut.  No GL, no files; never prints.
+ * Russian roulette on throughput, no depth cut.
+ *
+ * Files: sample.c (random numbers, phase sampling), trace.c (the bound grid, tracking, one
+ * path's radiance), image.c (a view's image over threads).
+ *
+ * It must not know GL, files, configs or windows: it takes a volume and plain descriptions
+ * (struct reference_desc, the renderer's render_view matrices) and returns images in memory;
+ * whoever calls it reads the scene and writes the files.  It never prints; failures go to the
+ * log.
  */
-#ifndef ANVIL_BENCH_REFERENCE_H
-#define ANVIL_BENCH_REFERENCE_H
+#ifndef ANVIL_REFERENCE_REFERENCE_H
+#define ANVIL_REFERENCE_REFERENCE_H
 
 #include <stdbool.h>
 #include <stdint.h>

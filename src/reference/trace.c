@@ -1,23 +1,18 @@
 /*
- * bench/reference: Monte Carlo path tracing of the extinction volume.  See reference.h for
- * what it computes and docs/reference.md for the units and the validation.
+ * reference/trace: Monte Carlo path tracing of the extinction volume: the bound grid, free
+ * flights, transmittance and the radiance of one path.  See reference.h for what it computes
+ * and docs/reference.md for the units and the validation.
  */
-#include "bench/reference.h"
+#include "reference/reference.h"
 
 #include <assert.h>
 #include <math.h>
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "common/log.h"
 
 #define PI 3.14159265358979323846
-
-/* Same clamp as optics' phase functions, so sampling and evaluation agree. */
-#define G_MAX 0.999
 
 /* Residual ratio tracking plays Russian roulette below this transmittance. */
 #define TR_ROULETTE 0.1
@@ -35,50 +30,7 @@ struct reference {
     float *bmax, *bmin; /* per block: bounds of the trilinear total extinction, 1/m */
 };
 
-/* ---- random numbers ---------------------------------------------------------------------- */
-
-static uint64_t splitmix64(uint64_t *x)
-{
-    uint64_t z = (*x += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
-
-static inline uint64_t rotl(uint64_t x, int k)
-{
-    return (x << k) | (x >> (64 - k));
-}
-
-void reference_rng_seed(struct reference_rng *rng, uint64_t seed, uint64_t stream)
-{
-    /* Mix the stream into the seed first so that neighbouring (seed, stream) pairs give
-     * unrelated states; splitmix64 then fills the four words (never all zero). */
-    uint64_t x = seed;
-    uint64_t h = splitmix64(&x) ^ (stream * 0xd1342543de82ef95ull);
-    x = h;
-    for (int i = 0; i < 4; i++)
-        rng->s[i] = splitmix64(&x);
-}
-
-uint64_t reference_rng_next(struct reference_rng *rng)
-{
-    uint64_t *s = rng->s;
-    uint64_t result = rotl(s[1] * 5, 7) * 9;
-    uint64_t t = s[1] << 17;
-    s[2] ^= s[0];
-    s[3] ^= s[1];
-    s[1] ^= s[2];
-    s[0] ^= s[3];
-    s[2] ^= t;
-    s[3] = rotl(s[3], 45);
-    return result;
-}
-
-double reference_rng_uniform(struct reference_rng *rng)
-{
-    return (double)(reference_rng_next(rng) >> 11) * 0x1.0p-53;
-}
+/* ---- free paths ------------------------------------------------------------------------- */
 
 /* Exponential with unit mean: the optical depth to the next event (Elek eq. 2.8). */
 static inline double exp_sample(struct reference_rng *rng)
@@ -86,39 +38,6 @@ static inline double exp_sample(struct reference_rng *rng)
     return -log(1.0 - reference_rng_uniform(rng));
 }
 
-/* ---- phase sampling ---------------------------------------------------------------------- */
-
-static double clamp_g(double g)
-{
-    return g > G_MAX ? G_MAX : g < -G_MAX ? -G_MAX : g;
-}
-
-double reference_sample_hg(double g, struct reference_rng *rng)
-{
-    g = clamp_g(g);
-    /* Elek eq. 2.5 (with 2g, not |2g|, so that negative g scatters backward):
-     *   mu = (1 + g^2 - ((1 - g^2) / (1 - g + 2 g xi))^2) / (2 g).
-     * With a = 1 - 2 xi and D = 1 - g a, expanding the numerator over D^2 divides out the
-     * factor g exactly:
-     *   mu = (-a + g (3 + a^2) / 2 - g^2 a + g^3 (a^2 - 1) / 2) / D^2,
-     * which is the isotropic mu = 2 xi - 1 at g = 0 and has no cancellation near it. */
-    double a = 1.0 - 2.0 * reference_rng_uniform(rng);
-    double d = 1.0 - g * a;
-    double num = -a + g * (0.5 * (3.0 + a * a) + g * (-a + 0.5 * g * (a * a - 1.0)));
-    double mu = num / (d * d);
-    return mu > 1.0 ? 1.0 : mu < -1.0 ? -1.0 : mu;
-}
-
-double reference_sample_cs(double g, struct reference_rng *rng)
-{
-    /* p_CS(mu) = p_HG(mu) * 3 (1 + mu^2) / (2 (2 + g^2)) <= p_HG(mu) * 3 / (2 + g^2), so
-     * HG samples accepted with probability (1 + mu^2) / 2 are exact CS samples. */
-    for (;;) {
-        double mu = reference_sample_hg(g, rng);
-        if (2.0 * reference_rng_uniform(rng) < 1.0 + mu * mu)
-            return mu;
-    }
-}
 
 static double sample_phase(const struct reference *r, double g, struct reference_rng *rng)
 {
@@ -645,187 +564,4 @@ void reference_radiance(const struct reference *r, const double origin[3], const
                 thr[c] /= q;
         }
     }
-}
-
-/* ---- images ------------------------------------------------------------------------------ */
-
-/* Inverse of a 4x4 matrix (row-major doubles) by Gauss-Jordan with partial pivoting. */
-static bool invert4(const double m[16], double out[16])
-{
-    double a[4][8];
-    for (int i = 0; i < 4; i++) {
-        for (int j = 0; j < 4; j++) {
-            a[i][j] = m[4 * i + j];
-            a[i][j + 4] = i == j;
-        }
-    }
-    for (int c = 0; c < 4; c++) {
-        int piv = c;
-        for (int i = c + 1; i < 4; i++) {
-            if (fabs(a[i][c]) > fabs(a[piv][c]))
-                piv = i;
-        }
-        if (a[piv][c] == 0.0)
-            return false;
-        for (int j = 0; j < 8; j++) {
-            double x = a[c][j];
-            a[c][j] = a[piv][j];
-            a[piv][j] = x;
-        }
-        double inv = 1.0 / a[c][c];
-        for (int j = 0; j < 8; j++)
-            a[c][j] *= inv;
-        for (int i = 0; i < 4; i++) {
-            if (i == c)
-                continue;
-            double f = a[i][c];
-            for (int j = 0; j < 8; j++)
-                a[i][j] -= f * a[c][j];
-        }
-    }
-    for (int i = 0; i < 4; i++) {
-        for (int j = 0; j < 4; j++)
-            out[4 * i + j] = a[i][j + 4];
-    }
-    return true;
-}
-
-struct render_job {
-    const struct reference *ref;
-    const struct reference_image_desc *d;
-    double inv[16]; /* clip -> world, row-major */
-    int width, height;
-    struct image *mean, *err;
-    atomic_int next_row;
-};
-
-static void unproject(const double inv[16], double x, double y, double z, double out[3])
-{
-    double v[4] = {x, y, z, 1.0}, r[4];
-    for (int i = 0; i < 4; i++)
-        r[i] = inv[4 * i] * v[0] + inv[4 * i + 1] * v[1] + inv[4 * i + 2] * v[2] + inv[4 * i + 3];
-    for (int i = 0; i < 3; i++)
-        out[i] = r[i] / r[3];
-}
-
-/* The renderer's camera ray through (PX, PY) in pixels: from the near plane toward the far
- * plane (shaders/raycast.comp). */
-static void camera_ray(const struct render_job *job, double px, double py, double o[3], double d[3])
-{
-    double nx = px / job->width * 2.0 - 1.0, ny = py / job->height * 2.0 - 1.0, f[3];
-    unproject(job->inv, nx, ny, -1.0, o);
-    unproject(job->inv, nx, ny, 1.0, f);
-    for (int i = 0; i < 3; i++)
-        d[i] = f[i] - o[i];
-    normalize3(d);
-}
-
-static void render_pixel(const struct render_job *job, int x, int y)
-{
-    const struct reference_image_desc *d = job->d;
-    struct reference_rng rng;
-    reference_rng_seed(&rng, d->seed, (uint64_t)y * (uint64_t)job->width + (uint64_t)x);
-    double o[3], dir[3];
-    camera_ray(job, x + 0.5, y + 0.5, o, dir);
-    /* Welford's running mean and sum of squared deviations, per channel (RGB, alpha). */
-    double mean[4] = {0}, m2[4] = {0};
-    for (int s = 0; s < d->spp; s++) {
-        if (d->jitter)
-            camera_ray(job, x + reference_rng_uniform(&rng), y + reference_rng_uniform(&rng), o,
-                       dir);
-        double l[3];
-        bool pass;
-        reference_radiance(job->ref, o, dir, &rng, l, &pass);
-        double v[4] = {l[0], l[1], l[2], pass ? 1.0 : 0.0};
-        for (int c = 0; c < 4; c++) {
-            double delta = v[c] - mean[c];
-            mean[c] += delta / (s + 1);
-            m2[c] += delta * (v[c] - mean[c]);
-        }
-    }
-    size_t i = 4 * ((size_t)y * (size_t)job->width + (size_t)x);
-    for (int c = 0; c < 4; c++) {
-        job->mean->rgba[i + c] = (float)mean[c];
-        double var = d->spp > 1 ? m2[c] / ((double)d->spp * (d->spp - 1)) : 0.0;
-        job->err->rgba[i + c] = (float)sqrt(var > 0.0 ? var : 0.0);
-    }
-}
-
-static void *render_worker(void *arg)
-{
-    struct render_job *job = arg;
-    for (;;) {
-        int y = atomic_fetch_add(&job->next_row, 1);
-        if (y >= job->height)
-            return NULL;
-        for (int x = 0; x < job->width; x++)
-            render_pixel(job, x, y);
-    }
-}
-
-bool reference_render(const struct reference *ref, const struct render_view *view,
-                      const struct reference_image_desc *d, struct image *radiance,
-                      struct image *stderr_img)
-{
-    assert(ref && view && d && radiance && stderr_img);
-    assert(d->spp >= 1);
-    memset(radiance, 0, sizeof(*radiance));
-    memset(stderr_img, 0, sizeof(*stderr_img));
-    struct render_job job = {.ref = ref,
-                             .d = d,
-                             .width = view->width,
-                             .height = view->height,
-                             .mean = radiance,
-                             .err = stderr_img};
-    atomic_init(&job.next_row, 0);
-    /* clip = proj * view; the matrices are column-major. */
-    double m[16];
-    for (int i = 0; i < 4; i++) {
-        for (int j = 0; j < 4; j++) {
-            double s = 0.0;
-            for (int k = 0; k < 4; k++)
-                s += (double)view->proj[4 * k + i] * view->view[4 * j + k];
-            m[4 * i + j] = s;
-        }
-    }
-    if (!invert4(m, job.inv)) {
-        log_error("reference: the camera matrices are singular");
-        return false;
-    }
-    if (!image_init(radiance, view->width, view->height))
-        return false;
-    if (!image_init(stderr_img, view->width, view->height))
-        goto error_mean;
-
-    int threads = d->threads;
-    if (threads <= 0) {
-        long n = sysconf(_SC_NPROCESSORS_ONLN);
-        threads = n > 0 ? (int)n : 1;
-    }
-    if (threads > view->height)
-        threads = view->height > 0 ? view->height : 1;
-    pthread_t *tid = calloc((size_t)threads, sizeof(*tid));
-    if (!tid) {
-        log_error("reference: out of memory");
-        goto error_err;
-    }
-    int started = 0;
-    for (; started < threads - 1; started++) {
-        if (pthread_create(&tid[started], NULL, render_worker, &job) != 0) {
-            log_warn("reference: could not start thread %d; going on with %d", started + 1,
-                     started + 1);
-            break;
-        }
-    }
-    render_worker(&job); /* the calling thread works too */
-    for (int i = 0; i < started; i++)
-        pthread_join(tid[i], NULL);
-    free(tid);
-    return true;
-
-error_err:
-    image_finish(stderr_img);
-error_mean:
-    image_finish(radiance);
-    return false;
 }

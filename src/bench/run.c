@@ -1,0 +1,303 @@
+/* anvil bench's work: the views benchmark, the quality sweep and the experiments, written
+ * into one folder (run.h). */
+#include "bench/run.h"
+
+#include <assert.h>
+#include <libgen.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "bench/bench.h"
+#include "bench/experiments.h"
+#include "bench/paraview.h"
+#include "bench/tables.h"
+#include "common/log.h"
+#include "config/config.h"
+#include "gpu/gpu.h"
+#include "light/light_gpu.h"
+#include "render/render.h"
+
+void bench_options_defaults(struct bench_options *o)
+{
+    memset(o, 0, sizeof(*o));
+    o->views = o->quality = true;
+}
+
+__attribute__((format(printf, 2, 3))) static void echo(const struct bench_options *o,
+                                                       const char *fmt, ...)
+{
+    if (!o->report)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vfprintf(o->report, fmt, ap);
+    va_end(ap);
+}
+
+/* Writes BUF (LEN bytes) to DIR/NAME, atomically. */
+static bool write_text(const struct bench_options *o, const char *name, const char *buf,
+                       size_t len)
+{
+    char path[PATH_MAX];
+    snprintf(path, sizeof(path), "%s/%s", o->out, name);
+    bool ok = file_write_atomic(path, buf, len);
+    if (ok)
+        echo(o, "wrote %s\n", path);
+    return ok;
+}
+
+/* ---- views ------------------------------------------------------------------------------ */
+
+static bool run_views(const struct bench_options *o, const char *device, struct renderer *r,
+                      struct light_gpu *lg)
+{
+    struct config cfg;
+    char *extra[] = {"render.ground_on=false"};
+    if (!bench_scene_config("storm", o->configs, o->quick, extra, 1, &cfg))
+        return false;
+    int w = o->quick ? 64 : 160, h = o->quick ? 48 : 120, repeats = o->quick ? 1 : 3;
+    struct ext_volume vol = {0};
+    struct bench_scene sc;
+    bool ok = bench_scene_prepare("storm", &cfg, w, h, &vol, &sc) &&
+              renderer_set_optics(r, &cfg.optics.params) && renderer_set_volume(r, &vol);
+    static const int counts[] = {1, 2, 8, 12};
+    struct bench_views_row rows[4];
+    ok = ok && bench_views(r, lg, &sc, counts, 4, w, h, repeats, rows);
+    if (!ok) {
+        ext_volume_finish(&vol);
+        return false;
+    }
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    bench_table_head(f, o->quick, "views");
+    bench_write_views_table(f, &sc, rows, 4, w, h, repeats, device);
+    fclose(f);
+    ok = write_text(o, "views-table.md", buf, len);
+    free(buf);
+    if (o->report)
+        bench_write_views_summary(o->report, rows, 4, device);
+    if (ok && o->paraview) {
+        struct bench_paraview_desc pd = {
+            .script = o->paraview_script,
+            .cache_dir = o->cache,
+            .out_dir = o->out,
+            .sun_azimuth_deg = cfg.light.azimuth_deg,
+            .sun_elevation_deg = cfg.light.elevation_deg,
+            .width = w,
+            .height = h,
+            .repeats = repeats,
+            .report = o->report,
+        };
+        ok = bench_paraview_views(&pd, &vol, rows, 4);
+    }
+    ext_volume_finish(&vol);
+    return ok;
+}
+
+/* ---- quality ---------------------------------------------------------------------------- */
+
+/* The sweep around the defaults of scene NAME (its config CFG) into OUT: the Monte Carlo
+ * reference, the renderer's own converged image, every variant's error and timings, the
+ * pooled timings and the Pareto front. */
+static bool sweep_scene(const struct bench_options *o, const char *name, const struct config *cfg,
+                        struct renderer *r, struct light_gpu *lg, struct bench_scene_results *out)
+{
+    int w = o->quick ? 48 : 96, h = o->quick ? 36 : 72;
+    struct ext_volume vol = {0};
+    struct bench_scene sc;
+    struct image ref = {0}, err = {0}, self = {0};
+    bool ok = false;
+    if (!bench_scene_prepare(name, cfg, w, h, &vol, &sc))
+        goto done;
+    bool cached = false;
+    /* The ball is cheap to trace (0.2 s at 256 samples on 2 cores) and its picture faint: at
+     * the base count its reference's noise is as large as the errors being compared, so it
+     * gets 64 times the samples (an eighth of the noise). */
+    int spp = strcmp(name, "sphere") == 0 ? 64 * o->spp : o->spp;
+    out->spp = spp;
+    if (!bench_reference(&sc, spp, o->cache, &ref, &err, &cached))
+        goto done;
+    double noise = 0.0;
+    for (int i = 0; i < w * h; i++)
+        for (int c = 0; c < 3; c++)
+            noise += (double)err.rgba[4 * i + c] * err.rgba[4 * i + c];
+    out->sigma = sqrt(noise / (3.0 * w * h));
+    if (!renderer_set_optics(r, &cfg->optics.params) || !renderer_set_volume(r, &vol))
+        goto done;
+    struct bench_variant variants[BENCH_MAX_VARIANTS];
+    int n = bench_variants(&sc, o->quick, variants, BENCH_MAX_VARIANTS);
+    /* The renderer's own model converged: finest ray step and light map, default knobs. */
+    struct bench_variant fine = variants[0];
+    float voxel = (float)fmin(vol.grid.spacing[0], fmin(vol.grid.spacing[1], vol.grid.spacing[2]));
+    fine.step_m = 0.125f * voxel;
+    fine.mode = LIGHT_GPU_DENSE;
+    for (int a = 0; a < 3; a++)
+        fine.light.resolution[a] = o->quick ? 128 : 256;
+    if (!bench_render(r, lg, &sc, &fine, &self))
+        goto done;
+    snprintf(out->name, sizeof(out->name), "%s", name);
+    out->n = 0;
+    for (int i = 0; i < n; i++) {
+        if (!bench_measure(r, lg, &sc, &variants[i], &ref, &err, &self, &out->res[i]))
+            goto done;
+    }
+    out->n = n;
+    /* Timings round-robin over the variants: 5 builds and 5 views each (1 and 1 quick). */
+    int rounds = o->quick ? 1 : 5, build_rounds = rounds;
+    for (int k = 0; k < rounds; k++) {
+        for (int i = 0; i < n; i++) {
+            if (!bench_time_once(r, lg, &sc, k < build_rounds, &out->res[i]))
+                goto done;
+        }
+    }
+    for (int i = 0; i < n; i++) {
+        bench_timings_finish(&out->res[i]);
+        log_info("bench: %s %s %s: build %.1f ms, view %.1f ms, RMSE %.4g (%.2f sigma)", name,
+                 variants[i].knob, variants[i].value, out->res[i].build_ms,
+                 out->res[i].view_ms, out->res[i].rmse, out->res[i].rmse_rel);
+    }
+    bench_pool_timings(out->res, out->n);
+    bench_pareto(out->res, out->n);
+    ok = true;
+done:
+    image_finish(&ref);
+    image_finish(&err);
+    image_finish(&self);
+    ext_volume_finish(&vol);
+    return ok;
+}
+
+static bool run_quality(const struct bench_options *o, const char *device, struct renderer *r,
+                        struct light_gpu *lg)
+{
+    static struct bench_scene_results scenes[BENCH_MAX_SCENES];
+    int n = 0;
+    for (int i = 0; i < o->n_scenes; i++) {
+        /* The renderer lights the cloud with the sun only, so the comparison does too: no
+         * sky (the reference would add sky light scattered by the cloud) and no ground. */
+        char *extra[] = {"render.sky=[0,0,0]", "render.ground_on=false"};
+        struct config cfg;
+        if (!bench_scene_config(o->scenes[i], o->configs, o->quick, extra, 2, &cfg))
+            return false;
+        const char *missing = bench_scene_missing_data(&cfg);
+        if (missing) {
+            log_warn("bench: %s not found: the %s scene is left out", missing, o->scenes[i]);
+            continue;
+        }
+        if (!sweep_scene(o, o->scenes[i], &cfg, r, lg, &scenes[n]))
+            return false;
+        n++;
+    }
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    bench_write_accuracy_csv(f, scenes, n);
+    fclose(f);
+    bool ok = write_text(o, "accuracy.csv", buf, len);
+    free(buf);
+
+    f = open_memstream(&buf, &len);
+    bench_table_head(f, o->quick, "quality");
+    bench_write_accuracy_table(f, scenes, n, device, o->spp);
+    fclose(f);
+    ok = write_text(o, "accuracy-table.md", buf, len) && ok;
+    echo(o, "%.*s", (int)len, buf);
+    free(buf);
+
+    const char *names[BENCH_MAX_SCENES];
+    const struct bench_result *res[BENCH_MAX_SCENES];
+    int counts[BENCH_MAX_SCENES];
+    for (int i = 0; i < n; i++) {
+        names[i] = scenes[i].name;
+        res[i] = scenes[i].res;
+        counts[i] = scenes[i].n;
+    }
+    for (int self = 0; self < 2; self++) {
+        char path[PATH_MAX], title[256];
+        snprintf(path, sizeof(path), "%s/accuracy%s.png", o->out, self ? "-self" : "");
+        snprintf(title, sizeof(title), "%s vs time (red: Pareto front, blue ring: default)",
+                 self ? "error against the converged renderer" : "error against Monte Carlo");
+        if (bench_plot_png(path, title, n, names, res, counts, self))
+            echo(o, "wrote %s\n", path);
+        else
+            ok = false;
+    }
+    return ok;
+}
+
+/* ---- experiments ------------------------------------------------------------------------ */
+
+static bool run_angles(const struct bench_options *o, const char *device, struct renderer *r,
+                       struct light_gpu *lg)
+{
+    struct bench_angles a;
+    struct bench_experiments_desc d = {.quick = o->quick, .spp = o->spp, .cache_dir = o->cache};
+    if (!bench_angles_measure(r, lg, &d, &a))
+        return false;
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    bench_table_head(f, o->quick, "quality");
+    bench_write_angles_table(f, &a, device, o->spp);
+    fclose(f);
+    bool ok = write_text(o, "angles-table.md", buf, len);
+    echo(o, "%.*s", (int)len, buf);
+    free(buf);
+    return ok;
+}
+
+enum bench_status bench_run(const struct bench_options *opts)
+{
+    assert(opts && opts->out && opts->configs);
+    assert(opts->views || opts->quality);
+    assert(!opts->paraview || opts->paraview_script);
+    struct bench_options o = *opts;
+    char cache[PATH_MAX];
+    if (!o.cache || !o.cache[0]) {
+        char exe[PATH_MAX];
+        ssize_t len = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+        if (len > 0) {
+            exe[len] = '\0';
+            snprintf(cache, sizeof(cache), "%s/bench-cache", dirname(exe));
+        } else {
+            snprintf(cache, sizeof(cache), "bench-cache");
+        }
+        o.cache = cache;
+    }
+    if (!o.spp)
+        o.spp = o.quick ? 32 : 256;
+    if (o.n_scenes == 0) {
+        for (int i = 0; i < BENCH_MAX_SCENES; i++)
+            o.scenes[i] = bench_scene_names[i];
+        o.n_scenes = BENCH_MAX_SCENES;
+    }
+    if (!bench_make_dir(o.out))
+        return BENCH_FAILED;
+    struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){.backend = "egl"});
+    if (!ctx)
+        return BENCH_NO_GPU;
+    const char *device = gpu_renderer_name();
+    struct renderer *r = renderer_create();
+    struct light_gpu *lg = light_gpu_create();
+    enum bench_status status = BENCH_FAILED;
+    if (!r || !lg)
+        goto done;
+    if (strstr(device, "llvmpipe"))
+        echo(&o, "note: %s is a CPU rasteriser; the milliseconds below are only meaningful as "
+                 "ratios\n", device);
+    if (o.views && !run_views(&o, device, r, lg))
+        goto done;
+    if (o.quality && !(run_quality(&o, device, r, lg) && run_angles(&o, device, r, lg)))
+        goto done;
+    status = BENCH_DONE;
+done:
+    light_gpu_destroy(lg);
+    renderer_destroy(r);
+    gpu_context_destroy(ctx);
+    return status;
+}

@@ -1,0 +1,77 @@
+/* anvil effects' decisions and light grid for a config (effects_report.h). */
+#include "session/effects_report.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "config/display_config.h"
+#include "display/display.h"
+#include "session/scene.h"
+
+/* The views of a display config whose head does not move (count 0 otherwise: an HMD's
+ * matrices come from its device, a path moves). */
+static int display_views(const struct display_config *dcfg, int height, struct view_set *set)
+{
+    if (dcfg->type == DISPLAY_TYPE_HMD || dcfg->head.source != DISPLAY_HEAD_FIXED)
+        return 0;
+    int sizes[DISPLAY_MAX_WALLS][2];
+    for (int w = 0; w < dcfg->wall_count; w++)
+        view_set_wall_size(dcfg, w, height, sizes[w]);
+    struct display_pose head;
+    display_pose_from_euler(dcfg->head.position, dcfg->head.orientation_deg, &head);
+    memset(set, 0, sizeof(*set));
+    view_set_layout(set, dcfg, &dcfg->navigation, &head, (const int(*)[2])sizes);
+    return set->count;
+}
+
+bool effects_report_make(const struct config *cfg, const struct effects_report_desc *d,
+                         struct effects_report *out)
+{
+    memset(out, 0, sizeof(*out));
+    struct ext_volume vol = {0};
+    if (!scene_build_volume(cfg, &vol))
+        return false;
+    struct effects_facts facts;
+    effects_facts_init(&facts);
+    double sun[3];
+    light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
+    bool ok = effects_measure_volume(&vol, sun, &cfg->optics.params, &facts);
+    const struct grid3 box = vol.grid;
+    ext_volume_finish(&vol);
+    if (!ok)
+        return false;
+    facts.time_steps = scene_time_steps(cfg);
+    facts.sun_moves = d->run && !d->display;
+    facts.playback = d->run || d->scripted;
+
+    static struct view_set set;
+    struct render_view views[DISPLAY_MAX_VIEWS];
+    int n = 0;
+    bool known = !d->run;
+    if (d->display) {
+        struct display_config dcfg;
+        if (!display_config_load(d->display, &dcfg))
+            return false;
+        facts.hmd = dcfg.type == DISPLAY_TYPE_HMD;
+        facts.hmd_warp = dcfg.hmd.warp;
+        int count = display_views(&dcfg, cfg->render.height, &set);
+        known = count > 0;
+        for (int i = 0; i < count; i++) {
+            if (set.views[i].visible)
+                views[n++] = set.views[i].rv;
+        }
+    } else if (known) {
+        scene_camera_view(cfg, cfg->render.width, cfg->render.height, &views[0]);
+        n = 1;
+    }
+    facts.views_known = known;
+    for (int i = 0; i < n; i++)
+        facts.ground_visible |= cfg->render.ground_on && effects_view_sees_ground(&views[i]);
+
+    effects_decide(cfg, &facts, &out->effects);
+    effects_light_settings(cfg, &out->effects, &out->light);
+    out->grid_ok = light_grid_init(&out->grid, sun, &box, out->light.resolution, out->light.grid);
+    if (out->grid_ok)
+        out->plane_m = out->grid.step[2] * fabs(out->grid.w[2]);
+    return true;
+}

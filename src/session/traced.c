@@ -1,0 +1,31 @@
+/* A config's view through the Monte Carlo reference (traced.h). */
+#include "session/traced.h"
+
+#include <string.h>
+
+#include "common/log.h"
+#include "session/scene.h"
+
+bool traced_render(const struct config *cfg, const struct ext_volume *vol,
+                   const struct traced_desc *d, struct image *mean, struct image *err,
+                   double *trace_ms)
+{
+    memset(mean, 0, sizeof(*mean));
+    memset(err, 0, sizeof(*err));
+    struct render_settings settings;
+    scene_render_settings(cfg, &settings);
+    struct reference_desc desc;
+    reference_desc_from_render(&settings, &cfg->optics.params, &desc);
+    desc.albedo = d->albedo;
+    struct render_view view;
+    scene_camera_view(cfg, cfg->render.width, cfg->render.height, &view);
+    struct reference *ref = reference_create(vol, &desc);
+    if (!ref)
+        return false;
+    double t = time_now_ms();
+    bool ok = reference_render(ref, &view, &d->image, mean, err);
+    if (trace_ms)
+        *trace_ms = time_now_ms() - t;
+    reference_destroy(ref);
+    return ok;
+}
