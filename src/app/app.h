@@ -12,6 +12,7 @@
 
 #include "app/effects.h"
 #include "config/config.h"
+#include "config/display_config.h"
 #include "data/volume.h"
 #include "render/render.h"
 
@@ -26,6 +27,19 @@ enum {
 
 /* Loads CONFIG_PATH (or the built-in defaults when NULL) and applies the --set overrides. */
 bool app_load_config(const char *config_path, char **sets, int n_sets, struct config *cfg);
+
+/* Sends each --set to the config it belongs to: those of the N_SETS in SETS that name a
+ * display setting (display_config_has_setting) move to DISPLAY_SETS (room for N_SETS), in
+ * order; the others stay in SETS, for the scene config.  Without a display file
+ * (HAVE_DISPLAY false) a display setting is a mistake of the command line: logged ("X is a
+ * display setting: it needs --display FILE"), false. */
+bool app_route_sets(char **sets, int *n_sets, bool have_display, char **display_sets,
+                    int *n_display_sets);
+
+/* Loads the display config PATH, applies the display --set overrides SETS (app_route_sets)
+ * and validates the result. */
+bool app_load_display_config(const char *path, char *const *sets, int n_sets,
+                             struct display_config *cfg);
 
 /* Builds the volume the config describes as extinction. */
 bool app_build_volume(const struct config *cfg, struct ext_volume *out);

@@ -91,6 +91,10 @@ int cmd_effects(int argc, char **argv)
         log_error("effects: unexpected argument \"%s\" (one config file at most)", argv[optind]);
         return usage(stderr);
     }
+    char *display_sets[MAX_SETS];
+    int n_display_sets;
+    if (!app_route_sets(sets, &n_sets, display, display_sets, &n_display_sets))
+        return EXIT_USAGE;
     struct config cfg;
     if (!app_load_config(config, sets, n_sets, &cfg))
         return EXIT_BAD_INPUT;
@@ -116,7 +120,7 @@ int cmd_effects(int argc, char **argv)
     bool known = !run;
     if (display) {
         struct display_config dcfg;
-        if (!display_config_load(display, &dcfg))
+        if (!app_load_display_config(display, display_sets, n_display_sets, &dcfg))
             return EXIT_BAD_INPUT;
         facts.hmd = dcfg.type == DISPLAY_TYPE_HMD;
         facts.hmd_warp = dcfg.hmd.warp;

@@ -21,8 +21,10 @@ struct render_options {
     const char *config;
     const char *output;
     const char *stats;
-    char *sets[64];
+    char *sets[64];      /* --set for the scene config */
     int n_sets;
+    char *display_sets[64]; /* --set of display settings (app_route_sets) */
+    int n_display_sets;
     const char *display; /* --display FILE: views from a display config */
     double time;         /* --time SECONDS: where on a scripted head path (with --display) */
     const char *input;     /* --input SCRIPT: scripted wand and keys (docs/menu.md) */
@@ -254,7 +256,7 @@ static int display_start(struct session *s, const struct render_options *o, bool
 {
     *out = NULL;
     struct display_config dcfg;
-    if (!display_config_load(o->display, &dcfg))
+    if (!app_load_display_config(o->display, o->display_sets, o->n_display_sets, &dcfg))
         return EXIT_BAD_INPUT;
     /* effects.distortion on or off overrides the display's hmd.warp; auto follows it. */
     enum effect_mode distortion = s->cfg.effects.mode[EFFECT_DISTORTION];
@@ -499,6 +501,8 @@ static int command_begin(int argc, char **argv, bool need_output, int (*usage)(v
         return usage();
     if (o->display && strcmp(o->display, "help") == 0)
         return display_help();
+    if (!app_route_sets(o->sets, &o->n_sets, o->display, o->display_sets, &o->n_display_sets))
+        return EXIT_USAGE;
     if (!app_load_config(o->config, o->sets, o->n_sets, &s->cfg))
         return EXIT_BAD_INPUT;
     return -1;

@@ -24,6 +24,39 @@ bool app_load_config(const char *config_path, char **sets, int n_sets, struct co
     return config_validate(cfg);
 }
 
+bool app_route_sets(char **sets, int *n_sets, bool have_display, char **display_sets,
+                    int *n_display_sets)
+{
+    int kept = 0;
+    *n_display_sets = 0;
+    for (int i = 0; i < *n_sets; i++) {
+        if (!display_config_has_setting(sets[i])) {
+            sets[kept++] = sets[i];
+        } else if (have_display) {
+            display_sets[(*n_display_sets)++] = sets[i];
+        } else {
+            const char *path = sets[i] + strspn(sets[i], " \t");
+            log_error("%.*s is a display setting: it needs --display FILE",
+                      (int)strcspn(path, "= \t"), path);
+            return false;
+        }
+    }
+    *n_sets = kept;
+    return true;
+}
+
+bool app_load_display_config(const char *path, char *const *sets, int n_sets,
+                             struct display_config *cfg)
+{
+    if (!display_config_load(path, cfg))
+        return false;
+    for (int i = 0; i < n_sets; i++) {
+        if (!display_config_set(cfg, sets[i]))
+            return false;
+    }
+    return display_config_validate(cfg);
+}
+
 /* One time step (data.step) of the files the config names, as extinction. */
 static bool load_data_step(const struct config *cfg, struct ext_volume *out)
 {
