@@ -625,8 +625,8 @@ static bool apply(const struct config_table *t, const struct config_field *s, in
                 report(&val->one.where, path, "expected an array of %d %s, got %s", s->n, expect,
                        got);
             } else {
-                report(&val->one.where, path, "expected an array of %d %s, got %d element%s",
-                       s->n, expect, val->count, val->count == 1 ? "" : "s");
+                report(&val->one.where, path, "expected an array of %d %s, got %d element%s", s->n,
+                       expect, val->count, val->count == 1 ? "" : "s");
             }
             break;
         }
@@ -763,8 +763,8 @@ static void known_beside(const struct config_table *t, const char *path, char *b
 }
 
 /* PATH (in T, below the list element PREFIX when that is not "") is not a setting of T. */
-static void report_unknown(const struct config_table *t, const struct where *w,
-                           const char *prefix, const char *path)
+static void report_unknown(const struct config_table *t, const struct where *w, const char *prefix,
+                           const char *path)
 {
     char full[NAME_MAX_LEN], near[NAME_MAX_LEN], near_full[NAME_MAX_LEN + 32];
     join_name(prefix, path, full, sizeof(full));
@@ -791,6 +791,7 @@ static void report_unknown(const struct config_table *t, const struct where *w,
 
 bool config_table_owns(const struct config_table *t, const char *path)
 {
+    path += strspn(path, " \t");
     size_t len = strcspn(path, ".[= \t");
     for (int i = 0; i < t->count; i++) {
         const char *p = t->fields[i].path;
@@ -892,8 +893,7 @@ static bool find_element(const struct config_table **t, void **base, const char 
         }
         if (index >= count) {
             report(&w, path, "expected a %s index in [0, %d] (there %s %d %s%s), got %ld", name,
-                   count - 1, count == 1 ? "is" : "are", count, name, count == 1 ? "" : "s",
-                   index);
+                   count - 1, count == 1 ? "is" : "are", count, name, count == 1 ? "" : "s", index);
             return false;
         }
         if (end[1] == '\0') {
@@ -1261,7 +1261,6 @@ error_memory:
     return false;
 }
 
-
 /* ------------------------------------------------------------------------------------------ */
 /* Where each setting was read                                                                 */
 
@@ -1378,8 +1377,8 @@ static bool walk_list(const struct reader *rd, const config_setting_t *list,
     char got[NAME_MAX_LEN + 8];
     if (!config_setting_is_list(list)) {
         describe(&r, got, sizeof(got));
-        report(&r.where, path, "expected a list ( { ... }, { ... } ) of %ss, got %s",
-               et->elem_name, got);
+        report(&r.where, path, "expected a list ( { ... }, { ... } ) of %ss, got %s", et->elem_name,
+               got);
         return false;
     }
     int n = config_setting_length(list);
@@ -1596,9 +1595,14 @@ static void write_rows(const struct config_table *t, const void *defaults, const
                        FILE *out)
 {
     static const char *const type_names[] = {
-        [T_BOOL] = "bool",     [T_INT] = "int",         [T_UINT] = "int",
-        [T_DOUBLE] = "float",  [T_ENUM] = "string",     [T_STRING] = "string",
-        [T_PATH] = "path",     [T_FILES] = "list of strings",
+        [T_BOOL] = "bool",
+        [T_INT] = "int",
+        [T_UINT] = "int",
+        [T_DOUBLE] = "float",
+        [T_ENUM] = "string",
+        [T_STRING] = "string",
+        [T_PATH] = "path",
+        [T_FILES] = "list of strings",
         [T_GROUPS] = "list of groups",
     };
     for (int i = 0; i < t->count; i++) {
@@ -1628,14 +1632,12 @@ static void write_rows(const struct config_table *t, const void *defaults, const
             join_name(prefix, name, path, sizeof(path));
             format_value(s, sp, defaults, value, sizeof(value));
             if (s->shown_default)
-                fprintf(out, "| `%s` | %s | %s | %s | %s |\n", path, type, s->shown_default,
-                        range, s->help);
+                fprintf(out, "| `%s` | %s | %s | %s | %s |\n", path, type, s->shown_default, range,
+                        s->help);
             else if (s->flags & F_REQUIRED)
-                fprintf(out, "| `%s` | %s | required | %s | %s |\n", path, type, range,
-                        s->help);
+                fprintf(out, "| `%s` | %s | required | %s | %s |\n", path, type, range, s->help);
             else
-                fprintf(out, "| `%s` | %s | `%s` | %s | %s |\n", path, type, value, range,
-                        s->help);
+                fprintf(out, "| `%s` | %s | `%s` | %s | %s |\n", path, type, value, range, s->help);
         }
         if (s->type == T_GROUPS) {
             void *elem = calloc(1, s->elems->size);

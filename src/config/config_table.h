@@ -51,18 +51,18 @@ struct config_field {
     size_t stride;   /* F_SPECIES: bytes from one species to the next */
     double min, max; /* of each number; T_GROUPS: of the element count; T_FILES: max count */
     unsigned flags;
-    double scale;             /* stored = written * scale; 0 means 1 */
-    const char *const *names; /* T_ENUM: NULL-terminated, in enum order */
-    double def[6];            /* numbers, bools as 0/1, enums as their index */
-    const char *def_text;     /* T_STRING, T_PATH: the default (NULL: "") */
-    size_t size;              /* T_STRING, T_PATH: bytes of the buffer */
-    size_t given;             /* F_GIVEN: offset of the bool */
-    size_t count_offset;      /* T_FILES, T_GROUPS: offset of the int count */
+    double scale;                     /* stored = written * scale; 0 means 1 */
+    const char *const *names;         /* T_ENUM: NULL-terminated, in enum order */
+    double def[6];                    /* numbers, bools as 0/1, enums as their index */
+    const char *def_text;             /* T_STRING, T_PATH: the default (NULL: "") */
+    size_t size;                      /* T_STRING, T_PATH: bytes of the buffer */
+    size_t given;                     /* F_GIVEN: offset of the bool */
+    size_t count_offset;              /* T_FILES, T_GROUPS: offset of the int count */
     const struct config_table *elems; /* T_GROUPS: the table of one element */
-    const void *def_elems;    /* T_GROUPS: the default elements ... */
-    int def_count;            /* ... and how many */
-    const char *shown_default; /* the reference's default column when the stored default is
-                                  not what applies ("display.mode", "the device's") */
+    const void *def_elems;            /* T_GROUPS: the default elements ... */
+    int def_count;                    /* ... and how many */
+    const char *shown_default;        /* the reference's default column when the stored default is
+                                         not what applies ("display.mode", "the device's") */
     const char *help;
 };
 
@@ -121,8 +121,7 @@ bool config_table_owns(const struct config_table *t, const char *path);
 /* Writes T as a markdown table: setting, type, default (read from DEFAULTS, a struct filled
  * with T's defaults), range, description.  A list's element settings follow it as
  * "walls.[i].name". */
-void config_table_write_reference(const struct config_table *t, const void *defaults,
-                                  FILE *out);
+void config_table_write_reference(const struct config_table *t, const void *defaults, FILE *out);
 
 /* The file and line (0: unknown) where the last read put PATH.  False when it did not. */
 bool config_trace_find(const struct config_trace *trace, const char *path, const char **file,

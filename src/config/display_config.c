@@ -20,8 +20,7 @@ static_assert(sizeof(enum display_stereo) == sizeof(int), "enum size");
 static_assert(sizeof(enum display_head_source) == sizeof(int), "enum size");
 
 static const char *const type_names[] = {"headless", "desktop", "stereo", "cave", "hmd", NULL};
-static const char *const stereo_names[] = {"mono", "side-by-side", "anaglyph", "quad-buffer",
-                                           NULL};
+static const char *const stereo_names[] = {"mono", "side-by-side", "anaglyph", "quad-buffer", NULL};
 static const char *const head_names[] = {"fixed", "path", "openhmd", NULL};
 
 const char *display_type_name(enum display_type t)
@@ -191,12 +190,11 @@ void display_config_write_reference(FILE *out)
 
 /* Logs "WHERE: PATH: expected ...", WHERE being the file and line where the file put AT
  * (TRACE may be NULL), else the config's file, else nothing. */
-static bool fail(const struct display_config *cfg, const struct config_trace *trace,
-                 const char *at, const char *path, const char *fmt, ...)
-    __attribute__((format(printf, 5, 6)));
+static bool fail(const struct display_config *cfg, const struct config_trace *trace, const char *at,
+                 const char *path, const char *fmt, ...) __attribute__((format(printf, 5, 6)));
 
-static bool fail(const struct display_config *cfg, const struct config_trace *trace,
-                 const char *at, const char *path, const char *fmt, ...)
+static bool fail(const struct display_config *cfg, const struct config_trace *trace, const char *at,
+                 const char *path, const char *fmt, ...)
 {
     char msg[512];
     va_list ap;
@@ -220,8 +218,7 @@ static double dist3(const double *a, const double *b)
     return sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
 }
 
-static bool check_wall(const struct display_config *cfg, const struct config_trace *trace,
-                       int i)
+static bool check_wall(const struct display_config *cfg, const struct config_trace *trace, int i)
 {
     const struct display_wall *w = &cfg->walls[i];
     char at[32], path[64];
@@ -246,9 +243,8 @@ static bool check_wall(const struct display_config *cfg, const struct config_tra
         e2[k] = w->upper_left[k] - w->lower_left[k];
     }
     double l1 = dist3(w->lower_right, w->lower_left), l2 = dist3(w->upper_left, w->lower_left);
-    double cosang = l1 > 0 && l2 > 0 ? (e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2]) /
-                                           (l1 * l2)
-                                     : 1.0;
+    double cosang =
+        l1 > 0 && l2 > 0 ? (e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2]) / (l1 * l2) : 1.0;
     if (l1 < 1e-6 || l2 < 1e-6 || fabs(cosang) > 1e-3) {
         snprintf(path, sizeof(path), "%s.upper_left", at);
         return fail(cfg, trace, at, path,
