@@ -7,6 +7,8 @@
 
 #include <stdbool.h>
 
+#include "config/display_config.h"
+
 /* Exit codes of the program (documented in docs/user-guide.md). */
 enum {
     EXIT_OK = 0,
@@ -23,6 +25,19 @@ bool app_option_long(const char *command, const char *option, const char *s, lon
                      long *out);
 bool app_option_double(const char *command, const char *option, const char *s, double lo,
                        double hi, double *out);
+
+/* Sends each --set to the config it belongs to (app/options.c): those of the N_SETS in SETS
+ * that name a display setting (display_config_has_setting) move to DISPLAY_SETS (room for
+ * N_SETS), in order; the others stay in SETS, for the scene config.  Without a display file
+ * (HAVE_DISPLAY false) a display setting is a mistake of the command line: logged ("X is a
+ * display setting: it needs --display FILE"), false. */
+bool app_route_sets(char **sets, int *n_sets, bool have_display, char **display_sets,
+                    int *n_display_sets);
+
+/* Loads the display config PATH, applies the display --set overrides SETS (app_route_sets)
+ * and validates the result. */
+bool app_load_display_config(const char *path, char *const *sets, int n_sets,
+                             struct display_config *cfg);
 
 int cmd_render(int argc, char **argv);
 int cmd_run(int argc, char **argv);

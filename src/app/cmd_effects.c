@@ -70,11 +70,19 @@ int cmd_effects(int argc, char **argv)
         log_error("effects: unexpected argument \"%s\" (one config file at most)", argv[optind]);
         return usage(stderr);
     }
+    char *display_sets[MAX_SETS];
+    int n_display_sets;
+    if (!app_route_sets(sets, &n_sets, display, display_sets, &n_display_sets))
+        return EXIT_USAGE;
     struct config cfg;
     if (!config_load_overrides(config, sets, n_sets, &cfg))
         return EXIT_BAD_INPUT;
+    struct display_config dcfg;
+    if (display && !app_load_display_config(display, display_sets, n_display_sets, &dcfg))
+        return EXIT_BAD_INPUT;
     struct effects_report rep;
-    struct effects_report_desc d = {.display = display, .run = run, .scripted = input != NULL};
+    struct effects_report_desc d = {
+        .display = display ? &dcfg : NULL, .run = run, .scripted = input != NULL};
     if (!effects_report_make(&cfg, &d, &rep))
         return EXIT_BAD_INPUT;
     const struct effects *e = &rep.effects;

@@ -163,13 +163,17 @@ static void print_backend(const char *name, const char *what, void *user)
 
 /* Loads the scene config and the display config (or makes the orbit display's) with the
  * --set overrides: those naming display settings go to the display. */
-static int load_configs(const struct render_options *o, struct config *cfg,
+static int load_configs(struct render_options *o, struct config *cfg,
                         struct display_config *dcfg)
 {
-    if (!config_load_overrides(o->config, (char **)o->sets, o->n_sets, cfg))
+    char *display_sets[64];
+    int n_display_sets = 0;
+    if (!app_route_sets(o->sets, &o->n_sets, o->display, display_sets, &n_display_sets))
+        return EXIT_USAGE;
+    if (!config_load_overrides(o->config, o->sets, o->n_sets, cfg))
         return EXIT_BAD_INPUT;
     if (o->display) {
-        if (!display_config_load(o->display, dcfg))
+        if (!app_load_display_config(o->display, display_sets, n_display_sets, dcfg))
             return EXIT_BAD_INPUT;
         /* effects.distortion on or off overrides the display's hmd.warp; auto follows it. */
         enum effect_mode distortion = cfg->effects.mode[EFFECT_DISTORTION];

@@ -7,6 +7,7 @@
 #include "app/cmd_data.h"
 #include "common/log.h"
 #include "config/config.h"
+#include "config/display_config.h"
 
 struct command {
     const char *name;
@@ -51,7 +52,10 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--verbose") == 0 || strcmp(argv[i], "-v") == 0) {
             log_set_level(LOG_DEBUG);
         } else if (strcmp(argv[i], "--config-reference") == 0) {
+            /* scene settings, then display settings (docs/config-reference.md) */
             config_write_reference(stdout);
+            printf("\n");
+            display_config_write_reference(stdout);
             return EXIT_OK;
         } else {
             fprintf(stderr, "anvil: unknown option %s\n", argv[i]);

@@ -1,8 +1,9 @@
 /*
  * config: scene files (libconfig syntax) and command-line overrides to one plain struct.
  * This is the only part that includes libconfig.h.  Every setting has a default, a type and
- * a valid range in one table (config.c); every error names the file, the line, the setting
- * and what was expected.
+ * a valid range in one table (config.c) that the settings engine shared with display files
+ * (config_table.c) reads; every error names the file, the line, the setting and what was
+ * expected.
  *
  * Units in files: lengths of the scene in km (positions, extents), ray steps in metres,
  * angles in degrees.  The struct below stores what the file says, in those units.

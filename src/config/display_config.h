@@ -1,8 +1,9 @@
 /*
- * config/display_config: display files (displays/NAME.cfg, libconfig syntax) to one plain
- * struct: which display backend, its walls (three corners each in tracker space), the stereo
- * mode, the head and where it comes from, the navigation transform that places the storm in
- * the room, and the HMD's device and lens.  Knows nothing about GL, windows or OpenHMD;
+ * config/display_config: display files (displays/NAME.cfg, libconfig syntax) and their --set
+ * overrides to one plain struct, through the same settings engine as scene files: which
+ * display backend, its walls (three corners each in tracker space), the stereo mode, the head
+ * and where it comes from, the navigation transform that places the storm in the room, and
+ * the HMD's device and lens.  Knows nothing about GL, windows or OpenHMD;
  * src/display/ turns this struct into views.
  *
  * Tracker space: metres, x to the right, y up, z toward the viewer (the OpenGL and OpenHMD
@@ -54,7 +55,10 @@ struct display_wall {
                                      w = 0: the wall has its own window */
     int size[2];                  /* walls.[i].size: image pixels; 0 = from render.height and
                                      the wall's aspect ratio */
-    enum display_stereo stereo;   /* walls.[i].mode: default display.mode */
+    enum display_stereo stereo;   /* walls.[i].mode; without it display.mode (set by
+                                     display_config_validate) */
+    bool stereo_set;              /* walls.[i].mode given: the wall keeps its own mode */
+    bool viewport_set;            /* walls.[i].viewport given */
     int line;                     /* line of the wall's group in the file (for messages) */
 };
 
@@ -104,16 +108,39 @@ struct display_config {
  * the storm 60 km wide shown 0.6 m wide behind the screen. */
 void display_config_defaults(struct display_config *cfg);
 
-/* Reads PATH on top of the defaults (a file with walls replaces the default wall list).  On
- * failure logs one message "FILE:LINE: SETTING: expected ..." and returns false. */
+/* Reads PATH on top of the defaults (@include resolved relative to the including file; a
+ * file with walls replaces the default wall list) and validates it (display_config_validate).
+ * On failure logs one message "FILE:LINE: SETTING: expected ..." and returns false. */
 bool display_config_load(const char *path, struct display_config *cfg);
+
+/* Applies one "path=value" override (the --set option) of a display setting, with the same
+ * types and ranges as the file: "display.eye_separation=0.07", "head.position=[0,1.7,0.4]",
+ * "head.source=path", "hmd.warp=false", "walls.[0].mode=anaglyph" (the wall must exist).  A
+ * path (head.path) is taken as given, relative to the working folder.  On failure logs
+ * "--set PATH: expected ..." and returns false with CFG untouched.  Run
+ * display_config_validate after the last one. */
+bool display_config_set(struct display_config *cfg, const char *assignment);
+
+/* The checks between settings, and the values derived from others: a wall without its own
+ * mode takes display.mode; head.source = "path" needs head.path; walls are rectangles with
+ * unique names made of letters, digits, '-' and '_'; a viewport has w, h >= 1.  Run after
+ * the file and after all display_config_set calls.  Logs and returns false on the first
+ * problem ("FILE: SETTING: expected ..."). */
+bool display_config_validate(struct display_config *cfg);
+
+/* True when PATH ("PATH" or "PATH=VALUE", as given to --set) is a display file's: it lies in
+ * display, head, navigation, hmd or walls, known below that or not.  The command line sends
+ * such a --set to the display config. */
+bool display_config_has_setting(const char *path);
 
 /* Names of the enums as written in files ("cave", "anaglyph", "path"); static strings. */
 const char *display_type_name(enum display_type t);
 const char *display_stereo_name(enum display_stereo s);
 const char *display_head_source_name(enum display_head_source s);
 
-/* Writes the display settings as a markdown table (docs/displays.md's reference). */
+/* Writes the display settings as a markdown table with types, defaults, ranges and
+ * descriptions, in the form of config_write_reference (docs/config-reference.md and
+ * docs/displays.md carry it). */
 void display_config_write_reference(FILE *out);
 
 #endif

@@ -117,6 +117,27 @@ bool effects_measure_volume(const struct ext_volume *vol, const double sun[3],
     return true;
 }
 
+bool effects_gather(const struct config *cfg, const struct ext_volume *vol,
+                    const struct effects_context *c, struct effects_facts *out)
+{
+    effects_facts_init(out);
+    out->time_steps = c->time_steps;
+    out->playback = c->playback;
+    out->sun_moves = c->sun_moves;
+    if (c->display) {
+        out->hmd = c->display->type == DISPLAY_TYPE_HMD;
+        out->hmd_warp = c->display->hmd.warp;
+    }
+    double sun[3];
+    light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
+    if (!effects_measure_volume(vol, sun, &cfg->optics.params, out))
+        return false;
+    out->views_known = c->views_known;
+    for (int i = 0; c->views_known && i < c->view_count; i++)
+        out->ground_visible |= cfg->render.ground_on && effects_view_sees_ground(&c->views[i]);
+    return true;
+}
+
 bool effects_view_sees_ground(const struct render_view *view)
 {
     mat4 proj, viewm, vp, inv;

@@ -15,6 +15,7 @@
 #include <stdbool.h>
 
 #include "config/config.h"
+#include "config/display_config.h"
 #include "data/volume.h"
 #include "light/light.h"
 #include "render/render.h"
@@ -60,6 +61,23 @@ void effects_facts_init(struct effects_facts *f);
  * of memory. */
 bool effects_measure_volume(const struct ext_volume *vol, const double sun[3],
                             const struct optics_params *optics, struct effects_facts *f);
+
+/* What a session knows besides the volume when it decides. */
+struct effects_context {
+    int time_steps;                       /* the scene's */
+    bool playback;                        /* time can play */
+    bool sun_moves;                       /* the sun can move (anvil run) */
+    const struct display_config *display; /* the display (HMD facts); NULL: none */
+    const struct render_view *views;      /* the views, when they are known and stay */
+    int view_count;
+    bool views_known;
+};
+
+/* Gathers the facts once, the same way for every caller (a session, anvil effects): C's, and
+ * the volume facts of VOL under CFG's sun (effects_measure_volume).  False (logged) as
+ * effects_measure_volume. */
+bool effects_gather(const struct config *cfg, const struct ext_volume *vol,
+                    const struct effects_context *c, struct effects_facts *out);
 
 /* Whether VIEW sees the ground plane z = 0 from above: the eye is above it and some ray of
  * the frustum points down (the frustum's directions form a convex cone, so its corners

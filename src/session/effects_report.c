@@ -31,30 +31,12 @@ bool effects_report_make(const struct config *cfg, const struct effects_report_d
     struct ext_volume vol = {0};
     if (!scene_build_volume(cfg, &vol))
         return false;
-    struct effects_facts facts;
-    effects_facts_init(&facts);
-    double sun[3];
-    light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
-    bool ok = effects_measure_volume(&vol, sun, &cfg->optics.params, &facts);
-    const struct grid3 box = vol.grid;
-    ext_volume_finish(&vol);
-    if (!ok)
-        return false;
-    facts.time_steps = scene_time_steps(cfg);
-    facts.sun_moves = d->run && !d->display;
-    facts.playback = d->run || d->scripted;
-
     static struct view_set set;
     struct render_view views[DISPLAY_MAX_VIEWS];
     int n = 0;
     bool known = !d->run;
     if (d->display) {
-        struct display_config dcfg;
-        if (!display_config_load(d->display, &dcfg))
-            return false;
-        facts.hmd = dcfg.type == DISPLAY_TYPE_HMD;
-        facts.hmd_warp = dcfg.hmd.warp;
-        int count = display_views(&dcfg, cfg->render.height, &set);
+        int count = display_views(d->display, cfg->render.height, &set);
         known = count > 0;
         for (int i = 0; i < count; i++) {
             if (set.views[i].visible)
@@ -64,9 +46,23 @@ bool effects_report_make(const struct config *cfg, const struct effects_report_d
         scene_camera_view(cfg, cfg->render.width, cfg->render.height, &views[0]);
         n = 1;
     }
-    facts.views_known = known;
-    for (int i = 0; i < n; i++)
-        facts.ground_visible |= cfg->render.ground_on && effects_view_sees_ground(&views[i]);
+    struct effects_context c = {
+        .time_steps = scene_time_steps(cfg),
+        .playback = d->run || d->scripted,
+        .sun_moves = d->run,
+        .display = d->display,
+        .views = views,
+        .view_count = n,
+        .views_known = known,
+    };
+    struct effects_facts facts;
+    double sun[3];
+    light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
+    bool ok = effects_gather(cfg, &vol, &c, &facts);
+    const struct grid3 box = vol.grid;
+    ext_volume_finish(&vol);
+    if (!ok)
+        return false;
 
     effects_decide(cfg, &facts, &out->effects);
     effects_light_settings(cfg, &out->effects, &out->light);

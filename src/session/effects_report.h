@@ -3,8 +3,9 @@
  * with its reason, made from the facts a session would measure (the first time step's volume
  * under the first sun, the time steps, the views of the config's camera or of a display with
  * a fixed head, the HMD) and how the light map's nodes will lie.  Plain CPU work: no GL, no
- * windows; the files read are the config's data and the display config.  Printing is the
- * caller's.
+ * windows; the files read are the config's data.  Printing is the caller's.  The facts are
+ * gathered as a session gathers them (effects_gather), the views laid out without a device:
+ * an HMD's come from its device, so for an HMD they count as unknown.
  */
 #ifndef ANVIL_SESSION_EFFECTS_REPORT_H
 #define ANVIL_SESSION_EFFECTS_REPORT_H
@@ -12,12 +13,12 @@
 #include <stdbool.h>
 
 #include "config/config.h"
+#include "config/display_config.h"
 #include "light/light.h"
 #include "session/effects.h"
 
 struct effects_report_desc {
-    const char *display; /* a display config file: decide for its views; NULL: the config's
-                            camera */
+    const struct display_config *display; /* decide for its views; NULL: the config's camera */
     bool run;            /* decide for anvil run: the sun can move, the views change */
     bool scripted;       /* a scripted render (--input): time may play */
 };

@@ -114,21 +114,18 @@ static void model_from_session(struct session *s, struct menu_model *m)
 static bool decide_effects(struct session *s, const struct ext_volume *vol)
 {
     struct effects_facts facts;
-    effects_facts_init(&facts);
-    facts.time_steps = player_step_count(s->player);
-    /* anvil run plays time and moves the sun; a render plays only when a script drives it. */
-    facts.playback = s->desc.playback;
-    facts.sun_moves = s->desc.interactive;
-    facts.hmd = s->display.type == DISPLAY_TYPE_HMD;
-    facts.hmd_warp = s->display.hmd.warp;
-    double sun[3];
-    light_sun_direction(s->cfg.light.azimuth_deg, s->cfg.light.elevation_deg, sun);
-    if (!effects_measure_volume(vol, sun, &s->cfg.optics.params, &facts))
+    struct effects_context c = {
+        .time_steps = player_step_count(s->player),
+        /* anvil run plays time and moves the sun; a render plays only when a script does. */
+        .playback = s->desc.playback,
+        .sun_moves = s->desc.interactive,
+        .display = &s->display,
+        .views = s->desc.views,
+        .view_count = s->desc.view_count,
+        .views_known = !s->desc.views_move,
+    };
+    if (!effects_gather(&s->cfg, vol, &c, &facts))
         return false;
-    facts.views_known = !s->desc.views_move;
-    for (int i = 0; facts.views_known && i < s->desc.view_count; i++)
-        facts.ground_visible |=
-            s->cfg.render.ground_on && effects_view_sees_ground(&s->desc.views[i]);
     effects_decide(&s->cfg, &facts, &s->effects);
     for (int e = 0; e < EFFECT_COUNT; e++)
         log_debug("effect %s: %s (%s)", effects_name(e), s->effects.on[e] ? "on" : "off",
