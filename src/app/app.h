@@ -1,6 +1,8 @@
 /*
  * app: the command line.  Each command parses its options, builds what it needs from the
  * parts below and returns one of the program's exit codes.
+ *
+ * Must not know: GL, file formats, the physics: it wires the parts below.
  */
 #ifndef ANVIL_APP_H
 #define ANVIL_APP_H

@@ -18,6 +18,8 @@
  * the one entry point of the command).  Measuring needs the GL context current; the Pareto
  * front and the plot do not.  Nothing here prints: progress goes to the log.  It must not
  * know windows or the command line.
+ *
+ * Must not know: windows, the command line.
  */
 #ifndef ANVIL_BENCH_BENCH_H
 #define ANVIL_BENCH_BENCH_H

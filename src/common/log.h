@@ -4,6 +4,8 @@
  *
  * Library code never prints or exits: it logs the reason for a failure here and returns
  * false or NULL.  The program decides what reaches stderr through the log level.
+ *
+ * Must not know: any other part (everything else may use it).
  */
 #ifndef ANVIL_COMMON_LOG_H
 #define ANVIL_COMMON_LOG_H

@@ -7,6 +7,8 @@
  *
  * Units in files: lengths of the scene in km (positions, extents), ray steps in metres,
  * angles in degrees.  The struct below stores what the file says, in those units.
+ *
+ * Must not know: GL, windows, data files, the session; the struct is plain data.
  */
 #ifndef ANVIL_CONFIG_H
 #define ANVIL_CONFIG_H

@@ -6,6 +6,8 @@
  * World frame: metres, x east, y north, z up; the ground (sea level) is z = 0.  A volume is a
  * box from ORIGIN to ORIGIN + N * SPACING; voxel (i, j, k) is centred at
  * origin + (i + 0.5, j + 0.5, k + 0.5) * spacing; x varies fastest: index = i + n0 (j + n1 k).
+ *
+ * Must not know: GL, configs (callers fill the desc structs), views, the session.
  */
 #ifndef ANVIL_DATA_VOLUME_H
 #define ANVIL_DATA_VOLUME_H

@@ -5,6 +5,9 @@
  * buffers and timer queries, so that no other part includes a GL header.
  *
  * Every function except gpu_context_* needs a context current on the calling thread.
+ *
+ * Must not know: scenes, volumes, physics, configs; it is the only part that calls OpenGL, EGL
+ * or GLFW's context functions.
  */
 #ifndef ANVIL_GPU_H
 #define ANVIL_GPU_H

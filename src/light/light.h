@@ -20,6 +20,8 @@
  * (1 = unattenuated), travelling along w: direct light plus light forward-scattered within the
  * forward angle.  It is what a particle at that point receives from the sun; the eye pass
  * multiplies it by the sample's (1 - T_s) P_v(psi) (Nes eq. 5.18).  Always within [0, 1].
+ *
+ * Must not know: views, cameras, windows, configs, the session.
  */
 #ifndef ANVIL_LIGHT_H
 #define ANVIL_LIGHT_H

@@ -13,6 +13,8 @@
  * DejaVu Sans) that the application puts on a quad; it never reads a device and calls no GL.
  * Its pose is in "menu space": tracker metres in a CAVE or HMD, world metres on the desktop;
  * wand rays must be given in the same space.
+ *
+ * Must not know: devices, GL, windows, the session (it edits a plain model).
  */
 #ifndef ANVIL_MENU_H
 #define ANVIL_MENU_H

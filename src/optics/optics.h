@@ -3,6 +3,8 @@
  * extinction per hydrometeor species (Nes eq. 5.2-5.4), air density, and the phase functions
  * (Henyey-Greenstein, Cornette-Shanks) with their cumulative forms.  No GL, no files, no
  * volumes: callers loop over voxels.
+ *
+ * Must not know: volumes, grids, GL, files, configs.
  */
 #ifndef ANVIL_OPTICS_H
 #define ANVIL_OPTICS_H

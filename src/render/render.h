@@ -4,6 +4,9 @@
  * table, the programs — so any number of views can be drawn from it without redoing that
  * work.  It does not know where views come from (display) or how the volume was made (data).
  * Every function needs the GL context current.
+ *
+ * Must not know: where views come from (displays, cameras), how volumes or light maps are
+ * made, configs, windows.
  */
 #ifndef ANVIL_RENDER_H
 #define ANVIL_RENDER_H

@@ -117,6 +117,11 @@ bool effects_measure_volume(const struct ext_volume *vol, const double sun[3],
     return true;
 }
 
+bool effects_detail_on(const struct config *cfg)
+{
+    return cfg->effects.mode[EFFECT_DETAIL] == EFFECT_ON; /* auto: off */
+}
+
 bool effects_gather(const struct config *cfg, const struct ext_volume *vol,
                     const struct effects_context *c, struct effects_facts *out)
 {
@@ -349,19 +354,12 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
             say(out, EFFECT_GROUND_SHADOW, true, "auto: the ground is in view");
     }
 
-    switch (mode[EFFECT_DETAIL]) {
-    case EFFECT_OFF:
-        say(out, EFFECT_DETAIL, false, "off in the config");
-        break;
-    case EFFECT_ON:
-        say(out, EFFECT_DETAIL, true, "on in the config (detail.*: noise on the CPU when the "
-            "volume is built)");
-        break;
-    case EFFECT_AUTO:
-        say(out, EFFECT_DETAIL, false, "auto: off (detail adds what the data lacks; ask for "
-            "it with effects.detail = \"on\")");
-        break;
-    }
+    say(out, EFFECT_DETAIL, effects_detail_on(cfg),
+        mode[EFFECT_DETAIL] == EFFECT_OFF  ? "off in the config"
+        : mode[EFFECT_DETAIL] == EFFECT_ON ? "on in the config (detail.*: noise on the CPU when "
+                                             "the volume is built)"
+                                           : "auto: off (detail adds what the data lacks; ask "
+                                             "for it with effects.detail = \"on\")");
 
     /* Temporal interpolation: blends step k and k + 1 during playback (two volumes and two
      * light maps on the GPU).  Nothing to blend with one step or a still render. */

@@ -62,6 +62,10 @@ void effects_facts_init(struct effects_facts *f);
 bool effects_measure_volume(const struct ext_volume *vol, const double sun[3],
                             const struct optics_params *optics, struct effects_facts *f);
 
+/* The detail effect's decision, which depends on no fact (effects_decide's own): for those
+ * that make volumes, without deciding everything else. */
+bool effects_detail_on(const struct config *cfg);
+
 /* What a session knows besides the volume when it decides. */
 struct effects_context {
     int time_steps;                       /* the scene's */

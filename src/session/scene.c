@@ -247,9 +247,7 @@ void scene_source_desc(const struct config *cfg, const char **file_ptrs,
 void scene_detail_desc(const struct config *cfg, struct detail_desc *out)
 {
     memset(out, 0, sizeof(*out));
-    struct effects e;
-    effects_decide(cfg, NULL, &e); /* detail depends on no measured fact */
-    out->on = e.on[EFFECT_DETAIL];
+    out->on = effects_detail_on(cfg);
     for (int f = 0; f < SPECIES_COUNT; f++)
         out->amount[f] = cfg->detail.amount[f];
     out->scale_m = cfg->detail.scale_km * 1000.0;
