@@ -14,6 +14,7 @@
 
 #include "common/log.h"
 #include "display/display_impl.h"
+#include "shaders/bindings.h"
 
 static const struct display_impl *const backends[] = {
     &display_headless_impl, &display_desktop_impl, &display_stereo_impl,
@@ -215,9 +216,9 @@ bool display_compose(struct display *d, const struct gpu_texture *left,
     gpu_uniform_int(&d->compose, "mode", mode);
     gpu_uniform_ivec2(&d->compose, "size", size);
     gpu_uniform_ivec2(&d->compose, "offset", offset);
-    gpu_texture_bind(left, 0);
-    gpu_texture_bind(mode == 1 ? right : left, 1);
-    gpu_image_bind(out, 0, true);
+    gpu_texture_bind(left, BIND_COMPOSE_TEX_LEFT);
+    gpu_texture_bind(mode == 1 ? right : left, BIND_COMPOSE_TEX_RIGHT);
+    gpu_image_bind(out, BIND_COMPOSE_IMG_OUT, true);
     gpu_dispatch(&d->compose, size[0], size[1], 1);
     return true;
 }

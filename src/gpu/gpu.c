@@ -291,7 +291,8 @@ static bool load_file(struct source *s, const char *name, int depth)
             const char *open = strchr(q, '"');
             const char *close = open ? strchr(open + 1, '"') : NULL;
             if (!open || !close || close > p + len) {
-                log_error("shaders/%s:%d: expected #include \"file.glsl\"", name, line);
+                log_error("shaders/%s:%d: expected #include \"FILE\" (a file in shaders/)", name,
+                          line);
                 ok = false;
                 break;
             }

@@ -99,9 +99,10 @@ struct gpu_program {
 
 /* Compiles shaders/NAME as a compute shader.  "#version 450 core" comes first, then DEFINES
  * (lines like "#define SHADOWS 1\n", may be NULL), then the file, where a line
- * `#include "file.glsl"` is replaced by shaders/file.glsl (nested, each file once).  Compile
- * and link errors are logged with the file name and line.  The shader directory is
- * $ANVIL_SHADER_DIR if set, else the source tree's shaders/. */
+ * `#include "FILE"` is replaced by shaders/FILE (nested, each file once): a GLSL include
+ * (*.glsl) or shaders/bindings.h, the binding numbers C includes too.  #line directives keep
+ * every file's own line numbers, so compile and link errors are logged with the file name and
+ * line.  The shader directory is $ANVIL_SHADER_DIR if set, else the source tree's shaders/. */
 bool gpu_program_init(struct gpu_program *prog, const char *name, const char *defines);
 /* A vertex + fragment program from shaders/VERTEX and shaders/FRAGMENT, loaded like compute
  * programs (same #include and DEFINES handling). */

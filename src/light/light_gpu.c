@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "common/log.h"
+#include "shaders/bindings.h"
 
 struct light_gpu {
     struct render_light hook; /* first: the renderer's bind callback gets it back */
@@ -44,12 +45,14 @@ void light_gpu_bind(const struct light_gpu *lg, const struct gpu_program *prog, 
                      lg->grid.world_to_tex);
     gpu_uniform_ivec3(prog, next ? "light_n_next" : "light_n", lg->grid.n);
     if (lg->built_multiple)
-        gpu_texture_bind(&lg->diffuse, next ? 10 : 9);
+        gpu_texture_bind(&lg->diffuse,
+                         next ? BIND_LIGHTMAP_TEX_DIFFUSE_NEXT : BIND_LIGHTMAP_TEX_DIFFUSE);
     if (lg->built_mode == LIGHT_GPU_DENSE) {
-        gpu_texture_bind(&lg->light, next ? 8 : 2);
+        gpu_texture_bind(&lg->light, next ? BIND_LIGHTMAP_TEX_LIGHT_NEXT : BIND_LIGHTMAP_TEX_LIGHT);
     } else {
-        gpu_buffer_bind(&lg->columns, next ? 2 : 0);
-        gpu_buffer_bind(&lg->nodes, next ? 3 : 1);
+        gpu_buffer_bind(&lg->columns,
+                        next ? BIND_LIGHTMAP_BUF_COLUMNS_NEXT : BIND_LIGHTMAP_BUF_COLUMNS);
+        gpu_buffer_bind(&lg->nodes, next ? BIND_LIGHTMAP_BUF_NODES_NEXT : BIND_LIGHTMAP_BUF_NODES);
     }
 }
 
@@ -113,8 +116,8 @@ static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src
     const struct gpu_program *p = &lg->lateral_pass;
     gpu_uniform_ivec3(p, "vol_n", n);
     gpu_uniform_float(p, "clear_beta", LIGHT_CLEAR_BETA);
-    gpu_texture_bind(src->beta, 0);
-    gpu_image_bind_rw(&lg->rates, 0);
+    gpu_texture_bind(src->beta, BIND_LATERAL_TEX_BETA);
+    gpu_image_bind_rw(&lg->rates, BIND_LATERAL_IMG_RATES);
     for (int axis = 0; axis < 2; axis++) {
         gpu_uniform_int(p, "axis", axis);
         gpu_uniform_float(p, "spacing", (float)src->grid->spacing[axis]);
@@ -201,10 +204,10 @@ static bool build_diffuse(struct light_gpu *lg, const double sun[3],
     gpu_uniform_vec2(p, "back", t.back);
     gpu_uniform_vec2(p, "gamma", t.gamma);
     gpu_uniform_float(p, "mu0", t.mu0);
-    gpu_image_bind(&lg->light, 0, false);
-    gpu_image_bind(&lg->slice, 1, false);
-    gpu_image_bind_rw(&lg->adding, 2);
-    gpu_image_bind(&lg->diffuse, 3, true);
+    gpu_image_bind(&lg->light, BIND_DIFFUSE_IMG_LIGHT, false);
+    gpu_image_bind(&lg->slice, BIND_DIFFUSE_IMG_SLICE, false);
+    gpu_image_bind_rw(&lg->adding, BIND_DIFFUSE_IMG_ADDING);
+    gpu_image_bind(&lg->diffuse, BIND_DIFFUSE_IMG_DIFFUSE, true);
     gpu_dispatch(p, g->n[0], g->n[1], 1);
     return true;
 }
@@ -256,12 +259,12 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
     gpu_uniform_float(p, "dsub", (float)(g->step[2] / substeps));
     gpu_uniform_vec4(p, "cp", cp);
     gpu_uniform_vec2(p, "per_offset", per);
-    gpu_texture_bind(src->beta, 0);
+    gpu_texture_bind(src->beta, BIND_BUILD_TEX_BETA);
     if (s->multiple && s->lateral)
-        gpu_texture_bind(&lg->rates, 1);
-    gpu_image_bind_rw(&lg->light, 0);
+        gpu_texture_bind(&lg->rates, BIND_BUILD_TEX_RATES);
+    gpu_image_bind_rw(&lg->light, BIND_BUILD_IMG_LIGHT);
     if (s->multiple)
-        gpu_image_bind(&lg->slice, 1, true);
+        gpu_image_bind(&lg->slice, BIND_BUILD_IMG_SLICE, true);
     for (int k = 0; k < g->n[2]; k++) {
         gpu_uniform_int(p, "plane", k);
         gpu_dispatch(p, g->n[0], g->n[1], 1);

@@ -43,8 +43,8 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
 const struct render_light *light_gpu_render_light(struct light_gpu *lg);
 
 /* Binds the last built map for the eye pass PROG: as the map of step k, or with NEXT as the
- * second of a pair (effects.temporal, LIGHTMAP_PAIR: texture unit 8 or buffers 2 and 3, the
- * uniforms named *_next). */
+ * second of a pair (effects.temporal, LIGHTMAP_PAIR: the BIND_LIGHTMAP_*_NEXT units of
+ * shaders/bindings.h, the uniforms named *_next). */
 void light_gpu_bind(const struct light_gpu *lg, const struct gpu_program *prog, bool next);
 /* The LIGHTMAP variant of the last build: 1 dense, 2 compressed, 0 none built yet. */
 int light_gpu_variant(const struct light_gpu *lg);

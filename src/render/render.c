@@ -7,6 +7,7 @@
 #include <cglm/cglm.h>
 
 #include "common/log.h"
+#include "shaders/bindings.h"
 
 #define PHASE_TABLE_SIZE 512
 #define MAX_VARIANTS 16
@@ -255,7 +256,7 @@ static bool draw_opaque(struct renderer *r, const struct render_settings *s,
         gpu_uniform_int(p, "emissive", m->emissive ? 1 : 0);
         gpu_uniform_int(p, "textured", m->texture ? 1 : 0);
         if (m->texture)
-            gpu_texture_bind(m->texture, 5);
+            gpu_texture_bind(m->texture, BIND_OPAQUE_TEX_MESH);
         gpu_mesh_draw(&m->mesh, p);
     }
     gpu_target_end(&r->target);
@@ -330,16 +331,16 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     gpu_uniform_ivec2(prog, "image_size", image_size);
     int zero[2] = {0, 0};
     gpu_uniform_ivec2(prog, "pixel_offset", zero);
-    gpu_texture_bind(&r->beta, 0);
-    gpu_texture_bind(&r->phase, 1);
+    gpu_texture_bind(&r->beta, BIND_EYE_TEX_BETA);
+    gpu_texture_bind(&r->phase, BIND_EYE_TEX_PHASE);
     if (r->have_tint)
-        gpu_texture_bind(&r->tint, 6);
+        gpu_texture_bind(&r->tint, BIND_EYE_TEX_TINT);
     if (temporal)
-        gpu_texture_bind(&r->beta_next, 7);
+        gpu_texture_bind(&r->beta_next, BIND_EYE_TEX_BETA_NEXT);
     /* Also the blend of a light map pair (LIGHTMAP_PAIR), which comes only with temporal. */
     if (s->temporal)
         gpu_uniform_float(prog, "temporal_f", s->temporal_f);
-    gpu_image_bind(out, 0, true);
+    gpu_image_bind(out, BIND_EYE_IMG_OUT, true);
     if (r->light && r->light->bind)
         r->light->bind(r->light, prog);
 
@@ -348,8 +349,8 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     if (opaque) {
         if (!draw_opaque(r, s, view, vp, inv, light_defines))
             return false;
-        gpu_texture_bind(&r->target.color, 3);
-        gpu_texture_bind(&r->target.value, 4);
+        gpu_texture_bind(&r->target.color, BIND_EYE_TEX_OPAQUE_COLOR);
+        gpu_texture_bind(&r->target.value, BIND_EYE_TEX_OPAQUE_DISTANCE);
     }
     gpu_dispatch(prog, view->width, view->height, 1);
     r->stats.views++;
@@ -367,8 +368,8 @@ bool renderer_tonemap(struct renderer *r, const struct gpu_texture *in, float ex
         return false;
     gpu_uniform_ivec2(&r->tonemap, "image_size", in->size);
     gpu_uniform_float(&r->tonemap, "exposure", exposure);
-    gpu_image_bind(in, 0, false);
-    gpu_image_bind(out, 1, true);
+    gpu_image_bind(in, BIND_TONEMAP_IMG_IN, false);
+    gpu_image_bind(out, BIND_TONEMAP_IMG_OUT, true);
     gpu_dispatch(&r->tonemap, in->size[0], in->size[1], 1);
     return true;
 }
