@@ -50,10 +50,10 @@ struct app_stats {
     const char *device;
     unsigned views;
     unsigned light_builds;
-    double view_ms[64];
-    unsigned n_view_ms;
-    double build_ms[64];
-    unsigned n_build_ms;
+    /* The times of the timed views and light map builds (view_ms and build_ms in the file),
+     * lent to the renderer and the light map (renderer_set_timing, app_light_set_timing);
+     * they arrive frames later, so collect them all before writing. */
+    struct gpu_timings view_times, build_times;
     double light_bytes_dense, light_bytes_compressed;
     size_t gpu_bytes;
     size_t nonfinite_pixels;
@@ -70,8 +70,10 @@ struct app_stats {
     double frame_ms_max;      /* longest frame of the loop */
 };
 
-void app_stats_add_view(struct app_stats *st, double ms);
-void app_stats_add_build(struct app_stats *st, double ms);
+/* Counts a view drawn and a light map built; their times go to view_times and build_times. */
+void app_stats_add_view(struct app_stats *st);
+void app_stats_add_build(struct app_stats *st);
+/* Writes ST as JSON to PATH (atomically).  A time that has not arrived is written as null. */
 bool app_stats_write(const struct app_stats *st, const char *path);
 
 /* The deep light map of a session: built on the GPU when the config asks for one, rebuilt
@@ -94,6 +96,8 @@ struct app_light {
     int pair_first;          /* which of them holds step_id while the pair is bound */
     struct render_light pair; /* the hook that binds both */
     char pair_defines[96];
+    struct gpu_timings *timing; /* where build times go (app_light_set_timing), or NULL */
+    bool log_pending[2];        /* gpu's, spare's last build is logged when its time arrives */
 };
 
 /* The identity of time step STEP made with look generation GEN (never 0). */
@@ -102,9 +106,16 @@ uint64_t app_light_step_id(int step, uint64_t gen);
 bool app_light_init(struct app_light *al, const struct config *cfg);
 /* Uses the decisions E (copied) from now on; without them every auto effect is on. */
 void app_light_set_effects(struct app_light *al, const struct effects *e);
-/* Builds when stale and points the renderer at the light map; counts builds in ST. */
+/* Builds when stale and points the renderer at the light map; counts builds in ST (may be
+ * NULL).  Never waits for the GPU (but on software drivers while timed, gpu.h "timers"). */
 bool app_light_update(struct app_light *al, const struct config *cfg, struct renderer *r,
                       struct app_stats *st);
+/* Times every following build into LOG (NULL: untimed, the default).  LOG is borrowed until
+ * app_light_collect_timings(al, true) returned or app_light_finish. */
+void app_light_set_timing(struct app_light *al, struct gpu_timings *log);
+/* Moves the build times the GPU has ready into the log (all of them with WAIT) and logs the
+ * builds whose time was not known when they were made.  Returns how many are in flight. */
+int app_light_collect_timings(struct app_light *al, bool wait);
 void app_light_finish(struct app_light *al);
 
 int cmd_render(int argc, char **argv);

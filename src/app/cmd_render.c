@@ -161,9 +161,20 @@ static void session_effects(struct session *s, const struct render_view *views, 
     effects_apply_render(&s->effects, &s->settings);
 }
 
-/* Builds the light map if the sun, volume or settings changed since the last build. */
+/* Moves the view and build times that arrived into the stats; with WAIT all of them, for the
+ * report at the end of a run. */
+static void session_timings(struct session *s, bool wait)
+{
+    if (s->renderer)
+        renderer_collect_timings(s->renderer, wait);
+    app_light_collect_timings(&s->light, wait);
+}
+
+/* Once per frame: collects the times that arrived (never waiting) and builds the light map if
+ * the sun, volume or settings changed since the last build. */
 static bool session_light(struct session *s)
 {
+    session_timings(s, false);
     return app_light_update(&s->light, &s->cfg, s->renderer, &s->stats);
 }
 
@@ -204,8 +215,10 @@ static int session_start(struct session *s, const struct render_options *o)
         ext_volume_finish(&vol);
         return EXIT_FAILED;
     }
-    /* An interactive run times its views only when they are reported. */
-    renderer_set_timing(s->renderer, o->stats || strcmp(s->stats.command, "run") != 0);
+    /* An interactive run times its views only when they are reported: on a software driver
+     * a timed view waits for itself (gpu.h, "timers"). */
+    if (o->stats || strcmp(s->stats.command, "run") != 0)
+        renderer_set_timing(s->renderer, &s->stats.view_times);
     bool ok = renderer_set_optics(s->renderer, &s->cfg.optics.params) &&
               renderer_set_volume(s->renderer, &vol);
     ext_volume_finish(&vol);
@@ -214,6 +227,7 @@ static int session_start(struct session *s, const struct render_options *o)
     s->stats.upload_ms = renderer_stats(s->renderer)->upload_ms;
     if (!app_light_init(&s->light, &s->cfg))
         return EXIT_FAILED;
+    app_light_set_timing(&s->light, &s->stats.build_times);
     s->map = app_map_create(&s->cfg, s->renderer);
     if (!s->map)
         return EXIT_FAILED;
@@ -297,7 +311,7 @@ static bool display_frame(struct session *s, struct display *d)
     for (int i = 0; i < display_view_count(d); i++) {
         const struct view *v = display_view(d, i);
         if (v->visible)
-            app_stats_add_view(&s->stats, v->ms);
+            app_stats_add_view(&s->stats);
     }
     return display_present(d, s->renderer, (float)s->cfg.render.exposure);
 }
@@ -429,6 +443,7 @@ static int render_display(struct session *s, const struct render_options *o, dou
     if (s->stats.nonfinite_pixels)
         log_warn("%zu pixels are not finite", s->stats.nonfinite_pixels);
     if (d) {
+        session_timings(s, true);
         s->stats.gpu_bytes = gpu_bytes_allocated();
         s->stats.total_ms = time_now_ms() - start;
         if (rc == EXIT_OK && o->stats && !app_stats_write(&s->stats, o->stats))
@@ -473,6 +488,7 @@ static int run_display(struct session *s, const struct render_options *o, double
         display_poll(d, moving || frames_left > 0 || dirty ? 0.0 : 0.03);
     }
     if (d) {
+        session_timings(s, true);
         s->stats.gpu_bytes = gpu_bytes_allocated();
         s->stats.total_ms = time_now_ms() - start;
         if (rc == EXIT_OK && o->stats && !app_stats_write(&s->stats, o->stats))
@@ -527,15 +543,18 @@ int cmd_render(int argc, char **argv)
     session_effects(&s, &view, 1);
     struct gpu_texture target = {0};
     struct image img = {0};
+    /* The script's frames are neither counted nor timed: the report is the settled view's. */
+    renderer_set_timing(s.renderer, NULL);
     if ((o.input || o.menu) && (rc = view_script(&s, &o, &view, &target)) != EXIT_OK)
         goto done_target;
+    renderer_set_timing(s.renderer, &s.stats.view_times);
     rc = EXIT_FAILED;
     if (!session_light(&s) || !renderer_draw(s.renderer, &s.settings, &view, &target))
         goto done_target;
-    const struct render_stats *rs = renderer_stats(s.renderer);
-    app_stats_add_view(&s.stats, rs->view_ms_total);
+    app_stats_add_view(&s.stats);
     if (!renderer_read(&target, &img))
         goto done_target;
+    session_timings(&s, true); /* the read-back waited for the GPU already */
     s.stats.nonfinite_pixels = image_count_nonfinite(&img);
     if (s.stats.nonfinite_pixels)
         log_warn("%zu pixels are not finite", s.stats.nonfinite_pixels);
@@ -544,7 +563,7 @@ int cmd_render(int argc, char **argv)
         goto done_image;
     }
     log_info("wrote %s (%dx%d, view %.1f ms on %s)", o.output, img.width, img.height,
-             rs->view_ms_total, s.stats.device);
+             s.stats.view_times.total_ms, s.stats.device);
     s.stats.gpu_bytes = gpu_bytes_allocated();
     s.stats.total_ms = time_now_ms() - start;
     rc = EXIT_OK;
@@ -752,7 +771,6 @@ int cmd_run(int argc, char **argv)
         st.dirty = st.dirty || redraw;
         if (st.dirty && w > 0 && h > 0) {
             s.stats.frames++;
-            double before = renderer_stats(s.renderer)->view_ms_total;
             if (!session_light(&s)) {
                 rc = EXIT_FAILED;
                 break;
@@ -762,7 +780,7 @@ int cmd_run(int argc, char **argv)
                 rc = EXIT_FAILED;
                 break;
             }
-            app_stats_add_view(&s.stats, renderer_stats(s.renderer)->view_ms_total - before);
+            app_stats_add_view(&s.stats);
             gpu_present(&ldr, 0, 0, w, h, 0);
             gpu_context_swap(ctx);
             st.dirty = false;
@@ -776,6 +794,7 @@ int cmd_run(int argc, char **argv)
     }
     gpu_texture_finish(&hdr);
     gpu_texture_finish(&ldr);
+    session_timings(&s, true);
     s.stats.gpu_bytes = gpu_bytes_allocated();
     s.stats.total_ms = time_now_ms() - start;
     if (o.stats && !app_stats_write(&s.stats, o.stats))

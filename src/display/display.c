@@ -115,14 +115,8 @@ bool display_draw(struct display *d, struct renderer *r, const struct render_set
     gpu_context_make_current(d->context);
     for (int i = 0; i < d->set.count; i++) {
         struct view *v = &d->set.views[i];
-        if (!v->visible) {
-            v->ms = 0.0;
-            continue;
-        }
-        double before = renderer_stats(r)->view_ms_total;
-        if (!renderer_draw(r, s, &v->rv, &v->target))
+        if (v->visible && !renderer_draw(r, s, &v->rv, &v->target))
             return false;
-        v->ms = renderer_stats(r)->view_ms_total - before;
     }
     return true;
 }

@@ -35,7 +35,10 @@ struct light_gpu {
     enum light_gpu_mode built_mode;
     double built_epsilon;
     size_t compressed_bytes;
-    struct gpu_timer timer;
+    struct gpu_timer_queue timers;
+    struct gpu_timings *timing; /* where build times go; NULL: untimed */
+    bool last_timed;            /* the last build was timed (its CPU part: last_cpu_ms) */
+    double last_cpu_ms;
     char defines[64];
 };
 
@@ -150,7 +153,7 @@ struct light_gpu *light_gpu_create(void)
         return NULL;
     }
     light_cache_init(&lg->cache);
-    gpu_timer_init(&lg->timer);
+    gpu_timer_queue_init(&lg->timers, GPU_TIMER_AUTO);
     lg->hook.bind = bind;
     lg->hook.defines = lg->defines;
     return lg;
@@ -172,7 +175,7 @@ void light_gpu_destroy(struct light_gpu *lg)
     gpu_texture_finish(&lg->adding);
     gpu_buffer_finish(&lg->columns);
     gpu_buffer_finish(&lg->nodes);
-    gpu_timer_finish(&lg->timer);
+    gpu_timer_queue_finish(&lg->timers);
     free(lg);
 }
 
@@ -343,14 +346,21 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
         return true;
     if (!light_grid_init(&lg->grid, sun, src->grid, settings->resolution, settings->grid))
         return false;
-    gpu_timer_begin(&lg->timer);
+    double cpu_start = time_now_ms();
+    struct gpu_timings *log = lg->timing;
+    if (log)
+        gpu_timer_queue_begin(&lg->timers);
     bool ok = build_dense(lg, src, sun, settings);
-    gpu_timer_end(&lg->timer);
-    double ms = gpu_timer_ms(&lg->timer);
+    unsigned number = log ? gpu_timer_queue_end(&lg->timers, log) : 0;
+    lg->last_timed = number != 0;
+    lg->last_cpu_ms = 0.0;
     if (ok && mode == LIGHT_GPU_COMPRESSED) {
+        /* The read-back waits for the GPU anyway: the CPU compresses what it built. */
         double start = time_now_ms();
         ok = build_compressed(lg, settings->epsilon);
-        ms += time_now_ms() - start;
+        lg->last_cpu_ms = time_now_ms() - start;
+        if (number)
+            gpu_timings_add(log, number, lg->last_cpu_ms);
     } else {
         gpu_buffer_finish(&lg->columns);
         gpu_buffer_finish(&lg->nodes);
@@ -360,7 +370,8 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
         light_cache_invalidate(&lg->cache);
         return false;
     }
-    light_cache_built(&lg->cache, &key, ms);
+    /* The cache keeps the CPU time of the update; the GPU's arrives in the timing log. */
+    light_cache_built(&lg->cache, &key, time_now_ms() - cpu_start);
     lg->have_key_mode = true;
     lg->built_mode = mode;
     lg->built_epsilon = settings->epsilon;
@@ -382,9 +393,23 @@ unsigned light_gpu_builds(const struct light_gpu *lg)
     return lg->cache.builds;
 }
 
-double light_gpu_last_build_ms(const struct light_gpu *lg)
+void light_gpu_set_timing(struct light_gpu *lg, struct gpu_timings *log)
 {
-    return lg->cache.last_ms;
+    lg->timing = log;
+}
+
+int light_gpu_collect_timings(struct light_gpu *lg, bool wait)
+{
+    return gpu_timer_queue_collect(&lg->timers, wait);
+}
+
+bool light_gpu_last_build_ms(struct light_gpu *lg, double *ms)
+{
+    /* The last build is the newest measurement: known once none is in flight. */
+    if (!lg->last_timed || light_gpu_collect_timings(lg, false) > 0)
+        return false;
+    *ms = lg->timers.last_ms + lg->last_cpu_ms;
+    return true;
 }
 
 void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed)

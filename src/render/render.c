@@ -46,8 +46,8 @@ struct renderer {
     char opaque_defines[MAX_VARIANTS][256];
     int n_opaque;
     struct gpu_target target;
-    struct gpu_timer timer;
-    bool timing; /* time each view (waits for it to finish) */
+    struct gpu_timer_queue timers;
+    struct gpu_timings *timing; /* where the views' times go; NULL: untimed */
     struct render_stats stats;
 };
 
@@ -87,8 +87,7 @@ struct renderer *renderer_create(void)
         renderer_destroy(r);
         return NULL;
     }
-    gpu_timer_init(&r->timer);
-    r->timing = true;
+    gpu_timer_queue_init(&r->timers, GPU_TIMER_AUTO);
     return r;
 }
 
@@ -106,7 +105,7 @@ void renderer_destroy(struct renderer *r)
     for (int i = 0; i < r->n_opaque; i++)
         gpu_program_finish(&r->opaque[i]);
     gpu_target_finish(&r->target);
-    gpu_timer_finish(&r->timer);
+    gpu_timer_queue_finish(&r->timers);
     free(r);
 }
 
@@ -345,7 +344,7 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
         r->light->bind(r->light, prog);
 
     if (r->timing)
-        gpu_timer_begin(&r->timer);
+        gpu_timer_queue_begin(&r->timers);
     if (opaque) {
         if (!draw_opaque(r, s, view, vp, inv, light_defines))
             return false;
@@ -354,10 +353,8 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     }
     gpu_dispatch(prog, view->width, view->height, 1);
     r->stats.views++;
-    if (r->timing) {
-        gpu_timer_end(&r->timer);
-        r->stats.view_ms_total += gpu_timer_ms(&r->timer);
-    }
+    if (r->timing)
+        gpu_timer_queue_end(&r->timers, r->timing);
     return true;
 }
 
@@ -457,7 +454,12 @@ void renderer_remove_mesh(struct renderer *r, struct render_mesh *m)
     }
 }
 
-void renderer_set_timing(struct renderer *r, bool on)
+void renderer_set_timing(struct renderer *r, struct gpu_timings *log)
 {
-    r->timing = on;
+    r->timing = log;
+}
+
+int renderer_collect_timings(struct renderer *r, bool wait)
+{
+    return gpu_timer_queue_collect(&r->timers, wait);
 }
