@@ -41,6 +41,10 @@ void gpu_context_list(void (*print)(const char *name, const char *what, void *us
 void *gpu_context_window(struct gpu_context *ctx);
 bool gpu_context_has_stereo(const struct gpu_context *ctx);
 void gpu_context_swap(struct gpu_context *ctx);
+/* Makes CTX current and sets how many vertical blanks its swaps wait for (0: none).  Windows
+ * that swap together wait in the last one only.  No effect on headless contexts (nor on
+ * NULL). */
+void gpu_context_swap_interval(struct gpu_context *ctx, int interval);
 /* Framebuffer size of a window context; the desc size for headless. */
 void gpu_context_size(struct gpu_context *ctx, int *width, int *height);
 
@@ -230,11 +234,5 @@ unsigned gpu_timer_queue_end(struct gpu_timer_queue *q, struct gpu_timings *log)
 /* Moves the times the GPU has ready into their logs, oldest first, without waiting; with
  * WAIT, waits for all of them.  Returns how many are still in flight (0 after a WAIT). */
 int gpu_timer_queue_collect(struct gpu_timer_queue *q, bool wait);
-
-/* ---- window swapping (context_swap.c) ------------------------------------------------- */
-
-/* Makes CTX current and sets how many vertical blanks its swaps wait for (0: none).  Windows
- * that swap together wait in the last one only.  No effect on headless contexts. */
-void gpu_context_swap_interval(struct gpu_context *ctx, int interval);
 
 #endif
