@@ -3,11 +3,13 @@
 // mode 1: red/cyan anaglyph, half-colour: red carries the left eye's luminance (so colours do
 //         not fight between the eyes), green and blue come from the right eye.
 
+#include "bindings.h"
+
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 0) uniform sampler2D left_tex;
-layout(binding = 1) uniform sampler2D right_tex;
-layout(rgba32f, binding = 0) uniform writeonly image2D out_image;
+layout(binding = BIND_COMPOSE_TEX_LEFT) uniform sampler2D left_tex;
+layout(binding = BIND_COMPOSE_TEX_RIGHT) uniform sampler2D right_tex;
+layout(rgba32f, binding = BIND_COMPOSE_IMG_OUT) uniform writeonly image2D out_image;
 
 uniform int mode;
 uniform ivec2 size;   // of the eye images and of the region written

@@ -8,10 +8,12 @@
 // (UNIVERSAL_ABERRATION_K) to cancel the lens' chromatic aberration.  Outside the eye image
 // the panel stays black.  With [0, 0, 0, 1] and [1, 1, 1] the pass is the identity.
 
+#include "bindings.h"
+
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 0) uniform sampler2D eye_tex; // linear radiance, linear filtering
-layout(rgba32f, binding = 0) uniform writeonly image2D out_image;
+layout(binding = BIND_WARP_TEX_EYE) uniform sampler2D eye_tex; // linear radiance, linear filtering
+layout(rgba32f, binding = BIND_WARP_IMG_OUT) uniform writeonly image2D out_image;
 
 uniform ivec2 size;           // of the eye's region on the screen, pixels
 uniform ivec2 offset;         // lower-left corner of the region in out_image

@@ -7,6 +7,7 @@
 // share for the diffuse column pass (light_diffuse.comp); LATERAL 1 (with MULTIPLE) = and its
 // lateral escape rates (light_lateral.comp), weighted by the extinction.
 
+#include "bindings.h"
 #include "common.glsl"
 
 #ifndef FORWARD
@@ -27,14 +28,15 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 0) uniform sampler3D beta_tex;      // read with texelFetch only
-layout(r32f, binding = 0) uniform image3D light_img; // node (i, j, k) = light at that point
+layout(binding = BIND_BUILD_TEX_BETA) uniform sampler3D beta_tex;      // texelFetch only
+layout(r32f, binding = BIND_BUILD_IMG_LIGHT) uniform image3D light_img; // node (i, j, k): light
 #if MULTIPLE
 // slice k-1..k: tau, ice share, lateral escape rates along x and y (0 without LATERAL)
-layout(rgba32f, binding = 1) uniform writeonly image3D slice_img;
+layout(rgba32f, binding = BIND_BUILD_IMG_SLICE) uniform writeonly image3D slice_img;
 #endif
 #if MULTIPLE && LATERAL
-layout(binding = 1) uniform sampler3D rates_tex; // volume grid, beta / w; texelFetch only
+// the volume grid: beta / w; texelFetch only
+layout(binding = BIND_BUILD_TEX_RATES) uniform sampler3D rates_tex;
 #endif
 
 uniform ivec3 vol_n;

@@ -13,13 +13,16 @@
 #define LATERAL 0
 #endif
 
+#include "bindings.h"
+
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(r32f, binding = 0) uniform readonly image3D light_img;   // the beam at each node
-layout(rgba32f, binding = 1) uniform readonly image3D slice_img; // slice k-1..k: tau, ice
-                                                                 // share, escape rates x, y
-layout(rg32f, binding = 2) uniform image3D adding_img;          // 1 - A, g
-layout(rg32f, binding = 3) uniform writeonly image3D diffuse_img; // 2 (U + V), 2 (U - V)
+// the beam at each node; slice k-1..k: tau, ice share, escape rates x, y; 1 - A, g;
+// 2 (U + V), 2 (U - V)
+layout(r32f, binding = BIND_DIFFUSE_IMG_LIGHT) uniform readonly image3D light_img;
+layout(rgba32f, binding = BIND_DIFFUSE_IMG_SLICE) uniform readonly image3D slice_img;
+layout(rg32f, binding = BIND_DIFFUSE_IMG_ADDING) uniform image3D adding_img;
+layout(rg32f, binding = BIND_DIFFUSE_IMG_DIFFUSE) uniform writeonly image3D diffuse_img;
 
 uniform ivec3 grid_n;
 uniform vec2 loss;  // the beam's loss share: water, ice

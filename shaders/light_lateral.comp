@@ -5,10 +5,12 @@
 // src/light/transport.c operation for operation in float32: the pass along x writes .r (and
 // clears .g), the pass along y then writes .g beside it.
 
+#include "bindings.h"
+
 layout(local_size_x = 64) in;
 
-layout(binding = 0) uniform sampler3D beta_tex;       // read with texelFetch only
-layout(rg32f, binding = 0) uniform image3D rates_img; // beta / w along x, along y
+layout(binding = BIND_LATERAL_TEX_BETA) uniform sampler3D beta_tex;       // texelFetch only
+layout(rg32f, binding = BIND_LATERAL_IMG_RATES) uniform image3D rates_img; // beta / w: x, y
 
 uniform ivec3 vol_n;
 uniform int axis;         // 0: rows along x, 1: rows along y

@@ -6,12 +6,14 @@
 //               binary search and linear interpolation, bilinear across columns.
 //   GROUND_SHADOW 1: the ground reads the light map too (else it sees the full sun).
 //   LIGHTMAP_PAIR 1 (effects.temporal): two maps, of steps k and k + 1, bound side by side
-//               (the second at texture unit 8 or buffers 2 and 3, uniforms *_next); the light
-//               is mix(L_k, L_k+1, temporal_f).
+//               (the second at the *_NEXT bindings of bindings.h, uniforms *_next); the
+//               light is mix(L_k, L_k+1, temporal_f).
 //   MULTIPLE 1 (effects.multiple): the map also holds the diffuse light of its two-stream
 //               column pass, M = 2 (U + V) and N = 2 (U - V) (light.h, light_map.diffuse), a
-//               dense RG volume at texture unit 9 (step k + 1: 10) in either storage;
-//               lightmap_diffuse() reads it (0 beside the light columns).
+//               dense RG volume at BIND_LIGHTMAP_TEX_DIFFUSE (step k + 1: *_NEXT) in either
+//               storage; lightmap_diffuse() reads it (0 beside the light columns).
+
+#include "bindings.h"
 
 #ifndef LIGHTMAP
 #define LIGHTMAP 0
@@ -55,9 +57,9 @@ uniform ivec3 light_n_next;
 #endif
 
 #if LIGHTMAP == 1
-layout(binding = 2) uniform sampler3D light_tex;
+layout(binding = BIND_LIGHTMAP_TEX_LIGHT) uniform sampler3D light_tex;
 #if LIGHTMAP_PAIR
-layout(binding = 8) uniform sampler3D light_tex_next;
+layout(binding = BIND_LIGHTMAP_TEX_LIGHT_NEXT) uniform sampler3D light_tex_next;
 #endif
 
 float lightmap_light(vec3 p)
@@ -72,11 +74,20 @@ float lightmap_light(vec3 p)
     return l;
 }
 #else
-layout(std430, binding = 0) readonly buffer light_columns { uint columns[]; }; // first, count
-layout(std430, binding = 1) readonly buffer light_nodes { float nodes[]; };    // depth, light
+// first node and count per column; depth and light per node
+layout(std430, binding = BIND_LIGHTMAP_BUF_COLUMNS) readonly buffer light_columns {
+    uint columns[];
+};
+layout(std430, binding = BIND_LIGHTMAP_BUF_NODES) readonly buffer light_nodes {
+    float nodes[];
+};
 #if LIGHTMAP_PAIR
-layout(std430, binding = 2) readonly buffer light_columns_next { uint columns_next[]; };
-layout(std430, binding = 3) readonly buffer light_nodes_next { float nodes_next[]; };
+layout(std430, binding = BIND_LIGHTMAP_BUF_COLUMNS_NEXT) readonly buffer light_columns_next {
+    uint columns_next[];
+};
+layout(std430, binding = BIND_LIGHTMAP_BUF_NODES_NEXT) readonly buffer light_nodes_next {
+    float nodes_next[];
+};
 // Map M's words: 0 the map of step k, 1 that of step k + 1.
 #define COLUMN_WORD(M, I) ((M) == 0 ? columns[I] : columns_next[I])
 #define NODE_WORD(M, I) ((M) == 0 ? nodes[I] : nodes_next[I])
@@ -157,9 +168,9 @@ float lightmap_light(vec3 p)
 #endif
 
 #if LIGHTMAP != 0 && MULTIPLE
-layout(binding = 9) uniform sampler3D diffuse_tex;
+layout(binding = BIND_LIGHTMAP_TEX_DIFFUSE) uniform sampler3D diffuse_tex;
 #if LIGHTMAP_PAIR
-layout(binding = 10) uniform sampler3D diffuse_tex_next;
+layout(binding = BIND_LIGHTMAP_TEX_DIFFUSE_NEXT) uniform sampler3D diffuse_tex_next;
 #endif
 
 vec2 lightmap_diffuse(vec3 p)

@@ -2,6 +2,7 @@
 // emissive) and its distance along the pixel's view ray, measured from the near plane the
 // way shaders/raycast.comp measures it, so the ray stops exactly there.
 
+#include "bindings.h"
 #include "common.glsl"
 #include "lightmap_lookup.glsl"
 
@@ -13,7 +14,7 @@ in vec2 v_uv;
 layout(location = 0) out vec4 out_color;
 layout(location = 1) out float out_distance;
 
-layout(binding = 5) uniform sampler2D mesh_texture;
+layout(binding = BIND_OPAQUE_TEX_MESH) uniform sampler2D mesh_texture;
 
 uniform mat4 inv_view_proj;
 uniform ivec2 image_size;

@@ -16,6 +16,7 @@
 // Eddington field along the light) is scattered toward the eye beside the sun's.
 uniform vec2 mean_cosine;    // g of the ice and the water phase (MULTIPLE)
 
+#include "bindings.h"
 #include "common.glsl"
 #include "lightmap_lookup.glsl"
 
@@ -30,9 +31,10 @@ uniform vec2 mean_cosine;    // g of the ice and the water phase (MULTIPLE)
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(rgba32f, binding = 0) uniform writeonly image2D out_image;
-layout(binding = 0) uniform sampler3D beta_tex;  // r: ice-phase beta, g: water-phase beta [1/m]
-layout(binding = 1) uniform sampler1D phase_tex; // r: ice, g: water eye phase over psi in [0, pi]
+layout(rgba32f, binding = BIND_EYE_IMG_OUT) uniform writeonly image2D out_image;
+// r: ice-phase beta, g: water-phase beta [1/m]; r: ice, g: water eye phase over psi in [0, pi]
+layout(binding = BIND_EYE_TEX_BETA) uniform sampler3D beta_tex;
+layout(binding = BIND_EYE_TEX_PHASE) uniform sampler1D phase_tex;
 
 uniform mat4 inv_view_proj; // clip space -> world (metres)
 uniform ivec2 image_size;
@@ -57,14 +59,15 @@ uniform float phase_size;    // entries in phase_tex
 #define TINT 0
 #endif
 #if TINT
-layout(binding = 6) uniform sampler3D tint_tex; // rgb: colour of the scattered light
+layout(binding = BIND_EYE_TEX_TINT) uniform sampler3D tint_tex; // rgb: colour of scattered light
 #endif
 #if TEMPORAL
-layout(binding = 7) uniform sampler3D beta_next_tex; // step k + 1, as beta_tex
+layout(binding = BIND_EYE_TEX_BETA_NEXT) uniform sampler3D beta_next_tex; // step k + 1, as beta_tex
 #endif
 #if OPAQUE
-layout(binding = 3) uniform sampler2D opaque_color;    // radiance of the opaque geometry
-layout(binding = 4) uniform sampler2D opaque_distance; // along the ray from the near plane
+// the opaque geometry's radiance, and its distance along the ray from the near plane
+layout(binding = BIND_EYE_TEX_OPAQUE_COLOR) uniform sampler2D opaque_color;
+layout(binding = BIND_EYE_TEX_OPAQUE_DISTANCE) uniform sampler2D opaque_distance;
 #endif
 
 vec2 eye_phase(float cos_psi)

@@ -2,9 +2,11 @@
 // 2002, the global operator), then the sRGB curve.
 // Must match image_tonemap() in src/render/image.c.
 
+#include "bindings.h"
+
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(rgba32f, binding = 0) uniform readonly image2D in_image;
-layout(rgba8, binding = 1) uniform writeonly image2D out_image;
+layout(rgba32f, binding = BIND_TONEMAP_IMG_IN) uniform readonly image2D in_image;
+layout(rgba8, binding = BIND_TONEMAP_IMG_OUT) uniform writeonly image2D out_image;
 uniform float exposure;
 uniform ivec2 image_size;
 

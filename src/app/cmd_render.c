@@ -203,7 +203,7 @@ static bool write_output(struct display *d, const struct render_options *o, floa
     bool ok = image_write(&img, o->output, exposure);
     if (ok)
         log_info("wrote %s (%dx%d, view %.1f ms on %s)", o->output, img.width, img.height,
-                 v->ms, st->device);
+                 st->view_times.total_ms, st->device);
     image_finish(&img);
     return ok;
 }
@@ -287,6 +287,7 @@ static int command(int argc, char **argv, bool run)
                                       .time = o.time,
                                       .frames = frames_env ? strtol(frames_env, NULL, 10) : -1});
     struct session_stats *st = session_stats(s);
+    session_collect_timings(s, true);
     if (rc == EXIT_OK && !run &&
         !write_output(d, &o, (float)session_config(s)->render.exposure, st))
         rc = EXIT_FAILED;

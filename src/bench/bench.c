@@ -234,7 +234,9 @@ static double median(double *v, int n, double *spread)
     return m;
 }
 
-/* Builds the light map of V (forced: a new generation) and points R at it; *MS its time. */
+/* Builds the light map of V (forced: a new generation) and points R at it; *MS its time.  A
+ * benchmark waits for every time it measures, build and view alike: the next measurement
+ * must not overlap it. */
 static bool build(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
                   const struct bench_variant *v, double *ms)
 {
@@ -249,9 +251,14 @@ static bool build(struct renderer *r, struct light_gpu *lg, const struct bench_s
         .volume_id = 1,
         .generation = generation_counter++,
     };
-    if (!light_gpu_update(lg, &src, sc->sun, &v->light, v->mode, NULL))
+    struct gpu_timings t = {0};
+    light_gpu_set_timing(lg, &t);
+    bool ok = light_gpu_update(lg, &src, sc->sun, &v->light, v->mode, NULL);
+    light_gpu_collect_timings(lg, true);
+    light_gpu_set_timing(lg, NULL);
+    if (!ok)
         return false;
-    *ms = light_gpu_last_build_ms(lg);
+    *ms = t.total_ms;
     renderer_set_light(r, light_gpu_render_light(lg));
     return true;
 }
@@ -259,11 +266,13 @@ static bool build(struct renderer *r, struct light_gpu *lg, const struct bench_s
 static bool draw(struct renderer *r, const struct render_settings *s,
                  const struct render_view *view, struct gpu_texture *out, double *ms)
 {
-    double before = renderer_stats(r)->view_ms_total;
-    if (!renderer_draw(r, s, view, out))
-        return false;
-    *ms = renderer_stats(r)->view_ms_total - before;
-    return true;
+    struct gpu_timings t = {0};
+    renderer_set_timing(r, &t);
+    bool ok = renderer_draw(r, s, view, out);
+    renderer_collect_timings(r, true);
+    renderer_set_timing(r, NULL);
+    *ms = t.total_ms;
+    return ok;
 }
 
 static void compare(const struct image *img, const struct image *ref, const struct image *err,

@@ -15,6 +15,7 @@
 
 #include "common/log.h"
 #include "display/display_impl.h"
+#include "shaders/bindings.h"
 
 static const struct display_impl *const backends[] = {
     &display_headless_impl, &display_desktop_impl, &display_stereo_impl,
@@ -130,14 +131,8 @@ bool display_draw(struct display *d, struct renderer *r, const struct render_set
     gpu_context_make_current(d->context);
     for (int i = 0; i < d->set.count; i++) {
         struct view *v = &d->set.views[i];
-        if (!v->visible) {
-            v->ms = 0.0;
-            continue;
-        }
-        double before = renderer_stats(r)->view_ms_total;
-        if (!renderer_draw(r, s, &v->rv, &v->target))
+        if (v->visible && !renderer_draw(r, s, &v->rv, &v->target))
             return false;
-        v->ms = renderer_stats(r)->view_ms_total - before;
     }
     return true;
 }
@@ -231,9 +226,9 @@ bool display_compose(struct display *d, const struct gpu_texture *left,
     gpu_uniform_int(&d->compose, "mode", mode);
     gpu_uniform_ivec2(&d->compose, "size", size);
     gpu_uniform_ivec2(&d->compose, "offset", offset);
-    gpu_texture_bind(left, 0);
-    gpu_texture_bind(mode == 1 ? right : left, 1);
-    gpu_image_bind(out, 0, true);
+    gpu_texture_bind(left, BIND_COMPOSE_TEX_LEFT);
+    gpu_texture_bind(mode == 1 ? right : left, BIND_COMPOSE_TEX_RIGHT);
+    gpu_image_bind(out, BIND_COMPOSE_IMG_OUT, true);
     gpu_dispatch(&d->compose, size[0], size[1], 1);
     return true;
 }

@@ -108,7 +108,6 @@ struct view {
     float extent[4];           /* frustum [l, r, b, t] at the near plane (walls) */
     bool visible;              /* false: the eye is behind this wall; not drawn */
     struct gpu_texture target; /* RGBA32F render target (owned, made on first draw) */
-    double ms;                 /* time of its last renderer_draw */
 };
 
 struct view_set {
@@ -181,8 +180,9 @@ int display_view_count(const struct display *d);
 struct view *display_view(struct display *d, int i);
 const struct display_config *display_get_config(const struct display *d);
 
-/* The per-frame view loop: one renderer_draw per visible view, nothing else (no light map
- * build, no volume upload).  Each view's ms is set.  Needs the primary context current. */
+/* The per-frame view loop: one renderer_draw per visible view, in view order, nothing else
+ * (no light map build, no volume upload; the views' times go where renderer_set_timing
+ * says).  Needs the primary context current. */
 bool display_draw(struct display *d, struct renderer *r, const struct render_settings *s);
 
 /* Composes the drawn views the way the display shows them (stereo composition, lens warp),

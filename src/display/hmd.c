@@ -14,6 +14,7 @@
 
 #include "common/log.h"
 #include "display/display_impl.h"
+#include "shaders/bindings.h"
 
 struct hmd {
     struct display base;
@@ -171,8 +172,8 @@ static void warp_eye(struct hmd *h, const struct gpu_texture *eye, int e, struct
     gpu_uniform_float(&h->warp, "warp_scale", scale);
     gpu_uniform_vec4(&h->warp, "warp_param", h->distortion);
     gpu_uniform_vec3(&h->warp, "aberration", h->aberration);
-    gpu_texture_bind(eye, 0);
-    gpu_image_bind(out, 0, true);
+    gpu_texture_bind(eye, BIND_WARP_TEX_EYE);
+    gpu_image_bind(out, BIND_WARP_IMG_OUT, true);
     gpu_dispatch(&h->warp, size[0], size[1], 1);
 }
 

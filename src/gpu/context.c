@@ -72,6 +72,14 @@ void gpu_context_swap(struct gpu_context *ctx)
         ctx->impl->swap(ctx);
 }
 
+void gpu_context_swap_interval(struct gpu_context *ctx, int interval)
+{
+    if (!ctx || !ctx->impl->swap_interval)
+        return;
+    gpu_context_make_current(ctx);
+    ctx->impl->swap_interval(ctx, interval);
+}
+
 void gpu_context_size(struct gpu_context *ctx, int *width, int *height)
 {
     if (ctx->impl->size) {

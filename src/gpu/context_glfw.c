@@ -99,6 +99,11 @@ static void glfw_swap(struct gpu_context *ctx)
     glfwSwapBuffers(((struct glfw_context *)ctx)->window);
 }
 
+static void glfw_swap_interval(struct gpu_context *ctx, int interval)
+{
+    glfwSwapInterval(interval); /* applies to the current context: CTX */
+}
+
 static void glfw_size(struct gpu_context *ctx, int *w, int *h)
 {
     glfwGetFramebufferSize(((struct glfw_context *)ctx)->window, w, h);
@@ -117,6 +122,7 @@ const struct gpu_context_impl gpu_context_glfw_impl = {
     .destroy = glfw_destroy,
     .make_current = glfw_make_current,
     .swap = glfw_swap,
+    .swap_interval = glfw_swap_interval,
     .size = glfw_size,
     .window = glfw_window,
 };

@@ -1,6 +1,8 @@
 /*
  * gpu internal: the context backend table.  Each backend embeds struct gpu_context as its
- * first member and fills a const gpu_context_impl.
+ * first member and fills a const gpu_context_impl; an entry a backend has no use for is NULL
+ * (egl: no window, no swaps), and gpu_context_* then does what the public header says for
+ * headless contexts.
  */
 #ifndef ANVIL_GPU_CONTEXT_IMPL_H
 #define ANVIL_GPU_CONTEXT_IMPL_H
@@ -14,6 +16,8 @@ struct gpu_context_impl {
     void (*destroy)(struct gpu_context *ctx);
     void (*make_current)(struct gpu_context *ctx);
     void (*swap)(struct gpu_context *ctx);
+    /* Vertical blanks a swap waits for; called with CTX current. */
+    void (*swap_interval)(struct gpu_context *ctx, int interval);
     void (*size)(struct gpu_context *ctx, int *w, int *h);
     void *(*window)(struct gpu_context *ctx);
 };

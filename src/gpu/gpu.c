@@ -1,5 +1,6 @@
 #include "gpu/gpu.h"
 
+#include <assert.h>
 #include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -291,7 +292,8 @@ static bool load_file(struct source *s, const char *name, int depth)
             const char *open = strchr(q, '"');
             const char *close = open ? strchr(open + 1, '"') : NULL;
             if (!open || !close || close > p + len) {
-                log_error("shaders/%s:%d: expected #include \"file.glsl\"", name, line);
+                log_error("shaders/%s:%d: expected #include \"FILE\" (a file in shaders/)", name,
+                          line);
                 ok = false;
                 break;
             }
@@ -496,47 +498,110 @@ void gpu_clear_default(float r, float g, float b)
 
 /* ---- timers -------------------------------------------------------------------------- */
 
-void gpu_timer_init(struct gpu_timer *t)
+void gpu_timings_add(struct gpu_timings *log, unsigned number, double ms)
 {
-    memset(t, 0, sizeof(*t));
-    glGenQueries(2, t->query);
+    assert(number >= 1 && number <= log->count);
+    if (number <= GPU_TIMINGS_KEPT)
+        log->ms[number - 1] += ms;
+    log->total_ms += ms;
 }
 
-void gpu_timer_begin(struct gpu_timer *t)
+/* Measurement NUMBER of LOG took MS on the GPU. */
+static void arrive(struct gpu_timer_queue *q, struct gpu_timings *log, unsigned number,
+                   double ms)
 {
-    glQueryCounter(t->query[0], GL_TIMESTAMP);
-    t->cpu_start = time_now_ms();
-    t->running = true;
+    gpu_timings_add(log, number, ms);
+    if (number <= GPU_TIMINGS_KEPT)
+        log->known[number - 1] = true;
+    log->arrived++;
+    q->last_ms = ms;
 }
 
-void gpu_timer_end(struct gpu_timer *t)
+/* Drivers that run compute work on the calling thread, whose timestamps do not advance
+ * across it. */
+static bool software_driver(void)
 {
-    if (!t->running)
+    const char *name = (const char *)glGetString(GL_RENDERER);
+    return name && (strstr(name, "llvmpipe") || strstr(name, "softpipe"));
+}
+
+void gpu_timer_queue_init(struct gpu_timer_queue *q, enum gpu_timer_clock clock)
+{
+    memset(q, 0, sizeof(*q));
+    q->wall_clock = clock == GPU_TIMER_WALL || (clock == GPU_TIMER_AUTO && software_driver());
+    if (q->wall_clock)
         return;
-    glQueryCounter(t->query[1], GL_TIMESTAMP);
-    t->running = false;
-    t->pending = true;
+    for (int i = 0; i < GPU_TIMER_QUEUE_SIZE; i++)
+        glGenQueries(2, q->slot[i].query);
 }
 
-double gpu_timer_ms(struct gpu_timer *t)
+void gpu_timer_queue_finish(struct gpu_timer_queue *q)
 {
-    if (!t->pending)
-        return 0.0;
-    GLuint64 a = 0, b = 0;
-    glGetQueryObjectui64v(t->query[0], GL_QUERY_RESULT, &a);
-    glGetQueryObjectui64v(t->query[1], GL_QUERY_RESULT, &b);
-    t->pending = false;
-    double gpu = b > a ? (double)(b - a) * 1e-6 : 0.0;
-    if (gpu > 0.0)
-        return gpu;
-    glFinish();
-    return time_now_ms() - t->cpu_start;
-}
-
-void gpu_timer_finish(struct gpu_timer *t)
-{
-    if (t && t->query[0]) {
-        glDeleteQueries(2, t->query);
-        t->query[0] = t->query[1] = 0;
+    if (!q)
+        return;
+    for (int i = 0; i < GPU_TIMER_QUEUE_SIZE; i++) {
+        if (q->slot[i].query[0])
+            glDeleteQueries(2, q->slot[i].query);
     }
+    memset(q, 0, sizeof(*q));
+}
+
+/* Reads the oldest measurement in flight into its log: false (nothing read) when the GPU has
+ * not passed its end yet and WAIT is false. */
+static bool collect_oldest(struct gpu_timer_queue *q, bool wait)
+{
+    struct gpu_timer_slot *s = &q->slot[q->head];
+    if (!wait) {
+        GLint ready = 0;
+        glGetQueryObjectiv(s->query[1], GL_QUERY_RESULT_AVAILABLE, &ready);
+        if (!ready)
+            return false;
+    }
+    /* Available (or waited for): the first timestamp came before the second. */
+    GLuint64 a = 0, b = 0;
+    glGetQueryObjectui64v(s->query[0], GL_QUERY_RESULT, &a);
+    glGetQueryObjectui64v(s->query[1], GL_QUERY_RESULT, &b);
+    arrive(q, s->log, s->number, b > a ? (double)(b - a) * 1e-6 : 0.0);
+    q->head = (q->head + 1) % GPU_TIMER_QUEUE_SIZE;
+    q->pending--;
+    return true;
+}
+
+void gpu_timer_queue_begin(struct gpu_timer_queue *q)
+{
+    q->running = true;
+    if (q->wall_clock) {
+        q->cpu_start = time_now_ms();
+        return;
+    }
+    if (q->pending == GPU_TIMER_QUEUE_SIZE)
+        collect_oldest(q, true);
+    int next = (q->head + q->pending) % GPU_TIMER_QUEUE_SIZE;
+    glQueryCounter(q->slot[next].query[0], GL_TIMESTAMP);
+}
+
+unsigned gpu_timer_queue_end(struct gpu_timer_queue *q, struct gpu_timings *log)
+{
+    if (!q->running)
+        return 0;
+    q->running = false;
+    unsigned number = ++log->count;
+    if (q->wall_clock) {
+        glFinish();
+        arrive(q, log, number, time_now_ms() - q->cpu_start);
+        return number;
+    }
+    struct gpu_timer_slot *s = &q->slot[(q->head + q->pending) % GPU_TIMER_QUEUE_SIZE];
+    glQueryCounter(s->query[1], GL_TIMESTAMP);
+    s->log = log;
+    s->number = number;
+    q->pending++;
+    return number;
+}
+
+int gpu_timer_queue_collect(struct gpu_timer_queue *q, bool wait)
+{
+    while (q->pending > 0 && collect_oldest(q, wait)) {
+    }
+    return q->pending;
 }

@@ -44,6 +44,10 @@ void gpu_context_list(void (*print)(const char *name, const char *what, void *us
 void *gpu_context_window(struct gpu_context *ctx);
 bool gpu_context_has_stereo(const struct gpu_context *ctx);
 void gpu_context_swap(struct gpu_context *ctx);
+/* Makes CTX current and sets how many vertical blanks its swaps wait for (0: none).  Windows
+ * that swap together wait in the last one only.  No effect on headless contexts (nor on
+ * NULL). */
+void gpu_context_swap_interval(struct gpu_context *ctx, int interval);
 /* Framebuffer size of a window context; the desc size for headless. */
 void gpu_context_size(struct gpu_context *ctx, int *width, int *height);
 
@@ -102,9 +106,10 @@ struct gpu_program {
 
 /* Compiles shaders/NAME as a compute shader.  "#version 450 core" comes first, then DEFINES
  * (lines like "#define SHADOWS 1\n", may be NULL), then the file, where a line
- * `#include "file.glsl"` is replaced by shaders/file.glsl (nested, each file once).  Compile
- * and link errors are logged with the file name and line.  The shader directory is
- * $ANVIL_SHADER_DIR if set, else the source tree's shaders/. */
+ * `#include "FILE"` is replaced by shaders/FILE (nested, each file once): a GLSL include
+ * (*.glsl) or shaders/bindings.h, the binding numbers C includes too.  #line directives keep
+ * every file's own line numbers, so compile and link errors are logged with the file name and
+ * line.  The shader directory is $ANVIL_SHADER_DIR if set, else the source tree's shaders/. */
 bool gpu_program_init(struct gpu_program *prog, const char *name, const char *defines);
 /* A vertex + fragment program from shaders/VERTEX and shaders/FRAGMENT, loaded like compute
  * programs (same #include and DEFINES handling). */
@@ -172,27 +177,65 @@ void gpu_target_end(struct gpu_target *t);
 void gpu_present(const struct gpu_texture *tex, int x, int y, int w, int h, int buffer);
 void gpu_clear_default(float r, float g, float b);
 
-/* ---- timers -------------------------------------------------------------------------- */
+/* ---- timers --------------------------------------------------------------------------
+ * Timing never makes the CPU wait for the GPU: a measurement brackets GPU work with two
+ * GL_TIMESTAMP queries, and its time is read later, once the GPU has passed the second one
+ * (GL_QUERY_RESULT_AVAILABLE), into a log the caller owns.  Only a collect that is asked to
+ * wait (at the end of a run, for a report) or a full queue waits.
+ *
+ * Software drivers (Mesa's llvmpipe and softpipe) are the exception: they run compute work
+ * on the calling thread and their timestamps do not advance across it, so there the end of a
+ * measurement waits for the work (glFinish) and the wall time since its beginning is the
+ * result, known at once.  Timing blocks there by nature. */
 
-struct gpu_timer {
-    unsigned query[2]; /* GL_TIMESTAMP before and after */
-    double cpu_start, cpu_ms;
-    bool running, pending;
+/* Measured times, numbered from 1 in the order the measurements ended.  Plain data, zero =
+ * empty: whoever reads it owns it, and lends it to the code that measures. */
+#define GPU_TIMINGS_KEPT 64
+struct gpu_timings {
+    unsigned count;                /* measurements ended */
+    unsigned arrived;              /* of them, those whose GPU time was read */
+    double total_ms;               /* the sum of every time that arrived or was added */
+    double ms[GPU_TIMINGS_KEPT];   /* measurement i at ms[i - 1], the first GPU_TIMINGS_KEPT */
+    bool known[GPU_TIMINGS_KEPT];  /* whether ms[i - 1] arrived */
 };
 
-void gpu_timer_init(struct gpu_timer *t);
-void gpu_timer_begin(struct gpu_timer *t);
-void gpu_timer_end(struct gpu_timer *t);
-/* Milliseconds of GPU time between begin and end; waits for the result.  Where the driver's
- * timestamps do not advance across compute work (llvmpipe runs it on the calling thread),
- * the wall time measured around a glFinish is returned instead. */
-double gpu_timer_ms(struct gpu_timer *t);
-void gpu_timer_finish(struct gpu_timer *t);
+/* Adds MS to measurement NUMBER of LOG (CPU work a measurement includes, such as compressing
+ * a light map on the CPU), whether or not its GPU time arrived yet. */
+void gpu_timings_add(struct gpu_timings *log, unsigned number, double ms);
 
-/* ---- window swapping (context_swap.c) ------------------------------------------------- */
+/* How a queue measures.  AUTO (zero) takes WALL on software drivers and QUERIES elsewhere;
+ * QUERIES there would measure next to nothing, but follows the same bookkeeping (tests). */
+enum gpu_timer_clock { GPU_TIMER_AUTO, GPU_TIMER_QUERIES, GPU_TIMER_WALL };
 
-/* Makes CTX current and sets how many vertical blanks its swaps wait for (0: none).  Windows
- * that swap together wait in the last one only.  No effect on headless contexts. */
-void gpu_context_swap_interval(struct gpu_context *ctx, int interval);
+/* Measurements in flight, oldest first.  Caller-owned memory; init, begin, end, collect and
+ * finish need the GL context current. */
+#define GPU_TIMER_QUEUE_SIZE 64
+struct gpu_timer_queue {
+    struct gpu_timer_slot {
+        unsigned query[2];        /* GL_TIMESTAMP before and after */
+        struct gpu_timings *log;  /* where its time goes */
+        unsigned number;          /* its number in LOG */
+    } slot[GPU_TIMER_QUEUE_SIZE];
+    int head, pending;            /* the oldest measurement in flight, how many are */
+    bool running;                 /* begun and not ended */
+    double cpu_start;             /* wall clock at begin (software drivers) */
+    bool wall_clock;              /* software driver: wall time around a glFinish */
+    double last_ms;               /* the time of the latest measurement that arrived */
+};
+
+void gpu_timer_queue_init(struct gpu_timer_queue *q, enum gpu_timer_clock clock);
+/* Deletes the queries; times still in flight are dropped (their logs are not written). */
+void gpu_timer_queue_finish(struct gpu_timer_queue *q);
+/* Begins a measurement.  With GPU_TIMER_QUEUE_SIZE in flight, the oldest is waited for
+ * first: a bound on the queries a caller that never collects holds. */
+void gpu_timer_queue_begin(struct gpu_timer_queue *q);
+/* Ends the measurement begun last as measurement number ++LOG->count of LOG, and returns that
+ * number; 0 (LOG untouched) when none was begun.  LOG must stay valid until its time arrived
+ * (gpu_timer_queue_collect) or the queue is finished.  Does not wait, but on software
+ * drivers. */
+unsigned gpu_timer_queue_end(struct gpu_timer_queue *q, struct gpu_timings *log);
+/* Moves the times the GPU has ready into their logs, oldest first, without waiting; with
+ * WAIT, waits for all of them.  Returns how many are still in flight (0 after a WAIT). */
+int gpu_timer_queue_collect(struct gpu_timer_queue *q, bool wait);
 
 #endif

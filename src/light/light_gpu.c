@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "common/log.h"
+#include "shaders/bindings.h"
 
 struct light_gpu {
     struct render_light hook; /* first: the renderer's bind callback gets it back */
@@ -34,7 +35,10 @@ struct light_gpu {
     enum light_gpu_mode built_mode;
     double built_epsilon;
     size_t compressed_bytes;
-    struct gpu_timer timer;
+    struct gpu_timer_queue timers;
+    struct gpu_timings *timing; /* where build times go; NULL: untimed */
+    bool last_timed;            /* the last build was timed (its CPU part: last_cpu_ms) */
+    double last_cpu_ms;
     char defines[64];
 };
 
@@ -44,12 +48,14 @@ void light_gpu_bind(const struct light_gpu *lg, const struct gpu_program *prog, 
                      lg->grid.world_to_tex);
     gpu_uniform_ivec3(prog, next ? "light_n_next" : "light_n", lg->grid.n);
     if (lg->built_multiple)
-        gpu_texture_bind(&lg->diffuse, next ? 10 : 9);
+        gpu_texture_bind(&lg->diffuse,
+                         next ? BIND_LIGHTMAP_TEX_DIFFUSE_NEXT : BIND_LIGHTMAP_TEX_DIFFUSE);
     if (lg->built_mode == LIGHT_GPU_DENSE) {
-        gpu_texture_bind(&lg->light, next ? 8 : 2);
+        gpu_texture_bind(&lg->light, next ? BIND_LIGHTMAP_TEX_LIGHT_NEXT : BIND_LIGHTMAP_TEX_LIGHT);
     } else {
-        gpu_buffer_bind(&lg->columns, next ? 2 : 0);
-        gpu_buffer_bind(&lg->nodes, next ? 3 : 1);
+        gpu_buffer_bind(&lg->columns,
+                        next ? BIND_LIGHTMAP_BUF_COLUMNS_NEXT : BIND_LIGHTMAP_BUF_COLUMNS);
+        gpu_buffer_bind(&lg->nodes, next ? BIND_LIGHTMAP_BUF_NODES_NEXT : BIND_LIGHTMAP_BUF_NODES);
     }
 }
 
@@ -113,8 +119,8 @@ static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src
     const struct gpu_program *p = &lg->lateral_pass;
     gpu_uniform_ivec3(p, "vol_n", n);
     gpu_uniform_float(p, "clear_beta", LIGHT_CLEAR_BETA);
-    gpu_texture_bind(src->beta, 0);
-    gpu_image_bind_rw(&lg->rates, 0);
+    gpu_texture_bind(src->beta, BIND_LATERAL_TEX_BETA);
+    gpu_image_bind_rw(&lg->rates, BIND_LATERAL_IMG_RATES);
     for (int axis = 0; axis < 2; axis++) {
         gpu_uniform_int(p, "axis", axis);
         gpu_uniform_float(p, "spacing", (float)src->grid->spacing[axis]);
@@ -147,7 +153,7 @@ struct light_gpu *light_gpu_create(void)
         return NULL;
     }
     light_cache_init(&lg->cache);
-    gpu_timer_init(&lg->timer);
+    gpu_timer_queue_init(&lg->timers, GPU_TIMER_AUTO);
     lg->hook.bind = bind;
     lg->hook.defines = lg->defines;
     return lg;
@@ -169,7 +175,7 @@ void light_gpu_destroy(struct light_gpu *lg)
     gpu_texture_finish(&lg->adding);
     gpu_buffer_finish(&lg->columns);
     gpu_buffer_finish(&lg->nodes);
-    gpu_timer_finish(&lg->timer);
+    gpu_timer_queue_finish(&lg->timers);
     free(lg);
 }
 
@@ -201,10 +207,10 @@ static bool build_diffuse(struct light_gpu *lg, const double sun[3],
     gpu_uniform_vec2(p, "back", t.back);
     gpu_uniform_vec2(p, "gamma", t.gamma);
     gpu_uniform_float(p, "mu0", t.mu0);
-    gpu_image_bind(&lg->light, 0, false);
-    gpu_image_bind(&lg->slice, 1, false);
-    gpu_image_bind_rw(&lg->adding, 2);
-    gpu_image_bind(&lg->diffuse, 3, true);
+    gpu_image_bind(&lg->light, BIND_DIFFUSE_IMG_LIGHT, false);
+    gpu_image_bind(&lg->slice, BIND_DIFFUSE_IMG_SLICE, false);
+    gpu_image_bind_rw(&lg->adding, BIND_DIFFUSE_IMG_ADDING);
+    gpu_image_bind(&lg->diffuse, BIND_DIFFUSE_IMG_DIFFUSE, true);
     gpu_dispatch(p, g->n[0], g->n[1], 1);
     return true;
 }
@@ -256,12 +262,12 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
     gpu_uniform_float(p, "dsub", (float)(g->step[2] / substeps));
     gpu_uniform_vec4(p, "cp", cp);
     gpu_uniform_vec2(p, "per_offset", per);
-    gpu_texture_bind(src->beta, 0);
+    gpu_texture_bind(src->beta, BIND_BUILD_TEX_BETA);
     if (s->multiple && s->lateral)
-        gpu_texture_bind(&lg->rates, 1);
-    gpu_image_bind_rw(&lg->light, 0);
+        gpu_texture_bind(&lg->rates, BIND_BUILD_TEX_RATES);
+    gpu_image_bind_rw(&lg->light, BIND_BUILD_IMG_LIGHT);
     if (s->multiple)
-        gpu_image_bind(&lg->slice, 1, true);
+        gpu_image_bind(&lg->slice, BIND_BUILD_IMG_SLICE, true);
     for (int k = 0; k < g->n[2]; k++) {
         gpu_uniform_int(p, "plane", k);
         gpu_dispatch(p, g->n[0], g->n[1], 1);
@@ -340,14 +346,21 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
         return true;
     if (!light_grid_init(&lg->grid, sun, src->grid, settings->resolution, settings->grid))
         return false;
-    gpu_timer_begin(&lg->timer);
+    double cpu_start = time_now_ms();
+    struct gpu_timings *log = lg->timing;
+    if (log)
+        gpu_timer_queue_begin(&lg->timers);
     bool ok = build_dense(lg, src, sun, settings);
-    gpu_timer_end(&lg->timer);
-    double ms = gpu_timer_ms(&lg->timer);
+    unsigned number = log ? gpu_timer_queue_end(&lg->timers, log) : 0;
+    lg->last_timed = number != 0;
+    lg->last_cpu_ms = 0.0;
     if (ok && mode == LIGHT_GPU_COMPRESSED) {
+        /* The read-back waits for the GPU anyway: the CPU compresses what it built. */
         double start = time_now_ms();
         ok = build_compressed(lg, settings->epsilon);
-        ms += time_now_ms() - start;
+        lg->last_cpu_ms = time_now_ms() - start;
+        if (number)
+            gpu_timings_add(log, number, lg->last_cpu_ms);
     } else {
         gpu_buffer_finish(&lg->columns);
         gpu_buffer_finish(&lg->nodes);
@@ -357,7 +370,8 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
         light_cache_invalidate(&lg->cache);
         return false;
     }
-    light_cache_built(&lg->cache, &key, ms);
+    /* The cache keeps the CPU time of the update; the GPU's arrives in the timing log. */
+    light_cache_built(&lg->cache, &key, time_now_ms() - cpu_start);
     lg->have_key_mode = true;
     lg->built_mode = mode;
     lg->built_epsilon = settings->epsilon;
@@ -379,9 +393,23 @@ unsigned light_gpu_builds(const struct light_gpu *lg)
     return lg->cache.builds;
 }
 
-double light_gpu_last_build_ms(const struct light_gpu *lg)
+void light_gpu_set_timing(struct light_gpu *lg, struct gpu_timings *log)
 {
-    return lg->cache.last_ms;
+    lg->timing = log;
+}
+
+int light_gpu_collect_timings(struct light_gpu *lg, bool wait)
+{
+    return gpu_timer_queue_collect(&lg->timers, wait);
+}
+
+bool light_gpu_last_build_ms(struct light_gpu *lg, double *ms)
+{
+    /* The last build is the newest measurement: known once none is in flight. */
+    if (!lg->last_timed || light_gpu_collect_timings(lg, false) > 0)
+        return false;
+    *ms = lg->timers.last_ms + lg->last_cpu_ms;
+    return true;
 }
 
 void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed)

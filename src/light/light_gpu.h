@@ -43,15 +43,27 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
 const struct render_light *light_gpu_render_light(struct light_gpu *lg);
 
 /* Binds the last built map for the eye pass PROG: as the map of step k, or with NEXT as the
- * second of a pair (effects.temporal, LIGHTMAP_PAIR: texture unit 8 or buffers 2 and 3, the
- * uniforms named *_next). */
+ * second of a pair (effects.temporal, LIGHTMAP_PAIR: the BIND_LIGHTMAP_*_NEXT units of
+ * shaders/bindings.h, the uniforms named *_next). */
 void light_gpu_bind(const struct light_gpu *lg, const struct gpu_program *prog, bool next);
 /* The LIGHTMAP variant of the last build: 1 dense, 2 compressed, 0 none built yet. */
 int light_gpu_variant(const struct light_gpu *lg);
 
-/* Builds so far and the GPU milliseconds of the last one. */
+/* Builds so far. */
 unsigned light_gpu_builds(const struct light_gpu *lg);
-double light_gpu_last_build_ms(const struct light_gpu *lg);
+
+/* Times every following build into LOG (NULL, the default: builds are not timed, and nothing
+ * in a build waits for the GPU).  A build's time is its GPU time plus, in compressed mode, the
+ * CPU time of the compression.  Timing does not wait either (gpu.h, "timers"), except on
+ * software drivers: the times arrive in LOG with light_gpu_collect_timings.  LOG is borrowed:
+ * it must stay valid until light_gpu_collect_timings(lg, true) returned or LG is destroyed. */
+void light_gpu_set_timing(struct light_gpu *lg, struct gpu_timings *log);
+/* Moves the build times the GPU has ready into their logs without waiting, or with WAIT all
+ * of them.  Returns how many are still in flight. */
+int light_gpu_collect_timings(struct light_gpu *lg, bool wait);
+/* The milliseconds of the last build, if known: collects without waiting, and returns false
+ * while the GPU has not finished the build (or when it was not timed, or none was made). */
+bool light_gpu_last_build_ms(struct light_gpu *lg, double *ms);
 
 /* Bytes of the dense light volume and of the compressed nodes (0 in dense mode), each with
  * the dense diffuse volume added when the last build had multiple scattering. */

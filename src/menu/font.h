@@ -1,5 +1,5 @@
-/* menu internal: text through stb_truetype, baked once into an 8-bit atlas and blended into
- * the menu's RGBA8 panel image. */
+/* menu internal: text baked once into an 8-bit atlas (common/glyphs.h) and blended into the
+ * menu's RGBA8 panel image. */
 #ifndef ANVIL_MENU_FONT_H
 #define ANVIL_MENU_FONT_H
 

@@ -9,7 +9,7 @@
  * report their change once, on release, so a drag costs one light map rebuild, not one per
  * frame.  Buttons act on release over the same widget.
  *
- * The menu draws itself into an RGBA8 image (row 0 at the top; text through stb_truetype with
+ * The menu draws itself into an RGBA8 image (row 0 at the top; text baked by common/glyphs.h from
  * DejaVu Sans) that the application puts on a quad; it never reads a device and calls no GL.
  * Its pose is in "menu space": tracker metres in a CAVE or HMD, world metres on the desktop;
  * wand rays must be given in the same space.

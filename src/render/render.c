@@ -7,6 +7,7 @@
 #include <cglm/cglm.h>
 
 #include "common/log.h"
+#include "shaders/bindings.h"
 
 #define PHASE_TABLE_SIZE 512
 #define MAX_VARIANTS 16
@@ -45,8 +46,8 @@ struct renderer {
     char opaque_defines[MAX_VARIANTS][256];
     int n_opaque;
     struct gpu_target target;
-    struct gpu_timer timer;
-    bool timing; /* time each view (waits for it to finish) */
+    struct gpu_timer_queue timers;
+    struct gpu_timings *timing; /* where the views' times go; NULL: untimed */
     struct render_stats stats;
 };
 
@@ -86,8 +87,7 @@ struct renderer *renderer_create(void)
         renderer_destroy(r);
         return NULL;
     }
-    gpu_timer_init(&r->timer);
-    r->timing = true;
+    gpu_timer_queue_init(&r->timers, GPU_TIMER_AUTO);
     return r;
 }
 
@@ -105,7 +105,7 @@ void renderer_destroy(struct renderer *r)
     for (int i = 0; i < r->n_opaque; i++)
         gpu_program_finish(&r->opaque[i]);
     gpu_target_finish(&r->target);
-    gpu_timer_finish(&r->timer);
+    gpu_timer_queue_finish(&r->timers);
     free(r);
 }
 
@@ -255,7 +255,7 @@ static bool draw_opaque(struct renderer *r, const struct render_settings *s,
         gpu_uniform_int(p, "emissive", m->emissive ? 1 : 0);
         gpu_uniform_int(p, "textured", m->texture ? 1 : 0);
         if (m->texture)
-            gpu_texture_bind(m->texture, 5);
+            gpu_texture_bind(m->texture, BIND_OPAQUE_TEX_MESH);
         gpu_mesh_draw(&m->mesh, p);
     }
     gpu_target_end(&r->target);
@@ -330,33 +330,31 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     gpu_uniform_ivec2(prog, "image_size", image_size);
     int zero[2] = {0, 0};
     gpu_uniform_ivec2(prog, "pixel_offset", zero);
-    gpu_texture_bind(&r->beta, 0);
-    gpu_texture_bind(&r->phase, 1);
+    gpu_texture_bind(&r->beta, BIND_EYE_TEX_BETA);
+    gpu_texture_bind(&r->phase, BIND_EYE_TEX_PHASE);
     if (r->have_tint)
-        gpu_texture_bind(&r->tint, 6);
+        gpu_texture_bind(&r->tint, BIND_EYE_TEX_TINT);
     if (temporal)
-        gpu_texture_bind(&r->beta_next, 7);
+        gpu_texture_bind(&r->beta_next, BIND_EYE_TEX_BETA_NEXT);
     /* Also the blend of a light map pair (LIGHTMAP_PAIR), which comes only with temporal. */
     if (s->temporal)
         gpu_uniform_float(prog, "temporal_f", s->temporal_f);
-    gpu_image_bind(out, 0, true);
+    gpu_image_bind(out, BIND_EYE_IMG_OUT, true);
     if (r->light && r->light->bind)
         r->light->bind(r->light, prog);
 
     if (r->timing)
-        gpu_timer_begin(&r->timer);
+        gpu_timer_queue_begin(&r->timers);
     if (opaque) {
         if (!draw_opaque(r, s, view, vp, inv, light_defines))
             return false;
-        gpu_texture_bind(&r->target.color, 3);
-        gpu_texture_bind(&r->target.value, 4);
+        gpu_texture_bind(&r->target.color, BIND_EYE_TEX_OPAQUE_COLOR);
+        gpu_texture_bind(&r->target.value, BIND_EYE_TEX_OPAQUE_DISTANCE);
     }
     gpu_dispatch(prog, view->width, view->height, 1);
     r->stats.views++;
-    if (r->timing) {
-        gpu_timer_end(&r->timer);
-        r->stats.view_ms_total += gpu_timer_ms(&r->timer);
-    }
+    if (r->timing)
+        gpu_timer_queue_end(&r->timers, r->timing);
     return true;
 }
 
@@ -367,8 +365,8 @@ bool renderer_tonemap(struct renderer *r, const struct gpu_texture *in, float ex
         return false;
     gpu_uniform_ivec2(&r->tonemap, "image_size", in->size);
     gpu_uniform_float(&r->tonemap, "exposure", exposure);
-    gpu_image_bind(in, 0, false);
-    gpu_image_bind(out, 1, true);
+    gpu_image_bind(in, BIND_TONEMAP_IMG_IN, false);
+    gpu_image_bind(out, BIND_TONEMAP_IMG_OUT, true);
     gpu_dispatch(&r->tonemap, in->size[0], in->size[1], 1);
     return true;
 }
@@ -456,7 +454,12 @@ void renderer_remove_mesh(struct renderer *r, struct render_mesh *m)
     }
 }
 
-void renderer_set_timing(struct renderer *r, bool on)
+void renderer_set_timing(struct renderer *r, struct gpu_timings *log)
 {
-    r->timing = on;
+    r->timing = log;
+}
+
+int renderer_collect_timings(struct renderer *r, bool wait)
+{
+    return gpu_timer_queue_collect(&r->timers, wait);
 }

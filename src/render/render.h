@@ -49,10 +49,10 @@ struct render_view {
     int width, height;
 };
 
-/* Statistics a caller may report (--stats). */
+/* Statistics a caller may report (--stats); the views' times go to renderer_set_timing's
+ * log. */
 struct render_stats {
     unsigned views;         /* views drawn */
-    double view_ms_total;   /* GPU time of all views */
     double upload_ms;       /* CPU+GPU time of the last volume upload */
 };
 
@@ -106,10 +106,15 @@ bool renderer_read(const struct gpu_texture *tex, struct image *img);
 
 const struct render_stats *renderer_stats(const struct renderer *r);
 
-/* Times every view (on by default) for render_stats.view_ms_total.  Reading a GPU timer
- * waits for the view to finish, so interactive loops that report nothing turn it off and let
- * the views of a frame queue up. */
-void renderer_set_timing(struct renderer *r, bool on);
+/* Times every following view into LOG (NULL, the default: views are not timed): the view's
+ * number in LOG is its place among the timed views.  Drawing never waits for a time; the
+ * times arrive in LOG with renderer_collect_timings (gpu.h, "timers"; on software drivers
+ * each timed view waits for itself).  LOG is borrowed: it must stay valid until
+ * renderer_collect_timings(r, true) returned or R is destroyed. */
+void renderer_set_timing(struct renderer *r, struct gpu_timings *log);
+/* Moves the view times the GPU has ready into their logs without waiting, or with WAIT all
+ * of them (for a report at the end of a run).  Returns how many are still in flight. */
+int renderer_collect_timings(struct renderer *r, bool wait);
 
 /* ---- opaque geometry -----------------------------------------------------------------
  * Meshes drawn in every view before the ray cast: each view's rays stop at their distance and

@@ -4,14 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "common/glyphs.h"
 #include "common/log.h"
-
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wunused-function"
-#define STBTT_STATIC /* private copy: the menu may bake its own */
-#define STB_TRUETYPE_IMPLEMENTATION
-#include <stb_truetype.h>
-#pragma GCC diagnostic pop
 
 #define ATLAS_SIZE 512
 #define GLYPH_PIXELS 48.0f
@@ -179,29 +173,22 @@ static int next_glyph(const char **s)
 struct render_text *render_text_create(const char *font_path, const struct render_label *labels,
                                        int n, const float color[3])
 {
-    size_t font_len = 0;
-    unsigned char *font = (unsigned char *)file_read_all(font_path, &font_len);
+    struct glyph_atlas *font =
+        glyph_atlas_create(font_path, GLYPH_PIXELS, FIRST_CHAR, CHAR_COUNT, ATLAS_SIZE, ATLAS_SIZE);
     if (!font)
         return NULL;
     struct render_text *t = calloc(1, sizeof(*t));
-    unsigned char *alpha = malloc(ATLAS_SIZE * ATLAS_SIZE);
     unsigned char *rgba = malloc(ATLAS_SIZE * ATLAS_SIZE * 4);
-    stbtt_bakedchar chars[CHAR_COUNT];
     size_t glyphs = 0;
     for (int l = 0; l < n; l++)
         glyphs += strlen(labels[l].text);
     struct render_vertex *v = malloc((glyphs * 4 + 1) * sizeof(*v));
     uint32_t *idx = malloc((glyphs * 6 + 1) * sizeof(*idx));
-    if (!t || !alpha || !rgba || !v || !idx) {
+    if (!t || !rgba || !v || !idx) {
         log_error("out of memory for labels");
         goto error;
     }
-    if (stbtt_BakeFontBitmap(font, 0, GLYPH_PIXELS, alpha, ATLAS_SIZE, ATLAS_SIZE, FIRST_CHAR,
-                             CHAR_COUNT, chars) <= 0) {
-        log_error("%s: cannot bake the font (not a TrueType file, or the atlas is too small)",
-                  font_path);
-        goto error;
-    }
+    const unsigned char *alpha = glyph_atlas_alpha(font);
     for (int p = 0; p < ATLAS_SIZE * ATLAS_SIZE; p++) {
         rgba[4 * p] = rgba[4 * p + 1] = rgba[4 * p + 2] = 255;
         rgba[4 * p + 3] = alpha[p];
@@ -218,8 +205,8 @@ struct render_text *render_text_create(const char *font_path, const struct rende
             int g = next_glyph(&c);
             if (g < 0)
                 continue;
-            stbtt_aligned_quad q;
-            stbtt_GetBakedQuad(chars, ATLAS_SIZE, ATLAS_SIZE, g, &px, &py, &q, 1);
+            struct glyph_quad q;
+            glyph_atlas_place(font, g, &px, &py, &q);
             /* Atlas y grows downward; the label's "up" is +y in the world. */
             const double corner[4][4] = {
                 {q.x0, q.y1, q.s0, q.t1}, {q.x1, q.y1, q.s1, q.t1},
@@ -246,8 +233,7 @@ struct render_text *render_text_create(const char *font_path, const struct rende
     if (!t->mesh)
         goto error;
     render_mesh_set_texture(t->mesh, &t->atlas);
-    free(font);
-    free(alpha);
+    glyph_atlas_destroy(font);
     free(rgba);
     free(v);
     free(idx);
@@ -255,8 +241,7 @@ struct render_text *render_text_create(const char *font_path, const struct rende
 
 error:
     render_text_destroy(t);
-    free(font);
-    free(alpha);
+    glyph_atlas_destroy(font);
     free(rgba);
     free(v);
     free(idx);

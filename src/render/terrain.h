@@ -1,7 +1,7 @@
 /*
  * render/terrain: the meshes that put the storm in its place (docs/terrain.md): the terrain's
  * height field as lit triangles with a flat skirt around it, polylines on the ground
- * (coastlines, graticule) and flat text labels baked with stb_truetype.  All of them are
+ * (coastlines, graticule) and flat text labels (glyphs from common/glyphs.h).  All of them are
  * opaque geometry for renderer_add_mesh: lit Lambertian, so they receive the light map's
  * shadow.  It knows nothing of lat/lon or files other than the font.
  * Every function that returns a mesh or text needs the GL context current.

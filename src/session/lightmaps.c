@@ -42,12 +42,16 @@ static void bind_pair(const struct render_light *light, const struct gpu_program
     light_gpu_bind(maps[1 - al->pair_first], prog, true);
 }
 
-/* Builds LG for SRC when stale; logs and counts a build. */
-static bool build(struct light_gpu *lg, const struct light_gpu_source *src, const double sun[3],
-                  const struct light_settings *s, enum light_gpu_mode mode, bool one_phase,
-                  struct session_stats *st)
+/* Builds map WHICH (0 gpu, 1 spare) for SRC when stale; logs and counts a build.  Its time is
+ * logged with it when known at once (software drivers, gpu.h), else when it arrives
+ * (lightmaps_collect_timings). */
+static bool build(struct lightmaps *al, int which, const struct light_gpu_source *src,
+                  const double sun[3], const struct light_settings *s, enum light_gpu_mode mode,
+                  bool one_phase, struct session_stats *st)
 {
+    struct light_gpu *lg = which ? al->spare : al->gpu;
     bool built = false;
+    light_gpu_set_timing(lg, al->timing);
     if (!light_gpu_update(lg, src, sun, s, mode, &built)) {
         log_error("lightmap.resolution [%d, %d, %d]: the light map could not be built (see "
                   "above); a smaller resolution needs less GPU memory",
@@ -56,18 +60,21 @@ static bool build(struct light_gpu *lg, const struct light_gpu_source *src, cons
     }
     if (!built)
         return true;
-    double ms = light_gpu_last_build_ms(lg);
-    if (st)
-        session_stats_add_build(st, ms);
     size_t dense, compressed;
     light_gpu_bytes(lg, &dense, &compressed);
     if (st) {
+        session_stats_add_build(st);
         st->light_bytes_dense = (double)dense;
         st->light_bytes_compressed = (double)compressed;
     }
-    log_info("light map %dx%dx%d built in %.1f ms (%s%s%s%s)", s->resolution[0],
-             s->resolution[1], s->resolution[2], ms,
-             mode == LIGHT_GPU_DENSE ? "dense" : "compressed",
+    double ms = 0.0;
+    bool known = light_gpu_last_build_ms(lg, &ms);
+    al->log_pending[which] = al->timing && !known;
+    char when[64] = "queued";
+    if (known)
+        snprintf(when, sizeof(when), "built in %.1f ms", ms);
+    log_info("light map %dx%dx%d %s (%s%s%s%s)", s->resolution[0], s->resolution[1],
+             s->resolution[2], when, mode == LIGHT_GPU_DENSE ? "dense" : "compressed",
              s->forward ? (s->peripheral ? ", forward and peripheral" : ", forward")
                         : ", shadow only",
              s->multiple ? (s->lateral ? ", diffuse light with lateral escape" : ", diffuse light")
@@ -98,7 +105,7 @@ static bool update_temporal(struct lightmaps *al, struct renderer *r,
         .generation = TEMPORAL_GENERATION,
     };
     al->held[cur] = 0;
-    if (!build(maps[cur], &src, p->sun, &p->light, p->mode, p->one_phase, st))
+    if (!build(al, cur, &src, p->sun, &p->light, p->mode, p->one_phase, st))
         return false;
     al->held[cur] = al->step_id;
     if (!pair) {
@@ -112,7 +119,7 @@ static bool update_temporal(struct lightmaps *al, struct renderer *r,
         .generation = TEMPORAL_GENERATION,
     };
     al->held[1 - cur] = 0;
-    if (!build(maps[1 - cur], &next, p->sun, &p->light, p->mode, p->one_phase, st))
+    if (!build(al, 1 - cur, &next, p->sun, &p->light, p->mode, p->one_phase, st))
         return false;
     al->held[1 - cur] = al->next_id;
     al->pair_first = cur;
@@ -157,7 +164,7 @@ bool lightmaps_update_params(struct lightmaps *al, const struct lightmaps_params
         .generation = al->generation,
     };
     al->held[0] = 0;
-    if (!build(al->gpu, &src, p->sun, &p->light, p->mode, p->one_phase, st))
+    if (!build(al, 0, &src, p->sun, &p->light, p->mode, p->one_phase, st))
         return false;
     renderer_set_light(r, light_gpu_render_light(al->gpu));
     return true;
@@ -170,6 +177,28 @@ bool lightmaps_update(struct lightmaps *al, const struct config *cfg, struct ren
     lightmaps_params_from(cfg, al->have_effects ? &al->effects : NULL, cfg->light.azimuth_deg,
                           cfg->light.elevation_deg, &p);
     return lightmaps_update_params(al, &p, r, st);
+}
+
+void lightmaps_set_timing(struct lightmaps *al, struct gpu_timings *log)
+{
+    al->timing = log;
+}
+
+int lightmaps_collect_timings(struct lightmaps *al, bool wait)
+{
+    struct light_gpu *maps[2] = {al->gpu, al->spare};
+    int in_flight = 0;
+    for (int i = 0; i < 2; i++) {
+        if (!maps[i])
+            continue;
+        in_flight += light_gpu_collect_timings(maps[i], wait);
+        double ms;
+        if (al->log_pending[i] && light_gpu_last_build_ms(maps[i], &ms)) {
+            log_info("light map built in %.1f ms on the GPU", ms);
+            al->log_pending[i] = false;
+        }
+    }
+    return in_flight;
 }
 
 void lightmaps_finish(struct lightmaps *al)

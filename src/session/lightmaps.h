@@ -35,6 +35,8 @@ struct lightmaps {
     int pair_first;          /* which of them holds step_id while the pair is bound */
     struct render_light pair; /* the hook that binds both */
     char pair_defines[96];
+    struct gpu_timings *timing; /* where build times go (lightmaps_set_timing), or NULL */
+    bool log_pending[2];        /* gpu's, spare's last build is logged when its time arrives */
 };
 
 /* What a build depends on besides the volume: the sun, the light map settings (the effects'
@@ -59,12 +61,19 @@ bool lightmaps_init(struct lightmaps *al, const struct config *cfg);
 /* Uses the decisions E (copied) from now on; without them every auto effect is on. */
 void lightmaps_set_effects(struct lightmaps *al, const struct effects *e);
 /* Builds when stale (the light key: sun, volume generation, optics, settings, storage) and
- * points the renderer at the light map; counts builds in ST (may be NULL). */
+ * points the renderer at the light map; counts builds in ST (may be NULL).  Never waits for
+ * the GPU (but on software drivers while timed: gpu.h, "timers"). */
 bool lightmaps_update_params(struct lightmaps *al, const struct lightmaps_params *p,
                              struct renderer *r, struct session_stats *st);
 /* The same with the parameters of CFG, its sun and the decisions set (lightmaps_params_from). */
 bool lightmaps_update(struct lightmaps *al, const struct config *cfg, struct renderer *r,
                       struct session_stats *st);
+/* Times every following build into LOG (NULL: untimed, the default).  LOG is borrowed until
+ * lightmaps_collect_timings(al, true) returned or lightmaps_finish. */
+void lightmaps_set_timing(struct lightmaps *al, struct gpu_timings *log);
+/* Moves the build times the GPU has ready into the log (all of them with WAIT) and logs the
+ * builds whose time was not known when they were made.  Returns how many are in flight. */
+int lightmaps_collect_timings(struct lightmaps *al, bool wait);
 void lightmaps_finish(struct lightmaps *al);
 
 #endif

@@ -213,7 +213,9 @@ struct session *session_create(const struct config *cfg, const struct session_de
     s->renderer = renderer_create();
     bool ok = s->renderer != NULL;
     if (ok) {
-        renderer_set_timing(s->renderer, d->time_views);
+        /* Views are timed only when reported: on a software driver a timed view waits for
+         * itself (gpu.h, "timers"). */
+        renderer_set_timing(s->renderer, d->time_views ? &s->stats.view_times : NULL);
         ok = renderer_set_optics(s->renderer, &cfg->optics.params) &&
              renderer_set_volume(s->renderer, &vol);
     }
@@ -224,6 +226,7 @@ struct session *session_create(const struct config *cfg, const struct session_de
     if (!lightmaps_init(&s->light, cfg))
         goto error;
     lightmaps_set_effects(&s->light, &s->effects);
+    lightmaps_set_timing(&s->light, &s->stats.build_times);
     s->map = scene_map_create(cfg, s->renderer, player_wrf_meta(s->player));
     if (!s->map)
         goto error;
@@ -827,8 +830,15 @@ bool session_apply(struct session *s, const struct frame_state *f, bool *changed
     return true;
 }
 
+void session_collect_timings(struct session *s, bool wait)
+{
+    renderer_collect_timings(s->renderer, wait);
+    lightmaps_collect_timings(&s->light, wait);
+}
+
 bool session_light(struct session *s)
 {
+    session_collect_timings(s, false);
     double az = s->have_applied ? s->applied.sun_azimuth_deg : s->sun_az;
     double el = s->have_applied ? s->applied.sun_elevation_deg : s->sun_el;
     struct lightmaps_params p;
@@ -859,7 +869,7 @@ bool session_draw(struct session *s, struct display *d, const struct frame_state
     for (int i = 0; i < display_view_count(d); i++) {
         const struct view *v = display_view(d, i);
         if (v->visible)
-            session_stats_add_view(&s->stats, v->ms);
+            session_stats_add_view(&s->stats);
     }
     s->stats.frames++;
     return display_present(d, s->renderer, (float)s->cfg.render.exposure);

@@ -80,7 +80,8 @@ bool session_update(struct session *s, const struct input_queue *window_events, 
  * of the eye pass.  *CHANGED (may be NULL) is set when a volume was uploaded. */
 bool session_apply(struct session *s, const struct frame_state *f, bool *changed);
 
-/* Builds the light map if its key changed since the last build (once for every view). */
+/* Builds the light map if its key changed since the last build (once for every view); first
+ * moves the view and build times that arrived into the stats (never waiting). */
 bool session_light(struct session *s);
 
 /* Places D's views for F, the menu's panel and ray, draws every view and presents them. */
@@ -119,6 +120,10 @@ bool session_script_done(struct session *s);
 double session_script_dt(const struct session *s);
 /* Waits for the wanted volume and uploads it (the end of a scripted render). */
 bool session_settle(struct session *s);
+
+/* Moves the view and build times the GPU has ready into session_stats; with WAIT all of them
+ * (before the report at the end of a run). */
+void session_collect_timings(struct session *s, bool wait);
 
 struct renderer *session_renderer(struct session *s);
 struct session_stats *session_stats(struct session *s);

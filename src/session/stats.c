@@ -6,25 +6,28 @@
 
 #include "common/log.h"
 
-void session_stats_add_view(struct session_stats *st, double ms)
+void session_stats_add_view(struct session_stats *st)
 {
     st->views++;
-    if (st->n_view_ms < sizeof(st->view_ms) / sizeof(st->view_ms[0]))
-        st->view_ms[st->n_view_ms++] = ms;
 }
 
-void session_stats_add_build(struct session_stats *st, double ms)
+void session_stats_add_build(struct session_stats *st)
 {
     st->light_builds++;
-    if (st->n_build_ms < sizeof(st->build_ms) / sizeof(st->build_ms[0]))
-        st->build_ms[st->n_build_ms++] = ms;
 }
 
-static void write_list(FILE *f, const double *v, unsigned n)
+/* The first GPU_TIMINGS_KEPT times of T; null where one has not arrived. */
+static void write_list(FILE *f, const struct gpu_timings *t)
 {
+    unsigned n = t->count < GPU_TIMINGS_KEPT ? t->count : GPU_TIMINGS_KEPT;
     fputc('[', f);
-    for (unsigned i = 0; i < n; i++)
-        fprintf(f, "%s%.4f", i ? ", " : "", v[i]);
+    for (unsigned i = 0; i < n; i++) {
+        fputs(i ? ", " : "", f);
+        if (t->known[i])
+            fprintf(f, "%.4f", t->ms[i]);
+        else
+            fputs("null", f);
+    }
     fputc(']', f);
 }
 
@@ -47,9 +50,9 @@ bool session_stats_write(const struct session_stats *st, const char *path)
     fprintf(f, "\",\n  \"views\": %u,\n  \"light_map_builds\": %u,\n", st->views,
             st->light_builds);
     fprintf(f, "  \"view_ms\": ");
-    write_list(f, st->view_ms, st->n_view_ms);
+    write_list(f, &st->view_times);
     fprintf(f, ",\n  \"build_ms\": ");
-    write_list(f, st->build_ms, st->n_build_ms);
+    write_list(f, &st->build_times);
     fprintf(f, ",\n  \"light_map_bytes_dense\": %.0f,\n", st->light_bytes_dense);
     fprintf(f, "  \"light_map_bytes_compressed\": %.0f,\n", st->light_bytes_compressed);
     fprintf(f, "  \"gpu_bytes\": %zu,\n  \"nonfinite_pixels\": %zu,\n", st->gpu_bytes,

@@ -8,15 +8,17 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "gpu/gpu.h"
+
 struct session_stats {
     const char *command;
     const char *device;
     unsigned views;
     unsigned light_builds;
-    double view_ms[64];
-    unsigned n_view_ms;
-    double build_ms[64];
-    unsigned n_build_ms;
+    /* The times of the timed views and light map builds (view_ms and build_ms in the file),
+     * lent to the renderer and the light maps (renderer_set_timing, lightmaps_set_timing);
+     * they arrive frames later, so collect them all before writing. */
+    struct gpu_timings view_times, build_times;
     double light_bytes_dense, light_bytes_compressed;
     size_t gpu_bytes;
     size_t nonfinite_pixels;
@@ -33,9 +35,11 @@ struct session_stats {
     double frame_ms_max;      /* longest frame of the loop */
 };
 
-void session_stats_add_view(struct session_stats *st, double ms);
-void session_stats_add_build(struct session_stats *st, double ms);
-/* Writes ST as JSON to PATH (atomically).  False (logged) on failure. */
+/* Counts a view drawn and a light map built; their times go to view_times and build_times. */
+void session_stats_add_view(struct session_stats *st);
+void session_stats_add_build(struct session_stats *st);
+/* Writes ST as JSON to PATH (atomically); a time that has not arrived is written as null.
+ * False (logged) on failure. */
 bool session_stats_write(const struct session_stats *st, const char *path);
 
 #endif

@@ -5,7 +5,8 @@
 . "$(dirname "$0")/lib.sh"
 cd "$src/src" || exit 1
 
-# Each part and the parts it may include, bottom to top.
+# Each part and the parts it may include, bottom to top ("shaders": the binding numbers shared
+# with GLSL, shaders/bindings.h, for the parts that bind textures and buffers).
 declare -A allowed=(
     [common]=""
     [optics]="common"
@@ -13,10 +14,10 @@ declare -A allowed=(
     [data]="common optics"
     [gpu]="common"
     [input]="common"
-    [render]="common optics data gpu"
-    [light]="common optics data gpu render"
+    [render]="common optics data gpu shaders"
+    [light]="common optics data gpu render shaders"
     [menu]="common optics input"
-    [display]="common config gpu input render"
+    [display]="common config gpu input render shaders"
     [reference]="common optics data render"
     [session]="common optics config data gpu input render light menu display reference"
     [bench]="common optics config data gpu input render light menu display reference session"

@@ -1,0 +1,73 @@
+/*
+ * Binding points shared by the C code that binds textures, images and storage buffers and
+ * the shaders that declare them: `layout(binding = NAME)` in shaders/, the same NAME in the
+ * gpu_texture_bind / gpu_image_bind / gpu_buffer_bind calls in src/.  C includes this file as
+ * "shaders/bindings.h"; shaders as `#include "bindings.h"` (src/gpu/gpu.c pastes it in).
+ *
+ * Only `#define NAME N` lines and comments, so both languages read it.  There is no include
+ * guard: repeating an identical #define is allowed in C and in GLSL, and the shader loader
+ * pastes each file once anyway.
+ *
+ * Texture units, image units and storage buffer bindings are three separate name spaces
+ * (BIND_*_TEX_*, BIND_*_IMG_*, BIND_*_BUF_*).  Within one program the numbers of one kind must
+ * differ: the groups below say which names meet in which program, and tests/unit/
+ * test_bindings.c checks it, and that no shader or bind call uses a bare number.
+ */
+
+/* ---- light map lookup (shaders/lightmap_lookup.glsl) -------------------------------------
+ * Read by the eye pass and by the opaque pass; bound by light_gpu_bind.  A light map pair
+ * (effects.temporal, LIGHTMAP_PAIR) binds step k's map at the plain names and step k + 1's at
+ * the *_NEXT names, all at once: the eight must differ from each other and from the units of
+ * the eye pass and the opaque pass. */
+#define BIND_LIGHTMAP_TEX_LIGHT 2          /* LIGHTMAP 1: dense light volume, R32F */
+#define BIND_LIGHTMAP_TEX_LIGHT_NEXT 8     /* ... of step k + 1 */
+#define BIND_LIGHTMAP_TEX_DIFFUSE 9        /* MULTIPLE 1: diffuse light M, N, RG32F */
+#define BIND_LIGHTMAP_TEX_DIFFUSE_NEXT 10  /* ... of step k + 1 */
+#define BIND_LIGHTMAP_BUF_COLUMNS 0        /* LIGHTMAP 2: first node and count per column */
+#define BIND_LIGHTMAP_BUF_NODES 1          /* LIGHTMAP 2: depth and light per node */
+#define BIND_LIGHTMAP_BUF_COLUMNS_NEXT 2   /* ... of step k + 1 */
+#define BIND_LIGHTMAP_BUF_NODES_NEXT 3     /* ... of step k + 1 */
+
+/* ---- eye pass (shaders/raycast.comp, renderer_draw) --------------------------------------
+ * Besides its own units, the eye pass reads the light map's (above). */
+#define BIND_EYE_TEX_BETA 0             /* RG32F extinction: ice and water phase */
+#define BIND_EYE_TEX_PHASE 1            /* 1D eye phase table */
+#define BIND_EYE_TEX_OPAQUE_COLOR 3     /* OPAQUE 1: radiance of the opaque geometry */
+#define BIND_EYE_TEX_OPAQUE_DISTANCE 4  /* OPAQUE 1: its distance along the ray */
+#define BIND_EYE_TEX_TINT 6             /* TINT 1: colour of the scattered light */
+#define BIND_EYE_TEX_BETA_NEXT 7        /* TEMPORAL 1: extinction of step k + 1 */
+#define BIND_EYE_IMG_OUT 0              /* RGBA32F radiance and transmittance */
+
+/* ---- opaque pass (shaders/opaque.vert, opaque.frag) ---------------------------------------
+ * Reads the light map's units too.  renderer_draw binds the eye pass's units before it draws
+ * the opaque geometry, so the mesh texture's unit must differ from those as well. */
+#define BIND_OPAQUE_TEX_MESH 5  /* RGBA8 texture of a textured mesh (text) */
+
+/* ---- tone mapping (shaders/tonemap.comp) ---------------------------------------------- */
+#define BIND_TONEMAP_IMG_IN 0   /* RGBA32F radiance */
+#define BIND_TONEMAP_IMG_OUT 1  /* RGBA8 display sRGB */
+
+/* ---- light build: the beam, plane by plane (shaders/light_build.comp) ----------------- */
+#define BIND_BUILD_TEX_BETA 0   /* the volume's extinction, texelFetch only */
+#define BIND_BUILD_TEX_RATES 1  /* MULTIPLE and LATERAL: lateral escape rates */
+#define BIND_BUILD_IMG_LIGHT 0  /* R32F node volume, read and written */
+#define BIND_BUILD_IMG_SLICE 1  /* MULTIPLE: each slice's tau, ice share, escape rates */
+
+/* ---- light build: the diffuse column pass (shaders/light_diffuse.comp) ---------------- */
+#define BIND_DIFFUSE_IMG_LIGHT 0    /* the beam at each node, read */
+#define BIND_DIFFUSE_IMG_SLICE 1    /* the slices of the beam pass, read */
+#define BIND_DIFFUSE_IMG_ADDING 2   /* scratch, read and written */
+#define BIND_DIFFUSE_IMG_DIFFUSE 3  /* RG32F diffuse light, written */
+
+/* ---- light build: the lateral escape rates (shaders/light_lateral.comp) --------------- */
+#define BIND_LATERAL_TEX_BETA 0   /* the volume's extinction, texelFetch only */
+#define BIND_LATERAL_IMG_RATES 0  /* RG32F rates along x and y, read and written */
+
+/* ---- stereo composition (shaders/display_compose.comp) -------------------------------- */
+#define BIND_COMPOSE_TEX_LEFT 0
+#define BIND_COMPOSE_TEX_RIGHT 1
+#define BIND_COMPOSE_IMG_OUT 0
+
+/* ---- HMD lens warp (shaders/hmd_warp.comp) -------------------------------------------- */
+#define BIND_WARP_TEX_EYE 0
+#define BIND_WARP_IMG_OUT 0
