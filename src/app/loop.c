@@ -56,32 +56,35 @@ int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
 
     bool moving = display_head_moves(d), dirty = true, idle = false;
     long frames_left = ld->frames;
+    struct input_queue *events = malloc(sizeof(*events));
+    if (!events) {
+        log_error("out of memory");
+        return EXIT_FAILED;
+    }
+    int rc = EXIT_OK;
     while (!session_quit_requested(s) && !display_should_close(d) && frames_left != 0) {
-        struct input_queue *events = malloc(sizeof(*events));
-        if (!events) {
-            log_error("out of memory");
-            return EXIT_FAILED;
-        }
         input_queue_clear(events);
         display_poll_input(d, idle ? 0.03 : 0.0, events);
         double dt = frame_dt(s, &last);
         double time = ld->time + (time_now_ms() - t0) * 1e-3;
         struct frame_state f;
         bool redraw = false, changed = false;
-        bool ok = session_update(s, events, dt, time, &f, &redraw) &&
-                  session_apply(s, &f, &changed);
-        free(events);
-        if (!ok)
-            return EXIT_FAILED;
+        if (!session_update(s, events, dt, time, &f, &redraw) || !session_apply(s, &f, &changed)) {
+            rc = EXIT_FAILED;
+            break;
+        }
         bool drawn = dirty || redraw || changed || moving || frames_left > 0;
         if (drawn) {
-            if (!draw(d, s, &f))
-                return EXIT_FAILED;
+            if (!draw(d, s, &f)) {
+                rc = EXIT_FAILED;
+                break;
+            }
             dirty = false;
             if (frames_left > 0)
                 frames_left--;
         }
         idle = !drawn;
     }
-    return EXIT_OK;
+    free(events);
+    return rc;
 }
