@@ -188,15 +188,13 @@ static bool single_present(struct display *d, struct renderer *r, float exposure
     }
     if (d->desc.offscreen)
         return true;
+    if (k->mode != DISPLAY_STEREO_QUAD_BUFFER)
+        return display_show_window(d, r, shown, exposure, &k->scratch);
     int fw, fh;
     gpu_context_size(d->context, &fw, &fh);
-    if (k->mode == DISPLAY_STEREO_QUAD_BUFFER) {
-        if (!display_show(r, &left->target, exposure, &k->scratch, 0, 0, fw, fh, 1) ||
-            !display_show(r, &right->target, exposure, &k->scratch, 0, 0, fw, fh, 2))
-            return false;
-    } else if (!display_show(r, shown, exposure, &k->scratch, 0, 0, fw, fh, 0)) {
+    if (!display_show(r, &left->target, exposure, &k->scratch, 0, 0, fw, fh, 1) ||
+        !display_show(r, &right->target, exposure, &k->scratch, 0, 0, fw, fh, 2))
         return false;
-    }
     gpu_context_swap(d->context);
     return true;
 }
@@ -267,12 +265,7 @@ static bool orbit_present(struct display *d, struct renderer *r, float exposure)
     const struct view *v = &d->set.views[0];
     if (d->desc.offscreen || !v->visible || !v->target.id)
         return true;
-    int fw, fh;
-    gpu_context_size(d->context, &fw, &fh);
-    if (!display_show(r, &v->target, exposure, &k->scratch, 0, 0, fw, fh, 0))
-        return false;
-    gpu_context_swap(d->context);
-    return true;
+    return display_show_window(d, r, &v->target, exposure, &k->scratch);
 }
 
 const struct display_impl display_orbit_impl = {

@@ -242,6 +242,17 @@ bool display_show(struct renderer *r, const struct gpu_texture *in, float exposu
     return true;
 }
 
+bool display_show_window(struct display *d, struct renderer *r, const struct gpu_texture *in,
+                         float exposure, struct gpu_texture *scratch)
+{
+    int fw, fh;
+    gpu_context_size(d->context, &fw, &fh);
+    if (!display_show(r, in, exposure, scratch, 0, 0, fw, fh, 0))
+        return false;
+    gpu_context_swap(d->context);
+    return true;
+}
+
 /* ---- windows: the one key table, and window events as input events -------------------- */
 
 /* A window key, what it means everywhere, and whether holding it repeats. */

@@ -86,6 +86,10 @@ bool display_compose(struct display *d, const struct gpu_texture *left,
 bool display_show(struct renderer *r, const struct gpu_texture *in, float exposure,
                   struct gpu_texture *scratch, int x, int y, int w, int h, int buffer);
 
+/* Tone maps IN into the whole primary window and swaps it. */
+bool display_show_window(struct display *d, struct renderer *r, const struct gpu_texture *in,
+                         float exposure, struct gpu_texture *scratch);
+
 /* Makes the primary context: offscreen, the desc's context or a new EGL one; else a GLFW
  * window W x H (fullscreen on MONITOR >= 0) with quad-buffer STEREO asked for. */
 bool display_open_primary(struct display *d, int w, int h, int monitor, bool stereo,

@@ -196,18 +196,14 @@ static bool hmd_present(struct display *d, struct renderer *r, float exposure)
     }
     if (d->desc.offscreen)
         return true;
-    int fw, fh;
-    gpu_context_size(d->context, &fw, &fh);
-    if (!display_show(r, &o->hdr, exposure, &h->scratch, 0, 0, fw, fh, 0))
-        return false;
-    gpu_context_swap(d->context);
-    return true;
+    return display_show_window(d, r, &o->hdr, exposure, &h->scratch);
 }
 
 const struct display_impl display_hmd_impl = {
     .name = "hmd",
     .description = "head-mounted display through OpenHMD (by product name, or the Null HMD): "
-                   "per-eye matrices from the device, the device's lens warp",
+                   "the device's per-eye projections and IPD, the head's pose, the device's "
+                   "lens warp",
     .create = hmd_create,
     .destroy = hmd_destroy,
     .layout = hmd_layout,
