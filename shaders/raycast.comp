@@ -39,6 +39,7 @@ layout(binding = BIND_EYE_TEX_PHASE) uniform sampler1D phase_tex;
 uniform mat4 inv_view_proj; // clip space -> world (metres)
 uniform ivec2 image_size;
 uniform ivec2 pixel_offset;  // this view's origin within a larger image (tiles), usually 0
+uniform int row_offset;      // the first row of this dispatch (a band of rows), usually 0
 uniform vec3 box_min;
 uniform vec3 box_size;
 uniform float step_len;      // metres; 0 = half the voxel crossing along each ray
@@ -162,7 +163,7 @@ void march_step(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
 
 void main()
 {
-    ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 pix = ivec2(gl_GlobalInvocationID.xy) + ivec2(0, row_offset);
     if (pix.x >= image_size.x || pix.y >= image_size.y)
         return;
     vec2 ndc = (vec2(pix) + 0.5) / vec2(image_size) * 2.0 - 1.0;

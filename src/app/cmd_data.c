@@ -10,6 +10,7 @@
 #include "session/stats.h"
 #include "session/effects.h"
 #include "common/log.h"
+#include "common/progress.h"
 #include "data/extfile.h"
 #include "data/synth.h"
 #include "data/wrf.h"
@@ -275,7 +276,10 @@ int cmd_synth(int argc, char **argv)
     struct wrf_write_desc wd = {.cen_lat = lat, .cen_lon = lon};
     struct wrf_writer *w = NULL;
     double t0 = time_now_ms();
+    struct progress pr;
+    progress_begin(&pr, "synth", "step", (uint64_t)steps);
     for (int s = 0; s < steps; s++) {
+        progress_update(&pr, (uint64_t)s);
         sd.time = steps > 1 ? (double)s / (steps - 1) : 0.0;
         struct field_volume fv;
         if (!synth_storm_fields(&sd, &fv)) {
@@ -293,7 +297,9 @@ int cmd_synth(int argc, char **argv)
             return EXIT_FAILED;
         }
         log_info("synth: step %d/%d (%s) written", s + 1, steps, date);
+        progress_update(&pr, (uint64_t)s + 1);
     }
+    progress_end(&pr);
     if (!wrf_writer_finish(w))
         return EXIT_FAILED;
     log_info("synth: %s: %d x %d x %d, %d steps in %.1f s", out, size[0], size[1], size[2], steps,
@@ -422,7 +428,10 @@ int cmd_convert(int argc, char **argv)
     int rc = EXIT_OK;
     struct extfile_writer *w = NULL;
     int steps = data_source_step_count(src);
+    struct progress pr;
+    progress_begin(&pr, "convert", "step", (uint64_t)steps);
     for (int s = 0; s < steps; s++) {
+        progress_update(&pr, (uint64_t)s);
         struct ext_volume v;
         double load_ms, convert_ms;
         if (!data_source_load(src, s, &v, &load_ms, &convert_ms)) {
@@ -440,7 +449,9 @@ int cmd_convert(int argc, char **argv)
             rc = EXIT_FAILED;
             break;
         }
+        progress_update(&pr, (uint64_t)s + 1);
     }
+    progress_end(&pr);
     if (rc == EXIT_OK) {
         if (!extfile_writer_finish(w))
             rc = EXIT_FAILED;

@@ -4,13 +4,19 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "app/app.h"
 #include "app/loop.h"
 #include "common/log.h"
+#include "common/progress.h"
 #include "config/display_config.h"
 #include "display/display.h"
+#include "config/camera_path.h"
 #include "gpu/gpu.h"
+#include "render/video.h"
+#include "session/camera_path.h"
+#include "session/output.h"
 #include "session/scene.h"
 #include "session/session.h"
 
@@ -27,6 +33,10 @@ struct render_options {
     const char *wand;      /* --wand NAME: an OpenHMD controller as the wand ("null") */
     bool menu;             /* --menu: start with the menu shown (render) */
     const char *format;    /* --format png|pfm: the image files of a display render */
+    const char *frames;    /* --frames all|A:B[:STEP]: an animation (render) */
+    double fps;            /* --fps N: its frame rate (0: the default) */
+    const char *codec;     /* --codec NAME: a movie's encoder */
+    const char *path;      /* --path FILE: a camera path (render: fly it; run: keys add to it) */
 };
 
 static int parse_options(int argc, char **argv, struct render_options *o, bool need_output)
@@ -44,6 +54,10 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         {"wand", required_argument, NULL, 'W'},
         {"menu", no_argument, NULL, 'M'},
         {"format", required_argument, NULL, 'P'},
+        {"frames", required_argument, NULL, 'A'},
+        {"fps", required_argument, NULL, 'R'},
+        {"codec", required_argument, NULL, 'C'},
+        {"path", required_argument, NULL, 'K'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -102,6 +116,24 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
             }
             o->format = optarg;
             break;
+        case 'A':
+            o->frames = optarg;
+            break;
+        case 'R': {
+            char *end;
+            o->fps = strtod(optarg, &end);
+            if (*end || !(o->fps >= 1.0 && o->fps <= 1000.0)) {
+                log_error("--fps %s: expected frames per second in [1, 1000]", optarg);
+                return EXIT_USAGE;
+            }
+            break;
+        }
+        case 'C':
+            o->codec = optarg;
+            break;
+        case 'K':
+            o->path = optarg;
+            break;
         case 'h':
             return -1;
         default:
@@ -120,11 +152,125 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
                              : "render: missing -o FILE.png or -o FILE.pfm");
         return EXIT_USAGE;
     }
-    /* A file name the writers cannot serve is refused before any work is done. */
-    if (need_output && o->output && !o->display && !image_path_supported(o->output)) {
-        log_error("%s: unknown image type: expected a name ending in .png or .pfm", o->output);
+    if (!need_output && (o->frames || o->fps > 0.0 || o->codec)) {
+        log_error("run: --frames, --fps and --codec belong to render (an animation to files)");
+        return EXIT_USAGE;
+    }
+    if (!need_output || !o->output)
+        return EXIT_OK;
+    /* An animation: numbered images or a movie, their folder there; checked before any work. */
+    bool sequence = strchr(o->output, '%') != NULL || video_path_supported(o->output);
+    if (o->frames || o->path || sequence) {
+        if (!sequence) {
+            log_error("%s: an animation (--frames, --path) needs numbered images "
+                      "(out/frame-%%05d.png) or a movie (storm.mp4) after -o",
+                      o->output);
+            return EXIT_BAD_INPUT;
+        }
+        if (!frame_output_check(o->output) ||
+            (video_path_supported(o->output) && !video_check(o->output, o->codec)))
+            return EXIT_BAD_INPUT;
+        return EXIT_OK;
+    }
+    if (o->display && image_path_supported(o->output)) {
+        log_error("%s: with --display, -o names a folder for the views' images (out/), not one "
+                  "image",
+                  o->output);
         return EXIT_BAD_INPUT;
     }
+    /* A file name the writers cannot serve is refused before any work is done, and so is a
+     * folder that is not there. */
+    if (!o->display && !image_path_supported(o->output)) {
+        log_error("%s: unknown image type: expected a name ending in .png or .pfm, or an "
+                  "animation's numbered images or movie",
+                  o->output);
+        return EXIT_BAD_INPUT;
+    }
+    if (!o->display && !frame_output_folder_exists(o->output))
+        return EXIT_BAD_INPUT;
+    return EXIT_OK;
+}
+
+/* --frames: "all" (FIRST 0, LAST -1: to the end) or "A:B[:STEP]". */
+static bool parse_frames(const char *spec, long *first, long *last, long *step)
+{
+    *first = 0;
+    *last = -1;
+    *step = 1;
+    if (!spec || strcmp(spec, "all") == 0)
+        return true;
+    char *end;
+    long a = strtol(spec, &end, 10), b = a, c = 1;
+    if (end == spec || *end != ':')
+        goto bad;
+    char *q = end + 1;
+    b = strtol(q, &end, 10);
+    if (end == q || (*end && *end != ':'))
+        goto bad;
+    if (*end == ':') {
+        q = end + 1;
+        c = strtol(q, &end, 10);
+        if (end == q || *end)
+            goto bad;
+    }
+    if (a < 0 || b < a || c < 1)
+        goto bad;
+    *first = a;
+    *last = b;
+    *step = c;
+    return true;
+bad:
+    log_error("--frames %s: expected all or FIRST:LAST[:STEP] (0 <= FIRST <= LAST, STEP >= 1)",
+              spec);
+    return false;
+}
+
+/* What the animation's frames are, from the options and the session; *FPS its frame rate. */
+static int animation(const struct render_options *o, struct session *s, struct loop_desc *ld,
+                     struct camera_path *path)
+{
+    long first, last, step;
+    if (!parse_frames(o->frames, &first, &last, &step))
+        return EXIT_USAGE;
+    const struct config *cfg = session_config(s);
+    if (o->path) {
+        if (o->display) {
+            log_error("--path flies the scene's own camera: leave out --display");
+            return EXIT_BAD_INPUT;
+        }
+        ld->kind = LOOP_PATH; /* PATH was read before the session (its steps decide playback) */
+        ld->path = path;
+        ld->fps = o->fps > 0.0 ? o->fps : 24.0;
+        long count = (long)floor(camera_path_duration(path) * ld->fps + 1e-9) + 1;
+        if (last < 0 || last >= count)
+            last = count - 1;
+        ld->first = (double)first;
+        ld->last = (double)last;
+        return first <= last ? EXIT_OK : EXIT_BAD_INPUT;
+    }
+    if (o->input) {
+        ld->kind = LOOP_SCRIPT;
+        ld->first = (double)first;
+        ld->last = last < 0 ? 1e18 : (double)last;
+        ld->fps = 1.0 / session_script_dt(s);
+        return EXIT_OK;
+    }
+    int steps = session_step_count(s);
+    if (last < 0)
+        last = steps - 1;
+    if (first >= steps || last >= steps) {
+        log_error("--frames %s: the scene has the time steps 0 to %d", o->frames, steps - 1);
+        return EXIT_BAD_INPUT;
+    }
+    ld->kind = LOOP_STEPS;
+    ld->first = (double)first;
+    ld->last = (double)last;
+    double speed = cfg->playback.speed;
+    /* The movie shows time going at playback.speed; with --fps above it and effects.temporal
+     * the frames between two steps blend them. */
+    ld->fps = o->fps > 0.0 ? o->fps : fmax(1.0, round(speed * step));
+    ld->by = step == 1 && o->fps > 0.0 && session_blends_steps(s) ? speed / ld->fps
+                                                                    : (double)step;
     return EXIT_OK;
 }
 
@@ -139,7 +285,7 @@ static int usage(FILE *out, bool run)
         fprintf(out,
                 "usage: anvil run [CONFIG] [--display DISPLAY.cfg] [--set PATH=VALUE]...\n"
                 "                 [--input SCRIPT] [--wand NAME] [--transfers DIR] [--time S]\n"
-                "                 [--stats FILE.json] [--quiet]\n"
+                "                 [--path CAMERA-PATH.cfg] [--stats FILE.json] [--quiet]\n"
                 "  Without --display: one window of the scene's camera (camera.*), orbiting\n"
                 "  its target.  The keys mean the same on every display:\n");
     else
@@ -148,8 +294,16 @@ static int usage(FILE *out, bool run)
                 "                    [--input SCRIPT] [--menu] [--stats FILE.json] [--quiet]\n"
                 "       anvil render [CONFIG] --display DISPLAY.cfg [--time SECONDS] "
                 "-o FOLDER/ [--format png|pfm] [...]\n"
+                "       anvil render [CONFIG] [--display D.cfg] --frames all|A:B[:STEP] "
+                "[--fps N]\n"
+                "                    -o out/frame-%%05d.png | -o storm.mp4 [--codec NAME]\n"
+                "       anvil render [CONFIG] --path CAMERA-PATH.cfg [--fps N] -o fly.mp4\n"
                 "       anvil render --display help\n"
-                "  A script (--input) plays these keys and the wand's buttons (docs/menu.md):\n");
+                "  An animation writes every frame: the time steps FIRST..LAST (with --fps above\n"
+                "  playback.speed and effects.temporal, blended frames between them), a camera\n"
+                "  path, or a script's frames (--input).  Movie encoders here: %s\n"
+                "  A script (--input) plays these keys and the wand's buttons (docs/menu.md):\n",
+                video_encoders());
     session_list_keys(print_key, out);
     fprintf(out, "  wand: trigger chooses in the menu, grab moves the world, menu shows it, "
                  "reset resets the view; stick: fly and turn\n");
@@ -227,15 +381,28 @@ static int command(int argc, char **argv, bool run)
     }
     struct config *cfg = malloc(sizeof(*cfg));
     struct display_config *dcfg = malloc(sizeof(*dcfg));
+    struct camera_path *path = malloc(sizeof(*path));
     struct display *d = NULL;
     struct session *s = NULL;
     rc = EXIT_FAILED;
-    if (!cfg || !dcfg) {
+    if (!cfg || !dcfg || !path) {
         log_error("out of memory");
         goto done;
     }
     if ((rc = load_configs(&o, cfg, dcfg)) != EXIT_OK)
         goto done;
+    bool have_path = false;
+    if (o.path && !run) {
+        if (!camera_path_load(o.path, path)) {
+            rc = EXIT_BAD_INPUT;
+            goto done;
+        }
+        have_path = true;
+    }
+    /* Time plays in a run, a script, an animation of the series or a path through it. */
+    bool plays = run || o.input || (have_path && path->has_steps) ||
+                 (!have_path && !run && o.output &&
+                  (o.frames || strchr(o.output, '%') || video_path_supported(o.output)));
 
     struct display_desc dd = {.offscreen = !run, .height = cfg->render.height};
     scene_camera(cfg, &dd.camera);
@@ -264,7 +431,7 @@ static int command(int argc, char **argv, bool run)
                            .view_count = views_move ? 0 : n,
                            .views_move = views_move,
                            .interactive = run,
-                           .playback = run || o.input,
+                           .playback = plays,
                            .menu = run || o.input || o.menu,
                            .show_menu = run ? !o.input || o.menu : o.menu,
                            .script = o.input,
@@ -282,15 +449,67 @@ static int command(int argc, char **argv, bool run)
         log_info("display %s (%s): %d views", o.display, display_type_name(dcfg->type),
                  display_view_count(d));
     const char *frames_env = getenv("ANVIL_RUN_FRAMES"); /* for automated runs */
-    rc = loop_run(d, s,
-                  &(struct loop_desc){.run = run,
-                                      .time = o.time,
-                                      .frames = frames_env ? strtol(frames_env, NULL, 10) : -1});
+    struct loop_desc ld = {
+        .run = run,
+        .time = o.time,
+        .frames = frames_env ? strtol(frames_env, NULL, 10) : -1,
+        .config_path = o.config,
+        .display_path = o.display,
+    };
+    float exposure = (float)session_config(s)->render.exposure;
+    bool animated = !run && o.output &&
+                    (o.frames || o.path || strchr(o.output, '%') || video_path_supported(o.output));
+    if (animated) {
+        if ((rc = animation(&o, s, &ld, path)) != EXIT_OK)
+            goto done;
+        ld.output = frame_output_open(&(struct frame_output_desc){
+            .path = o.output,
+            .fps = (int)lround(ld.fps),
+            .codec = o.codec,
+            .exposure = exposure,
+            .per_view = o.display != NULL,
+        });
+        if (!ld.output) {
+            rc = EXIT_BAD_INPUT;
+            goto done;
+        }
+    } else if (run && o.path) {
+        /* The keys add to the path and fly it; a file that is not there yet is made. */
+        struct stat st_path;
+        bool have = stat(o.path, &st_path) == 0;
+        if ((have && !camera_path_load(o.path, path)) ||
+            !session_set_camera_path(s, have ? path : NULL, o.path)) {
+            rc = EXIT_BAD_INPUT;
+            goto done;
+        }
+    }
+    /* A large still picture says how far it is, row by row. */
+    struct progress pr;
+    long rows = 0, pixels = 0;
+    for (int i = 0; !run && !animated && i < display_view_count(d); i++) {
+        rows += display_view(d, i)->rv.height;
+        pixels += (long)display_view(d, i)->rv.width * display_view(d, i)->rv.height;
+    }
+    bool counted = pixels >= 4L << 20;
+    if (counted) {
+        progress_begin(&pr, "render", "row", (uint64_t)rows);
+        session_set_progress(s, &pr);
+    }
+    rc = loop_run(d, s, &ld);
+    if (counted) {
+        session_set_progress(s, NULL);
+        progress_end(&pr);
+    }
     struct session_stats *st = session_stats(s);
     session_collect_timings(s, true);
-    if (rc == EXIT_OK && !run &&
-        !write_output(d, &o, (float)session_config(s)->render.exposure, st))
+    if (ld.output) {
+        if (rc == EXIT_OK && !frame_output_close(ld.output))
+            rc = EXIT_FAILED;
+        else if (rc != EXIT_OK)
+            frame_output_abort(ld.output);
+    } else if (rc == EXIT_OK && !run && !write_output(d, &o, exposure, st)) {
         rc = EXIT_FAILED;
+    }
     if (st->nonfinite_pixels)
         log_warn("%zu pixels are not finite", st->nonfinite_pixels);
     st->gpu_bytes = gpu_bytes_allocated();
@@ -304,6 +523,7 @@ done:
     display_destroy(d);
     free(cfg);
     free(dcfg);
+    free(path);
     return rc;
 }
 

@@ -1,10 +1,19 @@
 /* The one frame loop of anvil render and anvil run. */
 #include "app/loop.h"
 
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
 
 #include "app/app.h"
 #include "common/log.h"
+#include "common/progress.h"
+#include "render/image.h"
+#include "session/camera_path.h"
 
 #define SCRIPT_FRAMES_MAX 1000000
 
@@ -36,24 +45,144 @@ static bool render_frame(struct display *d, struct session *s, double dt, double
            draw(d, s, &f);
 }
 
+/* A scripted render: the script's frames, each drawn (and those in FIRST..LAST written);
+ * then the settled result, written when nothing else was. */
+static int render_script(struct display *d, struct session *s, const struct loop_desc *ld)
+{
+    double last = time_now_ms();
+    struct progress pr;
+    bool writing = ld->output && ld->kind == LOOP_SCRIPT;
+    progress_begin(&pr, "render", "frame", (uint64_t)session_script_frames(s));
+    long n = 0;
+    for (; !session_script_done(s); n++) {
+        if (n > SCRIPT_FRAMES_MAX) {
+            log_error("the script has not ended after %d frames", SCRIPT_FRAMES_MAX);
+            return EXIT_FAILED;
+        }
+        if (!render_frame(d, s, frame_dt(s, &last), ld->time))
+            return EXIT_FAILED;
+        if (writing && n >= ld->first && n <= ld->last &&
+            !frame_output_add(ld->output, d, (int)(n - (long)ld->first)))
+            return EXIT_FAILED;
+        if (pr.total < (uint64_t)n + 1) /* a volume still loading holds the end back */
+            pr.total = (uint64_t)n + 1;
+        progress_update(&pr, (uint64_t)n + 1);
+    }
+    progress_end(&pr);
+    if (!session_settle(s) || !render_frame(d, s, 0.0, ld->time))
+        return EXIT_FAILED;
+    if (writing && frame_output_frames(ld->output) == 0 &&
+        !frame_output_add(ld->output, d, 0))
+        return EXIT_FAILED;
+    return EXIT_OK;
+}
+
+/* An animation of the time series or of the camera path: every frame written. */
+static int render_animation(struct display *d, struct session *s, const struct loop_desc *ld)
+{
+    long count;
+    if (ld->kind == LOOP_STEPS)
+        count = ld->by > 0.0 ? (long)floor((ld->last - ld->first) / ld->by + 1e-9) + 1 : 1;
+    else
+        count = (long)(ld->last - ld->first) + 1;
+    struct display_camera base = {0};
+    struct frame_state f;
+    bool redraw;
+    if (!session_update(s, NULL, 0.0, ld->time, &f, &redraw))
+        return EXIT_FAILED;
+    base = f.camera;
+    struct progress pr;
+    progress_begin(&pr, "render", "frame", (uint64_t)count);
+    for (long i = 0; i < count; i++) {
+        if (ld->kind == LOOP_STEPS) {
+            session_set_time(s, ld->first + (double)i * ld->by);
+        } else {
+            struct display_camera cam;
+            double step = -1.0;
+            camera_path_eval(ld->path, (ld->first + (double)i) / ld->fps, &base, &cam, &step);
+            session_set_camera(s, &cam);
+            if (step >= 0.0)
+                session_set_time(s, step);
+        }
+        if (!render_frame(d, s, 0.0, ld->time) || !frame_output_add(ld->output, d, (int)i)) {
+            progress_end(&pr);
+            return EXIT_FAILED;
+        }
+        progress_update(&pr, (uint64_t)i + 1);
+    }
+    progress_end(&pr);
+    return EXIT_OK;
+}
+
+/* A name in the working folder not taken yet: PREFIX-N.EXT (EXT "" for a folder). */
+static void free_name(const char *prefix, const char *ext, char *out, size_t size)
+{
+    struct stat st;
+    for (int n = 1; n < 10000; n++) {
+        snprintf(out, size, "%s-%d%s", prefix, n, ext);
+        if (stat(out, &st) != 0)
+            return;
+    }
+}
+
+/* P: the views as they are, PNG and PFM, in the working folder. */
+static void screenshot(struct display *d, struct session *s)
+{
+    char stamp[64], name[96];
+    time_t now = time(NULL);
+    strftime(stamp, sizeof(stamp), "anvil-%Y%m%d-%H%M%S", localtime(&now));
+    float exposure = (float)session_config(s)->render.exposure;
+    bool ok = true;
+    if (display_uses_camera(d)) {
+        struct image img = {0};
+        free_name(stamp, ".png", name, sizeof(name));
+        ok = renderer_read(&display_view(d, 0)->target, &img) && image_write(&img, name, exposure);
+        char pfm[100];
+        snprintf(pfm, sizeof(pfm), "%.*s.pfm", (int)(strlen(name) - 4), name);
+        ok = ok && image_write(&img, pfm, exposure);
+        image_finish(&img);
+        if (ok)
+            log_info("screenshot: %s and %s", name, pfm);
+    } else {
+        free_name(stamp, "", name, sizeof(name));
+        ok = display_write_images(d, name, "png", exposure, NULL) &&
+             display_write_images(d, name, "pfm", exposure, NULL);
+        if (ok)
+            log_info("screenshot: %s/ (every view, PNG and PFM)", name);
+    }
+    if (!ok)
+        log_warn("screenshot: not written (see above)");
+}
+
+/* C: the view as a block to paste, and a bookmark file that renders it again. */
+static void bookmark(struct session *s, const struct loop_desc *ld)
+{
+    char view[1024], sun[256], name[64], text[4096];
+    session_view_text(s, view, sizeof(view));
+    session_sun_text(s, sun, sizeof(sun));
+    bool tracker = session_uses_tracker(s);
+    printf("%s%s", view, tracker ? "" : sun);
+    fflush(stdout);
+    const char *include = tracker ? ld->display_path : ld->config_path;
+    char full[PATH_MAX] = "";
+    if (include && !realpath(include, full))
+        snprintf(full, sizeof(full), "%s", include);
+    free_name("bookmark", ".cfg", name, sizeof(name));
+    snprintf(text, sizeof(text), "# anvil bookmark: %s\n%s%s%s%s%s",
+             tracker ? "the navigation of a display (anvil render SCENE --display THIS)"
+                     : "a view of a scene (anvil render THIS -o view.png)",
+             full[0] ? "@include \"" : "", full, full[0] ? "\"\n" : "", view, tracker ? "" : sun);
+    if (file_write_atomic(name, text, strlen(text)))
+        log_info("bookmark: %s", name);
+}
+
 int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
 {
-    double t0 = time_now_ms(), last = t0;
-    if (!ld->run) {
-        /* A script's frames, each drawn; then the settled result. */
-        for (long n = 0; !session_script_done(s); n++) {
-            if (n > SCRIPT_FRAMES_MAX) {
-                log_error("the script has not ended after %d frames", SCRIPT_FRAMES_MAX);
-                return EXIT_FAILED;
-            }
-            if (!render_frame(d, s, frame_dt(s, &last), ld->time))
-                return EXIT_FAILED;
-        }
-        if (!session_settle(s) || !render_frame(d, s, 0.0, ld->time))
-            return EXIT_FAILED;
-        return EXIT_OK;
-    }
+    if (!ld->run)
+        return ld->kind == LOOP_STEPS || ld->kind == LOOP_PATH ? render_animation(d, s, ld)
+                                                                : render_script(d, s, ld);
 
+    double t0 = time_now_ms(), last = t0;
     bool moving = display_head_moves(d), dirty = true, idle = false;
     long frames_left = ld->frames;
     struct input_queue *events = malloc(sizeof(*events));
@@ -73,6 +202,7 @@ int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
             rc = EXIT_FAILED;
             break;
         }
+        unsigned requests = session_take_requests(s);
         bool drawn = dirty || redraw || changed || moving || frames_left > 0;
         if (drawn) {
             if (!draw(d, s, &f)) {
@@ -83,6 +213,10 @@ int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
             if (frames_left > 0)
                 frames_left--;
         }
+        if (requests & SESSION_REQUEST_SCREENSHOT)
+            screenshot(d, s);
+        if (requests & SESSION_REQUEST_BOOKMARK)
+            bookmark(s, ld);
         idle = !drawn;
     }
     free(events);

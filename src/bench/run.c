@@ -16,6 +16,7 @@
 #include "bench/paraview.h"
 #include "bench/tables.h"
 #include "common/log.h"
+#include "common/progress.h"
 #include "config/config.h"
 #include "gpu/gpu.h"
 #include "light/light_gpu.h"
@@ -142,19 +143,30 @@ static bool sweep_scene(const struct bench_options *o, const char *name, const s
         goto done;
     snprintf(out->name, sizeof(out->name), "%s", name);
     out->n = 0;
-    for (int i = 0; i < n; i++) {
-        if (!bench_measure(r, lg, &sc, &variants[i], &ref, &err, &self, &out->res[i]))
-            goto done;
-    }
-    out->n = n;
     /* Timings round-robin over the variants: 5 builds and 5 views each (1 and 1 quick). */
     int rounds = o->quick ? 1 : 5, build_rounds = rounds;
+    struct progress pr;
+    char what[64];
+    snprintf(what, sizeof(what), "bench %s", name);
+    progress_begin(&pr, what, "run", (uint64_t)(n * (1 + rounds)));
+    for (int i = 0; i < n; i++) {
+        if (!bench_measure(r, lg, &sc, &variants[i], &ref, &err, &self, &out->res[i])) {
+            progress_end(&pr);
+            goto done;
+        }
+        progress_update(&pr, (uint64_t)i + 1);
+    }
+    out->n = n;
     for (int k = 0; k < rounds; k++) {
         for (int i = 0; i < n; i++) {
-            if (!bench_time_once(r, lg, &sc, k < build_rounds, &out->res[i]))
+            if (!bench_time_once(r, lg, &sc, k < build_rounds, &out->res[i])) {
+                progress_end(&pr);
                 goto done;
+            }
+            progress_update(&pr, (uint64_t)(n * (1 + k) + i + 1));
         }
     }
+    progress_end(&pr);
     for (int i = 0; i < n; i++) {
         bench_timings_finish(&out->res[i]);
         log_info("bench: %s %s %s: build %.1f ms, view %.1f ms, RMSE %.4g (%.2f sigma)", name,

@@ -14,6 +14,8 @@ static pthread_mutex_t log_lock = PTHREAD_MUTEX_INITIALIZER;
 static enum log_level current_level = LOG_INFO;
 static unsigned errors, warnings;
 static char last_error[1024];
+static char status[256]; /* the status line on a terminal (log_status), or "" */
+static int status_tty = -1; /* whether stderr is a terminal: -1 not asked yet */
 
 void log_set_level(enum log_level level)
 {
@@ -44,8 +46,41 @@ void log_msg(enum log_level level, const char *fmt, ...)
     }
     if ((int)level <= (int)current_level) {
         const char *tag = level == LOG_ERROR ? "error: " : level == LOG_WARN ? "warning: " : "";
+        if (status[0]) /* the message goes above the status line, which stays at the bottom */
+            fprintf(stderr, "\r\033[K");
         fprintf(stderr, "anvil: %s%s\n", tag, line);
+        if (status[0])
+            fprintf(stderr, "anvil: %s", status);
     }
+    pthread_mutex_unlock(&log_lock);
+}
+
+bool log_status_is_terminal(void)
+{
+    pthread_mutex_lock(&log_lock);
+    if (status_tty < 0)
+        status_tty = isatty(fileno(stderr)) && getenv("TERM") && strcmp(getenv("TERM"), "dumb");
+    bool tty = status_tty;
+    pthread_mutex_unlock(&log_lock);
+    return tty;
+}
+
+void log_status(const char *line, bool done)
+{
+    bool tty = log_status_is_terminal();
+    pthread_mutex_lock(&log_lock);
+    if ((int)LOG_INFO <= (int)current_level) {
+        if (!tty) {
+            fprintf(stderr, "anvil: %s\n", line);
+        } else {
+            fprintf(stderr, "\r\033[Kanvil: %s%s", line, done ? "\n" : "");
+            fflush(stderr);
+        }
+    }
+    if (tty && !done)
+        snprintf(status, sizeof(status), "%s", line);
+    else
+        status[0] = '\0';
     pthread_mutex_unlock(&log_lock);
 }
 

@@ -28,6 +28,13 @@ enum log_level log_get_level(void);
 /* Formats one line to stderr, prefixed "anvil: " (and "error: "/"warning: ").  Thread safe. */
 void log_msg(enum log_level level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
+/* A progress line at LOG_INFO.  On a terminal it is one line rewritten in place (other
+ * messages print above it) until DONE ends it; elsewhere each call is a plain line (the caller
+ * decides how often: common/progress.h).  Thread safe. */
+void log_status(const char *line, bool done);
+/* Whether stderr is a terminal that log_status rewrites in place. */
+bool log_status_is_terminal(void);
+
 /* Counts of errors and warnings logged so far (tests use them). */
 unsigned log_error_count(void);
 unsigned log_warn_count(void);

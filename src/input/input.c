@@ -39,6 +39,10 @@ static const struct {
     {"sun-right", INPUT_KEY_SUN_RIGHT},
     {"sun-up", INPUT_KEY_SUN_UP},
     {"sun-down", INPUT_KEY_SUN_DOWN},
+    {"screenshot", INPUT_KEY_SCREENSHOT},
+    {"bookmark", INPUT_KEY_BOOKMARK},
+    {"path-key", INPUT_KEY_PATH_KEY},
+    {"path-play", INPUT_KEY_PATH_PLAY},
 };
 
 void input_queue_clear(struct input_queue *q)

@@ -65,6 +65,10 @@ enum input_key {
     INPUT_KEY_SUN_RIGHT,    /* l: + 5 degrees */
     INPUT_KEY_SUN_UP,       /* i: sun elevation + 2 degrees */
     INPUT_KEY_SUN_DOWN,     /* k: - 2 degrees */
+    INPUT_KEY_SCREENSHOT,   /* p: the views as PNG and PFM files */
+    INPUT_KEY_BOOKMARK,     /* c: the camera as a scene file block, saved as a bookmark */
+    INPUT_KEY_PATH_KEY,     /* n: the current view becomes the camera path's next key */
+    INPUT_KEY_PATH_PLAY,    /* g: fly the camera path (again: stop) */
     INPUT_KEY_COUNT
 };
 

@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "common/log.h"
+#include "common/progress.h"
 
 static void normalize3(double v[3])
 {
@@ -72,6 +73,7 @@ struct render_job {
     int width, height;
     struct image *mean, *err;
     atomic_int next_row;
+    atomic_int rows_done;
 };
 
 static void unproject(const double inv[16], double x, double y, double z, double out[3])
@@ -135,6 +137,9 @@ static void *render_worker(void *arg)
             return NULL;
         for (int x = 0; x < job->width; x++)
             render_pixel(job, x, y);
+        int done = atomic_fetch_add(&job->rows_done, 1) + 1;
+        if (job->d->progress)
+            progress_update(job->d->progress, (uint64_t)done);
     }
 }
 
@@ -153,6 +158,7 @@ bool reference_render(const struct reference *ref, const struct render_view *vie
                              .mean = radiance,
                              .err = stderr_img};
     atomic_init(&job.next_row, 0);
+    atomic_init(&job.rows_done, 0);
     /* clip = proj * view; the matrices are column-major. */
     double m[16];
     for (int i = 0; i < 4; i++) {

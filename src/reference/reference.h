@@ -38,6 +38,8 @@
 #include "render/image.h"
 #include "render/render.h"
 
+struct progress;
+
 /* ---- random numbers: xoshiro256** (Blackman & Vigna 2018), seeded with splitmix64 -------- */
 
 struct reference_rng {
@@ -131,6 +133,7 @@ struct reference_image_desc {
     uint64_t seed;
     bool jitter; /* spread samples over the pixel; false samples the centre as the renderer
                     does */
+    struct progress *progress; /* rows done are counted here (NULL: not) */
 };
 
 /* Renders VIEW (the renderer's matrices; rays start at the near plane, one per sample through

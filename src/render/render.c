@@ -7,6 +7,7 @@
 #include <cglm/cglm.h>
 
 #include "common/log.h"
+#include "common/progress.h"
 #include "shaders/bindings.h"
 
 #define PHASE_TABLE_SIZE 512
@@ -48,6 +49,8 @@ struct renderer {
     struct gpu_target target;
     struct gpu_timer_queue timers;
     struct gpu_timings *timing; /* where the views' times go; NULL: untimed */
+    struct progress *progress;  /* rows drawn are counted here (renderer_set_progress) */
+    uint64_t progress_rows;
     struct render_stats stats;
 };
 
@@ -351,7 +354,22 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
         gpu_texture_bind(&r->target.color, BIND_EYE_TEX_OPAQUE_COLOR);
         gpu_texture_bind(&r->target.value, BIND_EYE_TEX_OPAQUE_DISTANCE);
     }
-    gpu_dispatch(prog, view->width, view->height, 1);
+    if (!r->progress) {
+        gpu_uniform_int(prog, "row_offset", 0);
+        gpu_dispatch(prog, view->width, view->height, 1);
+    } else {
+        /* Bands of rows, each waited for, so that a long view says how far it is.  A band is
+         * whole work groups: every pixel is computed exactly as in one dispatch. */
+        const int band = 128;
+        for (int y = 0; y < view->height; y += band) {
+            int rows = view->height - y < band ? view->height - y : band;
+            gpu_uniform_int(prog, "row_offset", y);
+            gpu_dispatch(prog, view->width, rows, 1);
+            gpu_finish();
+            r->progress_rows += (uint64_t)rows;
+            progress_update(r->progress, r->progress_rows);
+        }
+    }
     r->stats.views++;
     if (r->timing)
         gpu_timer_queue_end(&r->timers, r->timing);
@@ -452,6 +470,12 @@ void renderer_remove_mesh(struct renderer *r, struct render_mesh *m)
             return;
         }
     }
+}
+
+void renderer_set_progress(struct renderer *r, struct progress *p)
+{
+    r->progress = p;
+    r->progress_rows = 0;
 }
 
 void renderer_set_timing(struct renderer *r, struct gpu_timings *log)

@@ -111,6 +111,11 @@ const struct render_stats *renderer_stats(const struct renderer *r);
  * times arrive in LOG with renderer_collect_timings (gpu.h, "timers"; on software drivers
  * each timed view waits for itself).  LOG is borrowed: it must stay valid until
  * renderer_collect_timings(r, true) returned or R is destroyed. */
+/* Counts the rows of every following view in P (NULL: none, the default): the views are then
+ * drawn in bands of rows, each waited for, and the rows done so far are reported to P. */
+struct progress;
+void renderer_set_progress(struct renderer *r, struct progress *p);
+
 void renderer_set_timing(struct renderer *r, struct gpu_timings *log);
 /* Moves the view times the GPU has ready into their logs without waiting, or with WAIT all
  * of them (for a report at the end of a run).  Returns how many are still in flight. */

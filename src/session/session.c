@@ -14,6 +14,7 @@
 #include "light/light.h"
 #include "menu/menu.h"
 #include "render/camera.h"
+#include "session/camera_path.h"
 #include "session/effects.h"
 #include "session/lightmaps.h"
 #include "session/map.h"
@@ -49,6 +50,13 @@ struct session {
     struct display_navigation nav, nav_home;
     struct display_camera camera, camera_home;
     bool quit;
+    unsigned requests; /* SESSION_REQUEST_*, for the caller (session_take_requests) */
+
+    /* The camera path keys are added to (N) and flown along (G). */
+    struct camera_path *path;
+    char path_file[CONFIG_PATH_MAX]; /* where it is saved on every new key; "" nowhere */
+    bool path_playing;
+    double path_time;
 
     /* What the last session_apply made the GPU hold. */
     int shown;                /* the step on screen */
@@ -257,6 +265,7 @@ void session_destroy(struct session *s)
 {
     if (!s)
         return;
+    free(s->path);
     menu_view_destroy(s->menu_view, s->renderer); /* its meshes leave the renderer */
     menu_destroy(s->menu);
     for (int i = 0; i < s->n_sources; i++)
@@ -315,6 +324,129 @@ void session_set_step(struct session *s, int step)
 {
     s->playback.step = step < 0 ? 0 : step >= s->playback.count ? s->playback.count - 1 : step;
     s->playback.acc = 0.0;
+}
+
+void session_set_time(struct session *s, double t)
+{
+    double top = s->playback.count - 1;
+    t = t < 0.0 ? 0.0 : t > top ? top : t;
+    s->playback.step = (int)floor(t);
+    s->playback.acc = t - s->playback.step;
+    if (s->playback.step >= s->playback.count - 1) {
+        s->playback.step = s->playback.count - 1;
+        s->playback.acc = 0.0;
+    }
+}
+
+bool session_set_camera_path(struct session *s, const struct camera_path *p, const char *file)
+{
+    if (!s->path && !(s->path = calloc(1, sizeof(*s->path)))) {
+        log_error("out of memory");
+        return false;
+    }
+    if (p)
+        *s->path = *p;
+    else
+        s->path->count = 0;
+    snprintf(s->path_file, sizeof(s->path_file), "%s", file ? file : "");
+    s->path_playing = false;
+    return true;
+}
+
+/* The current view as the path's next key, 3 s after the last, saved to the path's file. */
+static void path_add_key(struct session *s)
+{
+    if (!s->path && !session_set_camera_path(s, NULL, NULL))
+        return;
+    struct camera_path *p = s->path;
+    if (p->count == CAMERA_PATH_MAX) {
+        log_warn("camera path: it holds %d keys already", CAMERA_PATH_MAX);
+        return;
+    }
+    double t = p->count ? p->keys[p->count - 1].time_s + 3.0 : 0.0;
+    if (p->count == 0)
+        p->has_steps = s->playback.count > 1;
+    camera_path_key(&s->camera, t, s->playback.step + s->playback.acc, &p->keys[p->count++]);
+    if (s->path_file[0] && camera_path_save(s->path_file, p))
+        log_info("camera path: key %d at %.1f s, saved to %s", p->count, t, s->path_file);
+    else if (!s->path_file[0])
+        log_info("camera path: key %d at %.1f s (--path FILE saves it)", p->count, t);
+}
+
+static void path_toggle(struct session *s)
+{
+    if (!s->path || s->path->count < 2) {
+        log_warn("camera path: it needs two keys to fly (N adds the current view)");
+        return;
+    }
+    s->path_playing = !s->path_playing;
+    s->path_time = 0.0;
+    log_info("camera path: %s", s->path_playing ? "flying" : "stopped");
+}
+
+/* Flies the path by DT seconds; at its end it stops there. */
+static void path_fly(struct session *s, double dt)
+{
+    if (!s->path_playing || s->tracker)
+        return;
+    s->path_time += dt > 0.0 ? dt : 0.0;
+    double step = -1.0;
+    camera_path_eval(s->path, s->path_time, &s->camera, &s->camera, &step);
+    if (step >= 0.0)
+        session_set_time(s, step);
+    if (s->path_time >= camera_path_duration(s->path)) {
+        s->path_playing = false;
+        log_info("camera path: at its end");
+    }
+}
+
+unsigned session_take_requests(struct session *s)
+{
+    unsigned r = s->requests;
+    s->requests = 0;
+    return r;
+}
+
+void session_view_text(const struct session *s, char *buf, size_t size)
+{
+    const struct display_camera *c = &s->camera;
+    const struct display_navigation *n = &s->nav;
+    if (s->tracker)
+        snprintf(buf, size,
+                 "navigation = {\n    scale = %.9g;\n    origin = [%.6f, %.6f, %.6f];\n"
+                 "    position = [%.6f, %.6f, %.6f];\n    orientation = [%.6f, %.6f, %.6f];\n};\n",
+                 n->scale, n->origin_km[0], n->origin_km[1], n->origin_km[2], n->position[0],
+                 n->position[1], n->position[2], n->orientation_deg[0], n->orientation_deg[1],
+                 n->orientation_deg[2]);
+    else
+        snprintf(buf, size,
+                 "camera = {\n    position = [%.6f, %.6f, %.6f];\n"
+                 "    target = [%.6f, %.6f, %.6f];\n    up = [%.6f, %.6f, %.6f];\n"
+                 "    fov = %.6f;\n};\n",
+                 c->eye[0] / 1000.0, c->eye[1] / 1000.0, c->eye[2] / 1000.0,
+                 c->target[0] / 1000.0, c->target[1] / 1000.0, c->target[2] / 1000.0, c->up[0],
+                 c->up[1], c->up[2], c->fov_deg);
+}
+
+void session_sun_text(const struct session *s, char *buf, size_t size)
+{
+    snprintf(buf, size, "light = { azimuth = %.6f; elevation = %.6f; };\n", s->sun_az,
+             s->sun_el);
+}
+
+bool session_uses_tracker(const struct session *s)
+{
+    return s->tracker;
+}
+
+int session_step_count(const struct session *s)
+{
+    return s->playback.count;
+}
+
+bool session_blends_steps(const struct session *s)
+{
+    return s->effects.on[EFFECT_TEMPORAL];
 }
 
 void session_set_playing(struct session *s, bool playing)
@@ -647,6 +779,14 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
     case INPUT_KEY:
         if (e.key == INPUT_KEY_QUIT)
             s->quit = true;
+        else if (e.key == INPUT_KEY_SCREENSHOT)
+            s->requests |= SESSION_REQUEST_SCREENSHOT;
+        else if (e.key == INPUT_KEY_BOOKMARK)
+            s->requests |= SESSION_REQUEST_BOOKMARK;
+        else if (e.key == INPUT_KEY_PATH_KEY)
+            path_add_key(s);
+        else if (e.key == INPUT_KEY_PATH_PLAY)
+            path_toggle(s);
         else if (!navigation_key(s, e.key) && !sun_key(s, e.key) && !s->menu)
             seen = false;
         break;
@@ -700,6 +840,8 @@ bool session_update(struct session *s, const struct input_queue *window_events, 
     for (int i = 0; i < s->queue.count; i++)
         events |= handle(s, from_world, s->queue.events[i]);
     navigate(s, dt);
+    bool flying = s->path_playing;
+    path_fly(s, dt);
     if (s->menu) {
         changes = menu_take_changes(s->menu);
         apply_changes(s, changes);
@@ -754,6 +896,7 @@ bool session_update(struct session *s, const struct input_queue *window_events, 
     if (s->menu)
         menu_pixels(s->menu, &(int){0}, &(int){0}, &after);
     *redraw = events || changes || after != before || s->playback.playing || was_playing ||
+              flying ||
               s->playback.step != old_step ||
               memcmp(&nav_before, &s->nav, sizeof(nav_before)) != 0 ||
               memcmp(&cam_before, &s->camera, sizeof(cam_before)) != 0;
@@ -888,6 +1031,11 @@ bool session_script_done(struct session *s)
            (input_source_finished(s->script) && player_settled(s->player, s->playback.step));
 }
 
+long session_script_frames(const struct session *s)
+{
+    return s->script ? input_script_last_frame(s->script) + 1 : 0;
+}
+
 double session_script_dt(const struct session *s)
 {
     return s->script ? 1.0 / input_script_fps(s->script) : 0.0;
@@ -903,6 +1051,11 @@ bool session_settle(struct session *s)
     if (!v)
         return player_settled(s->player, s->playback.step);
     return upload(s, v);
+}
+
+void session_set_progress(struct session *s, struct progress *p)
+{
+    renderer_set_progress(s->renderer, p);
 }
 
 struct renderer *session_renderer(struct session *s)
@@ -956,6 +1109,11 @@ static const struct {
     {INPUT_KEY_MENU, "show / hide the menu (also the right mouse button)"},
     {INPUT_KEY_PAGE_NEXT, "the menu's next page"},
     {INPUT_KEY_PAGE_PREV, "the menu's previous page"},
+    {INPUT_KEY_SCREENSHOT, "screenshot: the views as PNG and PFM files"},
+    {INPUT_KEY_BOOKMARK, "print the camera (the navigation) as a scene file block and save a "
+                         "bookmark"},
+    {INPUT_KEY_PATH_KEY, "the current view becomes the camera path's next key (3 s on)"},
+    {INPUT_KEY_PATH_PLAY, "fly the camera path from its start (again: stop)"},
     {INPUT_KEY_QUIT, "quit"},
 };
 

@@ -26,6 +26,7 @@
 #define ANVIL_SESSION_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "config/config.h"
@@ -105,6 +106,9 @@ void session_get_settings(const struct session *s, struct session_settings *out)
 void session_set_settings(struct session *s, const struct session_settings *in);
 
 void session_set_sun(struct session *s, double azimuth_deg, double elevation_deg);
+/* The time cursor at T steps (step floor(T), blended toward the next by the fraction with
+ * effects.temporal), clamped to the series. */
+void session_set_time(struct session *s, double t);
 void session_set_step(struct session *s, int step);
 void session_set_playing(struct session *s, bool playing);
 void session_set_navigation(struct session *s, const struct display_navigation *nav);
@@ -112,18 +116,40 @@ void session_set_camera(struct session *s, const struct display_camera *camera);
 /* Navigation and camera back to where they started. */
 void session_reset_view(struct session *s);
 
+/* The camera path that the path keys add to and fly (P NULL: an empty one), saved to FILE
+ * (NULL: nowhere) at every new key.  False (logged) out of memory. */
+struct camera_path;
+bool session_set_camera_path(struct session *s, const struct camera_path *p, const char *file);
+
+/* What the keys asked of the caller since the last call (a screenshot, a bookmark). */
+enum { SESSION_REQUEST_SCREENSHOT = 1u << 0, SESSION_REQUEST_BOOKMARK = 1u << 1 };
+unsigned session_take_requests(struct session *s);
+/* The orbit camera as a scene file's camera block, or on a tracked display the navigation as a
+ * display file's navigation block; the sun as a scene file's light block. */
+void session_view_text(const struct session *s, char *buf, size_t size);
+void session_sun_text(const struct session *s, char *buf, size_t size);
+bool session_uses_tracker(const struct session *s);
+/* The scene's time steps; whether steps are blended (effects.temporal). */
+int session_step_count(const struct session *s);
+bool session_blends_steps(const struct session *s);
+
 /* Whether the user asked to quit (a quit key, a window's close button). */
 bool session_quit_requested(const struct session *s);
 /* Scripted runs: whether the script has delivered everything and the volume caught up; its
  * frame time (1 / fps, or 0 without a script). */
 bool session_script_done(struct session *s);
 double session_script_dt(const struct session *s);
+long session_script_frames(const struct session *s); /* its last frame + 1; 0 without one */
 /* Waits for the wanted volume and uploads it (the end of a scripted render). */
 bool session_settle(struct session *s);
 
 /* Moves the view and build times the GPU has ready into session_stats; with WAIT all of them
  * (before the report at the end of a run). */
 void session_collect_timings(struct session *s, bool wait);
+
+/* Counts the rows of the following views in P (a long still picture: renderer_set_progress). */
+struct progress;
+void session_set_progress(struct session *s, struct progress *p);
 
 struct renderer *session_renderer(struct session *s);
 struct session_stats *session_stats(struct session *s);

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "common/log.h"
+#include "common/progress.h"
 #include "session/scene.h"
 
 bool traced_render(const struct config *cfg, const struct ext_volume *vol,
@@ -23,7 +24,12 @@ bool traced_render(const struct config *cfg, const struct ext_volume *vol,
     if (!ref)
         return false;
     double t = time_now_ms();
-    bool ok = reference_render(ref, &view, &d->image, mean, err);
+    struct progress pr;
+    progress_begin(&pr, "reference", "row", (uint64_t)view.height);
+    struct reference_image_desc id = d->image;
+    id.progress = &pr;
+    bool ok = reference_render(ref, &view, &id, mean, err);
+    progress_end(&pr);
     if (trace_ms)
         *trace_ms = time_now_ms() - t;
     reference_destroy(ref);

@@ -66,6 +66,7 @@ only 'netcdf\.h' "NetCDF" data/
 only 'openhmd\.h' "OpenHMD" input/ display/head.c display/hmd.c
 only 'stb_truetype\.h' "stb_truetype" common/glyphs.c
 only 'png\.h' "libpng" render/image.c
+only 'libav|libswscale' "FFmpeg" render/video.c
 
 # Every part's main header says what it must not know.
 declare -A header=(

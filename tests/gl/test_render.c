@@ -9,6 +9,7 @@
 #include "session/scene.h"
 #include "session/stats.h"
 #include "common/log.h"
+#include "common/progress.h"
 #include "gpu/gpu.h"
 #include "render/render.h"
 
@@ -161,6 +162,25 @@ static void test_sun_along_axis_is_finite(void **state)
     image_finish(&img);
 }
 
+/* A view drawn in bands of rows (with a progress to count them) is the view drawn at once, bit
+ * for bit, and the rows are all counted. */
+static void test_bands_are_one_view(void **state)
+{
+    struct config cfg;
+    struct image once, banded;
+    const char *sets[] = {"scene.size=[32,32,16]", "render.width=72", "render.height=300"};
+    render_config(&cfg, sets, 3, &once);
+    struct progress pr;
+    progress_begin(&pr, "render", "row", 300);
+    renderer_set_progress(renderer, &pr);
+    render_config(&cfg, sets, 3, &banded);
+    renderer_set_progress(renderer, NULL);
+    assert_int_equal(pr.done, 300);
+    assert_memory_equal(once.rgba, banded.rgba, sizeof(float) * 4 * 72 * 300);
+    image_finish(&once);
+    image_finish(&banded);
+}
+
 int main(void)
 {
     log_set_level(LOG_WARN);
@@ -174,6 +194,7 @@ int main(void)
         cmocka_unit_test(test_tiny_step_is_bounded_and_exact),
         cmocka_unit_test(test_storm_is_finite_and_not_blank),
         cmocka_unit_test(test_sun_along_axis_is_finite),
+        cmocka_unit_test(test_bands_are_one_view),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     renderer_destroy(renderer);
