@@ -11,7 +11,8 @@
 static int usage(FILE *out)
 {
     fprintf(out,
-            "usage: anvil bench [--quick] [--views-only | --quality-only] [-o DIR] [--cache DIR]\n"
+            "usage: anvil bench [--quick] [--views-only | --quality-only | --movie-only] [-o DIR]\n"
+            "                   [--cache DIR]\n"
             "                   [--configs DIR] [--spp N] [--scene sphere|storm|katrina]...\n"
             "                   [--paraview] [--quiet]\n"
             "What accuracy costs in time (docs/accuracy.md):\n"
@@ -21,6 +22,8 @@ static int usage(FILE *out)
             "           light build and per view, error against the Monte Carlo reference;\n"
             "           then a uniform cloud layer seen from 16 directions and a uniform\n"
             "           wall under 4 suns against Monte Carlo\n"
+            "  movie    frames per second of the default storm's movie, drawn only and\n"
+            "           written through the encoder (movie-table.md)\n"
             "  -o DIR         where views.md, accuracy.csv, accuracy-table.md, accuracy.png\n"
             "                 and angles-table.md go (default docs/bench)\n"
             "  --cache DIR    Monte Carlo references are kept here (default: bench-cache\n"
@@ -48,7 +51,8 @@ static int parse(int argc, char **argv, struct bench_options *o)
         {"cache", required_argument, NULL, 'c'},  {"spp", required_argument, NULL, 'n'},
         {"scene", required_argument, NULL, 's'},  {"quiet", no_argument, NULL, 'q'},
         {"paraview", no_argument, NULL, 'P'},     {"configs", required_argument, NULL, 'C'},
-        {"help", no_argument, NULL, 'h'},         {NULL, 0, NULL, 0},
+        {"movie-only", no_argument, NULL, 'M'},   {"help", no_argument, NULL, 'h'},
+        {NULL, 0, NULL, 0},
     };
     bench_options_defaults(o);
     o->out = "docs/bench";
@@ -56,7 +60,7 @@ static int parse(int argc, char **argv, struct bench_options *o)
     o->paraview_script = ANVIL_SOURCE_DIR "/src/bench/paraview_views.py";
     o->report = stdout;
     optind = 1;
-    int c;
+    int c, only = 0;
     long spp;
     while ((c = getopt_long(argc, argv, "o:qh", longopts, NULL)) != -1) {
         switch (c) {
@@ -64,10 +68,16 @@ static int parse(int argc, char **argv, struct bench_options *o)
             o->quick = true;
             break;
         case 'V':
-            o->quality = false;
+            o->quality = o->movie = false;
+            only++;
             break;
         case 'A':
-            o->views = false;
+            o->views = o->movie = false;
+            only++;
+            break;
+        case 'M':
+            o->views = o->quality = false;
+            only++;
             break;
         case 'o':
             o->out = optarg;
@@ -107,8 +117,8 @@ static int parse(int argc, char **argv, struct bench_options *o)
         log_error("bench: unexpected argument \"%s\"", argv[optind]);
         return EXIT_USAGE;
     }
-    if (!o->views && !o->quality) {
-        log_error("bench: --views-only and --quality-only exclude each other");
+    if (only > 1) {
+        log_error("bench: --views-only, --quality-only and --movie-only exclude each other");
         return EXIT_USAGE;
     }
     if (o->paraview && !o->views) {

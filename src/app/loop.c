@@ -13,7 +13,7 @@
 #include "common/log.h"
 #include "common/progress.h"
 #include "render/image.h"
-#include "session/camera_path.h"
+#include "session/animation.h"
 
 #define SCRIPT_FRAMES_MAX 1000000
 
@@ -74,43 +74,6 @@ static int render_script(struct display *d, struct session *s, const struct loop
     if (writing && frame_output_frames(ld->output) == 0 &&
         !frame_output_add(ld->output, d, 0))
         return EXIT_FAILED;
-    return EXIT_OK;
-}
-
-/* An animation of the time series or of the camera path: every frame written. */
-static int render_animation(struct display *d, struct session *s, const struct loop_desc *ld)
-{
-    long count;
-    if (ld->kind == LOOP_STEPS)
-        count = ld->by > 0.0 ? (long)floor((ld->last - ld->first) / ld->by + 1e-9) + 1 : 1;
-    else
-        count = (long)(ld->last - ld->first) + 1;
-    struct display_camera base = {0};
-    struct frame_state f;
-    bool redraw;
-    if (!session_update(s, NULL, 0.0, ld->time, &f, &redraw))
-        return EXIT_FAILED;
-    base = f.camera;
-    struct progress pr;
-    progress_begin(&pr, "render", "frame", (uint64_t)count);
-    for (long i = 0; i < count; i++) {
-        if (ld->kind == LOOP_STEPS) {
-            session_set_time(s, ld->first + (double)i * ld->by);
-        } else {
-            struct display_camera cam;
-            double step = -1.0;
-            camera_path_eval(ld->path, (ld->first + (double)i) / ld->fps, &base, &cam, &step);
-            session_set_camera(s, &cam);
-            if (step >= 0.0)
-                session_set_time(s, step);
-        }
-        if (!render_frame(d, s, 0.0, ld->time) || !frame_output_add(ld->output, d, (int)i)) {
-            progress_end(&pr);
-            return EXIT_FAILED;
-        }
-        progress_update(&pr, (uint64_t)i + 1);
-    }
-    progress_end(&pr);
     return EXIT_OK;
 }
 
@@ -178,9 +141,17 @@ static void bookmark(struct session *s, const struct loop_desc *ld)
 
 int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
 {
+    if (!ld->run && (ld->kind == LOOP_STEPS || ld->kind == LOOP_PATH)) {
+        struct animation_desc a = {.path = ld->kind == LOOP_PATH ? ld->path : NULL,
+                                   .first = ld->first,
+                                   .last = ld->last,
+                                   .by = ld->by,
+                                   .fps = ld->fps,
+                                   .time = ld->time};
+        return animation_run(d, s, &a, ld->output) ? EXIT_OK : EXIT_FAILED;
+    }
     if (!ld->run)
-        return ld->kind == LOOP_STEPS || ld->kind == LOOP_PATH ? render_animation(d, s, ld)
-                                                                : render_script(d, s, ld);
+        return render_script(d, s, ld);
 
     double t0 = time_now_ms(), last = t0;
     bool moving = display_head_moves(d), dirty = true, idle = false;

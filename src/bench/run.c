@@ -13,6 +13,7 @@
 
 #include "bench/bench.h"
 #include "bench/experiments.h"
+#include "bench/movie.h"
 #include "bench/paraview.h"
 #include "bench/tables.h"
 #include "common/log.h"
@@ -25,7 +26,7 @@
 void bench_options_defaults(struct bench_options *o)
 {
     memset(o, 0, sizeof(*o));
-    o->views = o->quality = true;
+    o->views = o->quality = o->movie = true;
 }
 
 __attribute__((format(printf, 2, 3))) static void echo(const struct bench_options *o,
@@ -266,7 +267,7 @@ static bool run_angles(const struct bench_options *o, const char *device, struct
 enum bench_status bench_run(const struct bench_options *opts)
 {
     assert(opts && opts->out && opts->configs);
-    assert(opts->views || opts->quality);
+    assert(opts->views || opts->quality || opts->movie);
     assert(!opts->paraview || opts->paraview_script);
     struct bench_options o = *opts;
     char cache[PATH_MAX];
@@ -305,6 +306,14 @@ enum bench_status bench_run(const struct bench_options *opts)
     if (o.views && !run_views(&o, device, r, lg))
         goto done;
     if (o.quality && !(run_quality(&o, device, r, lg) && run_angles(&o, device, r, lg)))
+        goto done;
+    struct bench_movie_result movie;
+    if (o.movie && !bench_movie(&(struct bench_movie_desc){.quick = o.quick,
+                                                           .out = o.out,
+                                                           .device = device,
+                                                           .context = ctx,
+                                                           .report = o.report},
+                                &movie))
         goto done;
     status = BENCH_DONE;
 done:

@@ -4,7 +4,8 @@
  * time for the same views), the quality sweep on the named scenes (bench/scenes.h) against
  * their Monte Carlo references, and the experiments of bench/experiments.h, written as
  * views-table.md, accuracy.csv, accuracy-table.md, accuracy.png, accuracy-self.png and
- * angles-table.md into one folder.
+ * angles-table.md into one folder; and what a movie of the default storm costs
+ * (movie-table.md, bench/movie.h).
  *
  * It makes its own headless GL context.  It must not know the command line or where the
  * source tree lies: the folders (output, reference cache, configs) and the ParaView script
@@ -22,7 +23,8 @@
 /* bench_options_defaults fills the defaults; zero means default where noted. */
 struct bench_options {
     bool quick;           /* small scenes and images, one repeat: a CI-sized run */
-    bool views, quality;  /* which benchmarks run (both by default; at least one) */
+    bool views, quality;  /* which benchmarks run (all three by default; at least one) */
+    bool movie;           /* the default storm's movie: frames per second (bench/movie.h) */
     bool paraview;        /* also time ParaView on the views (needs views and paraview_script) */
     const char *out;      /* folder for the tables and plots, created with its parents */
     const char *cache;    /* folder of the cached Monte Carlo references; NULL or "":
