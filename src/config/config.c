@@ -33,6 +33,7 @@ static const char *const lightmap_grid_names[] = {"auto", "upright", NULL}; /* l
 static const char *const effect_mode_names[] = {"auto", "on", "off", NULL};
 static const char *const phase_names[] = {"water", "ice", NULL};
 static const char *const coast_res_names[] = {"crude", "low", "intermediate", NULL};
+static const char *const overlay_when_names[] = {"run", "always", "never", NULL};
 
 /* clang-format off */
 #define OFF(member) offsetof(struct config, member)
@@ -199,6 +200,16 @@ static const struct config_field settings[] = {
            "or a still render"),
     EFFECT("effects.distortion", EFFECT_DISTORTION,
            "HMD lens pre-distortion; auto: on for an HMD display"),
+
+    ENUM("overlay.when", overlay.when, overlay_when_names, OVERLAY_RUN,
+         "where the information overlay shows: \"run\" (windows), \"always\" (renders and "
+         "movies too) or \"never\"; in a CAVE or HMD it is a panel in the room"),
+    BOOL("overlay.date", overlay.date, 1, "the shown time step's date and time (WRF Times)"),
+    BOOL("overlay.legend", overlay.legend, 1,
+         "a colour legend for the colour-mapped field (transfer function mode), with its "
+         "units"),
+    BOOL("overlay.north", overlay.north, 1, "a north arrow"),
+    BOOL("overlay.box", overlay.box, 1, "the domain's box, with km ticks along its floor"),
 
     BOOL("map.terrain", map.terrain, 1,
          "ground mesh from the data's HGT, LANDMASK, LU_INDEX (else the flat ground plane)"),

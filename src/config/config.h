@@ -155,6 +155,17 @@ struct config_playback {
     bool loop;    /* playback.loop: after the last step comes the first */
 };
 
+/* The information overlay (docs/user-guide.md): where it shows and what it holds. */
+enum overlay_when { OVERLAY_RUN, OVERLAY_ALWAYS, OVERLAY_NEVER };
+
+struct config_overlay {
+    enum overlay_when when; /* overlay.when: "run" | "always" (renders and movies too) | "never" */
+    bool date;              /* overlay.date: the shown step's date and time */
+    bool legend;            /* overlay.legend: colour legends of colour-mapped fields */
+    bool north;             /* overlay.north: a north arrow */
+    bool box;               /* overlay.box: the domain's box with km ticks */
+};
+
 struct config_effects {
     enum effect_mode mode[EFFECT_COUNT]; /* effects.<name>: "auto" | "on" | "off" */
 };
@@ -172,6 +183,7 @@ struct config {
     struct config_playback playback;
     struct config_map map;
     struct config_detail detail;
+    struct config_overlay overlay;
 };
 
 /* Fills every setting with its default: the built-in procedural storm seen from the south-west

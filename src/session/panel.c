@@ -8,61 +8,54 @@
 #include "common/log.h"
 #include "gpu/gpu.h"
 
-/* Texels hold radiance / PANEL_GAIN (times 1 / exposure) so that the tone mapping, 1 - exp(-L)
- * then sRGB, shows the image's own sRGB colours. */
-#define PANEL_MAX_DISPLAY 0.99
+/* Texels hold the radiance that the tone mapping (Reinhard's x / (1 + x) of exposure times
+ * radiance, then sRGB: image_tonemap) turns back into the image's own sRGB colour, as floats.
+ * White is kept just below the operator's asymptote. */
+#define PANEL_MAX_DISPLAY 0.999
 
 struct panel {
     struct renderer *renderer; /* borrowed */
     struct render_mesh *mesh;
     struct gpu_texture texture;
-    uint8_t *texels;
+    float *texels;
     unsigned generation;
     bool uploaded;
     float exposure;
-    uint8_t lut[256];
+    float lut[256]; /* radiance at exposure 1 for each sRGB level */
 };
-
-static float gain(float exposure)
-{
-    return (float)(-log(1.0 - PANEL_MAX_DISPLAY)) / exposure;
-}
 
 static double srgb_to_linear(double c)
 {
     return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
 }
 
-static void build_lut(uint8_t lut[256])
+static void build_lut(float lut[256])
 {
-    double g = -log(1.0 - PANEL_MAX_DISPLAY);
     for (int i = 0; i < 256; i++) {
         double d = srgb_to_linear(i / 255.0) * PANEL_MAX_DISPLAY;
-        double t = -log(1.0 - d) / g;
-        lut[i] = (uint8_t)(fmin(t, 1.0) * 255.0 + 0.5);
+        lut[i] = (float)(d / (1.0 - d)); /* x / (1 + x) = d */
     }
 }
 
 void panel_texel_radiance(const uint8_t rgba[4], float exposure, float out[3])
 {
-    uint8_t lut[256];
+    float lut[256];
     build_lut(lut);
     for (int c = 0; c < 3; c++)
-        out[c] = lut[rgba[c]] / 255.0f * gain(exposure);
+        out[c] = lut[rgba[c]] / exposure;
 }
 
-/* A unit quad whose vertex colour is the gain: texels times the gain are the radiance. */
-static struct render_mesh *quad_mesh(float exposure)
+/* A unit quad, white: the texels are the radiance. */
+static struct render_mesh *quad_mesh(void)
 {
     const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
     struct render_vertex quad[4];
     const float pos[4][2] = {{-0.5f, -0.5f}, {0.5f, -0.5f}, {0.5f, 0.5f}, {-0.5f, 0.5f}};
-    float g = gain(exposure);
     for (int i = 0; i < 4; i++) {
         quad[i] = (struct render_vertex){
             .pos = {pos[i][0], pos[i][1], 0.0f},
             .normal = {0.0f, 0.0f, 1.0f},
-            .color = {g, g, g, 1.0f},
+            .color = {1.0f, 1.0f, 1.0f, 1.0f},
             .uv = {pos[i][0] + 0.5f, 0.5f - pos[i][1]}, /* image row 0 is the top */
         };
     }
@@ -79,7 +72,7 @@ struct panel *panel_create(struct renderer *r)
     build_lut(p->lut);
     p->exposure = 1.0f;
     p->renderer = r;
-    p->mesh = quad_mesh(p->exposure);
+    p->mesh = quad_mesh();
     if (!p->mesh || !renderer_add_mesh(r, p->mesh)) {
         panel_destroy(p, r);
         return NULL;
@@ -135,26 +128,14 @@ bool panel_show(struct panel *p, const uint8_t *px, int w, int h, unsigned gener
                 const float c[3], const float x[3], const float y[3], const float to_world[16],
                 float exposure)
 {
-    if (exposure != p->exposure) {
-        /* The gain lives in the vertex colours: a new exposure needs a new quad. */
-        struct render_mesh *mesh = quad_mesh(exposure);
-        if (!mesh)
-            return false;
-        render_mesh_set_texture(mesh, p->texture.id ? &p->texture : NULL);
-        renderer_remove_mesh(p->renderer, p->mesh);
-        render_mesh_destroy(p->mesh);
-        p->mesh = mesh;
-        if (!renderer_add_mesh(p->renderer, mesh))
-            return false;
-    }
     render_mesh_set_visible(p->mesh, true);
     if (!p->uploaded || generation != p->generation || exposure != p->exposure) {
         if (!p->texels || p->texture.size[0] != w || p->texture.size[1] != h) {
             free(p->texels);
-            p->texels = malloc((size_t)w * (size_t)h * 4);
+            p->texels = malloc((size_t)w * (size_t)h * 4 * sizeof(float));
             gpu_texture_finish(&p->texture);
             int size[3] = {w, h, 1};
-            if (!p->texels || !gpu_texture_init(&p->texture, 2, size, GPU_RGBA8, NULL)) {
+            if (!p->texels || !gpu_texture_init(&p->texture, 2, size, GPU_RGBA32F, NULL)) {
                 log_error("panel: cannot make its texture");
                 return false;
             }
@@ -162,8 +143,8 @@ bool panel_show(struct panel *p, const uint8_t *px, int w, int h, unsigned gener
         }
         for (size_t i = 0; i < (size_t)w * (size_t)h; i++) {
             for (int k = 0; k < 3; k++)
-                p->texels[4 * i + k] = p->lut[px[4 * i + k]];
-            p->texels[4 * i + 3] = px[4 * i + 3];
+                p->texels[4 * i + k] = p->lut[px[4 * i + k]] / exposure;
+            p->texels[4 * i + 3] = px[4 * i + 3] / 255.0f;
         }
         gpu_texture_upload(&p->texture, p->texels);
         p->generation = generation;

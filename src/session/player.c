@@ -82,6 +82,7 @@ struct player {
     char (*dates)[DATE_LEN];
     struct data_source *src; /* read by the series' thread only once the series runs */
     struct ext_volume first; /* the first step, made by player_create until taken */
+    struct ext_volume still; /* without a series: the last step made on the caller's thread */
 
     pthread_mutex_t lock; /* guards look, look_gen, present */
     struct look look;
@@ -366,6 +367,7 @@ void player_destroy(struct player *p)
     series_destroy(p->series); /* joins the thread before the source goes */
     data_source_close(p->src);
     ext_volume_finish(&p->first);
+    ext_volume_finish(&p->still);
     pthread_mutex_destroy(&p->lock);
     free(p->dates);
     free(p);
@@ -408,9 +410,24 @@ void player_set_look(struct player *p, const struct look *look)
         series_invalidate(p->series);
 }
 
+/* Without a series (a still picture whose look or step changed anyway): the step made now, on
+ * the caller's thread, which is then the only one reading the source. */
+static const struct ext_volume *make_now(struct player *p, int want)
+{
+    ext_volume_finish(&p->still);
+    double load_ms = 0.0, convert_ms = 0.0;
+    if (!load(p, want, &p->still, &load_ms, &convert_ms))
+        return NULL;
+    p->shown = want;
+    p->shown_gen = p->look_gen;
+    return &p->still;
+}
+
 const struct ext_volume *player_poll(struct player *p, int want, int *shown)
 {
     const struct ext_volume *v = NULL;
+    if (!p->series && (want != p->shown || p->shown_gen != p->look_gen))
+        v = make_now(p, want);
     if (p->series && (want != p->shown || p->shown_gen != p->look_gen)) {
         v = series_try_acquire(p->series, want);
         if (v) {
@@ -426,6 +443,8 @@ const struct ext_volume *player_poll(struct player *p, int want, int *shown)
 const struct ext_volume *player_wait(struct player *p, int want, int *shown)
 {
     const struct ext_volume *v = NULL;
+    if (!p->series && (want != p->shown || p->shown_gen != p->look_gen))
+        v = make_now(p, want);
     if (p->series && (want != p->shown || p->shown_gen != p->look_gen)) {
         v = series_acquire(p->series, want);
         if (v) {

@@ -19,6 +19,7 @@
 #include "session/lightmaps.h"
 #include "session/map.h"
 #include "session/menu_view.h"
+#include "session/overlay_view.h"
 #include "session/scene.h"
 
 #define SOURCES_MAX 2
@@ -63,6 +64,10 @@ struct session {
     struct render_settings drawn; /* base with the frame's sun and temporal blend */
     struct frame_state applied;
     bool have_applied;
+
+    /* The information overlay (overlay.when), and what it showed last. */
+    struct overlay_view *overlay;
+    struct overlay_model overlay_model;
 
     /* The menu and its sources (desc.menu). */
     struct menu *menu;
@@ -249,6 +254,12 @@ struct session *session_create(const struct config *cfg, const struct session_de
     s->shown = s->playback.step;
     s->view_size[0] = cfg->render.width;
     s->view_size[1] = cfg->render.height;
+    enum overlay_when when = cfg->overlay.when;
+    if (when == OVERLAY_ALWAYS || (when == OVERLAY_RUN && d->interactive)) {
+        s->overlay = overlay_view_create(s->renderer, cfg);
+        if (!s->overlay)
+            goto error;
+    }
     if (d->menu && !create_menu(s)) {
         *rc = 1;
         goto error;
@@ -267,6 +278,7 @@ void session_destroy(struct session *s)
         return;
     free(s->path);
     menu_view_destroy(s->menu_view, s->renderer); /* its meshes leave the renderer */
+    overlay_view_destroy(s->overlay, s->renderer);
     menu_destroy(s->menu);
     for (int i = 0; i < s->n_sources; i++)
         input_source_destroy(s->sources[i]);
@@ -991,6 +1003,70 @@ bool session_light(struct session *s)
     return lightmaps_update_params(&s->light, &p, s->renderer, &s->stats);
 }
 
+/* "2005-08-28 06:00 UTC" from WRF's "2005-08-28_06:00:00". */
+static void date_text(const char *times, char *buf, size_t size)
+{
+    int y, mo, da, h, mi;
+    if (sscanf(times, "%d-%d-%d_%d:%d", &y, &mo, &da, &h, &mi) == 5)
+        snprintf(buf, size, "%04d-%02d-%02d %02d:%02d UTC", y, mo, da, h, mi);
+    else
+        snprintf(buf, size, "%s", times);
+}
+
+/* What the overlay shows for F. */
+static void overlay_model_of(struct session *s, const struct frame_state *f,
+                             struct overlay_model *m)
+{
+    memset(m, 0, sizeof(*m));
+    const struct config_overlay *co = &s->cfg.overlay;
+    m->date = co->date;
+    char when[64] = "";
+    const char *times = player_step_date(s->player, s->shown);
+    if (times[0])
+        date_text(times, when, sizeof(when));
+    else if (s->cfg.scene.kind == SCENE_STORM)
+        snprintf(when, sizeof(when), "procedural storm");
+    if (s->playback.count > 1)
+        snprintf(m->date_text, sizeof(m->date_text), "%s%sstep %d of %d", when,
+                 when[0] ? ", " : "", s->shown + 1, s->playback.count);
+    else
+        snprintf(m->date_text, sizeof(m->date_text), "%s", when);
+    m->legend = co->legend && s->settings.look.transfer_on;
+    if (m->legend)
+        m->transfer = s->settings.look.transfer;
+    m->north = co->north;
+    if (!m->north)
+        return;
+    double x, y;
+    if (s->tracker) {
+        float n[16];
+        display_navigation_matrix(&f->nav, n);
+        x = n[4]; /* world north (0, 1, 0) in the room; the panel's up is forward, -z */
+        y = -n[6];
+    } else {
+        /* A compass: north against the camera's heading, as seen from above. */
+        double fx = f->camera.target[0] - f->camera.eye[0];
+        double fy = f->camera.target[1] - f->camera.eye[1];
+        x = -fx; /* north . right, with right = (fy, -fx) */
+        y = fy;  /* north . forward */
+    }
+    m->north_deg = x * x + y * y > 1e-12 ? (float)(atan2(x, y) * 180.0 / M_PI) : 0.0f;
+}
+
+const struct overlay_model *session_overlay(const struct session *s)
+{
+    return s->overlay ? &s->overlay_model : NULL;
+}
+
+bool session_overlay_point(const struct session *s, float x, double world[3])
+{
+    int px, py;
+    if (!s->overlay || !overlay_legend_pixel(overlay_view_overlay(s->overlay), x, &px, &py))
+        return false;
+    overlay_view_point(s->overlay, (float)px + 0.5f, (float)py + 0.5f, world);
+    return true;
+}
+
 bool session_draw(struct session *s, struct display *d, const struct frame_state *f)
 {
     if (!display_layout(d, &f->head, &f->nav, &f->camera))
@@ -999,12 +1075,18 @@ bool session_draw(struct session *s, struct display *d, const struct frame_state
         s->view_size[0] = display_view(d, 0)->rv.width;
         s->view_size[1] = display_view(d, 0)->rv.height;
     }
-    if (s->menu) {
-        mat4 to_world, from_world;
-        menu_matrices(s, &f->nav, to_world, from_world);
-        float tw[16];
-        memcpy(tw, to_world, sizeof(tw));
-        if (!menu_view_update(s->menu_view, s->menu, tw, (float)s->cfg.render.exposure))
+    mat4 to_world, from_world;
+    menu_matrices(s, &f->nav, to_world, from_world);
+    float tw[16];
+    memcpy(tw, to_world, sizeof(tw));
+    float exposure = (float)s->cfg.render.exposure;
+    if (s->menu && !menu_view_update(s->menu_view, s->menu, tw, exposure))
+        return false;
+    if (s->overlay) {
+        overlay_model_of(s, f, &s->overlay_model);
+        if (!overlay_view_update(s->overlay, &s->overlay_model, s->tracker ? NULL : &f->camera,
+                                 s->view_size[0], s->view_size[1], s->display.head.position,
+                                 tw, exposure))
             return false;
     }
     if (!display_draw(d, s->renderer, &s->drawn))

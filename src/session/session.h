@@ -157,6 +157,13 @@ struct menu *session_menu(struct session *s); /* NULL without a menu */
 const struct config *session_config(const struct session *s);
 int session_step_shown(const struct session *s);
 
+/* What the information overlay showed in the last session_draw, or NULL without one. */
+struct overlay_model;
+const struct overlay_model *session_overlay(const struct session *s);
+/* Where in the world the overlay's legend shows the value at X in [0, 1] of its range (false
+ * without a legend): for tests that read it off a picture. */
+bool session_overlay_point(const struct session *s, float x, double world[3]);
+
 /* The help text's lines for the keys and what they do here ("W  move forward"), through the
  * display's key table. */
 void session_list_keys(void (*print)(const char *keys, const char *what, void *user),
