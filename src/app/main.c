@@ -5,6 +5,7 @@
 #include "app/app.h"
 #include "app/cmd_bench.h"
 #include "app/cmd_data.h"
+#include "cluster/cluster.h"
 #include "common/log.h"
 #include "config/config.h"
 #include "config/display_config.h"
@@ -68,8 +69,14 @@ int main(int argc, char **argv)
         return EXIT_USAGE;
     }
     for (size_t c = 0; c < sizeof(commands) / sizeof(commands[0]); c++) {
-        if (strcmp(argv[i], commands[c].name) == 0)
-            return commands[c].run(argc - i, argv + i);
+        if (strcmp(argv[i], commands[c].name) == 0) {
+            /* Under mpirun each rank runs the command; the walls are shared out among them. */
+            if (!cluster_init(&argc, &argv))
+                return EXIT_FAILED;
+            int rc = commands[c].run(argc - i, argv + i);
+            cluster_finish();
+            return rc;
+        }
     }
     fprintf(stderr, "anvil: unknown command \"%s\"\n", argv[i]);
     usage(stderr);

@@ -79,6 +79,9 @@ static const struct config_field wall_fields[] = {
     {.path = "mode", .type = T_ENUM, .n = 1, .offset = WALL(stereo), .names = stereo_names,
      .flags = F_GIVEN, .given = WALL(stereo_set), .shown_default = "display.mode",
      .help = "stereo mode of this wall"},
+    NUM(T_INT, "rank", WALL(rank), 1, -1, 4095, 0,
+        "under mpirun, the rank that draws this wall; -1 = the walls dealt round the ranks in "
+        "turn", -1),
 };
 
 static const struct config_table wall_table = {
@@ -93,7 +96,7 @@ static const struct config_table wall_table = {
 /* Without walls in the file: the desktop monitor, 0.52 x 0.32 m, its centre at the origin. */
 static const struct display_wall default_walls[] = {
     {.name = "screen", .lower_left = {-0.26, -0.16, 0.0}, .lower_right = {0.26, -0.16, 0.0},
-     .upper_left = {-0.26, 0.16, 0.0}, .monitor = -1},
+     .upper_left = {-0.26, 0.16, 0.0}, .monitor = -1, .rank = -1},
 };
 
 static const struct config_field display_fields[] = {
@@ -300,4 +303,16 @@ bool display_config_load(const char *path, struct display_config *cfg)
     bool ok = config_table_read(&display_table, path, cfg, &trace) && check(cfg, &trace);
     config_trace_finish(&trace);
     return ok;
+}
+
+int display_config_walls_of_rank(struct display_config *cfg, int rank, int size)
+{
+    int n = 0;
+    for (int w = 0; w < cfg->wall_count; w++) {
+        int owner = cfg->walls[w].rank >= 0 ? cfg->walls[w].rank : w % (size > 0 ? size : 1);
+        if (owner == rank)
+            cfg->walls[n++] = cfg->walls[w];
+    }
+    cfg->wall_count = n;
+    return n;
 }

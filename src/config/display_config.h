@@ -59,6 +59,8 @@ struct display_wall {
                                      display_config_validate) */
     bool stereo_set;              /* walls.[i].mode given: the wall keeps its own mode */
     bool viewport_set;            /* walls.[i].viewport given */
+    int rank;                     /* walls.[i].rank: the rank that draws it under mpirun; -1 =
+                                     wall i on rank i mod the ranks */
     int line;                     /* line of the wall's group in the file (for messages) */
 };
 
@@ -132,6 +134,10 @@ bool display_config_validate(struct display_config *cfg);
  * display, head, navigation, hmd or walls, known below that or not.  The command line sends
  * such a --set to the display config. */
 bool display_config_has_setting(const char *path);
+
+/* Keeps only the walls that rank RANK of SIZE draws (walls.[i].rank, or round the ranks in
+ * turn); their names are kept.  Returns how many there are. */
+int display_config_walls_of_rank(struct display_config *cfg, int rank, int size);
 
 /* Names of the enums as written in files ("cave", "anaglyph", "path"); static strings. */
 const char *display_type_name(enum display_type t);

@@ -14,6 +14,7 @@ declare -A allowed=(
     [data]="common optics"
     [gpu]="common"
     [input]="common"
+    [cluster]="common"
     [render]="common optics data gpu shaders"
     [light]="common optics data gpu render shaders"
     [menu]="common optics input"
@@ -21,7 +22,7 @@ declare -A allowed=(
     [reference]="common optics data render"
     [session]="common optics config data gpu input render light menu display reference"
     [bench]="common optics config data gpu input render light menu display reference session"
-    [app]="common optics config data gpu input render light menu display reference session bench"
+    [app]="common optics config data gpu input render light menu display reference session bench cluster"
 )
 for part in */; do
     part=${part%/}
@@ -67,12 +68,14 @@ only 'openhmd\.h' "OpenHMD" input/ display/head.c display/hmd.c
 only 'stb_truetype\.h' "stb_truetype" common/glyphs.c
 only 'png\.h' "libpng" render/image.c
 only 'libav|libswscale' "FFmpeg" render/video.c
+only 'mpi\.h' "MPI" cluster/cluster.c
 
 # Every part's main header says what it must not know.
 declare -A header=(
     [common]=log.h [optics]=optics.h [config]=config.h [data]=volume.h [gpu]=gpu.h
     [input]=input.h [render]=render.h [light]=light.h [menu]=menu.h [display]=display.h
     [reference]=reference.h [session]=session.h [bench]=bench.h [app]=app.h
+    [cluster]=cluster.h
 )
 for part in "${!header[@]}"; do
     check "$part/${header[$part]} says what it must not know" \
