@@ -237,6 +237,7 @@ static bool cave_present(struct display *d, struct renderer *r, float exposure)
             }
         }
     }
+    display_before_swap(d);
     for (int i = 0; i < c->window_count; i++)
         gpu_context_swap(c->windows[i]);
     gpu_context_make_current(d->context);

@@ -195,6 +195,7 @@ static bool single_present(struct display *d, struct renderer *r, float exposure
     if (!display_show(r, &left->target, exposure, &k->scratch, 0, 0, fw, fh, 1) ||
         !display_show(r, &right->target, exposure, &k->scratch, 0, 0, fw, fh, 2))
         return false;
+    display_before_swap(d);
     gpu_context_swap(d->context);
     return true;
 }

@@ -168,7 +168,7 @@ bool display_open_primary(struct display *d, int w, int h, int monitor, bool ste
         gpu_context_make_current(d->context);
         return true;
     }
-    struct gpu_context_desc cd = {.backend = "egl", .monitor = -1};
+    struct gpu_context_desc cd = {.backend = "egl", .monitor = -1, .device = d->desc.gpu_device};
     if (!d->desc.offscreen) {
         cd.backend = "glfw";
         cd.width = w;
@@ -242,6 +242,12 @@ bool display_show(struct renderer *r, const struct gpu_texture *in, float exposu
     return true;
 }
 
+void display_before_swap(struct display *d)
+{
+    if (d->desc.before_swap)
+        d->desc.before_swap(d->desc.swap_user);
+}
+
 bool display_show_window(struct display *d, struct renderer *r, const struct gpu_texture *in,
                          float exposure, struct gpu_texture *scratch)
 {
@@ -249,6 +255,7 @@ bool display_show_window(struct display *d, struct renderer *r, const struct gpu
     gpu_context_size(d->context, &fw, &fh);
     if (!display_show(r, in, exposure, scratch, 0, 0, fw, fh, 0))
         return false;
+    display_before_swap(d);
     gpu_context_swap(d->context);
     return true;
 }
@@ -641,7 +648,7 @@ bool display_write_images(struct display *d, const char *dir, const char *ext, f
         }
         struct image sheet = {0};
         const float bg[4] = {0.0f, 0.0f, 0.0f, 1.0f};
-        if (ok && display_contact_sheet(images, n, walls, 2, bg, &sheet)) {
+        if (ok && !d->desc.partial && display_contact_sheet(images, n, walls, 2, bg, &sheet)) {
             char path[1200];
             snprintf(path, sizeof(path), "%s/contact.%s", dir, ext);
             ok = image_write(&sheet, path, exposure);

@@ -140,6 +140,13 @@ struct display_desc {
     int height;                  /* image height of walls without a size (render.height) */
     struct display_camera camera; /* the orbit display's camera until display_layout is given
                                      another (the scene's camera) */
+    int gpu_device;               /* offscreen: the EGL device by index (one per rank of a
+                                     node); 0: the first */
+    bool partial;                 /* these are some of the walls (a cluster's rank): no
+                                     contact sheet of them all */
+    /* Called right before the windows swap (a cluster's ranks wait for each other there). */
+    void (*before_swap)(void *user);
+    void *swap_user;
 };
 
 /* Lists the backends (name, one-line description) for --display help. */

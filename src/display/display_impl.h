@@ -86,6 +86,9 @@ bool display_compose(struct display *d, const struct gpu_texture *left,
 bool display_show(struct renderer *r, const struct gpu_texture *in, float exposure,
                   struct gpu_texture *scratch, int x, int y, int w, int h, int buffer);
 
+/* What must happen right before the windows swap (display_desc.before_swap). */
+void display_before_swap(struct display *d);
+
 /* Tone maps IN into the whole primary window and swaps it. */
 bool display_show_window(struct display *d, struct renderer *r, const struct gpu_texture *in,
                          float exposure, struct gpu_texture *scratch);

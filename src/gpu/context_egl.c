@@ -36,10 +36,35 @@ static EGLDisplay try_initialize(EGLDisplay dpy)
     return dpy;
 }
 
-static EGLDisplay open_display(void)
+/* Device INDEX (modulo the count) of the EGL device platform, or EGL_NO_DISPLAY. */
+static EGLDisplay device_display(const char *client, int index)
+{
+    if (!has_extension(client, "EGL_EXT_platform_device"))
+        return EGL_NO_DISPLAY;
+    EGLDeviceEXT devices[16];
+    EGLint count = 0;
+    if (!eglQueryDevicesEXT(16, devices, &count) || count < 1)
+        return EGL_NO_DISPLAY;
+    int pick = index % count;
+    EGLDisplay dpy =
+        try_initialize(eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[pick], NULL));
+    if (dpy != EGL_NO_DISPLAY)
+        log_info("EGL: device %d of %d", pick, (int)count);
+    return dpy;
+}
+
+static EGLDisplay open_display(int device)
 {
     const char *client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
     EGLDisplay dpy = EGL_NO_DISPLAY;
+    if (device > 0) {
+        dpy = device_display(client, device);
+        if (dpy == EGL_NO_DISPLAY)
+            log_warn("EGL: no device %d to choose (EGL_EXT_device_enumeration): the first one",
+                     device);
+        else
+            return dpy;
+    }
     if (has_extension(client, "EGL_MESA_platform_surfaceless"))
         dpy = try_initialize(eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA,
                                                       EGL_DEFAULT_DISPLAY, NULL));
@@ -64,7 +89,7 @@ static struct gpu_context *egl_create(const struct gpu_context_desc *desc)
         return NULL;
     c->base.width = desc->width;
     c->base.height = desc->height;
-    c->display = open_display();
+    c->display = open_display(desc->device);
     if (c->display == EGL_NO_DISPLAY) {
         log_error("no EGL display could be opened (no GPU driver or Mesa?)");
         goto error_alloc;

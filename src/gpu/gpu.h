@@ -29,6 +29,8 @@ struct gpu_context_desc {
     void *share_window;  /* glfw: a GLFWwindow to share objects with, or NULL */
     int monitor;         /* glfw: monitor index for fullscreen, -1 = windowed */
     bool stereo;         /* glfw: ask for a quad-buffer stereo framebuffer */
+    int device;          /* egl: the GPU by index among the EGL devices (modulo how many there
+                            are): one per rank of a node; 0 = the first platform that works */
 };
 
 /* Creates an OpenGL 4.5 core context and makes it current.  Returns NULL (reason logged) when

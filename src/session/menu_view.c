@@ -55,6 +55,15 @@ void menu_view_destroy(struct menu_view *v, struct renderer *r)
     free(v);
 }
 
+void menu_view_state_of(struct menu *m, struct menu_view_state *out, const uint8_t **pixels)
+{
+    memset(out, 0, sizeof(*out));
+    out->visible = menu_visible(m);
+    *pixels = menu_pixels(m, &out->width, &out->height, &out->generation);
+    menu_corners(m, out->corners);
+    out->have_ray = menu_ray(m, out->ray_origin, out->ray_direction, &out->ray_hit);
+}
+
 bool menu_view_update(struct menu_view *v, struct menu *m, const float to_world[16],
                       float exposure)
 {
@@ -63,24 +72,34 @@ bool menu_view_update(struct menu_view *v, struct menu *m, const float to_world[
         render_mesh_set_visible(v->ray, false);
         return true;
     }
-    int w, h;
-    unsigned generation;
-    const uint8_t *px = menu_pixels(m, &w, &h, &generation);
-    float corners[4][3];
-    menu_corners(m, corners);
+    struct menu_view_state st;
+    const uint8_t *px;
+    menu_view_state_of(m, &st, &px);
+    return menu_view_show(v, &st, px, to_world, exposure);
+}
+
+bool menu_view_show(struct menu_view *v, const struct menu_view_state *st,
+                    const uint8_t *px, const float to_world[16], float exposure)
+{
+    if (!st->visible || !px) {
+        panel_hide(v->panel);
+        render_mesh_set_visible(v->ray, false);
+        return true;
+    }
     float x[3], y[3], c[3];
     for (int i = 0; i < 3; i++) {
-        x[i] = corners[1][i] - corners[0][i];
-        y[i] = corners[3][i] - corners[0][i];
-        c[i] = 0.5f * (corners[0][i] + corners[2][i]);
+        x[i] = st->corners[1][i] - st->corners[0][i];
+        y[i] = st->corners[3][i] - st->corners[0][i];
+        c[i] = 0.5f * (st->corners[0][i] + st->corners[2][i]);
     }
-    if (!panel_show(v->panel, px, w, h, generation, c, x, y, to_world, exposure))
+    if (!panel_show(v->panel, px, st->width, st->height, st->generation, c, x, y, to_world,
+                    exposure))
         return false;
-
-    float o[3], d[3], hit;
-    bool have = menu_ray(m, o, d, &hit);
+    bool have = st->have_ray;
     render_mesh_set_visible(v->ray, have);
     if (have) {
+        const float *o = st->ray_origin, *d = st->ray_direction;
+        float hit = st->ray_hit;
         float len = hit >= 0.0f ? hit : 2.0f * sqrtf(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
         /* Any two axes across the ray (lines have no width). */
         float a[3] = {fabsf(d[0]) < 0.9f ? 1.0f : 0.0f, fabsf(d[0]) < 0.9f ? 0.0f : 1.0f, 0.0f};
