@@ -156,28 +156,36 @@ struct openxr {
 
 /* ---- names and errors ------------------------------------------------------------------ */
 
+/* One case returning NAME, for openxr_reflection.h's lists. */
+#define NAME_CASE(name, value)                                                                     \
+    case name:                                                                                     \
+        return #name;
+
 static const char *result_name(XrResult r)
 {
     switch (r) {
-#define RESULT_CASE(name, value)                                                                   \
-    case name:                                                                                     \
-        return #name;
-        XR_LIST_ENUM_XrResult(RESULT_CASE)
-#undef RESULT_CASE
-            default : return "an unknown XrResult";
+        XR_LIST_ENUM_XrResult(NAME_CASE);
+    default:
+        return "an unknown XrResult";
     }
 }
 
+/* The state's name without XR_SESSION_STATE_. */
 static const char *state_name(XrSessionState s)
 {
+    const char *name = NULL;
     switch (s) {
-#define STATE_CASE(name, value)                                                                    \
-    case name:                                                                                     \
-        return #name + 17; /* without XR_SESSION_STATE_ */
-        XR_LIST_ENUM_XrSessionState(STATE_CASE)
+#define STATE_CASE(state, value)                                                                   \
+    case state:                                                                                    \
+        name = #state;                                                                             \
+        break;
+        XR_LIST_ENUM_XrSessionState(STATE_CASE);
 #undef STATE_CASE
-            default : return "unknown";
+    default:
+        name = "XR_SESSION_STATE_UNKNOWN";
+        break;
     }
+    return name + strlen("XR_SESSION_STATE_");
 }
 
 /* Logs a failed CALL with its result; true when R succeeded. */

@@ -178,15 +178,35 @@ static void fault(const char *fmt, ...)
     rt.report.faults++;
 }
 
+/* One case returning NAME, for openxr_reflection.h's lists. */
+#define NAME_CASE(name, value)                                                                     \
+    case name:                                                                                     \
+        return #name;
+
+static const char *result_name(XrResult r)
+{
+    switch (r) {
+        XR_LIST_ENUM_XrResult(NAME_CASE);
+    default:
+        return NULL;
+    }
+}
+
+static const char *type_name(XrStructureType t)
+{
+    switch (t) {
+        XR_LIST_ENUM_XrStructureType(NAME_CASE);
+    default:
+        return NULL;
+    }
+}
+
 static const char *state_name(XrSessionState s)
 {
     switch (s) {
-#define STATE_CASE(name, value)                                                                    \
-    case name:                                                                                     \
-        return #name + 17;
-        XR_LIST_ENUM_XrSessionState(STATE_CASE)
-#undef STATE_CASE
-            default : return "?";
+        XR_LIST_ENUM_XrSessionState(NAME_CASE);
+    default:
+        return "XR_SESSION_STATE_?";
     }
 }
 
@@ -583,7 +603,7 @@ static void enter(XrSessionState s)
     rt.state = s;
     size_t len = strlen(rt.report.states);
     snprintf(rt.report.states + len, sizeof(rt.report.states) - len, "%s%s", len ? " " : "",
-             state_name(s));
+             state_name(s) + strlen("XR_SESSION_STATE_"));
 }
 
 /* The runtime wants the session to stop: back through the states to STOPPING. */
@@ -698,32 +718,23 @@ static XrResult get_instance_properties(XrInstance i, XrInstanceProperties *p)
 
 static XrResult result_to_string(XrInstance i, XrResult r, char out[XR_MAX_RESULT_STRING_SIZE])
 {
-    switch (r) {
-#define RESULT_CASE(name, value)                                                                   \
-    case name:                                                                                     \
-        snprintf(out, XR_MAX_RESULT_STRING_SIZE, "%s", #name);                                     \
-        return XR_SUCCESS;
-        XR_LIST_ENUM_XrResult(RESULT_CASE)
-#undef RESULT_CASE
-            default : snprintf(out, XR_MAX_RESULT_STRING_SIZE, "XR_UNKNOWN_%d", (int)r);
-        return XR_SUCCESS;
-    }
+    const char *name = result_name(r);
+    if (name)
+        snprintf(out, XR_MAX_RESULT_STRING_SIZE, "%s", name);
+    else
+        snprintf(out, XR_MAX_RESULT_STRING_SIZE, "XR_UNKNOWN_%d", (int)r);
+    return XR_SUCCESS;
 }
 
 static XrResult structure_to_string(XrInstance i, XrStructureType t,
                                     char out[XR_MAX_STRUCTURE_NAME_SIZE])
 {
-    switch (t) {
-#define TYPE_CASE(name, value)                                                                     \
-    case name:                                                                                     \
-        snprintf(out, XR_MAX_STRUCTURE_NAME_SIZE, "%s", #name);                                    \
-        return XR_SUCCESS;
-        XR_LIST_ENUM_XrStructureType(TYPE_CASE)
-#undef TYPE_CASE
-            default
-            : snprintf(out, XR_MAX_STRUCTURE_NAME_SIZE, "XR_UNKNOWN_STRUCTURE_TYPE_%d", (int)t);
-        return XR_SUCCESS;
-    }
+    const char *name = type_name(t);
+    if (name)
+        snprintf(out, XR_MAX_STRUCTURE_NAME_SIZE, "%s", name);
+    else
+        snprintf(out, XR_MAX_STRUCTURE_NAME_SIZE, "XR_UNKNOWN_STRUCTURE_TYPE_%d", (int)t);
+    return XR_SUCCESS;
 }
 
 static XrResult string_to_path(XrInstance i, const char *s, XrPath *out)
