@@ -72,9 +72,7 @@ extern const struct display_impl display_stereo_impl;
 extern const struct display_impl display_cave_impl;
 extern const struct display_impl display_hmd_impl;
 extern const struct display_impl display_orbit_impl;
-#if HAVE_OPENXR
-extern const struct display_impl display_openxr_impl;
-#endif
+extern const struct display_impl display_openxr_impl; /* built with the OpenXR loader only */
 
 /* Shared by backends. */
 
