@@ -329,6 +329,15 @@ static int load_configs(struct render_options *o, struct config *cfg,
     if (o->display) {
         if (!app_load_display_config(o->display, display_sets, n_display_sets, dcfg))
             return EXIT_BAD_INPUT;
+        if (!display_type_available(dcfg->type)) {
+            log_error("%s: display.type = \"%s\": this anvil was built without that backend%s",
+                      o->display, display_type_name(dcfg->type),
+                      dcfg->type == DISPLAY_TYPE_OPENXR
+                          ? " (the OpenXR loader was not found: install libopenxr-dev and "
+                            "rebuild)"
+                          : "");
+            return EXIT_BAD_INPUT;
+        }
         /* effects.distortion on or off overrides the display's hmd.warp; auto follows it. */
         enum effect_mode distortion = cfg->effects.mode[EFFECT_DISTORTION];
         if (distortion != EFFECT_AUTO)
@@ -408,7 +417,9 @@ static int command(int argc, char **argv, bool run)
     scene_camera(cfg, &dd.camera);
     d = display_create(dcfg, &dd);
     if (!d) {
-        rc = !run || !o.display ? EXIT_NO_GPU : EXIT_FAILED;
+        /* An OpenXR display fails for want of a runtime or a headset, not of a context. */
+        rc = (!run || !o.display) && dcfg->type != DISPLAY_TYPE_OPENXR ? EXIT_NO_GPU
+                                                                       : EXIT_FAILED;
         goto done;
     }
     if (!display_update(d, o.time)) {

@@ -18,12 +18,16 @@
 static_assert(sizeof(enum display_type) == sizeof(int), "enum size");
 static_assert(sizeof(enum display_stereo) == sizeof(int), "enum size");
 static_assert(sizeof(enum display_head_source) == sizeof(int), "enum size");
+static_assert(sizeof(enum display_openxr_binding) == sizeof(int), "enum size");
+static_assert(sizeof(enum display_openxr_space) == sizeof(int), "enum size");
 
 static const char *const type_names[] = {"headless", "desktop", "stereo", "cave",
-                                         "hmd",      "orbit",   NULL};
+                                         "hmd",      "orbit",   "openxr", NULL};
 static const char *const stereo_names[] = {"mono", "side-by-side", "anaglyph", "quad-buffer",
                                            NULL};
 static const char *const head_names[] = {"fixed", "path", "openhmd", NULL};
+static const char *const openxr_binding_names[] = {"auto", "egl", "xlib", NULL};
+static const char *const openxr_space_names[] = {"auto", "stage", "local", NULL};
 
 const char *display_type_name(enum display_type t)
 {
@@ -38,6 +42,16 @@ const char *display_stereo_name(enum display_stereo s)
 const char *display_head_source_name(enum display_head_source s)
 {
     return head_names[s];
+}
+
+const char *display_openxr_binding_name(enum display_openxr_binding b)
+{
+    return openxr_binding_names[b];
+}
+
+const char *display_openxr_space_name(enum display_openxr_space s)
+{
+    return openxr_space_names[s];
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -101,7 +115,7 @@ static const struct display_wall default_walls[] = {
 
 static const struct config_field display_fields[] = {
     ENUM("display.type", DC(type), type_names, DISPLAY_TYPE_DESKTOP,
-         "backend: headless, desktop, stereo, cave, hmd or orbit"),
+         "backend: headless, desktop, stereo, cave, hmd, orbit or openxr"),
     ENUM("display.mode", DC(stereo), stereo_names, DISPLAY_STEREO_MONO,
          "stereo mode of every wall that does not name its own"),
     NUM(T_DOUBLE, "display.eye_separation", DC(eye_separation), 1, 0, 1, 0,
@@ -150,6 +164,17 @@ static const struct config_field display_fields[] = {
      .help = "chromatic scale [r, g, b] replacing the device's UNIVERSAL_ABERRATION_K"},
     {.path = "hmd.warp", .type = T_BOOL, .n = 1, .offset = DC(hmd.warp), .max = 1, .def = {1},
      .help = "apply the lens distortion pass"},
+
+    ENUM("openxr.binding", DC(openxr.binding), openxr_binding_names, DISPLAY_OPENXR_BINDING_AUTO,
+         "how the OpenXR runtime shares the GL context: auto (xlib with $DISPLAY set, else "
+         "egl), egl (headless, XR_MNDX_egl_enable) or xlib (a GLX window mirroring the left "
+         "eye)"),
+    ENUM("openxr.space", DC(openxr.space), openxr_space_names, DISPLAY_OPENXR_SPACE_AUTO,
+         "the runtime's space that is the room: auto (stage when there is one, else local), "
+         "stage (origin on the floor) or local (origin at the starting head, placed at "
+         "head.position)"),
+    NUM(T_DOUBLE, "openxr.resolution_scale", DC(openxr.resolution_scale), 1, 0.05, 2,
+        0, "eye image size as a fraction of the runtime's recommended size", 1.0),
 
     {.path = "walls", .type = T_GROUPS, .offset = DC(walls), .count_offset = DC(wall_count),
      .min = 1, .max = DISPLAY_MAX_WALLS, .elems = &wall_table, .def_elems = default_walls,

@@ -30,6 +30,8 @@ enum display_type {
     DISPLAY_TYPE_HMD,      /* "hmd": OpenHMD device, per-eye views and lens warp */
     DISPLAY_TYPE_ORBIT,    /* "orbit": the scene's own camera in one window (anvil run and
                               render without --display) */
+    DISPLAY_TYPE_OPENXR,   /* "openxr": a headset through an OpenXR runtime (built with the
+                              OpenXR loader only: display_type_available) */
 };
 
 enum display_stereo {
@@ -90,6 +92,27 @@ struct display_hmd {
     bool warp;               /* hmd.warp: apply the lens distortion pass */
 };
 
+/* OpenXR (display.type = "openxr"). */
+enum display_openxr_binding {
+    DISPLAY_OPENXR_BINDING_AUTO, /* "auto": xlib with an X display ($DISPLAY), else egl */
+    DISPLAY_OPENXR_BINDING_EGL,  /* "egl": a headless EGL context (XR_MNDX_egl_enable) */
+    DISPLAY_OPENXR_BINDING_XLIB, /* "xlib": a GLX window (XrGraphicsBindingOpenGLXlibKHR) */
+};
+
+enum display_openxr_space {
+    DISPLAY_OPENXR_SPACE_AUTO,  /* "auto": stage when the runtime has one, else local */
+    DISPLAY_OPENXR_SPACE_STAGE, /* "stage": the room's floor (the runtime must have it) */
+    DISPLAY_OPENXR_SPACE_LOCAL, /* "local": where the head was at the start, placed at
+                                   head.position in the room */
+};
+
+struct display_openxr {
+    enum display_openxr_binding binding; /* openxr.binding */
+    enum display_openxr_space space;     /* openxr.space */
+    double resolution_scale;             /* openxr.resolution_scale: of the runtime's
+                                            recommended eye image size */
+};
+
 struct display_config {
     char path[CONFIG_PATH_MAX];        /* the file it came from */
     enum display_type type;            /* display.type */
@@ -102,6 +125,7 @@ struct display_config {
     struct display_head head;
     struct display_navigation navigation;
     struct display_hmd hmd;
+    struct display_openxr openxr;
     struct display_wall walls[DISPLAY_MAX_WALLS];
     int wall_count;
 };
@@ -131,7 +155,7 @@ bool display_config_set(struct display_config *cfg, const char *assignment);
 bool display_config_validate(struct display_config *cfg);
 
 /* True when PATH ("PATH" or "PATH=VALUE", as given to --set) is a display file's: it lies in
- * display, head, navigation, hmd or walls, known below that or not.  The command line sends
+ * display, head, navigation, hmd, openxr or walls, known below that or not.  The command line sends
  * such a --set to the display config. */
 bool display_config_has_setting(const char *path);
 
@@ -143,6 +167,8 @@ int display_config_walls_of_rank(struct display_config *cfg, int rank, int size)
 const char *display_type_name(enum display_type t);
 const char *display_stereo_name(enum display_stereo s);
 const char *display_head_source_name(enum display_head_source s);
+const char *display_openxr_binding_name(enum display_openxr_binding b);
+const char *display_openxr_space_name(enum display_openxr_space s);
 
 /* Writes the display settings as a markdown table with types, defaults, ranges and
  * descriptions, in the form of config_write_reference (docs/config-reference.md and

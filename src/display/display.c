@@ -20,6 +20,9 @@
 static const struct display_impl *const backends[] = {
     &display_headless_impl, &display_desktop_impl, &display_stereo_impl,
     &display_cave_impl,     &display_hmd_impl,     &display_orbit_impl,
+#if HAVE_OPENXR
+    &display_openxr_impl,
+#endif
 };
 
 #define BACKEND_COUNT ((int)(sizeof(backends) / sizeof(backends[0])))
@@ -30,16 +33,27 @@ void display_list(void (*print)(const char *name, const char *what, void *user),
         print(backends[i]->name, backends[i]->description, user);
 }
 
-struct display *display_create(const struct display_config *cfg, const struct display_desc *desc)
+static const struct display_impl *find_backend(enum display_type type)
 {
-    const char *name = display_type_name(cfg->type);
-    const struct display_impl *impl = NULL;
+    const char *name = display_type_name(type);
     for (int i = 0; i < BACKEND_COUNT; i++) {
         if (strcmp(backends[i]->name, name) == 0)
-            impl = backends[i];
+            return backends[i];
     }
+    return NULL;
+}
+
+bool display_type_available(enum display_type type)
+{
+    return find_backend(type) != NULL;
+}
+
+struct display *display_create(const struct display_config *cfg, const struct display_desc *desc)
+{
+    const struct display_impl *impl = find_backend(cfg->type);
     if (!impl) {
-        log_error("%s: no display backend \"%s\"", cfg->path, name);
+        log_error("%s: no display backend \"%s\" in this build", cfg->path,
+                  display_type_name(cfg->type));
         return NULL;
     }
     struct display base = {.impl = impl, .cfg = *cfg};
@@ -90,6 +104,8 @@ const struct display_config *display_get_config(const struct display *d)
 bool display_sample_head(struct display *d, double t, struct display_pose *head)
 {
     d->time = t;
+    if (d->impl->sample_head)
+        return d->impl->sample_head(d, t, head);
     return display_head_tracker_pose(&d->head, t, head);
 }
 
@@ -113,7 +129,7 @@ bool display_uses_camera(const struct display *d)
 
 bool display_head_moves(const struct display *d)
 {
-    return d->cfg.head.source != DISPLAY_HEAD_FIXED;
+    return d->cfg.head.source != DISPLAY_HEAD_FIXED || d->impl->sample_head != NULL;
 }
 
 int display_view_count(const struct display *d)
@@ -485,6 +501,8 @@ static void poll_joystick(struct display *d, struct input_queue *q)
 
 void display_poll_input(struct display *d, double timeout_s, struct input_queue *q)
 {
+    if (d->impl->poll_input)
+        d->impl->poll_input(d, timeout_s, q);
     if (d->desc.offscreen || !gpu_context_window(d->context))
         return;
     if (timeout_s > 0.0)

@@ -2,8 +2,8 @@
  * display: view sets.  A frame renders N views — CAVE walls times eyes, HMD eyes, a desktop
  * window — each a render target, a view matrix, a projection and an eye, and then presents
  * them: offscreen (files), a window, side-by-side / anaglyph / quad-buffer stereo, one window
- * per wall, or an HMD with its lens warp.  The backends sit behind one const table (display.c,
- * `--display help`).
+ * per wall, an HMD with its lens warp, or an OpenXR runtime's swapchains.  The backends sit
+ * behind one const table (display.c, `--display help`).
  *
  * Every view of a frame is drawn from the same renderer, so the view-independent work (the
  * volume, the deep light map) is done once per change whatever the number of views: the view
@@ -47,6 +47,23 @@ struct display_pose {
  * clockwise seen from above; pitch about the head's x, up positive; roll about its z). */
 void display_pose_from_euler(const double position[3], const double hpr_deg[3],
                              struct display_pose *out);
+
+/* OUT = A after B: B's pose given in A's frame, expressed in A's parent frame (A's rotation
+ * applied to B's position, plus A's position; the rotations multiplied).  OUT may be A or B. */
+void display_pose_compose(const struct display_pose *a, const struct display_pose *b,
+                          struct display_pose *out);
+/* OUT = the inverse of P (P composed with OUT is the identity).  OUT may be P. */
+void display_pose_invert(const struct display_pose *p, struct display_pose *out);
+/* The view matrix of an eye at pose EYE (looking along its -z, y up) for the world -> tracker
+ * transform NAV (column-major): inverse(EYE) * NAV. */
+void display_pose_view(const struct display_pose *eye, const float nav[16], float view[16]);
+
+/* An OpenGL projection (column-major, NDC z in [-1, 1]) from a field of view given as the
+ * four angles of its edges from the view axis, radians: LEFT and DOWN negative where the edge
+ * lies left of or below the axis (OpenXR's XrFovf), so asymmetric frusta come out exactly.
+ * NEAR and FAR: distances along the view axis. */
+void display_fov_projection(float left, float right, float up, float down, float near,
+                            float far, float out[16]);
 
 /* World metres -> tracker metres (column-major 4x4):
  *   p_tracker = position + R * scale * A * (p_world - origin),
@@ -149,6 +166,10 @@ struct display_desc {
     void *swap_user;
 };
 
+/* Whether this build has the backend of TYPE (openxr needs the OpenXR loader at build
+ * time). */
+bool display_type_available(enum display_type type);
+
 /* Lists the backends (name, one-line description) for --display help. */
 void display_list(void (*print)(const char *name, const char *what, void *user), void *user);
 
@@ -164,7 +185,8 @@ void display_destroy(struct display *d);
 struct gpu_context *display_context(struct display *d);
 
 /* The head pose at time T (seconds) from the display's head tracker (fixed, a scripted path,
- * an OpenHMD device).  False (logged) when the device fails. */
+ * an OpenHMD device), or from the display's own headset (OpenXR: this begins the runtime's
+ * frame, which display_present ends).  False (logged) when the device fails. */
 bool display_sample_head(struct display *d, double t, struct display_pose *head);
 
 /* Places every view for HEAD, the navigation NAV (tracker displays) and CAMERA (the orbit
@@ -207,7 +229,9 @@ const struct gpu_texture *display_output(const struct display *d, int i, const c
  * buttons (left: trigger, middle: grab, right: the menu key), drags and the wheel, the
  * pointer's ray through the first view (world space) on displays with a pointer, and the
  * first joystick's buttons and left stick (fly, turn).  A window's close button is a
- * INPUT_KEY_QUIT.  Offscreen displays append nothing. */
+ * INPUT_KEY_QUIT.  An OpenXR display first appends its controllers' buttons, sticks and aim
+ * ray (tracker space), and an INPUT_KEY_QUIT when the runtime ends the session.  Offscreen
+ * displays append nothing else. */
 void display_poll_input(struct display *d, double timeout_s, struct input_queue *q);
 /* The key table for help texts: each meaning once, with the names of its keys ("R, Page Up"). */
 void display_list_keys(void (*print)(const char *keys, enum input_key key, void *user),

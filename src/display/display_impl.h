@@ -24,6 +24,12 @@ struct display_impl {
                    const struct display_navigation *nav, const struct display_camera *camera);
     /* Composes and shows the drawn views. */
     bool (*present)(struct display *d, struct renderer *r, float exposure);
+    /* Optional, for a display with a head of its own (a runtime's headset): the head pose
+     * at time T, in place of the head tracker's (NULL: the head tracker). */
+    bool (*sample_head)(struct display *d, double t, struct display_pose *head);
+    /* Optional: appends the display's own devices' events (a runtime's controllers, its
+     * session ending) to Q, before the windows' events. */
+    void (*poll_input)(struct display *d, double timeout_s, struct input_queue *q);
 };
 
 struct display_output {
@@ -66,6 +72,7 @@ extern const struct display_impl display_stereo_impl;
 extern const struct display_impl display_cave_impl;
 extern const struct display_impl display_hmd_impl;
 extern const struct display_impl display_orbit_impl;
+extern const struct display_impl display_openxr_impl; /* built with the OpenXR loader only */
 
 /* Shared by backends. */
 

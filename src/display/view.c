@@ -61,6 +61,56 @@ void display_pose_eyes(const struct display_pose *head, double separation, float
     }
 }
 
+void display_pose_compose(const struct display_pose *a, const struct display_pose *b,
+                          struct display_pose *out)
+{
+    versor qa, qb, q;
+    vec3 p;
+    memcpy(qa, a->rotation, sizeof(qa));
+    memcpy(qb, b->rotation, sizeof(qb));
+    glm_quat_rotatev(qa, (float *)b->position, p);
+    glm_quat_mul(qa, qb, q);
+    glm_quat_normalize(q);
+    for (int i = 0; i < 3; i++)
+        out->position[i] = a->position[i] + p[i];
+    memcpy(out->rotation, q, sizeof(q));
+}
+
+void display_pose_invert(const struct display_pose *p, struct display_pose *out)
+{
+    versor q, qi;
+    vec3 t;
+    memcpy(q, p->rotation, sizeof(q));
+    glm_quat_inv(q, qi);
+    glm_quat_rotatev(qi, (float *)p->position, t);
+    for (int i = 0; i < 3; i++)
+        out->position[i] = -t[i];
+    memcpy(out->rotation, qi, sizeof(qi));
+}
+
+void display_pose_view(const struct display_pose *eye, const float nav[16], float view[16])
+{
+    mat4 pose, inv, n, v;
+    versor q;
+    memcpy(q, eye->rotation, sizeof(q));
+    glm_quat_mat4(q, pose);
+    for (int i = 0; i < 3; i++)
+        pose[3][i] = eye->position[i];
+    glm_mat4_inv(pose, inv);
+    memcpy(n, nav, sizeof(n));
+    glm_mat4_mul(inv, n, v);
+    memcpy(view, v, sizeof(v));
+}
+
+void display_fov_projection(float left, float right, float up, float down, float near,
+                            float far, float out[16])
+{
+    mat4 p;
+    glm_frustum(near * tanf(left), near * tanf(right), near * tanf(down), near * tanf(up),
+                near, far, p);
+    memcpy(out, p, sizeof(p));
+}
+
 static void to_vec3(const double *d, vec3 out)
 {
     out[0] = (float)d[0];

@@ -11,6 +11,7 @@
 struct egl_context {
     struct gpu_context base;
     EGLDisplay display;
+    EGLConfig config; /* NULL (EGL_NO_CONFIG_KHR) when made without one */
     EGLContext context;
 };
 
@@ -100,8 +101,10 @@ static struct gpu_context *egl_create(const struct gpu_context_desc *desc)
     }
     const char *ext = eglQueryString(c->display, EGL_EXTENSIONS);
     EGLConfig config = NULL;
-    if (!has_extension(ext, "EGL_KHR_no_config_context")) {
-        const EGLint attribs[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
+    if (desc->egl_config || !has_extension(ext, "EGL_KHR_no_config_context")) {
+        /* A context shared with a runtime needs no surface of its own either. */
+        const EGLint attribs[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_SURFACE_TYPE,
+                                  desc->egl_config ? 0 : EGL_WINDOW_BIT, EGL_NONE};
         EGLint n = 0;
         if (!eglChooseConfig(c->display, attribs, &config, 1, &n) || n < 1) {
             log_error("EGL has no OpenGL config");
@@ -115,6 +118,7 @@ static struct gpu_context *egl_create(const struct gpu_context_desc *desc)
         EGL_CONTEXT_OPENGL_DEBUG, desc->no_debug ? EGL_FALSE : EGL_TRUE,
         EGL_NONE,
     };
+    c->config = config;
     c->context = eglCreateContext(c->display, config, EGL_NO_CONTEXT, ctx_attribs);
     if (c->context == EGL_NO_CONTEXT) {
         log_error("EGL could not create an OpenGL 4.5 core context (error 0x%x)",
@@ -151,10 +155,19 @@ static void egl_make_current(struct gpu_context *ctx)
     eglMakeCurrent(c->display, EGL_NO_SURFACE, EGL_NO_SURFACE, c->context);
 }
 
+static bool egl_native(struct gpu_context *ctx, struct gpu_context_native *out)
+{
+    struct egl_context *c = (struct egl_context *)ctx;
+    *out = (struct gpu_context_native){.kind = GPU_NATIVE_EGL, .display = c->display,
+                                       .config = c->config, .context = c->context};
+    return true;
+}
+
 const struct gpu_context_impl gpu_context_egl_impl = {
     .name = "egl",
     .description = "headless OpenGL 4.5 through EGL (Mesa surfaceless, EGL device, default)",
     .create = egl_create,
     .destroy = egl_destroy,
     .make_current = egl_make_current,
+    .native = egl_native,
 };

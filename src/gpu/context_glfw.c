@@ -2,7 +2,11 @@
 #include <stdlib.h>
 
 #include <epoxy/gl.h>
+#include <epoxy/glx.h> /* before glfw3native.h, which would include GL/glx.h */
 #include <GLFW/glfw3.h>
+#define GLFW_EXPOSE_NATIVE_X11
+#define GLFW_EXPOSE_NATIVE_GLX
+#include <GLFW/glfw3native.h>
 
 #include "common/log.h"
 #include "gpu/context_impl.h"
@@ -114,6 +118,19 @@ static void *glfw_window(struct gpu_context *ctx)
     return ((struct glfw_context *)ctx)->window;
 }
 
+static bool glfw_native(struct gpu_context *ctx, struct gpu_context_native *out)
+{
+    struct glfw_context *c = (struct glfw_context *)ctx;
+    Display *dpy = glfwGetX11Display();
+    GLXContext glx = glfwGetGLXContext(c->window);
+    if (!dpy || !glx) /* not X11 with GLX (Wayland, or a context made through EGL) */
+        return false;
+    *out = (struct gpu_context_native){.kind = GPU_NATIVE_X11_GLX, .display = dpy,
+                                       .context = glx,
+                                       .window = (unsigned long)glfwGetGLXWindow(c->window)};
+    return true;
+}
+
 const struct gpu_context_impl gpu_context_glfw_impl = {
     .name = "glfw",
     .description = "OpenGL 4.5 core window through GLFW (X11/Wayland; quad-buffer stereo "
@@ -125,4 +142,5 @@ const struct gpu_context_impl gpu_context_glfw_impl = {
     .swap_interval = glfw_swap_interval,
     .size = glfw_size,
     .window = glfw_window,
+    .native = glfw_native,
 };

@@ -9,6 +9,15 @@
 
 #include "gpu/gpu.h"
 
+/* What a runtime sharing a context needs of it (OpenXR's graphics bindings, context_xr.c). */
+struct gpu_context_native {
+    enum gpu_native_kind { GPU_NATIVE_NONE, GPU_NATIVE_EGL, GPU_NATIVE_X11_GLX } kind;
+    void *display;        /* EGLDisplay; the X Display */
+    void *config;         /* EGLConfig (EGL_NO_CONFIG_KHR when the context was made without) */
+    void *context;        /* EGLContext; the GLXContext */
+    unsigned long window; /* glx: the window's GLX drawable */
+};
+
 struct gpu_context_impl {
     const char *name;
     const char *description;
@@ -20,6 +29,8 @@ struct gpu_context_impl {
     void (*swap_interval)(struct gpu_context *ctx, int interval);
     void (*size)(struct gpu_context *ctx, int *w, int *h);
     void *(*window)(struct gpu_context *ctx);
+    /* The native handles (NULL: none to share). */
+    bool (*native)(struct gpu_context *ctx, struct gpu_context_native *out);
 };
 
 struct gpu_context {

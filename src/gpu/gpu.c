@@ -145,6 +145,12 @@ void gpu_texture_finish(struct gpu_texture *tex)
     memset(tex, 0, sizeof(*tex));
 }
 
+void gpu_texture_copy_into(const struct gpu_texture *tex, unsigned dst)
+{
+    glCopyImageSubData(tex->id, GL_TEXTURE_2D, 0, 0, 0, 0, dst, GL_TEXTURE_2D, 0, 0, 0, 0,
+                       tex->size[0], tex->size[1], 1);
+}
+
 void gpu_texture_bind(const struct gpu_texture *tex, unsigned unit)
 {
     glBindTextureUnit(unit, tex->id);

@@ -31,6 +31,9 @@ struct gpu_context_desc {
     bool stereo;         /* glfw: ask for a quad-buffer stereo framebuffer */
     int device;          /* egl: the GPU by index among the EGL devices (modulo how many there
                             are): one per rank of a node; 0 = the first platform that works */
+    bool egl_config;     /* egl: make the context from an EGLConfig even where
+                            EGL_KHR_no_config_context allows none (a runtime that shares the
+                            context makes its own from the same config: OpenXR) */
 };
 
 /* Creates an OpenGL 4.5 core context and makes it current.  Returns NULL (reason logged) when
@@ -77,6 +80,10 @@ void gpu_texture_upload(struct gpu_texture *tex, const void *data);
 /* Reads the whole level 0 back into OUT (bytes as for init, float or uint8). */
 void gpu_texture_read(const struct gpu_texture *tex, void *out, size_t out_bytes);
 void gpu_texture_finish(struct gpu_texture *tex);
+/* Copies TEX's level 0 into the 2D texture named DST (a texture this part did not make, such
+ * as an OpenXR swapchain image), which must be as large and of a format of the same size
+ * class (RGBA8 into an sRGB8 alpha8 image: the bytes are copied as they are). */
+void gpu_texture_copy_into(const struct gpu_texture *tex, unsigned dst);
 /* Binds for sampling at texture unit UNIT. */
 void gpu_texture_bind(const struct gpu_texture *tex, unsigned unit);
 /* Binds level 0 as an image at image unit UNIT (write-only when WRITE, else read-only). */
@@ -178,6 +185,24 @@ void gpu_target_end(struct gpu_target *t);
  * the back-left, back-right or back buffer as BUFFER says (0 back, 1 back-left, 2 back-right). */
 void gpu_present(const struct gpu_texture *tex, int x, int y, int w, int h, int buffer);
 void gpu_clear_default(float r, float g, float b);
+
+/* ---- sharing a context with an OpenXR runtime (context_xr.c; built with the OpenXR
+ * loader only, HAVE_OPENXR) ------------------------------------------------------------- */
+
+#define GPU_XR_BINDING_BYTES 128
+
+/* Fills BINDING (GPU_XR_BINDING_BYTES of caller storage aligned for pointers) with the OpenXR
+ * graphics binding of CTX, the structure XrSessionCreateInfo.next points to:
+ * XrGraphicsBindingEGLMNDX for an "egl" context, XrGraphicsBindingOpenGLXlibKHR for a "glfw"
+ * window on X11.  Returns the instance extension the binding needs besides
+ * XR_KHR_opengl_enable ("XR_MNDX_egl_enable"; "" for Xlib), or NULL (logged) when CTX has no
+ * such binding.  The handles in it stay valid while CTX does. */
+const char *gpu_context_xr_binding(struct gpu_context *ctx, void *binding);
+
+/* The swapchain format anvil writes, GL_SRGB8_ALPHA8 (the tone-mapped RGBA8 image copied as it
+ * is), if it is among the COUNT FORMATS a runtime offers (xrEnumerateSwapchainFormats);
+ * else 0. */
+int64_t gpu_xr_swapchain_format(const int64_t *formats, int count);
 
 /* ---- timers --------------------------------------------------------------------------
  * Timing never makes the CPU wait for the GPU: a measurement brackets GPU work with two

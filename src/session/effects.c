@@ -131,6 +131,7 @@ bool effects_gather(const struct config *cfg, const struct ext_volume *vol,
     out->sun_moves = c->sun_moves;
     if (c->display) {
         out->hmd = c->display->type == DISPLAY_TYPE_HMD;
+        out->runtime_warps = c->display->type == DISPLAY_TYPE_OPENXR;
         out->hmd_warp = c->display->hmd.warp;
     }
     double sun[3];
@@ -382,6 +383,9 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
 
     if (mode[EFFECT_DISTORTION] == EFFECT_OFF)
         say(out, EFFECT_DISTORTION, false, "off in the config");
+    else if (facts->runtime_warps)
+        say(out, EFFECT_DISTORTION, false, "%s: the OpenXR runtime warps for its lenses",
+            mode[EFFECT_DISTORTION] == EFFECT_ON ? "on in the config, but" : "auto");
     else if (!facts->hmd)
         say(out, EFFECT_DISTORTION, false, "%s: not an HMD display, nothing to distort",
             mode[EFFECT_DISTORTION] == EFFECT_ON ? "on in the config, but" : "auto");

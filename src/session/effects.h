@@ -48,6 +48,7 @@ struct effects_facts {
                                  render (--input) whose events may press play */
     bool hmd;                 /* the display is an HMD */
     bool hmd_warp;            /* ... and its display config asks for the lens warp (hmd.warp) */
+    bool runtime_warps;       /* the display is an OpenXR headset: its runtime warps */
 };
 
 void effects_facts_init(struct effects_facts *f);

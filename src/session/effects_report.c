@@ -9,10 +9,11 @@
 #include "session/scene.h"
 
 /* The views of a display config whose head does not move (count 0 otherwise: an HMD's
- * matrices come from its device, a path moves). */
+ * matrices come from its device or runtime, a path moves). */
 static int display_views(const struct display_config *dcfg, int height, struct view_set *set)
 {
-    if (dcfg->type == DISPLAY_TYPE_HMD || dcfg->head.source != DISPLAY_HEAD_FIXED)
+    if (dcfg->type == DISPLAY_TYPE_HMD || dcfg->type == DISPLAY_TYPE_OPENXR ||
+        dcfg->head.source != DISPLAY_HEAD_FIXED)
         return 0;
     int sizes[DISPLAY_MAX_WALLS][2];
     for (int w = 0; w < dcfg->wall_count; w++)

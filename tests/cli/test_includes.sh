@@ -65,6 +65,7 @@ only 'GLFW/' "GLFW" gpu/ display/display.c
 only 'libconfig\.h' "libconfig" config/
 only 'netcdf\.h' "NetCDF" data/
 only 'openhmd\.h' "OpenHMD" input/ display/head.c display/hmd.c
+only 'openxr/' "OpenXR" display/openxr.c gpu/context_xr.c
 only 'stb_truetype\.h' "stb_truetype" common/glyphs.c
 only 'png\.h' "libpng" render/image.c
 only 'libav|libswscale' "FFmpeg" render/video.c

@@ -1,5 +1,6 @@
 /* View math without GL: generalized perspective, seams, stereo disparity, navigation, head
- * paths, display config errors, contact sheets. */
+ * paths, poses and field-of-view projections (OpenXR's eyes), display config errors, contact
+ * sheets. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -273,6 +274,67 @@ static void expect_error(const char *name, const char *text, const char *message
         fail_msg("%s: expected \"%s\" in \"%s\"", name, message, got);
 }
 
+/* An asymmetric field of view: each edge's direction lands on its side of NDC, exactly. */
+static void test_fov_projection(void **state)
+{
+    const float l = -0.87f, r = 0.70f, u = 0.79f, d = -0.96f, near = 0.05f, far = 200.0f;
+    mat4 p;
+    display_fov_projection(l, r, u, d, near, far, (float *)p);
+    struct {
+        float x, y, z, ndc_x, ndc_y;
+    } cases[] = {
+        {tanf(l), 0.0f, -1.0f, -1.0f, NAN}, {tanf(r), 0.0f, -1.0f, 1.0f, NAN},
+        {0.0f, tanf(u), -1.0f, NAN, 1.0f},  {0.0f, tanf(d), -1.0f, NAN, -1.0f},
+        {tanf(l) * 7.0f, tanf(d) * 7.0f, -7.0f, -1.0f, -1.0f},
+    };
+    for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+        vec4 in = {cases[i].x, cases[i].y, cases[i].z, 1.0f}, out;
+        glm_mat4_mulv(p, in, out);
+        if (!isnan(cases[i].ndc_x))
+            assert_float_equal(out[0] / out[3], cases[i].ndc_x, 1e-5);
+        if (!isnan(cases[i].ndc_y))
+            assert_float_equal(out[1] / out[3], cases[i].ndc_y, 1e-5);
+    }
+    /* The axis is off the centre of an asymmetric frustum: straight ahead is not x = 0. */
+    vec4 ahead = {0.0f, 0.0f, -1.0f, 1.0f}, out;
+    glm_mat4_mulv(p, ahead, out);
+    float want = (0.0f - tanf(l)) / (tanf(r) - tanf(l)) * 2.0f - 1.0f;
+    assert_float_equal(out[0] / out[3], want, 1e-5);
+    assert_true(fabsf(want) > 0.05f);
+    /* Depth: near at -1, far at +1. */
+    vec4 pn = {0.0f, 0.0f, -near, 1.0f}, pf = {0.0f, 0.0f, -far, 1.0f};
+    glm_mat4_mulv(p, pn, out);
+    assert_float_equal(out[2] / out[3], -1.0f, 1e-4);
+    glm_mat4_mulv(p, pf, out);
+    assert_float_equal(out[2] / out[3], 1.0f, 1e-4);
+}
+
+/* Composing, inverting and viewing poses: a heading of 90 degrees turns -z into -x. */
+static void test_pose_math(void **state)
+{
+    struct display_pose a, b = {.position = {0.0f, 0.0f, -1.0f}, .rotation = {0, 0, 0, 1}}, c;
+    display_pose_from_euler((const double[3]){1.0, 2.0, 0.0}, (const double[3]){90.0, 0.0, 0.0},
+                            &a);
+    display_pose_compose(&a, &b, &c);
+    assert_float_equal(c.position[0], 0.0f, 1e-6);
+    assert_float_equal(c.position[1], 2.0f, 1e-6);
+    assert_float_equal(c.position[2], 0.0f, 1e-6);
+    struct display_pose inv, id;
+    display_pose_invert(&c, &inv);
+    display_pose_compose(&c, &inv, &id);
+    for (int i = 0; i < 3; i++)
+        assert_float_equal(id.position[i], 0.0f, 1e-6);
+    assert_float_equal(fabsf(id.rotation[3]), 1.0f, 1e-6);
+    /* A's eye sees a point 2 m along its own -z straight ahead, 2 m away. */
+    mat4 nav = GLM_MAT4_IDENTITY_INIT, view;
+    display_pose_view(&a, (float *)nav, (float *)view);
+    vec4 p = {1.0f - 2.0f, 2.0f, 0.0f, 1.0f}, out;
+    glm_mat4_mulv(view, p, out);
+    assert_float_equal(out[0], 0.0f, 1e-6);
+    assert_float_equal(out[1], 0.0f, 1e-6);
+    assert_float_equal(out[2], -2.0f, 1e-6);
+}
+
 static void test_config_errors(void **state)
 {
     expect_error("type.cfg", "display = {\n  type = \"dome\";\n};\n",
@@ -282,6 +344,10 @@ static void test_config_errors(void **state)
     expect_error("unknown.cfg", "head = {\n  postion = [0.0, 1.0, 0.0];\n};\n",
                  "unknown.cfg:2: head.postion: expected a known setting");
     expect_error("group.cfg", "screens = ();\n", "group.cfg:1: screens: expected a known group");
+    expect_error("xr.cfg", "openxr = {\n  space = \"floor\";\n};\n",
+                 "xr.cfg:2: openxr.space: expected one of \"auto\", \"stage\", \"local\"");
+    expect_error("scale.cfg", "openxr = { resolution_scale = 0.0; };\n",
+                 "scale.cfg:1: openxr.resolution_scale: expected a number in [0.05, 2]");
     expect_error("vec.cfg",
                  "walls = ({ name = \"a\";\n lower_left = [0.0, 0.0];\n"
                  " lower_right = [1.0, 0.0, 0.0]; upper_left = [0.0, 1.0, 0.0]; });\n",
@@ -311,9 +377,9 @@ static void test_config_errors(void **state)
 static void test_shipped_configs_load(void **state)
 {
     const char *names[] = {"desktop.cfg", "desktop-stereo.cfg", "cave4.cfg", "cave6.cfg",
-                           "hmd.cfg"};
+                           "hmd.cfg", "openxr.cfg"};
     struct display_config cfg;
-    for (int i = 0; i < 5; i++)
+    for (int i = 0; i < 6; i++)
         load_display(names[i], &cfg);
     load_display("cave4.cfg", &cfg);
     assert_int_equal(cfg.type, DISPLAY_TYPE_CAVE);
@@ -330,6 +396,19 @@ static void test_shipped_configs_load(void **state)
     assert_int_equal(cfg.type, DISPLAY_TYPE_HMD);
     assert_string_equal(cfg.hmd.device, "null");
     assert_true(cfg.hmd.distortion_set);
+    load_display("openxr.cfg", &cfg);
+    assert_int_equal(cfg.type, DISPLAY_TYPE_OPENXR);
+    assert_int_equal(cfg.openxr.binding, DISPLAY_OPENXR_BINDING_AUTO);
+    assert_int_equal(cfg.openxr.space, DISPLAY_OPENXR_SPACE_AUTO);
+    assert_true(display_config_set(&cfg, "openxr.space=\"local\""));
+    assert_int_equal(cfg.openxr.space, DISPLAY_OPENXR_SPACE_LOCAL);
+    assert_true(display_config_has_setting("openxr.binding"));
+    /* Built with the loader or not, the type is known; the backend only with it. */
+#if HAVE_OPENXR
+    assert_true(display_type_available(DISPLAY_TYPE_OPENXR));
+#else
+    assert_false(display_type_available(DISPLAY_TYPE_OPENXR));
+#endif
 }
 
 static void test_contact_sheet_layout(void **state)
@@ -387,6 +466,8 @@ int main(void)
         cmocka_unit_test(test_navigation_places_the_storm),
         cmocka_unit_test(test_eyes_along_head_right_axis),
         cmocka_unit_test(test_head_path),
+        cmocka_unit_test(test_fov_projection),
+        cmocka_unit_test(test_pose_math),
         cmocka_unit_test(test_config_errors),
         cmocka_unit_test(test_shipped_configs_load),
         cmocka_unit_test(test_contact_sheet_layout),

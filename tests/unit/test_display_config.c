@@ -37,6 +37,7 @@ static void old_defaults(struct display_config *cfg)
     cfg->hmd.aberration[0] = cfg->hmd.aberration[1] = cfg->hmd.aberration[2] = 1.0;
     cfg->hmd.distortion[3] = 1.0;
     cfg->hmd.warp = true;
+    cfg->openxr.resolution_scale = 1.0; /* binding and space: auto (0) */
     cfg->wall_count = 1;
     struct display_wall *w = &cfg->walls[0];
     w->monitor = -1;
@@ -131,7 +132,7 @@ static void test_shipped_displays(void **state)
     snprintf(pattern, sizeof(pattern), "%s/displays/*.cfg", ANVIL_SOURCE_DIR);
     glob_t g;
     assert_int_equal(glob(pattern, 0, NULL, &g), 0);
-    assert_int_equal(g.gl_pathc, 5);
+    assert_int_equal(g.gl_pathc, 6);
     static struct display_config cfg;
     for (size_t i = 0; i < g.gl_pathc; i++) {
         if (!display_config_load(g.gl_pathv[i], &cfg))
@@ -279,7 +280,7 @@ static void test_set_errors(void **state)
                      "source, position, orientation, path, device)");
     EXPECT_SET_ERROR(&cfg, "screens.x=1",
                      "--set screens.x: expected a known group (display, "
-                     "head, navigation, hmd, walls)");
+                     "head, navigation, hmd, openxr, walls)");
     EXPECT_SET_ERROR(&cfg, "walls.[0].nmae=x",
                      "--set walls.[0].nmae: expected a known "
                      "setting (did you mean walls.[0].name?)");
@@ -590,8 +591,8 @@ static void test_reference(void **state)
         assert_memory_equal(&cfg, &before, sizeof(cfg));
         set_back++;
     }
-    assert_int_equal(rows, 2 + 30);
-    assert_int_equal(set_back, 20);
+    assert_int_equal(rows, 2 + 33);
+    assert_int_equal(set_back, 23);
 
     const char *docs[] = {"/docs/config-reference.md", "/docs/displays.md"};
     for (int i = 0; i < 2; i++) {
