@@ -1,4 +1,11 @@
-/* The one frame loop of anvil render and anvil run. */
+/*
+ * The one frame loop of anvil render and anvil run, on one process or on the ranks of an
+ * mpirun job.  Rank 0 (the only one without MPI) produces each frame: the input, the menu,
+ * the script, the animation's next frame, the clock.  Every rank then consumes it: rank 0's
+ * frame state, settings and menu reach the others, the volumes are brought to the frame's
+ * step (held at the old one until every rank has the new), the light map is updated, rank 0
+ * samples the head last and sends it, every rank draws its walls and they swap together.
+ */
 #include "app/loop.h"
 
 #include <limits.h>
@@ -10,12 +17,53 @@
 #include <time.h>
 
 #include "app/app.h"
+#include "cluster/cluster.h"
 #include "common/log.h"
 #include "common/progress.h"
 #include "render/image.h"
 #include "session/animation.h"
+#include "session/menu_view.h"
 
 #define SCRIPT_FRAMES_MAX 1000000
+
+/* What rank 0 sends every frame. */
+enum {
+    SF_DRAW = 1u << 0,       /* the frame is drawn */
+    SF_QUIT = 1u << 1,       /* the loop ends */
+    SF_FAILED = 1u << 2,     /* ... because something failed */
+    SF_SETTINGS = 1u << 3,   /* the look or quality changed: the settings follow */
+    SF_MENU = 1u << 4,       /* the menu's meshes' state is in the frame */
+    SF_MENU_IMAGE = 1u << 5, /* ... and its image follows */
+    SF_WRITE = 1u << 6,      /* the frame is written (an animation's frame NUMBER) */
+    SF_SETTLE = 1u << 7,     /* wait for the wanted volume first (the end of a script) */
+};
+
+struct shared_frame {
+    uint8_t state[FRAME_STATE_BYTES];
+    uint32_t flags;
+    int32_t number;
+    struct menu_view_state menu;
+};
+
+struct loop {
+    const struct loop_desc *ld;
+    struct display *d;
+    struct session *s;
+    bool root;
+    /* rank 0's */
+    double t0, last;
+    bool dirty, idle;
+    long frames_left, n;
+    int stage;
+    struct input_queue *events;
+    struct animation_desc anim;
+    long anim_count;
+    struct display_camera base;
+    struct progress pr;
+    uint32_t settings_sent;
+    unsigned menu_sent;
+    bool menu_ever;
+};
 
 /* Seconds since the last call (or the script's frame time); the longest frame for --stats. */
 static double frame_dt(struct session *s, double *last_ms)
@@ -29,53 +77,226 @@ static double frame_dt(struct session *s, double *last_ms)
     return script > 0.0 ? script : dt;
 }
 
-/* The frame state -> the GPU -> the light map -> the head, sampled last -> every view. */
-static bool draw(struct display *d, struct session *s, struct frame_state *f)
-{
-    return session_light(s) && display_sample_head(d, f->time_s, &f->head) &&
-           session_draw(s, d, f);
-}
+/* ---- rank 0: the next frame ---------------------------------------------------------------- */
 
-/* One frame of a render: every frame is drawn, the script's clock stands still. */
-static bool render_frame(struct display *d, struct session *s, double dt, double time)
+/* A run: the input since the last frame, drawn when something changed. */
+static bool produce_run(struct loop *l, struct frame_state *f, uint32_t *flags)
 {
-    struct frame_state f;
-    bool redraw;
-    return session_update(s, NULL, dt, time, &f, &redraw) && session_apply(s, &f, NULL) &&
-           draw(d, s, &f);
-}
-
-/* A scripted render: the script's frames, each drawn (and those in FIRST..LAST written);
- * then the settled result, written when nothing else was. */
-static int render_script(struct display *d, struct session *s, const struct loop_desc *ld)
-{
-    double last = time_now_ms();
-    struct progress pr;
-    bool writing = ld->output && ld->kind == LOOP_SCRIPT;
-    progress_begin(&pr, "render", "frame", (uint64_t)session_script_frames(s));
-    long n = 0;
-    for (; !session_script_done(s); n++) {
-        if (n > SCRIPT_FRAMES_MAX) {
-            log_error("the script has not ended after %d frames", SCRIPT_FRAMES_MAX);
-            return EXIT_FAILED;
-        }
-        if (!render_frame(d, s, frame_dt(s, &last), ld->time))
-            return EXIT_FAILED;
-        if (writing && n >= ld->first && n <= ld->last &&
-            !frame_output_add(ld->output, d, (int)(n - (long)ld->first)))
-            return EXIT_FAILED;
-        if (pr.total < (uint64_t)n + 1) /* a volume still loading holds the end back */
-            pr.total = (uint64_t)n + 1;
-        progress_update(&pr, (uint64_t)n + 1);
+    if (session_quit_requested(l->s) || display_should_close(l->d) || l->frames_left == 0) {
+        *flags = SF_QUIT;
+        return true;
     }
-    progress_end(&pr);
-    if (!session_settle(s) || !render_frame(d, s, 0.0, ld->time))
-        return EXIT_FAILED;
-    if (writing && frame_output_frames(ld->output) == 0 &&
-        !frame_output_add(ld->output, d, 0))
-        return EXIT_FAILED;
-    return EXIT_OK;
+    input_queue_clear(l->events);
+    display_poll_input(l->d, l->idle ? 0.03 : 0.0, l->events);
+    double dt = frame_dt(l->s, &l->last);
+    double time = l->ld->time + (time_now_ms() - l->t0) * 1e-3;
+    bool redraw = false;
+    if (!session_update(l->s, l->events, dt, time, f, &redraw))
+        return false;
+    if (l->dirty || redraw || display_head_moves(l->d) || l->frames_left > 0)
+        *flags |= SF_DRAW;
+    return true;
 }
+
+/* A render: the script's frames, each drawn (and written); then the settled picture. */
+static bool produce_script(struct loop *l, struct frame_state *f, uint32_t *flags, int *number)
+{
+    bool writing = l->ld->output && l->ld->kind == LOOP_SCRIPT;
+    double dt = 0.0;
+    if (l->stage == 0 && session_script_done(l->s)) {
+        progress_end(&l->pr);
+        l->stage = 1;
+        *flags |= SF_SETTLE;
+    }
+    if (l->stage == 2) {
+        *flags = SF_QUIT;
+        return true;
+    }
+    if (l->stage == 0) {
+        if (l->n > SCRIPT_FRAMES_MAX) {
+            log_error("the script has not ended after %d frames", SCRIPT_FRAMES_MAX);
+            return false;
+        }
+        dt = frame_dt(l->s, &l->last);
+        if (writing && l->n >= l->ld->first && l->n <= l->ld->last) {
+            *flags |= SF_WRITE;
+            *number = (int)(l->n - (long)l->ld->first);
+        }
+        if (l->pr.total < (uint64_t)l->n + 1) /* a volume still loading holds the end back */
+            l->pr.total = (uint64_t)l->n + 1;
+        progress_update(&l->pr, (uint64_t)l->n);
+        l->n++;
+    } else {
+        l->stage = 2; /* the settled frame, written when nothing else was */
+        if (writing && frame_output_frames(l->ld->output) == 0) {
+            *flags |= SF_WRITE;
+            *number = 0;
+        }
+    }
+    bool redraw;
+    *flags |= SF_DRAW;
+    return session_update(l->s, NULL, dt, l->ld->time, f, &redraw);
+}
+
+/* An animation: frame after frame of the series or the camera path, each written. */
+static bool produce_animation(struct loop *l, struct frame_state *f, uint32_t *flags,
+                              int *number)
+{
+    bool redraw;
+    if (l->n >= l->anim_count) {
+        progress_end(&l->pr);
+        *flags = SF_QUIT;
+        return true;
+    }
+    if (l->n == 0) { /* what a camera path leaves alone: the scene's camera */
+        struct frame_state first;
+        if (!session_update(l->s, NULL, 0.0, l->ld->time, &first, &redraw))
+            return false;
+        l->base = first.camera;
+    }
+    animation_set_frame(l->s, &l->anim, l->n, &l->base);
+    *flags |= SF_DRAW | SF_WRITE;
+    *number = (int)l->n;
+    progress_update(&l->pr, (uint64_t)l->n);
+    l->n++;
+    return session_update(l->s, NULL, 0.0, l->ld->time, f, &redraw);
+}
+
+static bool produce(struct loop *l, struct frame_state *f, uint32_t *flags, int *number)
+{
+    *flags = 0;
+    *number = 0;
+    memset(f, 0, sizeof(*f));
+    if (l->ld->run)
+        return produce_run(l, f, flags);
+    if (l->ld->kind == LOOP_STEPS || l->ld->kind == LOOP_PATH)
+        return produce_animation(l, f, flags, number);
+    return produce_script(l, f, flags, number);
+}
+
+/* ---- every rank: the frame shared, applied, drawn ---------------------------------------- */
+
+/* Rank 0's frame, settings and menu to every rank.  False when the bytes are not a frame. */
+static bool share(struct loop *l, struct shared_frame *sf, struct frame_state *f)
+{
+    const uint8_t *menu_pixels = NULL;
+    if (l->root) {
+        frame_state_write(f, sf->state);
+        if (f->settings_revision != l->settings_sent) {
+            sf->flags |= SF_SETTINGS;
+            l->settings_sent = f->settings_revision;
+        }
+        if (cluster_active() && session_menu_state(l->s, &sf->menu, &menu_pixels)) {
+            sf->flags |= SF_MENU;
+            if (!l->menu_ever || sf->menu.generation != l->menu_sent)
+                sf->flags |= SF_MENU_IMAGE;
+            l->menu_sent = sf->menu.generation;
+            l->menu_ever = true;
+        }
+    }
+    if (!cluster_active())
+        return true;
+    cluster_broadcast(sf, sizeof(*sf));
+    if (sf->flags & SF_SETTINGS) {
+        struct session_settings set;
+        session_get_settings(l->s, &set);
+        cluster_broadcast(&set, sizeof(set));
+        if (!l->root)
+            session_set_settings(l->s, &set);
+    }
+    if (sf->flags & SF_MENU) {
+        size_t bytes = (size_t)sf->menu.width * (size_t)sf->menu.height * 4;
+        uint8_t *img = NULL;
+        if (sf->flags & SF_MENU_IMAGE) {
+            img = l->root ? (uint8_t *)menu_pixels : malloc(bytes);
+            if (!img)
+                cluster_abort(EXIT_FAILED);
+            cluster_broadcast(img, bytes);
+        }
+        bool ok = l->root || session_show_menu_state(l->s, &sf->menu, img);
+        if (!l->root)
+            free(img);
+        if (!ok)
+            return false;
+    }
+    if (!l->root && !(sf->flags & SF_QUIT) && !frame_state_read(sf->state, FRAME_STATE_BYTES, f))
+        return false;
+    return true;
+}
+
+/* The step every rank has: the frame's, or on a run the one shown before while some rank is
+ * still loading it (never one wall at another time). */
+static void hold(struct loop *l, struct frame_state *f)
+{
+    if (!cluster_active() || !l->ld->run)
+        return;
+    int next = f->time_step + 1 < session_step_count(l->s) ? f->time_step + 1 : f->time_step;
+    uint32_t mine = (session_step_loaded(l->s, f->time_step) ? 1u : 0u) |
+                    (f->step_fraction == 0.0f || session_step_loaded(l->s, next) ? 2u : 0u);
+    uint32_t all = cluster_and(mine);
+    if (!(all & 1u)) {
+        f->time_step = session_step_shown(l->s);
+        f->step_fraction = 0.0f;
+    } else if (!(all & 2u)) {
+        f->step_fraction = 0.0f;
+    }
+}
+
+/* --check-sync: every rank's frame and what else makes its pictures, equal to rank 0's. */
+static void check_sync(struct loop *l, const struct shared_frame *sf)
+{
+    uint64_t key = cluster_hash(session_sync_key(l->s), sf->state, sizeof(sf->state));
+    uint64_t keys[4096];
+    int n = cluster_size() <= 4096 ? cluster_size() : 4096;
+    cluster_gather_u64(key, keys);
+    for (int r = 1; l->root && r < n; r++) {
+        if (keys[r] != keys[0]) {
+            log_error("--check-sync: rank %d is out of step with rank 0 (its config, data or "
+                      "settings differ)",
+                      r);
+            cluster_abort(EXIT_FAILED);
+        }
+    }
+}
+
+static bool consume(struct loop *l, struct shared_frame *sf, struct frame_state *f)
+{
+    bool ok = true, changed = false;
+    if (sf->flags & SF_SETTLE)
+        ok = session_settle(l->s);
+    hold(l, f);
+    ok = ok && session_apply(l->s, f, &changed);
+    /* A volume that arrived on any rank is drawn on all. */
+    if (cluster_active() && l->ld->run && !cluster_all(!changed))
+        changed = true;
+    bool draw = (sf->flags & SF_DRAW) || changed;
+    if (draw) {
+        ok = ok && session_light(l->s);
+        /* The head, sampled last, on rank 0: its trackers are the cluster's. */
+        if (l->root)
+            ok = ok && display_sample_head(l->d, f->time_s, &f->head);
+        cluster_broadcast(&f->head, sizeof(f->head));
+        ok = ok && session_draw(l->s, l->d, f);
+        if (ok && (sf->flags & SF_WRITE))
+            ok = frame_output_add(l->ld->output, l->d, sf->number);
+        if (l->root)
+            l->dirty = false;
+    }
+    if (l->root && l->frames_left > 0 && draw)
+        l->frames_left--;
+    l->idle = !draw;
+    /* A rank that failed ends the job's loop on every rank, naming itself. */
+    if (cluster_active() && !cluster_all(ok)) {
+        if (!ok)
+            log_error("rank %d failed (see above); the cluster stops", cluster_rank());
+        return false;
+    }
+    if (l->ld->check_sync)
+        check_sync(l, sf);
+    return ok;
+}
+
+/* ---- rank 0's keys: screenshots and bookmarks ------------------------------------------- */
 
 /* A name in the working folder not taken yet: PREFIX-N.EXT (EXT "" for a folder). */
 static void free_name(const char *prefix, const char *ext, char *out, size_t size)
@@ -141,55 +362,65 @@ static void bookmark(struct session *s, const struct loop_desc *ld)
 
 int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
 {
-    if (!ld->run && (ld->kind == LOOP_STEPS || ld->kind == LOOP_PATH)) {
-        struct animation_desc a = {.path = ld->kind == LOOP_PATH ? ld->path : NULL,
-                                   .first = ld->first,
-                                   .last = ld->last,
-                                   .by = ld->by,
-                                   .fps = ld->fps,
-                                   .time = ld->time};
-        return animation_run(d, s, &a, ld->output) ? EXIT_OK : EXIT_FAILED;
-    }
-    if (!ld->run)
-        return render_script(d, s, ld);
-
-    double t0 = time_now_ms(), last = t0;
-    bool moving = display_head_moves(d), dirty = true, idle = false;
-    long frames_left = ld->frames;
-    struct input_queue *events = malloc(sizeof(*events));
-    if (!events) {
+    struct loop l = {.ld = ld, .d = d, .s = s, .root = cluster_rank() == 0, .dirty = true};
+    l.t0 = l.last = time_now_ms();
+    l.frames_left = ld->run ? ld->frames : -1;
+    l.events = malloc(sizeof(*l.events));
+    if (!l.events) {
         log_error("out of memory");
         return EXIT_FAILED;
     }
+    struct session_settings set;
+    session_get_settings(s, &set);
+    l.settings_sent = set.revision;
+    if (!ld->run && (ld->kind == LOOP_STEPS || ld->kind == LOOP_PATH)) {
+        l.anim = (struct animation_desc){.path = ld->kind == LOOP_PATH ? ld->path : NULL,
+                                         .first = ld->first,
+                                         .last = ld->last,
+                                         .by = ld->by,
+                                         .fps = ld->fps,
+                                         .time = ld->time};
+        l.anim_count = animation_frames(&l.anim);
+        progress_begin(&l.pr, "render", "frame", (uint64_t)l.anim_count);
+    } else if (!ld->run) {
+        progress_begin(&l.pr, "render", "frame", (uint64_t)session_script_frames(s));
+    }
     int rc = EXIT_OK;
-    while (!session_quit_requested(s) && !display_should_close(d) && frames_left != 0) {
-        input_queue_clear(events);
-        display_poll_input(d, idle ? 0.03 : 0.0, events);
-        double dt = frame_dt(s, &last);
-        double time = ld->time + (time_now_ms() - t0) * 1e-3;
+    for (;;) {
+        struct shared_frame sf;
         struct frame_state f;
-        bool redraw = false, changed = false;
-        if (!session_update(s, events, dt, time, &f, &redraw) || !session_apply(s, &f, &changed)) {
+        memset(&sf, 0, sizeof(sf));
+        memset(&f, 0, sizeof(f));
+        if (!l.root && ld->run) { /* the windows stay alive; rank 0's input is the cluster's */
+            input_queue_clear(l.events);
+            display_poll_input(d, 0.0, l.events);
+        }
+        bool ok = !l.root || produce(&l, &f, &sf.flags, &sf.number);
+        if (!ok)
+            sf.flags = SF_QUIT | SF_FAILED;
+        if (!share(&l, &sf, &f)) {
             rc = EXIT_FAILED;
             break;
         }
-        unsigned requests = session_take_requests(s);
-        bool drawn = dirty || redraw || changed || moving || frames_left > 0;
-        if (drawn) {
-            if (!draw(d, s, &f)) {
+        if (sf.flags & SF_QUIT) {
+            if (sf.flags & SF_FAILED)
                 rc = EXIT_FAILED;
-                break;
-            }
-            dirty = false;
-            if (frames_left > 0)
-                frames_left--;
+            break;
         }
-        if (requests & SESSION_REQUEST_SCREENSHOT)
-            screenshot(d, s);
-        if (requests & SESSION_REQUEST_BOOKMARK)
-            bookmark(s, ld);
-        idle = !drawn;
+        if (!consume(&l, &sf, &f)) {
+            rc = EXIT_FAILED;
+            break;
+        }
+        if (l.root && ld->run) {
+            unsigned requests = session_take_requests(s);
+            if (requests & SESSION_REQUEST_SCREENSHOT)
+                screenshot(d, s);
+            if (requests & SESSION_REQUEST_BOOKMARK)
+                bookmark(s, ld);
+        }
     }
-    free(events);
+    if (!ld->run)
+        progress_end(&l.pr);
+    free(l.events);
     return rc;
 }

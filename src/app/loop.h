@@ -38,6 +38,7 @@ struct loop_desc {
     /* run: where screenshots and bookmarks go ("" the working folder), and the files the
      * bookmarks include (the scene's config; the display's, on a tracked display). */
     const char *config_path, *display_path;
+    bool check_sync; /* a cluster: every frame, every rank's frame checked against rank 0's */
 };
 
 /* Runs frames of S on D as LD says.  Returns an exit code of app/app.h. */

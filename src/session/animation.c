@@ -13,6 +13,21 @@ long animation_frames(const struct animation_desc *a)
     return a->by > 0.0 ? (long)floor((a->last - a->first) / a->by + 1e-9) + 1 : 1;
 }
 
+void animation_set_frame(struct session *s, const struct animation_desc *a, long i,
+                         const struct display_camera *base)
+{
+    if (!a->path) {
+        session_set_time(s, a->first + (double)i * a->by);
+        return;
+    }
+    struct display_camera cam;
+    double step = -1.0;
+    camera_path_eval(a->path, (a->first + (double)i) / a->fps, base, &cam, &step);
+    session_set_camera(s, &cam);
+    if (step >= 0.0)
+        session_set_time(s, step);
+}
+
 static bool frame(struct display *d, struct session *s, double time)
 {
     struct frame_state f;
@@ -35,16 +50,7 @@ bool animation_run(struct display *d, struct session *s, const struct animation_
     progress_begin(&pr, "render", "frame", (uint64_t)count);
     bool ok = true;
     for (long i = 0; ok && i < count; i++) {
-        if (!a->path) {
-            session_set_time(s, a->first + (double)i * a->by);
-        } else {
-            struct display_camera cam;
-            double step = -1.0;
-            camera_path_eval(a->path, (a->first + (double)i) / a->fps, &base, &cam, &step);
-            session_set_camera(s, &cam);
-            if (step >= 0.0)
-                session_set_time(s, step);
-        }
+        animation_set_frame(s, a, i, &base);
         ok = frame(d, s, a->time) && (!out || frame_output_add(out, d, (int)i));
         progress_update(&pr, (uint64_t)i + 1);
     }

@@ -28,6 +28,11 @@ struct animation_desc {
 bool animation_run(struct display *d, struct session *s, const struct animation_desc *a,
                    struct frame_output *out);
 
+/* Sets S's time (and on a path its camera, BASE giving what the path leaves alone) for frame I
+ * of A: what animation_run does before each frame. */
+void animation_set_frame(struct session *s, const struct animation_desc *a, long i,
+                         const struct display_camera *base);
+
 /* How many frames A has. */
 long animation_frames(const struct animation_desc *a);
 

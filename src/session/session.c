@@ -69,9 +69,11 @@ struct session {
     struct overlay_view *overlay;
     struct overlay_model overlay_model;
 
-    /* The menu and its sources (desc.menu). */
+    /* The menu and its sources (desc.menu); or a copy of another's (session_show_menu_state). */
     struct menu *menu;
     struct menu_view *menu_view;
+    struct menu_view_state remote;
+    uint8_t *remote_pixels;
     struct input_source *sources[SOURCES_MAX];
     int n_sources;
     struct input_source *script;
@@ -277,6 +279,7 @@ void session_destroy(struct session *s)
     if (!s)
         return;
     free(s->path);
+    free(s->remote_pixels);
     menu_view_destroy(s->menu_view, s->renderer); /* its meshes leave the renderer */
     overlay_view_destroy(s->overlay, s->renderer);
     menu_destroy(s->menu);
@@ -1082,6 +1085,9 @@ bool session_draw(struct session *s, struct display *d, const struct frame_state
     float exposure = (float)s->cfg.render.exposure;
     if (s->menu && !menu_view_update(s->menu_view, s->menu, tw, exposure))
         return false;
+    if (!s->menu && s->menu_view &&
+        !menu_view_show(s->menu_view, &s->remote, s->remote_pixels, tw, exposure))
+        return false;
     if (s->overlay) {
         overlay_model_of(s, f, &s->overlay_model);
         if (!overlay_view_update(s->overlay, &s->overlay_model, s->tracker ? NULL : &f->camera,
@@ -1133,6 +1139,58 @@ bool session_settle(struct session *s)
     if (!v)
         return player_settled(s->player, s->playback.step);
     return upload(s, v);
+}
+
+uint64_t session_sync_key(const struct session *s)
+{
+    /* FNV-1a over what makes the pictures besides the frame state: the config (read once,
+     * never written), the look and quality, the step on screen. */
+    uint64_t h = 1469598103934665603ull;
+    const unsigned char *parts[3] = {(const unsigned char *)&s->cfg,
+                                     (const unsigned char *)&s->settings,
+                                     (const unsigned char *)&s->shown};
+    const size_t sizes[3] = {sizeof(s->cfg), sizeof(s->settings), sizeof(s->shown)};
+    for (int k = 0; k < 3; k++)
+        for (size_t i = 0; i < sizes[k]; i++) {
+            h ^= parts[k][i];
+            h *= 1099511628211ull;
+        }
+    return h;
+}
+
+bool session_step_loaded(struct session *s, int step)
+{
+    return player_ready(s->player, step) ||
+           (player_settled(s->player, step) && s->shown == step);
+}
+
+bool session_menu_state(struct session *s, struct menu_view_state *st, const uint8_t **pixels)
+{
+    if (!s->menu)
+        return false;
+    menu_view_state_of(s->menu, st, pixels);
+    return true;
+}
+
+bool session_show_menu_state(struct session *s, const struct menu_view_state *st,
+                             const uint8_t *pixels)
+{
+    if (s->menu)
+        return true; /* it has its own */
+    if (!s->menu_view && !(s->menu_view = menu_view_create(s->renderer)))
+        return false;
+    if (pixels) {
+        size_t bytes = (size_t)st->width * (size_t)st->height * 4;
+        uint8_t *copy = realloc(s->remote_pixels, bytes);
+        if (!copy) {
+            log_error("menu: out of memory");
+            return false;
+        }
+        memcpy(copy, pixels, bytes);
+        s->remote_pixels = copy;
+    }
+    s->remote = *st;
+    return true;
 }
 
 void session_set_progress(struct session *s, struct progress *p)

@@ -147,6 +147,22 @@ bool session_settle(struct session *s);
  * (before the report at the end of a run). */
 void session_collect_timings(struct session *s, bool wait);
 
+/* ---- a cluster's ranks (app/loop.c) -------------------------------------------------- */
+
+/* A hash of what makes the pictures besides the frame state (the config, the look and
+ * quality, the step on screen): ranks in step have equal keys (--check-sync). */
+uint64_t session_sync_key(const struct session *s);
+/* Whether STEP's volume is in memory (the cluster holds its walls at the old step until every
+ * rank has the new one). */
+bool session_step_loaded(struct session *s, int step);
+/* The menu's meshes (rank 0): false without a menu; *PIXELS its image. */
+struct menu_view_state;
+bool session_menu_state(struct session *s, struct menu_view_state *st, const uint8_t **pixels);
+/* A session without a menu shows ST (another's) from now on; PIXELS (copied) when ST's image
+ * is new, else NULL to keep the last.  False (logged) out of memory or GL. */
+bool session_show_menu_state(struct session *s, const struct menu_view_state *st,
+                             const uint8_t *pixels);
+
 /* Counts the rows of the following views in P (a long still picture: renderer_set_progress). */
 struct progress;
 void session_set_progress(struct session *s, struct progress *p);
