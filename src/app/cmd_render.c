@@ -7,6 +7,8 @@
 #include <sys/stat.h>
 
 #include "app/app.h"
+#include "app/cluster_walls.h"
+#include "cluster/cluster.h"
 #include "app/loop.h"
 #include "common/log.h"
 #include "common/progress.h"
@@ -37,6 +39,7 @@ struct render_options {
     double fps;            /* --fps N: its frame rate (0: the default) */
     const char *codec;     /* --codec NAME: a movie's encoder */
     const char *path;      /* --path FILE: a camera path (render: fly it; run: keys add to it) */
+    bool check_sync;       /* --check-sync: under mpirun, every rank's frame checked */
 };
 
 static int parse_options(int argc, char **argv, struct render_options *o, bool need_output)
@@ -58,6 +61,7 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         {"fps", required_argument, NULL, 'R'},
         {"codec", required_argument, NULL, 'C'},
         {"path", required_argument, NULL, 'K'},
+        {"check-sync", no_argument, NULL, 'Y'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -133,6 +137,9 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
             break;
         case 'K':
             o->path = optarg;
+            break;
+        case 'Y':
+            o->check_sync = true;
             break;
         case 'h':
             return -1;
@@ -393,12 +400,18 @@ static int command(int argc, char **argv, bool run)
     struct camera_path *path = malloc(sizeof(*path));
     struct display *d = NULL;
     struct session *s = NULL;
+    struct cluster_walls *cw = calloc(1, sizeof(*cw));
+    bool gated = false;     /* every rank passes app_cluster_gate once, failed or not */
+    double sync_ms = 0.0;   /* a cluster's rank: time in the swap barrier */
     rc = EXIT_FAILED;
-    if (!cfg || !dcfg || !path) {
+    if (!cfg || !dcfg || !path || !cw) {
         log_error("out of memory");
         goto done;
     }
     if ((rc = load_configs(&o, cfg, dcfg)) != EXIT_OK)
+        goto done;
+    /* Under mpirun: this rank's walls (the effects are decided from all of them). */
+    if ((rc = app_cluster_walls(o.display, dcfg, cw)) != EXIT_OK)
         goto done;
     bool have_path = false;
     if (o.path && !run) {
@@ -414,6 +427,13 @@ static int command(int argc, char **argv, bool run)
                   (o.frames || strchr(o.output, '%') || video_path_supported(o.output)));
 
     struct display_desc dd = {.offscreen = !run, .height = cfg->render.height};
+    if (cw->active) {
+        dd.gpu_device = cluster_local_rank(); /* one GPU per rank of a node */
+        dd.partial = true;
+        dd.before_swap = app_cluster_before_swap;
+        dd.swap_user = &sync_ms;
+        dd.swap_group = 1;
+    }
     scene_camera(cfg, &dd.camera);
     d = display_create(dcfg, &dd);
     if (!d) {
@@ -428,7 +448,14 @@ static int command(int argc, char **argv, bool run)
     }
     struct render_view views[DISPLAY_MAX_VIEWS];
     int n = 0;
-    for (int i = 0; i < display_view_count(d); i++) {
+    static struct view_set all; /* a cluster: every rank's walls */
+    if (cw->active && view_set_fixed(&cw->all, cfg->render.height, &all) > 0) {
+        for (int i = 0; i < all.count; i++) {
+            if (all.views[i].visible)
+                views[n++] = all.views[i].rv;
+        }
+    }
+    for (int i = 0; !cw->active && i < display_view_count(d); i++) {
         if (display_view(d, i)->visible)
             views[n++] = display_view(d, i)->rv;
     }
@@ -443,9 +470,11 @@ static int command(int argc, char **argv, bool run)
                            .views_move = views_move,
                            .interactive = run,
                            .playback = plays,
-                           .menu = run || o.input || o.menu,
+                           /* Rank 0's menu and script are the cluster's (the others show
+                            * the menu rank 0 sends). */
+                           .menu = (run || o.input || o.menu) && cluster_rank() == 0,
                            .show_menu = run ? !o.input || o.menu : o.menu,
-                           .script = o.input,
+                           .script = cluster_rank() == 0 ? o.input : NULL,
                            .transfers_dir = o.transfers,
                            .wand = o.wand,
                            /* An interactive run times its views only when they are reported. */
@@ -466,6 +495,7 @@ static int command(int argc, char **argv, bool run)
         .frames = frames_env ? strtol(frames_env, NULL, 10) : -1,
         .config_path = o.config,
         .display_path = o.display,
+        .check_sync = o.check_sync,
     };
     float exposure = (float)session_config(s)->render.exposure;
     bool animated = !run && o.output &&
@@ -506,6 +536,13 @@ static int command(int argc, char **argv, bool run)
         progress_begin(&pr, "render", "row", (uint64_t)rows);
         session_set_progress(s, &pr);
     }
+    /* Every rank has its walls, its data and its output open: they start together. */
+    gated = true;
+    if (!app_cluster_gate(true, cw)) {
+        rc = EXIT_FAILED;
+        goto done;
+    }
+    app_cluster_swap_group(d);
     rc = loop_run(d, s, &ld);
     if (counted) {
         session_set_progress(s, NULL);
@@ -525,9 +562,14 @@ static int command(int argc, char **argv, bool run)
         log_warn("%zu pixels are not finite", st->nonfinite_pixels);
     st->gpu_bytes = gpu_bytes_allocated();
     st->total_ms = time_now_ms() - start;
-    if (rc == EXIT_OK && o.stats && !session_stats_write(st, o.stats))
-        rc = EXIT_FAILED;
+    st->sync_ms = sync_ms;
+    /* Every rank reaches here together (the loop ends on all): rank 0 gathers their stats. */
+    if (o.stats && (rc == EXIT_OK || cw->active) &&
+        !app_cluster_stats(st, cw, o.stats, rc == EXIT_OK))
+        rc = rc == EXIT_OK ? EXIT_FAILED : rc;
 done:
+    if (!gated && cluster_active())
+        app_cluster_gate(false, cw);
     if (d)
         gpu_context_make_current(display_context(d));
     session_destroy(s);
@@ -535,6 +577,7 @@ done:
     free(cfg);
     free(dcfg);
     free(path);
+    free(cw);
     return rc;
 }
 

@@ -216,11 +216,16 @@ static bool share(struct loop *l, struct shared_frame *sf, struct frame_state *f
         bool ok = l->root || session_show_menu_state(l->s, &sf->menu, img);
         if (!l->root)
             free(img);
-        if (!ok)
-            return false;
+        if (!ok) { /* the others are already drawing: end the job, naming this rank */
+            log_error("rank %d: the menu from rank 0 could not be shown", cluster_rank());
+            cluster_abort(EXIT_FAILED);
+        }
     }
-    if (!l->root && !(sf->flags & SF_QUIT) && !frame_state_read(sf->state, FRAME_STATE_BYTES, f))
-        return false;
+    if (!l->root && !(sf->flags & SF_QUIT) && !frame_state_read(sf->state, FRAME_STATE_BYTES, f)) {
+        log_error("rank %d: rank 0's frame state is not one (a different anvil?)",
+                  cluster_rank());
+        cluster_abort(EXIT_FAILED);
+    }
     return true;
 }
 

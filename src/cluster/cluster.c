@@ -51,6 +51,10 @@ bool cluster_init(int *argc, char ***argv)
     MPI_Comm_free(&local);
     /* A failed call ends the job rather than hang it. */
     MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_ARE_FATAL);
+    char name[32];
+    snprintf(name, sizeof(name), "anvil[%d]", rank);
+    if (size > 1)
+        log_set_name(name);
     if (rank != 0 && log_get_level() >= LOG_INFO)
         log_set_level(LOG_WARN); /* the other ranks say only what goes wrong */
     return true;

@@ -14,6 +14,7 @@ static pthread_mutex_t log_lock = PTHREAD_MUTEX_INITIALIZER;
 static enum log_level current_level = LOG_INFO;
 static unsigned errors, warnings;
 static char last_error[1024];
+static char who[32] = "anvil"; /* the program's name in each line (log_set_name) */
 static char status[256]; /* the status line on a terminal (log_status), or "" */
 static int status_tty = -1; /* whether stderr is a terminal: -1 not asked yet */
 
@@ -27,6 +28,13 @@ void log_set_level(enum log_level level)
 enum log_level log_get_level(void)
 {
     return current_level;
+}
+
+void log_set_name(const char *name)
+{
+    pthread_mutex_lock(&log_lock);
+    snprintf(who, sizeof(who), "%s", name);
+    pthread_mutex_unlock(&log_lock);
 }
 
 void log_msg(enum log_level level, const char *fmt, ...)
@@ -48,9 +56,9 @@ void log_msg(enum log_level level, const char *fmt, ...)
         const char *tag = level == LOG_ERROR ? "error: " : level == LOG_WARN ? "warning: " : "";
         if (status[0]) /* the message goes above the status line, which stays at the bottom */
             fprintf(stderr, "\r\033[K");
-        fprintf(stderr, "anvil: %s%s\n", tag, line);
+        fprintf(stderr, "%s: %s%s\n", who, tag, line);
         if (status[0])
-            fprintf(stderr, "anvil: %s", status);
+            fprintf(stderr, "%s: %s", who, status);
     }
     pthread_mutex_unlock(&log_lock);
 }
@@ -71,9 +79,9 @@ void log_status(const char *line, bool done)
     pthread_mutex_lock(&log_lock);
     if ((int)LOG_INFO <= (int)current_level) {
         if (!tty) {
-            fprintf(stderr, "anvil: %s\n", line);
+            fprintf(stderr, "%s: %s\n", who, line);
         } else {
-            fprintf(stderr, "\r\033[Kanvil: %s%s", line, done ? "\n" : "");
+            fprintf(stderr, "\r\033[K%s: %s%s", who, line, done ? "\n" : "");
             fflush(stderr);
         }
     }

@@ -25,6 +25,9 @@ enum log_level {
 void log_set_level(enum log_level level);
 enum log_level log_get_level(void);
 
+/* The name each line starts with: "anvil" (a cluster's ranks: "anvil[2]"). */
+void log_set_name(const char *name);
+
 /* Formats one line to stderr, prefixed "anvil: " (and "error: "/"warning: ").  Thread safe. */
 void log_msg(enum log_level level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 

@@ -454,7 +454,7 @@ typedef char file_list[CONFIG_MAX_FILES][CONFIG_PATH_MAX];
 static bool add_files(const struct raw *r, const char *path, const char *base_dir, file_list list,
                       int *count)
 {
-    char full[CONFIG_PATH_MAX];
+    char full[CONFIG_PATH_MAX] = ""; /* all of it zero: it is copied whole */
     if (!r->s[0]) {
         report(&r->where, path, "expected a file name, got an empty string");
         return false;
@@ -515,7 +515,7 @@ static bool apply_files(const struct config_field *s, const struct value *val, c
         report(&val->one.where, path, "expected at most %d files, got %d", CONFIG_MAX_FILES, n);
         return false;
     }
-    file_list *list = malloc(sizeof(file_list));
+    file_list *list = calloc(1, sizeof(file_list)); /* zeroed: configs compare bytewise */
     if (!list) {
         report(&val->one.where, path, "out of memory");
         return false;

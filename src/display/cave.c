@@ -104,6 +104,7 @@ static struct display *cave_create(const struct display *base)
             if (!ctx)
                 goto error;
             display_watch_window(d, gpu_context_window(ctx));
+            display_join_swap_group(d, ctx);
             c->windows[c->window_count++] = ctx;
         }
         c->wall_window[w] = c->window_count - 1;

@@ -195,9 +195,26 @@ bool display_open_primary(struct display *d, int w, int h, int monitor, bool ste
     }
     d->context = gpu_context_create(&cd);
     d->own_context = d->context != NULL;
-    if (d->context && !d->desc.offscreen)
+    if (d->context && !d->desc.offscreen) {
         display_watch_window(d, gpu_context_window(d->context));
+        display_join_swap_group(d, d->context);
+    }
     return d->context != NULL;
+}
+
+void display_join_swap_group(struct display *d, struct gpu_context *ctx)
+{
+    if (!d->desc.swap_group)
+        return;
+    d->swap_windows++;
+    if (gpu_context_join_swap_group(ctx, d->desc.swap_group, d->desc.swap_group))
+        d->swap_joined++;
+    gpu_context_make_current(d->context);
+}
+
+bool display_swap_grouped(const struct display *d)
+{
+    return d->swap_windows > 0 && d->swap_joined == d->swap_windows;
 }
 
 void display_close_primary(struct display *d)

@@ -143,6 +143,11 @@ void view_set_layout(struct view_set *set, const struct display_config *cfg,
 /* Image size of wall W: walls[w].size, else HEIGHT pixels high and the wall's aspect wide. */
 void view_set_wall_size(const struct display_config *cfg, int w, int height, int out[2]);
 
+/* The views of CFG's walls when its head does not move (head.source fixed): laid out for that
+ * head with the config's navigation, HEIGHT pixels high where a wall has no size.  0 (SET
+ * empty) for a moving head, a headset or the orbit display.  No GL. */
+int view_set_fixed(const struct display_config *cfg, int height, struct view_set *set);
+
 /* Frees the views' textures (GL context current). */
 void view_set_finish(struct view_set *set);
 
@@ -164,6 +169,8 @@ struct display_desc {
     /* Called right before the windows swap (a cluster's ranks wait for each other there). */
     void (*before_swap)(void *user);
     void *swap_user;
+    unsigned swap_group; /* windows: join this swap group and its barrier (GLX_NV_swap_group);
+                            0: none */
 };
 
 /* Whether this build has the backend of TYPE (openxr needs the OpenXR loader at build
@@ -179,6 +186,9 @@ void display_list(void (*print)(const char *name, const char *what, void *user),
  * display_destroy (which accepts NULL). */
 struct display *display_create(const struct display_config *cfg, const struct display_desc *desc);
 void display_destroy(struct display *d);
+
+/* Whether every window of D joined desc.swap_group (false without windows or swap groups). */
+bool display_swap_grouped(const struct display *d);
 
 /* The primary GL context (owned by the display unless it was given in the desc).  Valid until
  * display_destroy. */

@@ -64,6 +64,7 @@ struct display {
     double cursor[2], drag_from[2];
     unsigned char joy_buttons[INPUT_BUTTON_COUNT];
     float joy_axes[INPUT_AXIS_COUNT];
+    int swap_windows, swap_joined; /* windows asked to join desc.swap_group; those that did */
 };
 
 extern const struct display_impl display_headless_impl;
@@ -95,6 +96,9 @@ bool display_show(struct renderer *r, const struct gpu_texture *in, float exposu
 
 /* What must happen right before the windows swap (display_desc.before_swap). */
 void display_before_swap(struct display *d);
+
+/* A window of D's (CTX) into desc.swap_group, when one is asked for. */
+void display_join_swap_group(struct display *d, struct gpu_context *ctx);
 
 /* Tone maps IN into the whole primary window and swaps it. */
 bool display_show_window(struct display *d, struct renderer *r, const struct gpu_texture *in,

@@ -236,6 +236,21 @@ void view_set_layout(struct view_set *set, const struct display_config *cfg,
     set->count = n;
 }
 
+int view_set_fixed(const struct display_config *cfg, int height, struct view_set *set)
+{
+    memset(set, 0, sizeof(*set));
+    if (cfg->type == DISPLAY_TYPE_HMD || cfg->type == DISPLAY_TYPE_OPENXR ||
+        cfg->type == DISPLAY_TYPE_ORBIT || cfg->head.source != DISPLAY_HEAD_FIXED)
+        return 0;
+    int sizes[DISPLAY_MAX_WALLS][2];
+    for (int w = 0; w < cfg->wall_count; w++)
+        view_set_wall_size(cfg, w, height, sizes[w]);
+    struct display_pose head;
+    display_pose_from_euler(cfg->head.position, cfg->head.orientation_deg, &head);
+    view_set_layout(set, cfg, &cfg->navigation, &head, (const int(*)[2])sizes);
+    return set->count;
+}
+
 void view_set_finish(struct view_set *set)
 {
     if (!set)

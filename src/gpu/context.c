@@ -80,6 +80,14 @@ void gpu_context_swap_interval(struct gpu_context *ctx, int interval)
     ctx->impl->swap_interval(ctx, interval);
 }
 
+bool gpu_context_join_swap_group(struct gpu_context *ctx, unsigned group, unsigned barrier)
+{
+    if (!ctx || !ctx->impl->join_swap_group)
+        return false;
+    gpu_context_make_current(ctx);
+    return ctx->impl->join_swap_group(ctx, group, barrier);
+}
+
 void gpu_context_size(struct gpu_context *ctx, int *width, int *height)
 {
     if (ctx->impl->size) {

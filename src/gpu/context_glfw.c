@@ -131,6 +131,24 @@ static bool glfw_native(struct gpu_context *ctx, struct gpu_context_native *out)
     return true;
 }
 
+/* GLX_NV_swap_group (NVIDIA Quadro and its framelock boards): the windows of every rank swap
+ * together when they are in one group bound to one barrier. */
+static bool glfw_join_swap_group(struct gpu_context *ctx, unsigned group, unsigned barrier)
+{
+    struct glfw_context *c = (struct glfw_context *)ctx;
+    Display *dpy = glfwGetX11Display();
+    if (!dpy || !glfwGetGLXContext(c->window) ||
+        !epoxy_has_glx_extension(dpy, DefaultScreen(dpy), "GLX_NV_swap_group"))
+        return false;
+    GLuint max_groups = 0, max_barriers = 0;
+    if (!glXQueryMaxSwapGroupsNV(dpy, DefaultScreen(dpy), &max_groups, &max_barriers) ||
+        group > max_groups || barrier > max_barriers)
+        return false;
+    if (!glXJoinSwapGroupNV(dpy, glfwGetGLXWindow(c->window), group))
+        return false;
+    return barrier == 0 || glXBindSwapBarrierNV(dpy, group, barrier);
+}
+
 const struct gpu_context_impl gpu_context_glfw_impl = {
     .name = "glfw",
     .description = "OpenGL 4.5 core window through GLFW (X11/Wayland; quad-buffer stereo "
@@ -143,4 +161,5 @@ const struct gpu_context_impl gpu_context_glfw_impl = {
     .size = glfw_size,
     .window = glfw_window,
     .native = glfw_native,
+    .join_swap_group = glfw_join_swap_group,
 };

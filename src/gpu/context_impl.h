@@ -31,6 +31,8 @@ struct gpu_context_impl {
     void *(*window)(struct gpu_context *ctx);
     /* The native handles (NULL: none to share). */
     bool (*native)(struct gpu_context *ctx, struct gpu_context_native *out);
+    /* Joins swap group GROUP bound to barrier BARRIER (GLX_NV_swap_group); CTX current. */
+    bool (*join_swap_group)(struct gpu_context *ctx, unsigned group, unsigned barrier);
 };
 
 struct gpu_context {

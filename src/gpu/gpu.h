@@ -53,6 +53,11 @@ void gpu_context_swap(struct gpu_context *ctx);
  * that swap together wait in the last one only.  No effect on headless contexts (nor on
  * NULL). */
 void gpu_context_swap_interval(struct gpu_context *ctx, int interval);
+/* Makes CTX current and joins its window to swap group GROUP bound to barrier BARRIER (0:
+ * none), so that windows of several processes and machines swap together (GLX_NV_swap_group
+ * with a framelock board).  False where the window system has no swap groups (headless, Mesa,
+ * Wayland): the caller keeps its own barrier. */
+bool gpu_context_join_swap_group(struct gpu_context *ctx, unsigned group, unsigned barrier);
 /* Framebuffer size of a window context; the desc size for headless. */
 void gpu_context_size(struct gpu_context *ctx, int *width, int *height);
 

@@ -8,23 +8,6 @@
 #include "display/display.h"
 #include "session/scene.h"
 
-/* The views of a display config whose head does not move (count 0 otherwise: an HMD's
- * matrices come from its device or runtime, a path moves). */
-static int display_views(const struct display_config *dcfg, int height, struct view_set *set)
-{
-    if (dcfg->type == DISPLAY_TYPE_HMD || dcfg->type == DISPLAY_TYPE_OPENXR ||
-        dcfg->head.source != DISPLAY_HEAD_FIXED)
-        return 0;
-    int sizes[DISPLAY_MAX_WALLS][2];
-    for (int w = 0; w < dcfg->wall_count; w++)
-        view_set_wall_size(dcfg, w, height, sizes[w]);
-    struct display_pose head;
-    display_pose_from_euler(dcfg->head.position, dcfg->head.orientation_deg, &head);
-    memset(set, 0, sizeof(*set));
-    view_set_layout(set, dcfg, &dcfg->navigation, &head, (const int(*)[2])sizes);
-    return set->count;
-}
-
 bool effects_report_make(const struct config *cfg, const struct effects_report_desc *d,
                          struct effects_report *out)
 {
@@ -37,7 +20,7 @@ bool effects_report_make(const struct config *cfg, const struct effects_report_d
     int n = 0;
     bool known = !d->run;
     if (d->display) {
-        int count = display_views(d->display, cfg->render.height, &set);
+        int count = view_set_fixed(d->display, cfg->render.height, &set);
         known = count > 0;
         for (int i = 0; i < count; i++) {
             if (set.views[i].visible)

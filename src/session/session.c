@@ -994,15 +994,23 @@ void session_collect_timings(struct session *s, bool wait)
     lightmaps_collect_timings(&s->light, wait);
 }
 
+/* The light map's key besides the volume: the frame's sun, the effects' and the session's
+ * settings. */
+static void light_params(const struct session *s, struct lightmaps_params *p)
+{
+    double az = s->have_applied ? s->applied.sun_azimuth_deg : s->sun_az;
+    double el = s->have_applied ? s->applied.sun_elevation_deg : s->sun_el;
+    memset(p, 0, sizeof(*p));
+    lightmaps_params_from(&s->cfg, &s->effects, az, el, p);
+    memcpy(p->light.resolution, s->settings.light_resolution, sizeof(p->light.resolution));
+    p->light.epsilon = s->settings.epsilon;
+}
+
 bool session_light(struct session *s)
 {
     session_collect_timings(s, false);
-    double az = s->have_applied ? s->applied.sun_azimuth_deg : s->sun_az;
-    double el = s->have_applied ? s->applied.sun_elevation_deg : s->sun_el;
     struct lightmaps_params p;
-    lightmaps_params_from(&s->cfg, &s->effects, az, el, &p);
-    memcpy(p.light.resolution, s->settings.light_resolution, sizeof(p.light.resolution));
-    p.light.epsilon = s->settings.epsilon;
+    light_params(s, &p);
     return lightmaps_update_params(&s->light, &p, s->renderer, &s->stats);
 }
 
@@ -1144,15 +1152,18 @@ bool session_settle(struct session *s)
 uint64_t session_sync_key(const struct session *s)
 {
     /* FNV-1a over what makes the pictures besides the frame state: the config (read once,
-     * never written), the look and quality, the step on screen. */
+     * never written), the look and quality, the effects decided, the step on screen and the
+     * light map's key (its parameters and the steps it holds). */
+    struct lightmaps_params p;
+    light_params(s, &p);
+    uint64_t ids[2] = {s->light.step_id, s->light.next_id};
+    const void *parts[] = {&s->cfg, &s->settings, &s->effects, &s->shown, &p, ids};
+    const size_t sizes[] = {sizeof(s->cfg), sizeof(s->settings), sizeof(s->effects),
+                            sizeof(s->shown), sizeof(p), sizeof(ids)};
     uint64_t h = 1469598103934665603ull;
-    const unsigned char *parts[3] = {(const unsigned char *)&s->cfg,
-                                     (const unsigned char *)&s->settings,
-                                     (const unsigned char *)&s->shown};
-    const size_t sizes[3] = {sizeof(s->cfg), sizeof(s->settings), sizeof(s->shown)};
-    for (int k = 0; k < 3; k++)
+    for (size_t k = 0; k < sizeof(sizes) / sizeof(sizes[0]); k++)
         for (size_t i = 0; i < sizes[k]; i++) {
-            h ^= parts[k][i];
+            h ^= ((const unsigned char *)parts[k])[i];
             h *= 1099511628211ull;
         }
     return h;

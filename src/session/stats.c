@@ -31,23 +31,39 @@ static void write_list(FILE *f, const struct gpu_timings *t)
     fputc(']', f);
 }
 
-bool session_stats_write(const struct session_stats *st, const char *path)
+/* TEXT as a JSON string (control characters left out). */
+static void write_string(FILE *f, const char *text)
 {
-    char *buf = NULL;
-    size_t len = 0;
-    FILE *f = open_memstream(&buf, &len);
-    if (!f) {
-        log_error("%s: out of memory", path);
-        return false;
-    }
-    fprintf(f, "{\n  \"command\": \"%s\",\n", st->command ? st->command : "");
-    fprintf(f, "  \"device\": \"");
-    for (const char *p = st->device ? st->device : ""; *p; p++) {
+    fputc('"', f);
+    for (const char *p = text ? text : ""; *p; p++) {
         if (*p == '"' || *p == '\\')
             fputc('\\', f);
-        fputc(*p, f);
+        if ((unsigned char)*p >= 0x20)
+            fputc(*p, f);
     }
-    fprintf(f, "\",\n  \"views\": %u,\n  \"light_map_builds\": %u,\n", st->views,
+    fputc('"', f);
+}
+
+bool session_stats_json(const struct session_stats *st, int rank, const char *walls,
+                        char **text, size_t *len)
+{
+    *text = NULL;
+    *len = 0;
+    FILE *f = open_memstream(text, len);
+    if (!f) {
+        log_error("--stats: out of memory");
+        return false;
+    }
+    fprintf(f, "{\n  \"command\": ");
+    write_string(f, st->command);
+    if (rank >= 0) {
+        fprintf(f, ",\n  \"rank\": %d,\n  \"walls\": ", rank);
+        write_string(f, walls);
+        fprintf(f, ",\n  \"sync_ms\": %.3f", st->sync_ms);
+    }
+    fprintf(f, ",\n  \"device\": ");
+    write_string(f, st->device);
+    fprintf(f, ",\n  \"views\": %u,\n  \"light_map_builds\": %u,\n", st->views,
             st->light_builds);
     fprintf(f, "  \"view_ms\": ");
     write_list(f, &st->view_times);
@@ -69,7 +85,21 @@ bool session_stats_write(const struct session_stats *st, const char *path)
     fprintf(f, "  \"frame_ms_max\": %.3f,\n", st->frame_ms_max);
     fprintf(f, "  \"volume_ms\": %.3f,\n  \"upload_ms\": %.3f,\n  \"total_ms\": %.3f\n}\n",
             st->volume_ms, st->upload_ms, st->total_ms);
-    fclose(f);
+    if (fclose(f) != 0 || !*text) {
+        free(*text);
+        *text = NULL;
+        log_error("--stats: out of memory");
+        return false;
+    }
+    return true;
+}
+
+bool session_stats_write(const struct session_stats *st, const char *path)
+{
+    char *buf;
+    size_t len;
+    if (!session_stats_json(st, -1, NULL, &buf, &len))
+        return false;
     bool ok = file_write_atomic(path, buf, len);
     free(buf);
     return ok;

@@ -33,6 +33,8 @@ struct session_stats {
                                  also each next step's, into the second texture) */
     double load_ms, convert_ms, wait_ms, upload_ms_total;
     double frame_ms_max;      /* longest frame of the loop */
+    double sync_ms;           /* a cluster's rank: time in the swap barrier (its wait for the
+                                 slowest rank included) */
 };
 
 /* Counts a view drawn and a light map built; their times go to view_times and build_times. */
@@ -41,5 +43,9 @@ void session_stats_add_build(struct session_stats *st);
 /* Writes ST as JSON to PATH (atomically); a time that has not arrived is written as null.
  * False (logged) on failure. */
 bool session_stats_write(const struct session_stats *st, const char *path);
+/* ST as one JSON object in *TEXT (the caller frees; *LEN bytes); with RANK >= 0 also the
+ * cluster rank, the WALLS it draws and its sync_ms.  False (logged) out of memory. */
+bool session_stats_json(const struct session_stats *st, int rank, const char *walls,
+                        char **text, size_t *len);
 
 #endif

@@ -128,6 +128,52 @@ static void test_defaults(void **state)
     assert_true(config_validate(&cfg));
 }
 
+/* Fills a stack frame and a freed heap block with BYTE: what an unset byte would pick up. */
+static void __attribute__((noinline)) dirty(unsigned char byte)
+{
+    volatile unsigned char stack[256 * 1024];
+    for (size_t i = 0; i < sizeof(stack); i++)
+        stack[i] = byte;
+    void *heap = malloc(sizeof(struct config) * 2);
+    if (heap) {
+        memset(heap, byte, sizeof(struct config) * 2);
+        free(heap);
+    }
+}
+
+/* A cluster's ranks compare their configs byte for byte (--check-sync): loading one file
+ * must set every byte, padding and the rest of each string included, whatever memory held. */
+static void test_loaded_bytes_are_all_set(void **state)
+{
+    (void)state;
+    const char *path = test_write_file("bytes.cfg",
+                                       "scene = { kind = \"data\"; };\n"
+                                       "data = { files = [\"a.nc\", \"b*.nc\"]; };\n"
+                                       "render = { width = 64; };\n"
+                                       "transfer = { function = \"tf.cfg\"; };\n");
+    test_write_file("b1.nc", "");
+    char *sets[] = {"camera.fov=40", "data.files=[\"c.nc\"]"};
+    struct config *a = malloc(sizeof(*a)), *b = malloc(sizeof(*b));
+    assert_non_null(a);
+    assert_non_null(b);
+    memset(a, 0xa5, sizeof(*a));
+    memset(b, 0x5a, sizeof(*b));
+    dirty(0x33);
+    bool ok_a = config_load_overrides(path, sets, 2, a);
+    dirty(0xcc);
+    bool ok_b = config_load_overrides(path, sets, 2, b);
+    assert_int_equal(ok_a, ok_b);
+    const unsigned char *x = (const unsigned char *)a, *y = (const unsigned char *)b;
+    size_t first = sizeof(*a);
+    for (size_t i = 0; i < sizeof(*a) && first == sizeof(*a); i++)
+        if (x[i] != y[i])
+            first = i;
+    if (first != sizeof(*a))
+        fail_msg("byte %zu of struct config depends on what memory held before", first);
+    free(a);
+    free(b);
+}
+
 static void test_good_file(void **state)
 {
     struct config cfg;
@@ -609,6 +655,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_loaded_bytes_are_all_set),
         cmocka_unit_test(test_good_file),
         cmocka_unit_test(test_int_for_double),
         cmocka_unit_test(test_nested_include),
