@@ -188,6 +188,21 @@ static int load_configs(struct render_options *o, struct config *cfg,
     return EXIT_OK;
 }
 
+/* --wand NAME: an OpenHMD controller as the wand, in place of the display's wand.*. */
+static int apply_wand_option(const struct render_options *o, struct display_config *dcfg)
+{
+    if (!o->wand)
+        return EXIT_OK;
+    if (strlen(o->wand) >= sizeof(dcfg->wand.device)) {
+        log_error("--wand %s: expected an OpenHMD product name of at most %zu characters",
+                  o->wand, sizeof(dcfg->wand.device) - 1);
+        return EXIT_USAGE;
+    }
+    dcfg->wand.source = DISPLAY_WAND_OPENHMD;
+    snprintf(dcfg->wand.device, sizeof(dcfg->wand.device), "%s", o->wand);
+    return EXIT_OK;
+}
+
 /* Writes what a render made: the one view as -o FILE, or every view into -o FOLDER/. */
 static bool write_output(struct display *d, const struct render_options *o, float exposure,
                          struct session_stats *st)
@@ -234,7 +249,7 @@ static int command(int argc, char **argv, bool run)
         log_error("out of memory");
         goto done;
     }
-    if ((rc = load_configs(&o, cfg, dcfg)) != EXIT_OK)
+    if ((rc = load_configs(&o, cfg, dcfg)) != EXIT_OK || (rc = apply_wand_option(&o, dcfg)))
         goto done;
 
     struct display_desc dd = {.offscreen = !run, .height = cfg->render.height};
@@ -269,7 +284,6 @@ static int command(int argc, char **argv, bool run)
                            .show_menu = run ? !o.input || o.menu : o.menu,
                            .script = o.input,
                            .transfers_dir = o.transfers,
-                           .wand = o.wand,
                            /* An interactive run times its views only when they are reported. */
                            .time_views = o.stats || !run,
                        },

@@ -50,7 +50,7 @@ struct display *display_create(const struct display_config *cfg, const struct di
     struct display *d = impl->create(&base);
     if (!d)
         return NULL;
-    if (!display_head_tracker_init(&d->head, &cfg->head))
+    if (!display_head_tracker_init(&d->head, &cfg->head, cfg))
         goto error;
     if (!gpu_program_init(&d->compose, "display_compose.comp", NULL))
         goto error;
@@ -162,6 +162,15 @@ const struct gpu_texture *display_output(const struct display *d, int i, const c
 bool display_open_primary(struct display *d, int w, int h, int monitor, bool stereo,
                           const char *title)
 {
+    return display_open_primary_on(d, &(struct gpu_context_desc){.width = w,
+                                                                 .height = h,
+                                                                 .monitor = monitor,
+                                                                 .stereo = stereo,
+                                                                 .title = title});
+}
+
+bool display_open_primary_on(struct display *d, const struct gpu_context_desc *window)
+{
     if (d->desc.offscreen && d->desc.context) {
         d->context = d->desc.context;
         d->own_context = false;
@@ -170,12 +179,8 @@ bool display_open_primary(struct display *d, int w, int h, int monitor, bool ste
     }
     struct gpu_context_desc cd = {.backend = "egl", .monitor = -1};
     if (!d->desc.offscreen) {
+        cd = *window;
         cd.backend = "glfw";
-        cd.width = w;
-        cd.height = h;
-        cd.monitor = monitor;
-        cd.stereo = stereo;
-        cd.title = title;
     }
     d->context = gpu_context_create(&cd);
     d->own_context = d->context != NULL;

@@ -30,6 +30,7 @@
 #include "config/display_config.h"
 #include "gpu/gpu.h"
 #include "input/input.h"
+#include "input/tracker.h"
 #include "render/image.h"
 #include "render/render.h"
 
@@ -85,6 +86,13 @@ void display_path_finish(struct display_path *path);
 /* The pose at time T: linear in position, spherical-linear in rotation between the two
  * surrounding poses; clamped to the first and last. */
 void display_path_eval(const struct display_path *path, double t, struct display_pose *out);
+
+/* The input part's descs of CFG's tracked head (head.source dtrack or vrpn) and wand
+ * (wand.source dtrack or vrpn): address, sensor, calibration (units "auto": DTrack's mm,
+ * VRPN's m), and the wand's buttons and channels.  CFG must have been validated (the derived
+ * fields of struct display_tracking). */
+void display_head_desc(const struct display_config *cfg, struct tracker_desc *out);
+void display_wand_desc(const struct display_config *cfg, struct tracker_wand_desc *out);
 
 /* The world camera of the orbit display (anvil run without --display): world metres, z up. */
 struct display_camera {
@@ -157,7 +165,9 @@ void display_destroy(struct display *d);
 struct gpu_context *display_context(struct display *d);
 
 /* The head pose at time T (seconds) from the display's head tracker (fixed, a scripted path,
- * an OpenHMD device).  False (logged) when the device fails. */
+ * an OpenHMD device, the latest pose of a DTrack or VRPN body: never waiting on the network,
+ * head.position and head.orientation until the first pose).  False (logged) when the device
+ * fails. */
 bool display_sample_head(struct display *d, double t, struct display_pose *head);
 
 /* Places every view for HEAD, the navigation NAV (tracker displays) and CAMERA (the orbit

@@ -143,8 +143,17 @@ static bool create_menu(struct session *s)
             return false;
         s->sources[s->n_sources++] = s->script;
     }
-    if (d->wand) {
-        struct input_source *w = input_ohmd_create(d->wand, NULL);
+    /* The display's wand (wand.*; anvil's --wand NAME makes it an OpenHMD controller). */
+    const struct display_wand *wand = &s->display.wand;
+    struct input_source *w = NULL;
+    if (wand->source == DISPLAY_WAND_OPENHMD) {
+        w = input_ohmd_create(wand->device, NULL);
+    } else if (wand->source == DISPLAY_WAND_DTRACK || wand->source == DISPLAY_WAND_VRPN) {
+        struct tracker_wand_desc wd;
+        display_wand_desc(&s->display, &wd);
+        w = tracker_wand_create(&wd);
+    }
+    if (wand->source != DISPLAY_WAND_NONE) {
         if (!w)
             return false;
         s->sources[s->n_sources++] = w;

@@ -51,11 +51,11 @@ struct session_desc {
     bool interactive;          /* anvil run: the sun moves, loads never wait */
     bool playback;             /* time can move (run, a script, frame states from elsewhere):
                                   the time series cache runs behind the first step */
-    bool menu;                 /* make the menu and the input sources (run, --input, --menu) */
+    bool menu;                 /* make the menu and the input sources (run, --input, --menu):
+                                  the script and the display's wand (display->wand) */
     bool show_menu;            /* start with the menu shown */
     const char *script;        /* --input FILE: scripted events, or NULL */
     const char *transfers_dir; /* where named transfer functions are saved ("." default) */
-    const char *wand;          /* an OpenHMD controller as the wand ("null"), or NULL */
     bool time_views;           /* time every view and build (they are reported) */
 };
 

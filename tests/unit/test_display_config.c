@@ -37,6 +37,16 @@ static void old_defaults(struct display_config *cfg)
     cfg->hmd.aberration[0] = cfg->hmd.aberration[1] = cfg->hmd.aberration[2] = 1.0;
     cfg->hmd.distortion[3] = 1.0;
     cfg->hmd.warp = true;
+    /* Tracked heads and wands came later: calibrations are the identity, the wand is none. */
+    snprintf(cfg->head.tracking.axes, sizeof(cfg->head.tracking.axes), "x y z");
+    snprintf(cfg->wand.tracking.axes, sizeof(cfg->wand.tracking.axes), "x y z");
+    snprintf(cfg->wand.device, sizeof(cfg->wand.device), "null");
+    cfg->wand.flystick = true;
+    for (int b = 0; b < 4; b++)
+        cfg->wand.buttons[b] = b;
+    cfg->wand.joystick[0] = 1;
+    cfg->wand.joystick_scale[0] = cfg->wand.joystick_scale[1] = 1.0;
+    cfg->wand.dead_zone = 0.1;
     cfg->wall_count = 1;
     struct display_wall *w = &cfg->walls[0];
     w->monitor = -1;
@@ -261,7 +271,7 @@ static void test_set_errors(void **state)
     EXPECT_SET_ERROR(&cfg, "display.mode=polarised",
                      "--set display.mode: expected one of "
                      "\"mono\", \"side-by-side\", \"anaglyph\", \"quad-buffer\", "
-                     "got \"polarised\"");
+                     "\"passive\", got \"polarised\"");
     EXPECT_SET_ERROR(&cfg, "hmd.warp=maybe", "--set hmd.warp: expected true or false", "\"maybe\"");
     EXPECT_SET_ERROR(&cfg, "hmd.device=",
                      "--set hmd.device: expected a string of 1 to 127 "
@@ -275,10 +285,11 @@ static void test_set_errors(void **state)
                      "head.position?)");
     EXPECT_SET_ERROR(&cfg, "head.zz=1",
                      "--set head.zz: expected a known setting (one of "
-                     "source, position, orientation, path, device)");
+                     "source, position, orientation, path, device, address, sensor, units, axes, offset, "
+                     "rotation)");
     EXPECT_SET_ERROR(&cfg, "screens.x=1",
                      "--set screens.x: expected a known group (display, "
-                     "head, navigation, hmd, walls)");
+                     "head, navigation, hmd, wand, walls)");
     EXPECT_SET_ERROR(&cfg, "walls.[0].nmae=x",
                      "--set walls.[0].nmae: expected a known "
                      "setting (did you mean walls.[0].name?)");
@@ -589,8 +600,8 @@ static void test_reference(void **state)
         assert_memory_equal(&cfg, &before, sizeof(cfg));
         set_back++;
     }
-    assert_int_equal(rows, 2 + 29);
-    assert_int_equal(set_back, 19);
+    assert_int_equal(rows, 2 + 53);
+    assert_int_equal(set_back, 19 + 17);
 
     const char *docs[] = {"/docs/config-reference.md", "/docs/displays.md"};
     for (int i = 0; i < 2; i++) {
