@@ -747,8 +747,10 @@ static struct link *link_get(const struct tracker_address *a)
     fcntl(l->wake[1], F_SETFD, FD_CLOEXEC);
     if (a->protocol == TRACKER_DTRACK && !dtrack_listen(l))
         goto error;
-    if (a->protocol == TRACKER_DTRACK && a->port == 0)
+    if (a->protocol == TRACKER_DTRACK && a->port == 0) { /* any free port: now a known one */
+        l->address.port = l->port;
         snprintf(l->name, sizeof(l->name), "DTrack port %d", l->port);
+    }
     if (pthread_create(&l->thread, NULL, a->protocol == TRACKER_DTRACK ? dtrack_main : vrpn_main,
                        l) != 0) {
         log_error("%s: cannot start its thread", l->name);
