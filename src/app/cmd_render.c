@@ -27,6 +27,7 @@ struct render_options {
     const char *wand;      /* --wand NAME: an OpenHMD controller as the wand ("null") */
     bool menu;             /* --menu: start with the menu shown (render) */
     const char *format;    /* --format png|pfm: the image files of a display render */
+    const char *record;    /* --record FILE: every frame's input, head and clock */
 };
 
 static int parse_options(int argc, char **argv, struct render_options *o, bool need_output)
@@ -44,6 +45,7 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         {"wand", required_argument, NULL, 'W'},
         {"menu", no_argument, NULL, 'M'},
         {"format", required_argument, NULL, 'P'},
+        {"record", required_argument, NULL, 'R'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -102,6 +104,9 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
             }
             o->format = optarg;
             break;
+        case 'R':
+            o->record = optarg;
+            break;
         case 'h':
             return -1;
         default:
@@ -139,7 +144,9 @@ static int usage(FILE *out, bool run)
         fprintf(out,
                 "usage: anvil run [CONFIG] [--display DISPLAY.cfg] [--set PATH=VALUE]...\n"
                 "                 [--input SCRIPT] [--wand NAME] [--transfers DIR] [--time S]\n"
-                "                 [--stats FILE.json] [--quiet]\n"
+                "                 [--record FILE] [--stats FILE.json] [--quiet]\n"
+                "  --record FILE writes every frame's input, head pose and clock; --input FILE\n"
+                "  replays it (docs/menu.md, \"Recordings\").\n"
                 "  Without --display: one window of the scene's camera (camera.*), orbiting\n"
                 "  its target.  The keys mean the same on every display:\n");
     else
@@ -149,6 +156,8 @@ static int usage(FILE *out, bool run)
                 "       anvil render [CONFIG] --display DISPLAY.cfg [--time SECONDS] "
                 "-o FOLDER/ [--format png|pfm] [...]\n"
                 "       anvil render --display help\n"
+                "  --record FILE writes every frame's input, head pose and clock; --input FILE\n"
+                "  replays a recording (docs/menu.md, \"Recordings\").\n"
                 "  A script (--input) plays these keys and the wand's buttons (docs/menu.md):\n");
     session_list_keys(print_key, out);
     fprintf(out, "  wand: trigger chooses in the menu, grab moves the world, menu shows it, "
@@ -203,6 +212,39 @@ static int apply_wand_option(const struct render_options *o, struct display_conf
     return EXIT_OK;
 }
 
+/* What --input brings besides events: a recording's head (then the display's head and wand
+ * trackers stay closed: the recording carries what they gave), whether it was recorded by
+ * anvil run, and how its menu started. */
+struct replay {
+    bool head, from_run;
+    int menu_shown; /* -1: the script does not say */
+};
+
+static int inspect_input(const struct render_options *o, struct display_config *dcfg,
+                         struct replay *r)
+{
+    memset(r, 0, sizeof(*r));
+    r->menu_shown = -1;
+    if (!o->input)
+        return EXIT_OK;
+    struct input_source *script = input_script_open(o->input);
+    if (!script)
+        return EXIT_BAD_INPUT;
+    r->head = input_script_has_head(script);
+    input_script_recorded(script, &r->from_run, &r->menu_shown);
+    input_source_destroy(script);
+    if (!r->head)
+        return EXIT_OK;
+    if (dcfg->head.source != DISPLAY_HEAD_FIXED || dcfg->wand.source != DISPLAY_WAND_NONE)
+        log_info("%s: replaying its head and wand (the display's head.source \"%s\" and "
+                 "wand.source \"%s\" stay closed)",
+                 o->input, display_head_source_name(dcfg->head.source),
+                 display_wand_source_name(dcfg->wand.source));
+    dcfg->head.source = DISPLAY_HEAD_FIXED;
+    dcfg->wand.source = DISPLAY_WAND_NONE;
+    return EXIT_OK;
+}
+
 /* Writes what a render made: the one view as -o FILE, or every view into -o FOLDER/. */
 static bool write_output(struct display *d, const struct render_options *o, float exposure,
                          struct session_stats *st)
@@ -244,12 +286,15 @@ static int command(int argc, char **argv, bool run)
     struct display_config *dcfg = malloc(sizeof(*dcfg));
     struct display *d = NULL;
     struct session *s = NULL;
+    struct input_recorder *recorder = NULL;
     rc = EXIT_FAILED;
     if (!cfg || !dcfg) {
         log_error("out of memory");
         goto done;
     }
-    if ((rc = load_configs(&o, cfg, dcfg)) != EXIT_OK || (rc = apply_wand_option(&o, dcfg)))
+    struct replay replay;
+    if ((rc = load_configs(&o, cfg, dcfg)) != EXIT_OK || (rc = apply_wand_option(&o, dcfg)) ||
+        (rc = inspect_input(&o, dcfg, &replay)))
         goto done;
 
     struct display_desc dd = {.offscreen = !run, .height = cfg->render.height};
@@ -269,8 +314,12 @@ static int command(int argc, char **argv, bool run)
         if (display_view(d, i)->visible)
             views[n++] = display_view(d, i)->rv;
     }
-    /* A moving head may bring the ground into view later; so may the orbit camera of run. */
-    bool views_move = display_head_moves(d) || (run && !o.display);
+    /* A moving head may bring the ground into view later (a recorded one too); so may the
+     * orbit camera of run. */
+    bool views_move = display_head_moves(d) || replay.head || (run && !o.display);
+    bool show_menu = run ? !o.input || o.menu : o.menu;
+    if (replay.menu_shown >= 0)
+        show_menu = replay.menu_shown;
     s = session_create(cfg,
                        &(struct session_desc){
                            .command = run ? "run" : "render",
@@ -281,7 +330,8 @@ static int command(int argc, char **argv, bool run)
                            .interactive = run,
                            .playback = run || o.input,
                            .menu = run || o.input || o.menu,
-                           .show_menu = run ? !o.input || o.menu : o.menu,
+                           .show_menu = show_menu,
+                           .replay_of_run = replay.from_run,
                            .script = o.input,
                            .transfers_dir = o.transfers,
                            /* An interactive run times its views only when they are reported. */
@@ -295,11 +345,23 @@ static int command(int argc, char **argv, bool run)
     if (o.display)
         log_info("display %s (%s): %d views", o.display, display_type_name(dcfg->type),
                  display_view_count(d));
+    if (o.record) {
+        recorder = input_recorder_open(o.record, run ? "run" : "render", show_menu);
+        if (!recorder) {
+            rc = EXIT_FAILED;
+            goto done;
+        }
+    }
     const char *frames_env = getenv("ANVIL_RUN_FRAMES"); /* for automated runs */
     rc = loop_run(d, s,
                   &(struct loop_desc){.run = run,
                                       .time = o.time,
-                                      .frames = frames_env ? strtol(frames_env, NULL, 10) : -1});
+                                      .frames = frames_env ? strtol(frames_env, NULL, 10) : -1,
+                                      .recorder = recorder});
+    bool recorded = input_recorder_close(recorder);
+    recorder = NULL;
+    if (!recorded && rc == EXIT_OK)
+        rc = EXIT_FAILED;
     struct session_stats *st = session_stats(s);
     session_collect_timings(s, true);
     if (rc == EXIT_OK && !run &&
@@ -312,6 +374,7 @@ static int command(int argc, char **argv, bool run)
     if (rc == EXIT_OK && o.stats && !session_stats_write(st, o.stats))
         rc = EXIT_FAILED;
 done:
+    input_recorder_close(recorder);
     if (d)
         gpu_context_make_current(display_context(d));
     session_destroy(s);

@@ -2,6 +2,7 @@
 #include "app/loop.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 #include "app/app.h"
 #include "common/log.h"
@@ -20,20 +21,45 @@ static double frame_dt(struct session *s, double *last_ms)
     return script > 0.0 ? script : dt;
 }
 
-/* The frame state -> the GPU -> the light map -> the head, sampled last -> every view. */
+/* The frame state -> the GPU -> the light map -> the head, sampled last (unless a recording
+ * gave it) -> every view. */
 static bool draw(struct display *d, struct session *s, struct frame_state *f)
 {
-    return session_light(s) && display_sample_head(d, f->time_s, &f->head) &&
+    return session_light(s) &&
+           (session_head_given(s) || display_sample_head(d, f->time_s, &f->head)) &&
            session_draw(s, d, f);
 }
 
+/* --record: the frame's events, clock, head (when drawn, and only a head that moves: a fixed
+ * one is the display's) and cursor. */
+static void record(const struct loop_desc *ld, struct display *d, const struct session *s,
+                   const struct frame_state *f, bool drawn)
+{
+    if (!ld->recorder)
+        return;
+    struct input_record_frame r = {
+        .frame = (long)f->frame,
+        .time_s = f->time_s,
+        .dt_s = f->dt_s,
+        .have_head = drawn && (display_head_moves(d) || session_head_given(s)),
+    };
+    memcpy(r.head_position, f->head.position, sizeof(r.head_position));
+    memcpy(r.head_rotation, f->head.rotation, sizeof(r.head_rotation));
+    session_cursor(s, &r.step, &r.step_acc, &r.playing);
+    input_recorder_frame(ld->recorder, &r, session_events(s));
+}
+
 /* One frame of a render: every frame is drawn, the script's clock stands still. */
-static bool render_frame(struct display *d, struct session *s, double dt, double time)
+static bool render_frame(struct display *d, struct session *s, const struct loop_desc *ld,
+                         double dt, double time)
 {
     struct frame_state f;
     bool redraw;
-    return session_update(s, NULL, dt, time, &f, &redraw) && session_apply(s, &f, NULL) &&
-           draw(d, s, &f);
+    if (!session_update(s, NULL, dt, time, &f, &redraw) || !session_apply(s, &f, NULL) ||
+        !draw(d, s, &f))
+        return false;
+    record(ld, d, s, &f, true);
+    return true;
 }
 
 int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
@@ -46,10 +72,10 @@ int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
                 log_error("the script has not ended after %d frames", SCRIPT_FRAMES_MAX);
                 return EXIT_FAILED;
             }
-            if (!render_frame(d, s, frame_dt(s, &last), ld->time))
+            if (!render_frame(d, s, ld, frame_dt(s, &last), ld->time))
                 return EXIT_FAILED;
         }
-        if (!session_settle(s) || !render_frame(d, s, 0.0, ld->time))
+        if (!session_settle(s) || !render_frame(d, s, ld, 0.0, ld->time))
             return EXIT_FAILED;
         return EXIT_OK;
     }
@@ -83,6 +109,7 @@ int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
             if (frames_left > 0)
                 frames_left--;
         }
+        record(ld, d, s, &f, drawn);
         idle = !drawn;
     }
     free(events);

@@ -5,6 +5,7 @@
  *   poll the display's input -> session_update (input, menu, setters, playback: the frame
  *   state) -> session_apply (volumes) -> session_light (the light map, only when stale) ->
  *   display_sample_head (the head pose, sampled last) -> session_draw (every view) -> present
+ *   -> the recording (--record: the frame's events, clock, head and cursor)
  */
 #ifndef ANVIL_APP_LOOP_H
 #define ANVIL_APP_LOOP_H
@@ -19,6 +20,7 @@ struct loop_desc {
                      the settled picture */
     double time;  /* the display's clock at the first frame (--time), seconds */
     long frames;  /* run: stop after this many frames, each drawn (-1: until quit) */
+    struct input_recorder *recorder; /* --record: every frame goes there (NULL: none) */
 };
 
 /* Runs frames of S on D as LD says.  Returns an exit code of app/app.h. */

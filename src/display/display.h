@@ -26,6 +26,7 @@
 #define ANVIL_DISPLAY_H
 
 #include <stdbool.h>
+#include <stdio.h>
 
 #include "config/display_config.h"
 #include "gpu/gpu.h"
@@ -224,6 +225,20 @@ bool display_should_close(const struct display *d);
  * be NULL) receives the count of non-finite pixels over all views. */
 bool display_write_images(struct display *d, const char *dir, const char *ext, float exposure,
                           size_t *nonfinite);
+
+/* ---- diagnostics: a display's trackers (anvil trackers) ---------------------------------- */
+
+struct display_trackers;
+
+/* Opens CFG's tracked head and wand (dtrack, vrpn) to watch them, without a window.  NULL
+ * (logged) when CFG tracks neither or a link cannot be had. */
+struct display_trackers *display_trackers_open(const struct display_config *cfg);
+/* Writes what they hold at NOW_S seconds to OUT: per tracker its pose in room coordinates
+ * after calibration (metres; heading, pitch, roll in degrees), tracked or not, its pose rate
+ * since the last report, its untracked frames, the wand's buttons and stick; per link its
+ * frame rate, frames, dropped frames, refused input and the ids it has seen. */
+void display_trackers_report(struct display_trackers *t, double now_s, FILE *out);
+void display_trackers_close(struct display_trackers *t); /* NULL is fine */
 
 /* Arranges IMAGES (N of them) in a grid of COLUMNS, row 0 at the top, with GAP pixels of
  * BACKGROUND between them, into OUT (initialised here).  No GL. */
