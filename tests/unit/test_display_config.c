@@ -140,7 +140,7 @@ static void test_shipped_displays(void **state)
     snprintf(pattern, sizeof(pattern), "%s/displays/*.cfg", ANVIL_SOURCE_DIR);
     glob_t g;
     assert_int_equal(glob(pattern, 0, NULL, &g), 0);
-    assert_int_equal(g.gl_pathc, 5);
+    assert_int_equal(g.gl_pathc, 7);
     static struct display_config cfg;
     for (size_t i = 0; i < g.gl_pathc; i++) {
         if (!display_config_load(g.gl_pathv[i], &cfg))
@@ -183,6 +183,89 @@ static void test_shipped_displays(void **state)
     assert_false(cfg.hmd.distortion_set);
     assert_true(cfg.hmd.distortion[3] == 1.0);
     assert_true(cfg.navigation.orientation_deg[1] == 10.0);
+
+    /* The tracked CAVEs: cave4's walls, a tracker's head and wand, their addresses read. */
+    assert_true(display_config_load(display_file("cave4-dtrack.cfg"), &cfg));
+    assert_int_equal(cfg.wall_count, 4);
+    assert_int_equal(cfg.head.source, DISPLAY_HEAD_DTRACK);
+    assert_string_equal(cfg.head.tracking.host, "");
+    assert_int_equal(cfg.head.tracking.port, 5000);
+    assert_int_equal(cfg.head.tracking.units, DISPLAY_UNITS_MM);
+    const int z_up[3] = {1, 3, -2};
+    assert_memory_equal(cfg.head.tracking.axis_map, z_up, sizeof(z_up));
+    assert_int_equal(cfg.wand.source, DISPLAY_WAND_DTRACK);
+    assert_true(cfg.wand.flystick);
+    assert_memory_equal(cfg.wand.tracking.axis_map, z_up, sizeof(z_up));
+    assert_true(display_config_load(display_file("cave4-vrpn.cfg"), &cfg));
+    assert_int_equal(cfg.head.source, DISPLAY_HEAD_VRPN);
+    assert_string_equal(cfg.head.tracking.device, "Head");
+    assert_string_equal(cfg.head.tracking.host, "tracker.local");
+    assert_int_equal(cfg.head.tracking.port, 3883);
+    assert_int_equal(cfg.wand.source, DISPLAY_WAND_VRPN);
+    assert_string_equal(cfg.wand.controls_device, "Wand");
+    assert_int_equal(cfg.wand.controls_port, 3883);
+}
+
+/* Tracked heads and wands: addresses of each protocol's form, axes that form a rotation, a
+ * controls device only for VRPN; passive walls name the right eye's output.  Every message
+ * names the file, the line and the setting. */
+static void test_tracker_settings(void **state)
+{
+    static struct display_config cfg;
+    display_config_defaults(&cfg);
+    assert_true(display_config_set(&cfg, "head.source=dtrack"));
+    unsigned before = log_error_count();
+    assert_false(display_config_validate(&cfg));
+    check_error(before, "head.address: expected \"PORT\" or \"ADDRESS:PORT\"", NULL);
+    assert_true(display_config_set(&cfg, "head.address=239.255.42.99:5001"));
+    assert_true(display_config_validate(&cfg));
+    assert_string_equal(cfg.head.tracking.host, "239.255.42.99");
+    assert_int_equal(cfg.head.tracking.port, 5001);
+    assert_true(display_config_set(&cfg, "head.address=dtrack.local:5000"));
+    assert_false(display_config_validate(&cfg));
+    assert_true(display_config_set(&cfg, "head.address=70000"));
+    assert_false(display_config_validate(&cfg));
+    assert_true(display_config_set(&cfg, "head.source=vrpn"));
+    before = log_error_count();
+    assert_false(display_config_validate(&cfg));
+    check_error(before, "head.address: expected \"Device@host\"", "got \"70000\"", NULL);
+    assert_true(display_config_set(&cfg, "head.address=DTrack@10.0.0.2:3884"));
+    assert_true(display_config_validate(&cfg));
+    assert_string_equal(cfg.head.tracking.device, "DTrack");
+    assert_int_equal(cfg.head.tracking.port, 3884);
+    assert_true(display_config_set(&cfg, "head.axes=x x z"));
+    before = log_error_count();
+    assert_false(display_config_validate(&cfg));
+    check_error(before, "head.axes: expected three tracker axes that form a rotation", NULL);
+    assert_true(display_config_set(&cfg, "head.axes=x y -z")); /* a mirror */
+    assert_false(display_config_validate(&cfg));
+    assert_true(display_config_set(&cfg, "head.axes=-z y x"));
+    assert_true(display_config_validate(&cfg));
+    EXPECT_SET_ERROR(&cfg, "head.units=inch", "--set head.units: expected one of \"auto\"");
+    EXPECT_SET_ERROR(&cfg, "wand.buttons=[0,1,2,64]", "--set wand.buttons: expected [4 numbers]");
+
+    EXPECT_LOAD_ERROR("wandsrc.cfg", "head = { source = \"fixed\"; };\nwand = {\n"
+                                     "  source = \"dtrack\";\n  address = \"5000\";\n"
+                                     "  controls = \"Buttons@localhost\";\n};\n",
+                      "wandsrc.cfg:5: wand.controls: expected no controls device unless "
+                      "wand.source = \"vrpn\"");
+    EXPECT_LOAD_ERROR("noaddr.cfg", "head = {\n  source = \"vrpn\";\n};\n",
+                      "noaddr.cfg:2: head.address: expected \"Device@host\"");
+    EXPECT_LOAD_ERROR("passive.cfg",
+                      "walls = (\n{ name = \"a\"; " SQUARE " mode = \"passive\";\n"
+                      "  output = \"DP-1\"; } );\n",
+                      "passive.cfg:2: walls.[0].right_output: expected the right eye's output");
+    EXPECT_LOAD_ERROR("notpassive.cfg",
+                      "walls = (\n{ name = \"a\"; " SQUARE " right_output = \"DP-2\"; } );\n",
+                      "notpassive.cfg:2: walls.[0].mode: expected mode = \"passive\"");
+    const char *ok = test_write_file(
+        "passive-ok.cfg", "display = { type = \"cave\"; };\nwalls = (\n{ name = \"a\"; " SQUARE
+                          " mode = \"passive\"; output = \"DP-1\"; right_window = [1920, 0, "
+                          "1920, 1080]; } );\n");
+    assert_true(display_config_load(ok, &cfg));
+    assert_int_equal(cfg.walls[0].stereo, DISPLAY_STEREO_PASSIVE);
+    assert_string_equal(cfg.walls[0].output, "DP-1");
+    assert_true(cfg.walls[0].right_window_set && cfg.walls[0].right_window[2] == 1920);
 }
 
 static void test_set_each_kind(void **state)
@@ -626,7 +709,7 @@ int main(void)
         cmocka_unit_test(test_mode_reaches_walls), cmocka_unit_test(test_validate_after_set),
         cmocka_unit_test(test_walls_errors),       cmocka_unit_test(test_include_and_paths),
         cmocka_unit_test(test_has_setting),        cmocka_unit_test(test_route_sets),
-        cmocka_unit_test(test_reference),
+        cmocka_unit_test(test_reference),          cmocka_unit_test(test_tracker_settings),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
