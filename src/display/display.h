@@ -73,7 +73,9 @@ bool display_wall_projection(const struct display_wall *wall, const float eye[3]
 /* ---- head tracking ------------------------------------------------------------------- */
 
 /* A scripted head path: "t x y z heading pitch roll" per line (seconds, tracker metres,
- * degrees; '#' starts a comment; times strictly increasing). */
+ * degrees; '#' starts a comment; times strictly increasing).  A recording (input_recorder:
+ * its first line "recorded ...") is a path too: its head lines at the sum of its frames'
+ * steps. */
 struct display_path {
     int count;
     double *time;          /* count */

@@ -29,12 +29,91 @@ void display_path_finish(struct display_path *path)
     memset(path, 0, sizeof(*path));
 }
 
+/* Appends pose P at time T (a later time, or replacing the pose at the same time). */
+static bool path_add(struct display_path *path, int *cap, double t, const struct display_pose *p)
+{
+    if (path->count > 0 && !(t > path->time[path->count - 1])) {
+        path->pose[path->count - 1] = *p;
+        return true;
+    }
+    if (path->count == *cap) {
+        *cap = *cap ? 2 * *cap : 16;
+        double *times = realloc(path->time, sizeof(double) * (size_t)*cap);
+        if (times)
+            path->time = times;
+        struct display_pose *ps = realloc(path->pose, sizeof(*ps) * (size_t)*cap);
+        if (ps)
+            path->pose = ps;
+        if (!times || !ps)
+            return false;
+    }
+    path->time[path->count] = t;
+    path->pose[path->count++] = *p;
+    return true;
+}
+
+/* A recording (input_recorder) as a path: its head lines, at the sum of the frames' steps. */
+static bool path_from_recording(const char *file, struct display_path *path)
+{
+    struct input_source *rec = input_script_open(file);
+    if (!rec)
+        return false;
+    int cap = 0;
+    double t = 0.0;
+    bool ok = true;
+    long last = input_script_last_frame(rec);
+    for (long f = 0; f <= last && ok; f++) {
+        struct input_script_frame info;
+        if (!input_script_frame(rec, f, &info))
+            continue;
+        if (info.have_time)
+            t += info.dt_s;
+        if (info.have_head) {
+            struct display_pose p;
+            memcpy(p.position, info.head_position, sizeof(p.position));
+            memcpy(p.rotation, info.head_rotation, sizeof(p.rotation));
+            ok = path_add(path, &cap, t, &p);
+        }
+    }
+    input_source_destroy(rec);
+    if (!ok)
+        log_error("%s: out of memory", file);
+    else if (path->count == 0)
+        log_error("%s: expected a recording with head lines (a tracked display's)", file);
+    if (!ok || path->count == 0) {
+        display_path_finish(path);
+        return false;
+    }
+    return true;
+}
+
+/* Whether TEXT is a recording: a line "recorded ..." before any pose line. */
+static bool is_recording(const char *text)
+{
+    for (const char *p = text; *p;) {
+        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n')
+            p++;
+        if (strncmp(p, "recorded ", 9) == 0)
+            return true;
+        if (*p && *p != '#')
+            return false;
+        p = strchr(p, '\n');
+        if (!p)
+            break;
+    }
+    return false;
+}
+
 bool display_path_load(const char *file, struct display_path *path)
 {
     memset(path, 0, sizeof(*path));
     char *text = file_read_all(file, NULL);
     if (!text)
         return false;
+    if (is_recording(text)) {
+        free(text);
+        return path_from_recording(file, path);
+    }
     int cap = 0, line = 0;
     bool ok = true;
     for (char *p = text; *p && ok;) {
