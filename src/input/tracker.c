@@ -9,7 +9,9 @@
 #include <assert.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <ifaddrs.h>
 #include <math.h>
+#include <net/if.h>
 #include <netdb.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
@@ -387,6 +389,37 @@ done:
     return NULL;
 }
 
+/* Joins the multicast group HOST on every IPv4 interface that is up (DTrack's output may
+ * come in on any of a CAVE machine's networks, or on loopback). */
+static bool join_group(struct link *l, struct in_addr host)
+{
+    struct ifaddrs *ifs = NULL;
+    int joined = 0, err = 0;
+    if (getifaddrs(&ifs) == 0) {
+        for (struct ifaddrs *i = ifs; i; i = i->ifa_next) {
+            if (!i->ifa_addr || i->ifa_addr->sa_family != AF_INET || !(i->ifa_flags & IFF_UP))
+                continue;
+            struct ip_mreq m = {.imr_multiaddr = host};
+            m.imr_interface = ((struct sockaddr_in *)i->ifa_addr)->sin_addr;
+            if (setsockopt(l->fd, IPPROTO_IP, IP_ADD_MEMBERSHIP, &m, sizeof(m)) == 0)
+                joined++;
+            else
+                err = errno;
+        }
+        freeifaddrs(ifs);
+    }
+    if (joined == 0) {
+        struct ip_mreq m = {.imr_multiaddr = host};
+        m.imr_interface.s_addr = htonl(INADDR_ANY);
+        if (setsockopt(l->fd, IPPROTO_IP, IP_ADD_MEMBERSHIP, &m, sizeof(m)) == 0)
+            return true;
+        log_error("%s: cannot join the multicast group %s: %s", l->name, l->address.host,
+                  strerror(err ? err : errno));
+        return false;
+    }
+    return true;
+}
+
 static bool dtrack_listen(struct link *l)
 {
     const struct tracker_address *a = &l->address;
@@ -417,15 +450,8 @@ static bool dtrack_listen(struct link *l)
                   a->port, strerror(errno));
         return false;
     }
-    if (multicast) {
-        struct ip_mreq m = {.imr_multiaddr = host};
-        m.imr_interface.s_addr = htonl(INADDR_ANY);
-        if (setsockopt(l->fd, IPPROTO_IP, IP_ADD_MEMBERSHIP, &m, sizeof(m)) != 0) {
-            log_error("%s: cannot join the multicast group %s: %s", l->name, a->host,
-                      strerror(errno));
-            return false;
-        }
-    }
+    if (multicast && !join_group(l, host))
+        return false;
     struct sockaddr_in bound;
     socklen_t len = sizeof(bound);
     if (getsockname(l->fd, (struct sockaddr *)&bound, &len) == 0)

@@ -267,6 +267,40 @@ static void test_dtrack_port_taken(void **state)
     assert_int_equal(tracker_links_open(), 0);
 }
 
+/* DTrack to a multicast group (its "send to a multicast address" output): joined, received. */
+static void test_dtrack_multicast(void **state)
+{
+    struct tracker_desc d = dtrack_desc(0, false, 0);
+    snprintf(d.address.host, sizeof(d.address.host), "239.255.42.99");
+    log_set_level(LOG_NONE);
+    struct tracker *t = tracker_open(&d);
+    log_set_level(LOG_INFO);
+    if (!t) {
+        fprintf(stderr, "no multicast route here (%s): multicast not tested\n", log_last_error());
+        return;
+    }
+    struct tracker_link_stats st;
+    tracker_link_stats(t, &st);
+    int fd = fake_udp_socket();
+    struct in_addr lo = {.s_addr = htonl(INADDR_LOOPBACK)};
+    assert_int_equal(setsockopt(fd, IPPROTO_IP, IP_MULTICAST_IF, &lo, sizeof(lo)), 0);
+    struct sockaddr_in g = {.sin_family = AF_INET, .sin_port = htons((uint16_t)st.port)};
+    inet_pton(AF_INET, "239.255.42.99", &g.sin_addr);
+    const char *text = "fr 1\n6d 1 [0 1.0][1000 2000 3000][1 0 0 0 1 0 0 0 1]\n";
+    struct wait_poses w = {t, 1, 0};
+    double end = time_now_ms() + 2000.0;
+    while (!got_poses(&w) && time_now_ms() < end) {
+        sendto(fd, text, strlen(text), 0, (struct sockaddr *)&g, sizeof(g));
+        fake_sleep_ms(5);
+    }
+    assert_true(got_poses(&w)); /* joined on loopback too */
+    struct tracker_sample s;
+    tracker_sample(t, &s);
+    assert_float_equal(s.position[2], 3.0, 1e-12);
+    close(fd);
+    tracker_close(t);
+}
+
 /* ---- VRPN -------------------------------------------------------------------------------- */
 
 static struct tracker_desc vrpn_desc(int port, const char *device, int sensor)
@@ -460,6 +494,7 @@ int main(void)
         cmocka_unit_test(test_calibration),
         cmocka_unit_test(test_dtrack_stream),
         cmocka_unit_test(test_dtrack_port_taken),
+        cmocka_unit_test(test_dtrack_multicast),
         cmocka_unit_test(test_vrpn_server),
         cmocka_unit_test(test_vrpn_no_server),
     };
