@@ -92,8 +92,7 @@ void display_trackers_close(struct display_trackers *t)
 static void euler_of(const double q[4], double hpr[3])
 {
     double x = q[0], y = q[1], z = q[2], w = q[3];
-    double f[3] = {-2.0 * (x * z + w * y), -2.0 * (y * z - w * x),
-                   -(1.0 - 2.0 * (x * x + y * y))};
+    double f[3] = {-2.0 * (x * z + w * y), -2.0 * (y * z - w * x), -(1.0 - 2.0 * (x * x + y * y))};
     double h = atan2(-f[0], -f[2]);
     double p = asin(fmax(-1.0, fmin(1.0, f[1])));
     /* qr = conj(qh qp) q */
@@ -122,8 +121,8 @@ static void report_one(struct watched *w, double now_s, FILE *out)
 {
     struct tracker_sample s;
     tracker_sample(w->tracker, &s);
-    double rate = now_s > w->before_s ? (double)(s.poses - w->poses_before) / (now_s - w->before_s)
-                                      : 0.0;
+    double rate =
+        now_s > w->before_s ? (double)(s.poses - w->poses_before) / (now_s - w->before_s) : 0.0;
     w->poses_before = s.poses;
     w->before_s = now_s;
     fprintf(out, "  %s  %s: ", w->what, tracker_describe(w->tracker));

@@ -20,8 +20,7 @@ struct input_recorder {
     long frames;
 };
 
-struct input_recorder *input_recorder_open(const char *path, const char *command,
-                                           bool menu_shown)
+struct input_recorder *input_recorder_open(const char *path, const char *command, bool menu_shown)
 {
     struct input_recorder *r = calloc(1, sizeof(*r));
     if (!r) {
@@ -57,9 +56,8 @@ static void event_line(FILE *f, long frame, const struct input_event *e)
         return;
     case INPUT_POSE:
         fprintf(f, "%ld pose %s %.9g %.9g %.9g %.9g %.9g %.9g\n", frame,
-                e->space == INPUT_SPACE_WORLD ? "world" : "tracker", e->position[0],
-                e->position[1], e->position[2], e->direction[0], e->direction[1],
-                e->direction[2]);
+                e->space == INPUT_SPACE_WORLD ? "world" : "tracker", e->position[0], e->position[1],
+                e->position[2], e->direction[0], e->direction[1], e->direction[2]);
         return;
     case INPUT_AXIS:
         if (e->axis >= 0 && e->axis < INPUT_AXIS_COUNT)
@@ -92,10 +90,9 @@ void input_recorder_frame(struct input_recorder *r, const struct input_record_fr
     for (int i = 0; events && i < events->count; i++)
         event_line(out, f->frame, &events->events[i]);
     if (f->have_head)
-        fprintf(out, "%ld head %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", f->frame,
-                f->head_position[0], f->head_position[1], f->head_position[2],
-                f->head_rotation[0], f->head_rotation[1], f->head_rotation[2],
-                f->head_rotation[3]);
+        fprintf(out, "%ld head %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", f->frame, f->head_position[0],
+                f->head_position[1], f->head_position[2], f->head_rotation[0], f->head_rotation[1],
+                f->head_rotation[2], f->head_rotation[3]);
     fprintf(out, "%ld cursor %d %.17g %d\n", f->frame, f->step, f->step_acc, f->playing);
     r->frames++;
     if (ferror(out)) {

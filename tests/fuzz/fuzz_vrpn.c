@@ -35,7 +35,9 @@ static void parse(const uint8_t *data, size_t size, size_t chunk, struct seen *s
                 abort();
             if (s->count < EVENTS_MAX) {
                 s->type[s->count] = (uint8_t)t;
-                s->a[s->count] = t == VRPN_POSE ? ev.sensor : t == VRPN_BUTTON ? ev.button : ev.count;
+                s->a[s->count] = t == VRPN_POSE     ? ev.sensor
+                                 : t == VRPN_BUTTON ? ev.button
+                                                    : ev.count;
                 s->b[s->count] = ev.sender_id;
                 s->count++;
             }
@@ -55,8 +57,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     static struct seen whole, split;
     parse(data + 1, size - 1, size, &whole);
     parse(data + 1, size - 1, chunk, &split);
-    if (whole.count != split.count ||
-        memcmp(whole.type, split.type, (size_t)whole.count) != 0 ||
+    if (whole.count != split.count || memcmp(whole.type, split.type, (size_t)whole.count) != 0 ||
         memcmp(whole.a, split.a, sizeof(int32_t) * (size_t)whole.count) != 0 ||
         memcmp(whole.b, split.b, sizeof(int32_t) * (size_t)whole.count) != 0)
         abort();

@@ -48,11 +48,9 @@ static void tracked_cave(const char *file, int port, bool wand, struct display_c
     snprintf(path, sizeof(path), "%s/displays/%s", ANVIL_SOURCE_DIR, file);
     assert_true(display_config_load(path, dcfg));
     bool vrpn = strstr(file, "vrpn") != NULL;
-    snprintf(set, sizeof(set), vrpn ? "head.address=Head@127.0.0.1:%d" : "head.address=%d",
-             port);
+    snprintf(set, sizeof(set), vrpn ? "head.address=Head@127.0.0.1:%d" : "head.address=%d", port);
     assert_true(display_config_set(dcfg, set));
-    snprintf(set, sizeof(set), vrpn ? "wand.address=Wand@127.0.0.1:%d" : "wand.address=%d",
-             port);
+    snprintf(set, sizeof(set), vrpn ? "wand.address=Wand@127.0.0.1:%d" : "wand.address=%d", port);
     assert_true(display_config_set(dcfg, set));
     if (vrpn) {
         snprintf(set, sizeof(set), "wand.controls=Wand@127.0.0.1:%d", port);
@@ -76,8 +74,7 @@ static void rig_open(struct rig *r, const struct display_config *dcfg, bool seri
     memset(r, 0, sizeof(*r));
     if (series)
         test_config_file(&r->cfg, series_cfg,
-                         (const char *[]){"render.height=24", "lightmap.resolution=[16,16,16]"},
-                         2);
+                         (const char *[]){"render.height=24", "lightmap.resolution=[16,16,16]"}, 2);
     else
         test_config_from(&r->cfg,
                          (const char *[]){"scene.size=[16,16,8]", "render.height=24",
@@ -161,8 +158,11 @@ static void frames_until_head(struct rig *r, int fd, int port, const char *text,
             return;
         fake_sleep_ms(1);
     } while (time_now_ms() < end);
-    fail_msg("the loop's head is at (%g %g %g) rotated (%g %g %g %g), expected (%g %g %g) turned %g", r->f.head.position[0],
-             r->f.head.position[1], r->f.head.position[2], r->f.head.rotation[0], r->f.head.rotation[1], r->f.head.rotation[2], r->f.head.rotation[3], want[0], want[1], want[2], yaw);
+    fail_msg(
+        "the loop's head is at (%g %g %g) rotated (%g %g %g %g), expected (%g %g %g) turned %g",
+        r->f.head.position[0], r->f.head.position[1], r->f.head.position[2], r->f.head.rotation[0],
+        r->f.head.rotation[1], r->f.head.rotation[2], r->f.head.rotation[3], want[0], want[1],
+        want[2], yaw);
 }
 
 /* Every view's frustum is the one Kooima's math gives for its eye of HEAD (room m). */
@@ -278,8 +278,8 @@ static void test_wand_plays(void **state)
                  counter++, dt[0], dt[1], dt[2], phase == 1 ? 1 : 0);
         assert_true(fake_udp_send_text(fd, port, text));
         rig_frame(&r);
-        if (phase == 0 && r.f.wand_valid &&
-            distance(r.f.wand_position, room) < 1e-5 && fabs(r.f.wand_direction[2] + 1) < 1e-6) {
+        if (phase == 0 && r.f.wand_valid && distance(r.f.wand_position, room) < 1e-5 &&
+            fabs(r.f.wand_direction[2] + 1) < 1e-6) {
             phase = 1;
             phase_end = time_now_ms() + 200.0;
         } else if (phase == 1 && time_now_ms() > phase_end) {
@@ -354,9 +354,10 @@ static int setup(void **state)
     if (system(cmd) != 0)
         return -1;
     snprintf(series_cfg, sizeof(series_cfg), "%s",
-             test_write_file("series.cfg", "scene = { kind = \"data\"; };\n"
-                                           "data = { format = \"wrf\"; files = [\"series.nc\"]; };\n"
-                                           "playback = { speed = 5.0; loop = false; };\n"));
+             test_write_file("series.cfg",
+                             "scene = { kind = \"data\"; };\n"
+                             "data = { format = \"wrf\"; files = [\"series.nc\"]; };\n"
+                             "playback = { speed = 5.0; loop = false; };\n"));
     return 0;
 }
 

@@ -131,12 +131,11 @@ void fake_vrpn_pose(struct fake_bytes *b, int32_t sender, int32_t type, int32_t 
 void fake_vrpn_button(struct fake_bytes *b, int32_t sender, int32_t type, int32_t button,
                       int32_t state)
 {
-    b->n += vrpn_write_button(b->data + b->n, sizeof(b->data) - b->n, sender, type, 1.0, button,
-                              state);
+    b->n +=
+        vrpn_write_button(b->data + b->n, sizeof(b->data) - b->n, sender, type, 1.0, button, state);
 }
 
-void fake_vrpn_analog(struct fake_bytes *b, int32_t sender, int32_t type, const double *v,
-                      int n)
+void fake_vrpn_analog(struct fake_bytes *b, int32_t sender, int32_t type, const double *v, int n)
 {
     b->n += vrpn_write_analog(b->data + b->n, sizeof(b->data) - b->n, sender, type, 1.0, v, n);
 }

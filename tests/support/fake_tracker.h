@@ -42,8 +42,7 @@ void fake_vrpn_pose(struct fake_bytes *b, int32_t sender, int32_t type, int32_t 
                     const double position[3], const double quat[4]);
 void fake_vrpn_button(struct fake_bytes *b, int32_t sender, int32_t type, int32_t button,
                       int32_t state);
-void fake_vrpn_analog(struct fake_bytes *b, int32_t sender, int32_t type, const double *v,
-                      int n);
+void fake_vrpn_analog(struct fake_bytes *b, int32_t sender, int32_t type, const double *v, int n);
 
 /* Waits up to TIMEOUT_S for DONE(USER) to be true, checking every millisecond. */
 bool fake_wait(bool (*done)(void *user), void *user, double timeout_s);

@@ -114,8 +114,7 @@ static int vrpn(const char *port_file, double rate, double seconds)
         char copy[8192];
         snprintf(copy, sizeof(copy), "%s", frames[f]);
         char *save = NULL;
-        for (char *line = strtok_r(copy, "\n", &save); line;
-             line = strtok_r(NULL, "\n", &save)) {
+        for (char *line = strtok_r(copy, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
             char kind[16], dev[TRACKER_NAME_MAX];
             if (sscanf(line, "%15s %63s", kind, dev) == 2)
                 device_id(dev);

@@ -17,9 +17,13 @@
 
 static const struct input_event events[] = {
     {.type = INPUT_BUTTON, .button = INPUT_BUTTON_GRAB, .down = true},
-    {.type = INPUT_POSE, .space = INPUT_SPACE_TRACKER, .position = {0.1f, 1.2345678f, -0.3f},
+    {.type = INPUT_POSE,
+     .space = INPUT_SPACE_TRACKER,
+     .position = {0.1f, 1.2345678f, -0.3f},
      .direction = {0.26726124f, 0.53452248f, -0.80178373f}},
-    {.type = INPUT_POSE, .space = INPUT_SPACE_WORLD, .position = {30000.5f, -1e-7f, 12.25f},
+    {.type = INPUT_POSE,
+     .space = INPUT_SPACE_WORLD,
+     .position = {30000.5f, -1e-7f, 12.25f},
      .direction = {0.0f, -1.0f, 0.0f}},
     {.type = INPUT_AXIS, .axis = INPUT_AXIS_TURN, .value = -0.33333334f},
     {.type = INPUT_KEY, .key = INPUT_KEY_SUN_UP},

@@ -76,7 +76,9 @@ static void test_calibration(void **state)
     quat_equal(q, want, 1e-6);
 
     /* Matrix to quaternion and back, for rotations near each of the four branches. */
-    const double qs[][4] = {{0.1, 0.2, 0.3, 0.9}, {0.9, 0.1, -0.2, 0.1}, {0.1, -0.95, 0.2, 0.05},
+    const double qs[][4] = {{0.1, 0.2, 0.3, 0.9},
+                            {0.9, 0.1, -0.2, 0.1},
+                            {0.1, -0.95, 0.2, 0.05},
                             {-0.2, 0.1, 0.97, 0.05}};
     for (int k = 0; k < 4; k++) {
         double u[4];
@@ -139,8 +141,8 @@ static void wait_frames(struct tracker *t, uint64_t frames, uint64_t malformed)
 
 static struct tracker_desc dtrack_desc(int port, bool flystick, int id)
 {
-    struct tracker_desc d = {.what = flystick ? "wand" : "head", .flystick = flystick,
-                             .sensor = id};
+    struct tracker_desc d = {
+        .what = flystick ? "wand" : "head", .flystick = flystick, .sensor = id};
     d.address.protocol = TRACKER_DTRACK;
     d.address.port = port;
     tracker_calibration_identity(&d.calibration);
@@ -193,8 +195,7 @@ static void test_dtrack_stream(void **state)
     unsigned warnings = log_warn_count();
     for (int f = 0; f < 5; f++) {
         char text[256];
-        snprintf(text, sizeof(text), "fr %d\n6d 1 [1 -1.000][0 0 0][0 0 0 0 0 0 0 0 0]\n",
-                 101 + f);
+        snprintf(text, sizeof(text), "fr %d\n6d 1 [1 -1.000][0 0 0][0 0 0 0 0 0 0 0 0]\n", 101 + f);
         assert_true(fake_udp_send_text(fd, port, text));
         wait_for(head, 1, (uint64_t)f + 1);
     }
@@ -207,8 +208,8 @@ static void test_dtrack_stream(void **state)
     assert_true(fake_udp_send_text(fd, port, "fr 106\n6d 1 [0 1.0][0 0 0][1 0 0 0 1 0 0 0 1]\n"));
     wait_for(head, 1, 6);
     /* Back, with a frame counter that skipped three frames. */
-    assert_true(fake_udp_send_text(fd, port,
-                                   "fr 110\n6d 1 [1 1.0][10 20 30][1 0 0 0 1 0 0 0 1]\n"));
+    assert_true(
+        fake_udp_send_text(fd, port, "fr 110\n6d 1 [1 1.0][10 20 30][1 0 0 0 1 0 0 0 1]\n"));
     wait_for(head, 2, 6);
     tracker_sample(head, &s);
     assert_true(s.tracked);
@@ -229,8 +230,8 @@ static void test_dtrack_stream(void **state)
     wait_frames(head, 8, 3);
     log_set_level(LOG_INFO);
     assert_int_equal(log_warn_count(), warnings + 1);
-    assert_true(fake_udp_send_text(fd, port,
-                                   "fr 113\n6d 1 [1 1.0][-10 20 30][1 0 0 0 1 0 0 0 1]\n"));
+    assert_true(
+        fake_udp_send_text(fd, port, "fr 113\n6d 1 [1 1.0][-10 20 30][1 0 0 0 1 0 0 0 1]\n"));
     wait_for(head, 3, 6);
     tracker_sample(head, &s);
     assert_float_equal(s.position[0], -0.01, 1e-12);
@@ -491,12 +492,9 @@ static void test_vrpn_no_server(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_calibration),
-        cmocka_unit_test(test_dtrack_stream),
-        cmocka_unit_test(test_dtrack_port_taken),
-        cmocka_unit_test(test_dtrack_multicast),
-        cmocka_unit_test(test_vrpn_server),
-        cmocka_unit_test(test_vrpn_no_server),
+        cmocka_unit_test(test_calibration),       cmocka_unit_test(test_dtrack_stream),
+        cmocka_unit_test(test_dtrack_port_taken), cmocka_unit_test(test_dtrack_multicast),
+        cmocka_unit_test(test_vrpn_server),       cmocka_unit_test(test_vrpn_no_server),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
