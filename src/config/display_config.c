@@ -345,6 +345,11 @@ static bool check_wall(const struct display_config *cfg, const struct config_tra
                     "the right eye's output (right_output or right_window) for mode = "
                     "\"passive\"");
     }
+    if (w->stereo == DISPLAY_STEREO_PASSIVE && w->viewport_set) {
+        snprintf(path, sizeof(path), "%s.viewport", at);
+        return fail(cfg, trace, at, path,
+                    "no viewport for mode = \"passive\" (each eye has a window of its own)");
+    }
     if (w->stereo != DISPLAY_STEREO_PASSIVE && (w->right_output[0] || w->right_window_set)) {
         snprintf(path, sizeof(path), "%s.mode", at);
         return fail(cfg, trace, at, path,

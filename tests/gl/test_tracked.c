@@ -192,6 +192,11 @@ static void test_head_through_the_loop(void **state)
     int port = free_udp_port();
     struct display_config dcfg;
     tracked_cave("cave4-dtrack.cfg", port, false, &dcfg);
+    /* DTrack's origin 0.5 m right of the room's and 0.25 m forward, its axes turned a quarter
+     * to the left. */
+    assert_true(display_config_set(&dcfg, "head.offset=[0.5,0.0,-0.25]"));
+    assert_true(display_config_set(&dcfg, "head.rotation=[90,0,0]"));
+    assert_true(display_config_validate(&dcfg));
     struct rig r;
     rig_open(&r, &dcfg, false, false);
     int fd = fake_udp_socket();
@@ -201,19 +206,22 @@ static void test_head_through_the_loop(void **state)
     rig_frame(&r);
     assert_true(distance(r.f.head.position, (double[]){0.0, 1.6, 0.5}) < 1e-6);
 
-    /* DTrack (z up, mm): x 120, y -480, z 1650, turned 30 degrees -> the room (axes x z -y):
-     * (0.12, 1.65, 0.48) m, turned 30 degrees about y. */
-    const double p1[3] = {120.0, -480.0, 1650.0}, room1[3] = {0.12, 1.65, 0.48};
+    /* DTrack (z up, mm): x 120, y -480, z 1650, turned 30 degrees about its z.  Axes x z -y:
+     * (0.12, 1.65, 0.48) m; turned 90 degrees about y: (0.48, 1.65, -0.12); plus the offset:
+     * (0.98, 1.65, -0.37), turned 30 + 90 degrees about y. */
+    const double yaw = 120.0;
+    const double p1[3] = {120.0, -480.0, 1650.0}, room1[3] = {0.98, 1.65, -0.37};
     body_text(text, sizeof(text), 1, p1, 30.0, 1.0);
-    frames_until_head(&r, fd, port, text, room1, 30.0);
+    frames_until_head(&r, fd, port, text, room1, yaw);
     float before[8][4], after[8][4];
-    views_match(&r, room1, 30.0, before);
+    views_match(&r, room1, yaw, before);
 
-    /* 0.3 m to the left. */
-    const double p2[3] = {-180.0, -480.0, 1650.0}, room2[3] = {-0.18, 1.65, 0.48};
+    /* 0.3 m to the left in the room: 300 mm along DTrack's y, which the calibration turns
+     * into the room's -x. */
+    const double p2[3] = {120.0, -180.0, 1650.0}, room2[3] = {0.68, 1.65, -0.37};
     body_text(text, sizeof(text), 2, p2, 30.0, 1.0);
-    frames_until_head(&r, fd, port, text, room2, 30.0);
-    views_match(&r, room2, 30.0, after);
+    frames_until_head(&r, fd, port, text, room2, yaw);
+    views_match(&r, room2, yaw, after);
     /* The front wall (z = -1.5, x from -1.5 to 1.5) from an eye at ex, ez: left and right
      * extents (edge - ex) near / (ez + 1.5), so both grow by 0.3 near / d. */
     const struct display_config *c = display_get_config(r.d);
@@ -222,7 +230,7 @@ static void test_head_through_the_loop(void **state)
         assert_string_equal(c->walls[v->wall].name, "front");
         float eyes[2][3];
         struct display_pose pose;
-        display_pose_from_euler(room2, (double[]){30, 0, 0}, &pose);
+        display_pose_from_euler(room2, (double[]){yaw, 0, 0}, &pose);
         display_pose_eyes(&pose, c->eye_separation, eyes[0], eyes[1]);
         const float *e = eyes[v->eye == VIEW_EYE_RIGHT ? 1 : 0];
         double d = e[2] + 1.5, k = c->near_m / d;

@@ -255,6 +255,10 @@ static void test_tracker_settings(void **state)
                       "walls = (\n{ name = \"a\"; " SQUARE " mode = \"passive\";\n"
                       "  output = \"DP-1\"; } );\n",
                       "passive.cfg:2: walls.[0].right_output: expected the right eye's output");
+    EXPECT_LOAD_ERROR("passive-vp.cfg",
+                      "walls = (\n{ name = \"a\"; " SQUARE " mode = \"passive\";\n"
+                      "  right_output = \"DP-2\"; viewport = [0, 0, 10, 10]; } );\n",
+                      "passive-vp.cfg:2: walls.[0].viewport: expected no viewport");
     EXPECT_LOAD_ERROR("notpassive.cfg",
                       "walls = (\n{ name = \"a\"; " SQUARE " right_output = \"DP-2\"; } );\n",
                       "notpassive.cfg:2: walls.[0].mode: expected mode = \"passive\"");
