@@ -28,7 +28,7 @@ ts 100.1
 ts 100.2
 6dcal 2
 6d 0
-6df2 1 1 [0 -1.000 6 2][0 0 0][0 0 0 0 0 0 0 0 0][0 0.0 0.0]
+6df2 1 1 [0 -1.000 6 2][0 0 0][0 0 0 0 0 0 0 0 0][0 0.0 0.5]
 EOF
 start_dtrack() { # FILE SECONDS: a sender on a free port, its port in $port
     port=$("$fake" port)
@@ -70,7 +70,7 @@ analog Wand 0.0 -0.5
 EOF
 "$fake" vrpn "$tmp/vrpn.port" "$tmp/vrpn.txt" 60 4 &
 pids+=($!)
-for i in $(seq 50); do [ -s "$tmp/vrpn.port" ] && break; sleep 0.05; done
+for i in $(seq 200); do [ -s "$tmp/vrpn.port" ] && break; sleep 0.05; done
 vport=$(cat "$tmp/vrpn.port")
 expect_exit 0 "trackers on a VRPN server" "$anvil" trackers "$cave_vrpn" \
     --set head.address=Head@127.0.0.1:$vport --set wand.address=Wand@127.0.0.1:$vport \
