@@ -268,6 +268,8 @@ bool dtrack_parse(const char *data, size_t len, struct dtrack_frame *out, char *
         return fail(&c, "expected a datagram of at most %d bytes, got %zu", DTRACK_DATAGRAM_MAX,
                     len);
     }
+    while (c.end > c.p && c.end[-1] == '\0') /* a sender's C string terminator */
+        c.end--;
     bool any = false;
     bool seen_fr = false, seen_ts = false, seen_cal = false;
     while (c.p < c.end) {

@@ -139,6 +139,25 @@ if command -v xvfb-run >/dev/null; then
         "$src/configs/default.cfg" $small --display "$cave_dtrack" --input "$tmp/run.txt" \
         -o "$tmp/run-replay/"
 
+    # The same with a VRPN server: the head and the wand (its trigger held) in the recording.
+    rm -f "$tmp/vrpn.port"
+    "$fake" vrpn "$tmp/vrpn.port" "$tmp/vrpn.txt" 60 60 &
+    pids+=($!)
+    for i in $(seq 200); do [ -s "$tmp/vrpn.port" ] && break; sleep 0.05; done
+    vport=$(cat "$tmp/vrpn.port")
+    ANVIL_RUN_FRAMES=6 timeout 120 xvfb-run -a -s "$small_screen" "$anvil" run \
+        "$src/configs/default.cfg" $small $win --display "$cave_vrpn" \
+        --set head.address=Head@127.0.0.1:$vport --set wand.address=Wand@127.0.0.1:$vport \
+        --set wand.controls=Wand@127.0.0.1:$vport --record "$tmp/vrpn-run.txt" 2>"$tmp/err"
+    check "run --display cave4-vrpn.cfg exits 0" test $? -eq 0
+    kill "${pids[-1]}" 2>/dev/null
+    check "the VRPN run followed the head" \
+        grep -q " head 0.119999997 1.64999998 0.479999989 [-0-9.e]* 0.707106769 [-0-9.e]* 0.707106769" \
+        "$tmp/vrpn-run.txt"
+    check "and the wand" grep -q " pose tracker 0.300000012 1.20000005 0.899999976 " \
+        "$tmp/vrpn-run.txt"
+    check "and its trigger" grep -q " button trigger down" "$tmp/vrpn-run.txt"
+
     # Walls by output name: an unknown one is explained with the outputs there are.
     sed -e 's/monitor = 0;/output = "NO-SUCH-1";/' "$src/displays/cave4.cfg" >"$tmp/named.cfg"
     ANVIL_RUN_FRAMES=1 timeout 120 xvfb-run -a -s "$small_screen" "$anvil" run \

@@ -76,6 +76,9 @@ static void test_variants(void **state)
     assert_int_equal(frame.flysticks[0].button_count, 40);
     for (int b = 0; b < 40; b++)
         assert_int_equal(frame.flysticks[0].buttons[b], b == 35);
+    /* A NUL after the text (a sender that counts its C string's terminator) is no line. */
+    assert_true(dtrack_parse("fr 9\r\n6d 0\r\n\0\0", 14, &frame, why, sizeof(why)));
+    assert_int_equal(frame.counter, 9);
     /* Only record types anvil skips: a valid, empty frame. */
     assert_true(parse("3d 0\ngl 0\n"));
     assert_int_equal(frame.skipped_lines, 2);
