@@ -40,6 +40,7 @@ struct render_options {
     const char *codec;     /* --codec NAME: a movie's encoder */
     const char *path;      /* --path FILE: a camera path (render: fly it; run: keys add to it) */
     bool check_sync;       /* --check-sync: under mpirun, every rank's frame checked */
+    const char *record;    /* --record FILE: every frame's input, head and clock */
 };
 
 static int parse_options(int argc, char **argv, struct render_options *o, bool need_output)
@@ -62,6 +63,7 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         {"codec", required_argument, NULL, 'C'},
         {"path", required_argument, NULL, 'K'},
         {"check-sync", no_argument, NULL, 'Y'},
+        {"record", required_argument, NULL, 'E'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -140,6 +142,9 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
             break;
         case 'Y':
             o->check_sync = true;
+            break;
+        case 'E':
+            o->record = optarg;
             break;
         case 'h':
             return -1;
@@ -292,7 +297,12 @@ static int usage(FILE *out, bool run)
         fprintf(out,
                 "usage: anvil run [CONFIG] [--display DISPLAY.cfg] [--set PATH=VALUE]...\n"
                 "                 [--input SCRIPT] [--wand NAME] [--transfers DIR] [--time S]\n"
-                "                 [--path CAMERA-PATH.cfg] [--stats FILE.json] [--quiet]\n"
+                "                 [--path CAMERA-PATH.cfg] [--record FILE] [--stats FILE.json]\n"
+                "                 [--quiet]\n"
+                "  --record FILE writes every frame's input, head pose and clock; --input FILE\n"
+                "  replays it (docs/menu.md, \"Recordings\").\n"
+                "  Under mpirun each rank draws some walls of --display (docs/displays.md,\n"
+                "  \"Running a CAVE on a cluster\"); --check-sync checks every frame on every rank.\n"
                 "  Without --display: one window of the scene's camera (camera.*), orbiting\n"
                 "  its target.  The keys mean the same on every display:\n");
     else
@@ -309,6 +319,10 @@ static int usage(FILE *out, bool run)
                 "  An animation writes every frame: the time steps FIRST..LAST (with --fps above\n"
                 "  playback.speed and effects.temporal, blended frames between them), a camera\n"
                 "  path, or a script's frames (--input).  Movie encoders here: %s\n"
+                "  --record FILE writes every frame's input, head pose and clock; --input FILE\n"
+                "  replays a recording (docs/menu.md, \"Recordings\").\n"
+                "  Under mpirun each rank draws some walls of --display (docs/displays.md,\n"
+                "  \"Running a CAVE on a cluster\"); --check-sync checks every frame on every rank.\n"
                 "  A script (--input) plays these keys and the wand's buttons (docs/menu.md):\n",
                 video_encoders());
     session_list_keys(print_key, out);
@@ -358,6 +372,54 @@ static int load_configs(struct render_options *o, struct config *cfg,
     return EXIT_OK;
 }
 
+/* --wand NAME: an OpenHMD controller as the wand, in place of the display's wand.*. */
+static int apply_wand_option(const struct render_options *o, struct display_config *dcfg)
+{
+    if (!o->wand)
+        return EXIT_OK;
+    if (strlen(o->wand) >= sizeof(dcfg->wand.device)) {
+        log_error("--wand %s: expected an OpenHMD product name of at most %zu characters",
+                  o->wand, sizeof(dcfg->wand.device) - 1);
+        return EXIT_USAGE;
+    }
+    dcfg->wand.source = DISPLAY_WAND_OPENHMD;
+    snprintf(dcfg->wand.device, sizeof(dcfg->wand.device), "%s", o->wand);
+    return EXIT_OK;
+}
+
+/* What --input brings besides events: a recording's head (then the display's head and wand
+ * trackers stay closed: the recording carries what they gave), whether it was recorded by
+ * anvil run, and how its menu started. */
+struct replay {
+    bool head, from_run;
+    int menu_shown; /* -1: the script does not say */
+};
+
+static int inspect_input(const struct render_options *o, struct display_config *dcfg,
+                         struct replay *r)
+{
+    memset(r, 0, sizeof(*r));
+    r->menu_shown = -1;
+    if (!o->input)
+        return EXIT_OK;
+    struct input_source *script = input_script_open(o->input);
+    if (!script)
+        return EXIT_BAD_INPUT;
+    r->head = input_script_has_head(script);
+    input_script_recorded(script, &r->from_run, &r->menu_shown);
+    input_source_destroy(script);
+    if (!r->head)
+        return EXIT_OK;
+    if (dcfg->head.source != DISPLAY_HEAD_FIXED || dcfg->wand.source != DISPLAY_WAND_NONE)
+        log_info("%s: replaying its head and wand (the display's head.source \"%s\" and "
+                 "wand.source \"%s\" stay closed)",
+                 o->input, display_head_source_name(dcfg->head.source),
+                 display_wand_source_name(dcfg->wand.source));
+    dcfg->head.source = DISPLAY_HEAD_FIXED;
+    dcfg->wand.source = DISPLAY_WAND_NONE;
+    return EXIT_OK;
+}
+
 /* Writes what a render made: the one view as -o FILE, or every view into -o FOLDER/. */
 static bool write_output(struct display *d, const struct render_options *o, float exposure,
                          struct session_stats *st)
@@ -403,12 +465,15 @@ static int command(int argc, char **argv, bool run)
     struct cluster_walls *cw = calloc(1, sizeof(*cw));
     bool gated = false;     /* every rank passes app_cluster_gate once, failed or not */
     double sync_ms = 0.0;   /* a cluster's rank: time in the swap barrier */
+    struct input_recorder *recorder = NULL;
     rc = EXIT_FAILED;
     if (!cfg || !dcfg || !path || !cw) {
         log_error("out of memory");
         goto done;
     }
-    if ((rc = load_configs(&o, cfg, dcfg)) != EXIT_OK)
+    struct replay replay;
+    if ((rc = load_configs(&o, cfg, dcfg)) != EXIT_OK || (rc = apply_wand_option(&o, dcfg)) ||
+        (rc = inspect_input(&o, dcfg, &replay)))
         goto done;
     /* Under mpirun: this rank's walls (the effects are decided from all of them). */
     if ((rc = app_cluster_walls(o.display, dcfg, cw)) != EXIT_OK)
@@ -433,6 +498,7 @@ static int command(int argc, char **argv, bool run)
         dd.before_swap = app_cluster_before_swap;
         dd.swap_user = &sync_ms;
         dd.swap_group = 1;
+        dd.head_given = cluster_rank() != 0; /* rank 0's trackers are the cluster's */
     }
     scene_camera(cfg, &dd.camera);
     d = display_create(dcfg, &dd);
@@ -459,8 +525,12 @@ static int command(int argc, char **argv, bool run)
         if (display_view(d, i)->visible)
             views[n++] = display_view(d, i)->rv;
     }
-    /* A moving head may bring the ground into view later; so may the orbit camera of run. */
-    bool views_move = display_head_moves(d) || (run && !o.display);
+    /* A moving head may bring the ground into view later (a recorded one too); so may the
+     * orbit camera of run. */
+    bool views_move = display_head_moves(d) || replay.head || (run && !o.display);
+    bool show_menu = run ? !o.input || o.menu : o.menu;
+    if (replay.menu_shown >= 0)
+        show_menu = replay.menu_shown;
     s = session_create(cfg,
                        &(struct session_desc){
                            .command = run ? "run" : "render",
@@ -473,10 +543,10 @@ static int command(int argc, char **argv, bool run)
                            /* Rank 0's menu and script are the cluster's (the others show
                             * the menu rank 0 sends). */
                            .menu = (run || o.input || o.menu) && cluster_rank() == 0,
-                           .show_menu = run ? !o.input || o.menu : o.menu,
+                           .show_menu = show_menu,
+                           .replay_of_run = replay.from_run,
                            .script = cluster_rank() == 0 ? o.input : NULL,
                            .transfers_dir = o.transfers,
-                           .wand = o.wand,
                            /* An interactive run times its views only when they are reported. */
                            .time_views = o.stats || !run,
                        },
@@ -488,6 +558,13 @@ static int command(int argc, char **argv, bool run)
     if (o.display)
         log_info("display %s (%s): %d views", o.display, display_type_name(dcfg->type),
                  display_view_count(d));
+    if (o.record && cluster_rank() == 0) { /* rank 0's input is the cluster's */
+        recorder = input_recorder_open(o.record, run ? "run" : "render", show_menu);
+        if (!recorder) {
+            rc = EXIT_FAILED;
+            goto done;
+        }
+    }
     const char *frames_env = getenv("ANVIL_RUN_FRAMES"); /* for automated runs */
     struct loop_desc ld = {
         .run = run,
@@ -496,6 +573,7 @@ static int command(int argc, char **argv, bool run)
         .config_path = o.config,
         .display_path = o.display,
         .check_sync = o.check_sync,
+        .recorder = recorder,
     };
     float exposure = (float)session_config(s)->render.exposure;
     bool animated = !run && o.output &&
@@ -548,6 +626,10 @@ static int command(int argc, char **argv, bool run)
         session_set_progress(s, NULL);
         progress_end(&pr);
     }
+    bool recorded = input_recorder_close(recorder);
+    recorder = NULL;
+    if (!recorded && rc == EXIT_OK)
+        rc = EXIT_FAILED;
     struct session_stats *st = session_stats(s);
     session_collect_timings(s, true);
     if (ld.output) {
@@ -570,6 +652,7 @@ static int command(int argc, char **argv, bool run)
 done:
     if (!gated && cluster_active())
         app_cluster_gate(false, cw);
+    input_recorder_close(recorder);
     if (d)
         gpu_context_make_current(display_context(d));
     session_destroy(s);

@@ -174,6 +174,24 @@ static bool produce(struct loop *l, struct frame_state *f, uint32_t *flags, int 
     return produce_script(l, f, flags, number);
 }
 
+/* --record (rank 0): the frame's events, clock, head (when drawn, and only a head that moves:
+ * a fixed one is the display's) and cursor. */
+static void record(const struct loop *l, const struct frame_state *f, bool drawn)
+{
+    if (!l->ld->recorder || !l->root)
+        return;
+    struct input_record_frame r = {
+        .frame = (long)f->frame,
+        .time_s = f->time_s,
+        .dt_s = f->dt_s,
+        .have_head = drawn && (display_head_moves(l->d) || session_head_given(l->s)),
+    };
+    memcpy(r.head_position, f->head.position, sizeof(r.head_position));
+    memcpy(r.head_rotation, f->head.rotation, sizeof(r.head_rotation));
+    session_cursor(l->s, &r.step, &r.step_acc, &r.playing);
+    input_recorder_frame(l->ld->recorder, &r, session_events(l->s));
+}
+
 /* ---- every rank: the frame shared, applied, drawn ---------------------------------------- */
 
 /* Rank 0's frame, settings and menu to every rank.  False when the bytes are not a frame. */
@@ -277,8 +295,9 @@ static bool consume(struct loop *l, struct shared_frame *sf, struct frame_state 
     bool draw = (sf->flags & SF_DRAW) || changed;
     if (draw) {
         ok = ok && session_light(l->s);
-        /* The head, sampled last, on rank 0: its trackers are the cluster's. */
-        if (l->root)
+        /* The head, sampled last, on rank 0 (unless a recording gave it): its trackers are the
+         * cluster's. */
+        if (l->root && !session_head_given(l->s))
             ok = ok && display_sample_head(l->d, f->time_s, &f->head);
         cluster_broadcast(&f->head, sizeof(f->head));
         ok = ok && session_draw(l->s, l->d, f);
@@ -287,6 +306,8 @@ static bool consume(struct loop *l, struct shared_frame *sf, struct frame_state 
         if (l->root)
             l->dirty = false;
     }
+    if (ok)
+        record(l, f, draw);
     if (l->root && l->frames_left > 0 && draw)
         l->frames_left--;
     l->idle = !draw;

@@ -5,7 +5,8 @@
  *   poll the display's input -> session_update (input, menu, setters, playback: the frame
  *   state) -> session_apply (volumes) -> session_light (the light map, only when stale) ->
  *   display_sample_head (the head pose, sampled last) -> session_draw (every view) -> present
- *   [-> the frame written: an animation]
+ *   [-> the frame written: an animation] [-> the recording (--record: the frame's events,
+ *   clock, head and cursor)]
  */
 #ifndef ANVIL_APP_LOOP_H
 #define ANVIL_APP_LOOP_H
@@ -39,6 +40,7 @@ struct loop_desc {
      * bookmarks include (the scene's config; the display's, on a tracked display). */
     const char *config_path, *display_path;
     bool check_sync; /* a cluster: every frame, every rank's frame checked against rank 0's */
+    struct input_recorder *recorder; /* --record: every frame goes there (NULL: none) */
 };
 
 /* Runs frames of S on D as LD says.  Returns an exit code of app/app.h. */

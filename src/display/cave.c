@@ -1,9 +1,10 @@
 /*
  * CAVE: walls given by three corners each, every wall in its own window (fullscreen on its
- * monitor) or in a viewport of one shared window; each wall mono, side-by-side, anaglyph or
- * quad-buffer.  All views are drawn and composed in the primary context; the windows (sharing
- * its textures) then only blit, and swap together: only the last one waits for the vertical
- * blank.
+ * output, named or placed on the desktop, or on its monitor) or in a viewport of one shared
+ * window; each wall mono, side-by-side, anaglyph, quad-buffer or passive (each eye in its own
+ * window on its own output: two projectors per wall).  All views are drawn and composed in
+ * the primary context; the windows (sharing its textures) then only blit, and swap together:
+ * only the last one waits for the vertical blank.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -11,13 +12,14 @@
 #include "common/log.h"
 #include "display/display_impl.h"
 
-#define MAX_WINDOWS (DISPLAY_MAX_WALLS + 1)
+#define MAX_WINDOWS (2 * DISPLAY_MAX_WALLS + 1)
 
 struct cave {
     struct display base;
     struct gpu_context *windows[MAX_WINDOWS]; /* [0] is the primary context */
     int window_count;
     int wall_window[DISPLAY_MAX_WALLS];        /* which window shows each wall */
+    int right_window[DISPLAY_MAX_WALLS];       /* passive walls: the right eye's window */
     enum display_stereo mode[DISPLAY_MAX_WALLS]; /* after any fallback */
     struct gpu_texture composed[DISPLAY_MAX_WALLS];
     struct gpu_texture ldr[DISPLAY_MAX_WALLS][2];
@@ -78,36 +80,44 @@ static struct display *cave_create(const struct display *base)
     }
     for (int w = 0; w < cfg->wall_count; w++) {
         const struct display_wall *wall = &cfg->walls[w];
+        c->right_window[w] = -1;
         if (has_viewport(wall)) {
             c->wall_window[w] = 0;
             continue;
         }
         int size[2];
         view_set_wall_size(cfg, w, cfg->window_size[1], size);
-        char title[64];
-        snprintf(title, sizeof(title), "anvil: %s", wall->name);
-        bool quad = c->mode[w] == DISPLAY_STEREO_QUAD_BUFFER;
-        if (c->window_count == 0) {
-            if (!display_open_primary(d, size[0], size[1], wall->monitor, quad, title))
-                goto error;
-            c->windows[c->window_count++] = d->context;
-        } else {
-            struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){
+        bool passive = c->mode[w] == DISPLAY_STEREO_PASSIVE;
+        for (int eye = 0; eye < (passive ? 2 : 1); eye++) {
+            char title[80];
+            snprintf(title, sizeof(title), "anvil: %s%s", wall->name,
+                     !passive ? "" : eye == 0 ? " (left eye)" : " (right eye)");
+            struct gpu_context_desc cd = {
                 .backend = "glfw",
                 .width = size[0],
                 .height = size[1],
                 .title = title,
-                .monitor = wall->monitor,
-                .stereo = quad,
-                .share_window = gpu_context_window(d->context),
-            });
-            if (!ctx)
-                goto error;
-            display_watch_window(d, gpu_context_window(ctx));
-            display_join_swap_group(d, ctx);
-            c->windows[c->window_count++] = ctx;
+                .monitor = eye == 0 ? wall->monitor : -1,
+                .stereo = c->mode[w] == DISPLAY_STEREO_QUAD_BUFFER,
+                .output = eye == 0 ? wall->output : wall->right_output,
+                .rect_set = eye == 0 ? wall->window_set : wall->right_window_set,
+            };
+            memcpy(cd.rect, eye == 0 ? wall->window : wall->right_window, sizeof(cd.rect));
+            if (c->window_count == 0) {
+                if (!display_open_primary_on(d, &cd))
+                    goto error;
+                c->windows[c->window_count++] = d->context;
+            } else {
+                cd.share_window = gpu_context_window(d->context);
+                struct gpu_context *ctx = gpu_context_create(&cd);
+                if (!ctx)
+                    goto error;
+                display_watch_window(d, gpu_context_window(ctx));
+                display_join_swap_group(d, ctx);
+                c->windows[c->window_count++] = ctx;
+            }
+            *(eye == 0 ? &c->wall_window[w] : &c->right_window[w]) = c->window_count - 1;
         }
-        c->wall_window[w] = c->window_count - 1;
     }
     for (int w = 0; w < cfg->wall_count; w++) {
         if (c->mode[w] == DISPLAY_STEREO_QUAD_BUFFER &&
@@ -187,6 +197,7 @@ static bool cave_present(struct display *d, struct renderer *r, float exposure)
         case DISPLAY_STEREO_MONO:
             break;
         case DISPLAY_STEREO_QUAD_BUFFER:
+        case DISPLAY_STEREO_PASSIVE:
             src[1] = eye[1];
             break;
         case DISPLAY_STEREO_SIDE_BY_SIDE:
@@ -220,9 +231,17 @@ static bool cave_present(struct display *d, struct renderer *r, float exposure)
         gpu_context_size(c->windows[i], &fw, &fh);
         gpu_clear_default(0.0f, 0.0f, 0.0f);
         for (int w = 0; w < d->cfg.wall_count; w++) {
+            if (shown[w] && c->right_window[w] == i) { /* passive: the right eye alone */
+                gpu_present(&c->ldr[w][shown[w] == 2 ? 1 : 0], 0, 0, fw, fh, 0);
+                continue;
+            }
             if (c->wall_window[w] != i || !shown[w])
                 continue;
             const struct display_wall *wall = &d->cfg.walls[w];
+            if (c->right_window[w] >= 0) {
+                gpu_present(&c->ldr[w][0], 0, 0, fw, fh, 0);
+                continue;
+            }
             int x = 0, y = 0, ww = fw, wh = fh;
             if (has_viewport(wall)) {
                 x = wall->viewport[0];

@@ -101,6 +101,12 @@ static struct display *single_create(const struct display *base, bool stereo_typ
                  d->impl->name, d->cfg.walls[0].name);
     d->cfg.wall_count = 1;
     k->mode = stereo_type ? d->cfg.walls[0].stereo : DISPLAY_STEREO_MONO;
+    if (stereo_type && k->mode == DISPLAY_STEREO_PASSIVE) {
+        log_warn("%s: display.mode = \"passive\" needs a cave display whose walls name two "
+                 "outputs: showing side-by-side in one window",
+                 d->cfg.path);
+        k->mode = DISPLAY_STEREO_SIDE_BY_SIDE;
+    }
     if (stereo_type && k->mode == DISPLAY_STEREO_MONO) {
         log_warn("%s: display.mode = \"mono\" on a stereo display: using \"anaglyph\"",
                  d->cfg.path);
@@ -168,6 +174,7 @@ static bool single_present(struct display *d, struct renderer *r, float exposure
     switch (k->mode) {
     case DISPLAY_STEREO_MONO:
     case DISPLAY_STEREO_QUAD_BUFFER:
+    case DISPLAY_STEREO_PASSIVE: /* not shown here: single_create makes it side-by-side */
         d->output_count = 0;
         break;
     case DISPLAY_STEREO_SIDE_BY_SIDE: {

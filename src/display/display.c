@@ -64,7 +64,11 @@ struct display *display_create(const struct display_config *cfg, const struct di
     struct display *d = impl->create(&base);
     if (!d)
         return NULL;
-    if (!display_head_tracker_init(&d->head, &cfg->head))
+    /* A head the caller gives opens no tracker (a cluster's rank 0 samples it for all). */
+    struct display_head head = cfg->head;
+    if (d->desc.head_given)
+        head.source = DISPLAY_HEAD_FIXED;
+    if (!display_head_tracker_init(&d->head, &head, cfg))
         goto error;
     if (!gpu_program_init(&d->compose, "display_compose.comp", NULL))
         goto error;
@@ -178,6 +182,15 @@ const struct gpu_texture *display_output(const struct display *d, int i, const c
 bool display_open_primary(struct display *d, int w, int h, int monitor, bool stereo,
                           const char *title)
 {
+    return display_open_primary_on(d, &(struct gpu_context_desc){.width = w,
+                                                                 .height = h,
+                                                                 .monitor = monitor,
+                                                                 .stereo = stereo,
+                                                                 .title = title});
+}
+
+bool display_open_primary_on(struct display *d, const struct gpu_context_desc *window)
+{
     if (d->desc.offscreen && d->desc.context) {
         d->context = d->desc.context;
         d->own_context = false;
@@ -186,12 +199,8 @@ bool display_open_primary(struct display *d, int w, int h, int monitor, bool ste
     }
     struct gpu_context_desc cd = {.backend = "egl", .monitor = -1, .device = d->desc.gpu_device};
     if (!d->desc.offscreen) {
+        cd = *window;
         cd.backend = "glfw";
-        cd.width = w;
-        cd.height = h;
-        cd.monitor = monitor;
-        cd.stereo = stereo;
-        cd.title = title;
     }
     d->context = gpu_context_create(&cd);
     d->own_context = d->context != NULL;

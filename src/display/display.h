@@ -26,10 +26,12 @@
 #define ANVIL_DISPLAY_H
 
 #include <stdbool.h>
+#include <stdio.h>
 
 #include "config/display_config.h"
 #include "gpu/gpu.h"
 #include "input/input.h"
+#include "input/tracker.h"
 #include "render/image.h"
 #include "render/render.h"
 
@@ -88,7 +90,9 @@ bool display_wall_projection(const struct display_wall *wall, const float eye[3]
 /* ---- head tracking ------------------------------------------------------------------- */
 
 /* A scripted head path: "t x y z heading pitch roll" per line (seconds, tracker metres,
- * degrees; '#' starts a comment; times strictly increasing). */
+ * degrees; '#' starts a comment; times strictly increasing).  A recording (input_recorder:
+ * its first line "recorded ...") is a path too: its head lines at the sum of its frames'
+ * steps. */
 struct display_path {
     int count;
     double *time;          /* count */
@@ -102,6 +106,13 @@ void display_path_finish(struct display_path *path);
 /* The pose at time T: linear in position, spherical-linear in rotation between the two
  * surrounding poses; clamped to the first and last. */
 void display_path_eval(const struct display_path *path, double t, struct display_pose *out);
+
+/* The input part's descs of CFG's tracked head (head.source dtrack or vrpn) and wand
+ * (wand.source dtrack or vrpn): address, sensor, calibration (units "auto": DTrack's mm,
+ * VRPN's m), and the wand's buttons and channels.  CFG must have been validated (the derived
+ * fields of struct display_tracking). */
+void display_head_desc(const struct display_config *cfg, struct tracker_desc *out);
+void display_wand_desc(const struct display_config *cfg, struct tracker_wand_desc *out);
 
 /* The world camera of the orbit display (anvil run without --display): world metres, z up. */
 struct display_camera {
@@ -171,6 +182,9 @@ struct display_desc {
     void *swap_user;
     unsigned swap_group; /* windows: join this swap group and its barrier (GLX_NV_swap_group);
                             0: none */
+    bool head_given;     /* every head pose comes from the caller (a cluster's other ranks:
+                            rank 0 samples it): no head tracker or device is opened, though
+                            the head still counts as moving (display_head_moves) */
 };
 
 /* Whether this build has the backend of TYPE (openxr needs the OpenXR loader at build
@@ -195,8 +209,10 @@ bool display_swap_grouped(const struct display *d);
 struct gpu_context *display_context(struct display *d);
 
 /* The head pose at time T (seconds) from the display's head tracker (fixed, a scripted path,
- * an OpenHMD device), or from the display's own headset (OpenXR: this begins the runtime's
- * frame, which display_present ends).  False (logged) when the device fails. */
+ * an OpenHMD device, the latest pose of a DTrack or VRPN body: never waiting on the network,
+ * head.position and head.orientation until the first pose), or from the display's own headset
+ * (OpenXR: this begins the runtime's frame, which display_present ends).  False (logged) when
+ * the device fails. */
 bool display_sample_head(struct display *d, double t, struct display_pose *head);
 
 /* Places every view for HEAD, the navigation NAV (tracker displays) and CAMERA (the orbit
@@ -255,6 +271,20 @@ bool display_should_close(const struct display *d);
  * be NULL) receives the count of non-finite pixels over all views. */
 bool display_write_images(struct display *d, const char *dir, const char *ext, float exposure,
                           size_t *nonfinite);
+
+/* ---- diagnostics: a display's trackers (anvil trackers) ---------------------------------- */
+
+struct display_trackers;
+
+/* Opens CFG's tracked head and wand (dtrack, vrpn) to watch them, without a window.  NULL
+ * (logged) when CFG tracks neither or a link cannot be had. */
+struct display_trackers *display_trackers_open(const struct display_config *cfg);
+/* Writes what they hold at NOW_S seconds to OUT: per tracker its pose in room coordinates
+ * after calibration (metres; heading, pitch, roll in degrees), tracked or not, its pose rate
+ * since the last report, its untracked frames, the wand's buttons and stick; per link its
+ * frame rate, frames, dropped frames, refused input and the ids it has seen. */
+void display_trackers_report(struct display_trackers *t, double now_s, FILE *out);
+void display_trackers_close(struct display_trackers *t); /* NULL is fine */
 
 /* Arranges IMAGES (N of them) in a grid of COLUMNS, row 0 at the top, with GAP pixels of
  * BACKGROUND between them, into OUT (initialised here).  No GL. */

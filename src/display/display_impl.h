@@ -43,6 +43,7 @@ struct display_head_tracker {
     struct display_pose fixed;   /* fixed; also the offset added to a device's position */
     struct display_path path;
     struct ohmd_device *device; /* the process's OpenHMD context's (input_ohmd_open) */
+    struct tracker *tracker;    /* dtrack, vrpn: the head's body (input/tracker.h) */
 };
 
 struct display {
@@ -108,6 +109,9 @@ bool display_show_window(struct display *d, struct renderer *r, const struct gpu
  * window W x H (fullscreen on MONITOR >= 0) with quad-buffer STEREO asked for. */
 bool display_open_primary(struct display *d, int w, int h, int monitor, bool stereo,
                           const char *title);
+/* The same for a window WINDOW describes (size, title, stereo, and where: output name,
+ * desktop rectangle or monitor index). */
+bool display_open_primary_on(struct display *d, const struct gpu_context_desc *window);
 /* Closes the primary context if the display made it. */
 void display_close_primary(struct display *d);
 
@@ -117,7 +121,8 @@ void display_close_primary(struct display *d);
 void display_watch_window(struct display *d, void *window);
 
 /* Head trackers. */
-bool display_head_tracker_init(struct display_head_tracker *h, const struct display_head *cfg);
+bool display_head_tracker_init(struct display_head_tracker *h, const struct display_head *cfg,
+                               const struct display_config *display);
 void display_head_tracker_finish(struct display_head_tracker *h);
 bool display_head_tracker_pose(struct display_head_tracker *h, double t,
                                struct display_pose *out);

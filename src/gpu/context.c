@@ -1,5 +1,6 @@
 #include <stdio.h>
 #include <string.h>
+#include <strings.h>
 
 #include <epoxy/gl.h>
 
@@ -133,4 +134,73 @@ const char *gpu_renderer_name(void)
     snprintf(name, sizeof(name), "%s (OpenGL %s)", (const char *)glGetString(GL_RENDERER),
              (const char *)glGetString(GL_VERSION));
     return name;
+}
+
+/* ---- outputs: pure choices, testable without monitors ---------------------------------- */
+
+int gpu_output_by_name(const struct gpu_output *outputs, int n, const char *name)
+{
+    for (int i = 0; i < n; i++) {
+        if (strcmp(outputs[i].name, name) == 0)
+            return i;
+    }
+    for (int i = 0; i < n; i++) {
+        if (strcasecmp(outputs[i].name, name) == 0)
+            return i;
+    }
+    return -1;
+}
+
+int gpu_output_by_rect(const struct gpu_output *outputs, int n, const int rect[4])
+{
+    for (int i = 0; i < n; i++) {
+        if (memcmp(outputs[i].rect, rect, sizeof(outputs[i].rect)) == 0)
+            return i;
+    }
+    return -1;
+}
+
+void gpu_output_list(const struct gpu_output *outputs, int n, char *out, size_t size)
+{
+    size_t len = 0;
+    out[0] = '\0';
+    for (int i = 0; i < n && len < size; i++)
+        len += (size_t)snprintf(out + len, size - len, "%s%s at %d,%d %dx%d", i ? "; " : "",
+                                outputs[i].name, outputs[i].rect[0], outputs[i].rect[1],
+                                outputs[i].rect[2], outputs[i].rect[3]);
+    if (n == 0)
+        snprintf(out, size, "none");
+}
+
+int gpu_output_choose(const struct gpu_context_desc *desc, const struct gpu_output *outputs,
+                      int n, bool *borderless)
+{
+    *borderless = false;
+    char list[512];
+    if (desc->output && desc->output[0]) {
+        int i = gpu_output_by_name(outputs, n, desc->output);
+        if (i >= 0)
+            return i;
+        gpu_output_list(outputs, n, list, sizeof(list));
+        log_warn("%s: output \"%s\" is not connected (outputs: %s): opening a window instead",
+                 desc->title ? desc->title : "window", desc->output, list);
+        return -1;
+    }
+    if (desc->rect_set) {
+        int i = gpu_output_by_rect(outputs, n, desc->rect);
+        if (i >= 0)
+            return i;
+        gpu_output_list(outputs, n, list, sizeof(list));
+        log_info("%s: no output is exactly at %d,%d %dx%d (outputs: %s): a borderless window "
+                 "there", desc->title ? desc->title : "window", desc->rect[0], desc->rect[1],
+                 desc->rect[2], desc->rect[3], list);
+        *borderless = true;
+        return -1;
+    }
+    if (desc->monitor >= 0 && desc->monitor < n)
+        return desc->monitor;
+    if (desc->monitor >= 0)
+        log_warn("monitor %d does not exist (%d connected): opening a window instead",
+                 desc->monitor, n);
+    return -1;
 }

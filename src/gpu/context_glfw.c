@@ -1,4 +1,5 @@
 /* Window contexts through GLFW. */
+#include <stdio.h>
 #include <stdlib.h>
 
 #include <epoxy/gl.h>
@@ -46,16 +47,31 @@ static struct gpu_context *glfw_create(const struct gpu_context_desc *desc)
     glfwWindowHint(GLFW_AUTO_ICONIFY, GLFW_FALSE);
     glfwWindowHint(GLFW_STEREO, desc->stereo ? GLFW_TRUE : GLFW_FALSE);
     GLFWmonitor *monitor = NULL;
-    if (desc->monitor >= 0) {
+    bool borderless = false;
+    if (desc->monitor >= 0 || desc->rect_set || (desc->output && desc->output[0])) {
         int count = 0;
         GLFWmonitor **monitors = glfwGetMonitors(&count);
-        if (desc->monitor < count)
-            monitor = monitors[desc->monitor];
-        else
-            log_warn("monitor %d does not exist (%d connected): opening a window instead",
-                     desc->monitor, count);
+        struct gpu_output outputs[16];
+        int n = count < 16 ? count : 16;
+        for (int i = 0; i < n; i++) {
+            const char *name = glfwGetMonitorName(monitors[i]);
+            snprintf(outputs[i].name, sizeof(outputs[i].name), "%s", name ? name : "?");
+            glfwGetMonitorPos(monitors[i], &outputs[i].rect[0], &outputs[i].rect[1]);
+            const GLFWvidmode *mode = glfwGetVideoMode(monitors[i]);
+            outputs[i].rect[2] = mode ? mode->width : 0;
+            outputs[i].rect[3] = mode ? mode->height : 0;
+        }
+        int chosen = gpu_output_choose(desc, outputs, n, &borderless);
+        if (chosen >= 0)
+            monitor = monitors[chosen];
     }
     int w = desc->width > 0 ? desc->width : 960, h = desc->height > 0 ? desc->height : 720;
+    if (borderless) {
+        w = desc->rect[2];
+        h = desc->rect[3];
+        glfwWindowHint(GLFW_DECORATED, GLFW_FALSE);
+        glfwWindowHint(GLFW_FLOATING, GLFW_TRUE);
+    }
     c->window = glfwCreateWindow(w, h, desc->title ? desc->title : "anvil", monitor,
                                  (GLFWwindow *)desc->share_window);
     if (!c->window && desc->stereo) {
@@ -70,6 +86,8 @@ static struct gpu_context *glfw_create(const struct gpu_context_desc *desc)
         log_error("GLFW could not open an OpenGL 4.5 core window");
         goto error_alloc;
     }
+    if (borderless)
+        glfwSetWindowPos(c->window, desc->rect[0], desc->rect[1]);
     glfwMakeContextCurrent(c->window);
     glfwSwapInterval(1);
     c->base.width = w;

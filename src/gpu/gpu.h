@@ -34,7 +34,31 @@ struct gpu_context_desc {
     bool egl_config;     /* egl: make the context from an EGLConfig even where
                             EGL_KHR_no_config_context allows none (a runtime that shares the
                             context makes its own from the same config: OpenXR) */
+    const char *output;  /* glfw: fullscreen on the output of this name (before MONITOR);
+                            NULL or "": none */
+    bool rect_set;       /* glfw: RECT places the window (before MONITOR, after OUTPUT) */
+    int rect[4];         /* [x, y, w, h] on the desktop: fullscreen on the output exactly
+                            there, else a borderless window of that place and size */
 };
+
+/* An output (GLFW's monitor): its name and its rectangle on the desktop, in screen
+ * coordinates. */
+struct gpu_output {
+    char name[64];
+    int rect[4]; /* x, y, w, h */
+};
+
+/* The output among N called NAME: the same name, else the same ignoring case; -1 if none. */
+int gpu_output_by_name(const struct gpu_output *outputs, int n, const char *name);
+/* The output among N whose rectangle is RECT exactly; -1 if none. */
+int gpu_output_by_rect(const struct gpu_output *outputs, int n, const int rect[4]);
+/* "DP-1 at 0,0 1920x1080; HDMI-0 at 1920,0 1920x1080" (or "none") into OUT. */
+void gpu_output_list(const struct gpu_output *outputs, int n, char *out, size_t size);
+/* Where DESC puts a window among the N OUTPUTS: the output index to be fullscreen on, or -1
+ * for a window (then *BORDERLESS says whether at DESC->rect).  A name or place that matches no
+ * output is warned about, with the outputs there are, and gives a window. */
+int gpu_output_choose(const struct gpu_context_desc *desc, const struct gpu_output *outputs,
+                      int n, bool *borderless);
 
 /* Creates an OpenGL 4.5 core context and makes it current.  Returns NULL (reason logged) when
  * no such context can be made: tests then exit 77.  Destroy with gpu_context_destroy. */

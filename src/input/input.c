@@ -135,11 +135,21 @@ struct timed_event {
     struct input_event event;
 };
 
+struct frame_info {
+    long frame;
+    struct input_script_frame info;
+};
+
 struct script {
     struct input_source base;
     struct timed_event *events;
     int count, next;
     double fps;
+    struct frame_info *frames; /* a recording's per-frame lines, ascending */
+    int frame_count, frame_cap;
+    bool recorded, from_run, has_head;
+    int menu_shown;
+    long polled; /* the last frame polled */
 };
 
 static bool script_poll(struct input_source *s, const struct input_frame *frame,
@@ -148,19 +158,23 @@ static bool script_poll(struct input_source *s, const struct input_frame *frame,
     struct script *sc = (struct script *)s;
     while (sc->next < sc->count && sc->events[sc->next].frame <= frame->frame)
         input_queue_push(q, &sc->events[sc->next++].event);
+    sc->polled = frame->frame;
     return true;
 }
 
+/* Every event delivered, and every frame a recording describes polled. */
 static bool script_finished(const struct input_source *s)
 {
     const struct script *sc = (const struct script *)s;
-    return sc->next >= sc->count;
+    return sc->next >= sc->count &&
+           (sc->frame_count == 0 || sc->polled >= sc->frames[sc->frame_count - 1].frame);
 }
 
 static void script_destroy(struct input_source *s)
 {
     struct script *sc = (struct script *)s;
     free(sc->events);
+    free(sc->frames);
     free(sc);
 }
 
@@ -235,11 +249,103 @@ static const char *parse_event(char **tok, int n, struct input_event *e)
                           e->direction[2] * e->direction[2]);
         if (!(len > 0.0f))
             return "a direction DX DY DZ that is not zero";
-        for (int i = 0; i < 3; i++)
+        /* A unit direction (as a recording writes it) is kept to the bit. */
+        for (int i = 0; i < 3 && fabsf(len - 1.0f) > 1e-5f; i++)
             e->direction[i] /= len;
         return NULL;
     }
-    return "an event: button, key, axis, aim or pose";
+    if (strcmp(kind, "drag") == 0) {
+        e->type = INPUT_DRAG;
+        if (n != 3 || !parse_float(tok[1], &e->u) || !parse_float(tok[2], &e->v))
+            return "\"drag DX DY\" (pixels right and down)";
+        return NULL;
+    }
+    if (strcmp(kind, "scroll") == 0) {
+        e->type = INPUT_SCROLL;
+        if (n != 2 || !parse_float(tok[1], &e->value))
+            return "\"scroll NOTCHES\"";
+        return NULL;
+    }
+    return "an event: button, key, axis, aim, pose, drag or scroll, or a recording's time, "
+           "head or cursor";
+}
+
+static bool parse_double(const char *tok, double *out)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(tok, &end);
+    if (*end || end == tok || errno || !isfinite(v))
+        return false;
+    *out = v;
+    return true;
+}
+
+/* A recording's per-frame line (time, head, cursor) into INFO.  NULL, or what was expected;
+ * *HANDLED false when the words are an event instead. */
+static const char *parse_frame_line(char **tok, int n, struct input_script_frame *info,
+                                    bool *handled)
+{
+    *handled = true;
+    const char *kind = tok[0];
+    if (strcmp(kind, "time") == 0) {
+        if (n != 3 || !parse_double(tok[1], &info->time_s) ||
+            !parse_double(tok[2], &info->dt_s) || info->dt_s < 0.0 || info->dt_s > 3600.0)
+            return "\"time SECONDS DT\" (the frame's clock and its step, DT in [0, 3600])";
+        info->have_time = true;
+        return NULL;
+    }
+    if (strcmp(kind, "head") == 0) {
+        bool ok = n == 8;
+        for (int i = 0; ok && i < 3; i++)
+            ok = parse_float(tok[1 + i], &info->head_position[i]) &&
+                 fabsf(info->head_position[i]) <= 1e4f;
+        float len = 0.0f;
+        for (int i = 0; ok && i < 4; i++) {
+            ok = parse_float(tok[4 + i], &info->head_rotation[i]);
+            len += info->head_rotation[i] * info->head_rotation[i];
+        }
+        if (!ok || fabsf(sqrtf(len) - 1.0f) > 1e-3f)
+            return "\"head X Y Z QX QY QZ QW\" (room metres within 10 km, a unit quaternion)";
+        info->have_head = true;
+        return NULL;
+    }
+    if (strcmp(kind, "cursor") == 0) {
+        char *end;
+        errno = 0;
+        long step = n == 4 ? strtol(tok[1], &end, 10) : -1;
+        bool ok = n == 4 && !*end && !errno && step >= 0 && step < 1000000 &&
+                  parse_double(tok[2], &info->step_acc) && info->step_acc >= 0.0 &&
+                  info->step_acc <= 1.0 && (strcmp(tok[3], "0") == 0 || strcmp(tok[3], "1") == 0);
+        if (!ok)
+            return "\"cursor STEP FRACTION PLAYING\" (a step from 0, a fraction in [0, 1], "
+                   "0 or 1)";
+        info->step = (int)step;
+        info->playing = tok[3][0] == '1';
+        info->have_cursor = true;
+        return NULL;
+    }
+    *handled = false;
+    return NULL;
+}
+
+/* The per-frame record of FRAME, made if needed (frames ascend). */
+static struct input_script_frame *frame_slot(struct script *sc, long frame)
+{
+    if (sc->frame_count && sc->frames[sc->frame_count - 1].frame == frame)
+        return &sc->frames[sc->frame_count - 1].info;
+    if (sc->frame_count == sc->frame_cap) {
+        int cap = sc->frame_cap ? 2 * sc->frame_cap : 64;
+        struct frame_info *grown = realloc(sc->frames, sizeof(*grown) * (size_t)cap);
+        if (!grown)
+            return NULL;
+        sc->frames = grown;
+        sc->frame_cap = cap;
+    }
+    struct frame_info *f = &sc->frames[sc->frame_count++];
+    memset(f, 0, sizeof(*f));
+    f->frame = frame;
+    return &f->info;
 }
 
 struct input_source *input_script_open(const char *path)
@@ -255,6 +361,8 @@ struct input_source *input_script_open(const char *path)
     }
     sc->base.impl = &script_impl;
     sc->fps = 30.0;
+    sc->menu_shown = -1;
+    sc->polled = -1;
     int cap = 0, line_no = 0;
     long last = -1;
     for (char *line = text, *next; line; line = next) {
@@ -272,6 +380,24 @@ struct input_source *input_script_open(const char *path)
             tok[n++] = t;
         if (n == 0)
             continue;
+        if (strcmp(tok[0], "recorded") == 0) {
+            if (n != 2 || (strcmp(tok[1], "run") != 0 && strcmp(tok[1], "render") != 0)) {
+                log_error("%s:%d: expected \"recorded run\" or \"recorded render\"", path,
+                          line_no);
+                goto error;
+            }
+            sc->recorded = true;
+            sc->from_run = strcmp(tok[1], "run") == 0;
+            continue;
+        }
+        if (strcmp(tok[0], "menu") == 0 && n == 2) {
+            if (strcmp(tok[1], "shown") != 0 && strcmp(tok[1], "hidden") != 0) {
+                log_error("%s:%d: expected \"menu shown\" or \"menu hidden\"", path, line_no);
+                goto error;
+            }
+            sc->menu_shown = strcmp(tok[1], "shown") == 0;
+            continue;
+        }
         if (strcmp(tok[0], "fps") == 0) {
             float fps;
             if (n != 2 || !parse_float(tok[1], &fps) || !(fps > 0.0f && fps <= 1000.0f)) {
@@ -298,8 +424,24 @@ struct input_source *input_script_open(const char *path)
             log_error("%s:%d: expected an event after the frame number", path, line_no);
             goto error;
         }
+        struct input_script_frame *slot = frame_slot(sc, frame);
+        if (!slot) {
+            log_error("%s: out of memory", path);
+            goto error;
+        }
+        bool handled;
+        const char *expected = parse_frame_line(tok + 1, n - 1, slot, &handled);
+        if (expected) {
+            log_error("%s:%d: expected %s", path, line_no, expected);
+            goto error;
+        }
+        last = frame;
+        if (handled) {
+            sc->has_head = sc->has_head || slot->have_head;
+            continue;
+        }
         struct input_event e;
-        const char *expected = parse_event(tok + 1, n - 1, &e);
+        expected = parse_event(tok + 1, n - 1, &e);
         if (expected) {
             log_error("%s:%d: expected %s", path, line_no, expected);
             goto error;
@@ -335,5 +477,43 @@ long input_script_last_frame(const struct input_source *s)
     if (s->impl != &script_impl)
         return -1;
     const struct script *sc = (const struct script *)s;
-    return sc->count ? sc->events[sc->count - 1].frame : -1;
+    long last = sc->count ? sc->events[sc->count - 1].frame : -1;
+    if (sc->frame_count && sc->frames[sc->frame_count - 1].frame > last)
+        last = sc->frames[sc->frame_count - 1].frame;
+    return last;
+}
+
+bool input_script_frame(const struct input_source *s, long frame, struct input_script_frame *out)
+{
+    memset(out, 0, sizeof(*out));
+    if (s->impl != &script_impl)
+        return false;
+    const struct script *sc = (const struct script *)s;
+    int lo = 0, hi = sc->frame_count;
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (sc->frames[mid].frame < frame)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    if (lo >= sc->frame_count || sc->frames[lo].frame != frame)
+        return false;
+    *out = sc->frames[lo].info;
+    return out->have_time || out->have_head || out->have_cursor;
+}
+
+bool input_script_has_head(const struct input_source *s)
+{
+    return s->impl == &script_impl && ((const struct script *)s)->has_head;
+}
+
+bool input_script_recorded(const struct input_source *s, bool *from_run, int *menu_shown)
+{
+    const struct script *sc = s->impl == &script_impl ? (const struct script *)s : NULL;
+    if (from_run)
+        *from_run = sc && sc->from_run;
+    if (menu_shown)
+        *menu_shown = sc ? sc->menu_shown : -1;
+    return sc && sc->recorded;
 }

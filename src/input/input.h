@@ -126,13 +126,66 @@ void input_source_destroy(struct input_source *s); /* NULL is fine */
 /* A scripted input file (format in docs/menu.md): one event per line,
  *   FRAME EVENT ARGS...        e.g.  "30 button trigger down", "31 aim time.play"
  * with frames counted from 0 and ascending; '#' starts a comment.  Also "fps N" (the frame
- * rate the script was recorded at, default 30).  On failure logs "FILE:LINE: expected ..."
- * and returns NULL.  Destroy with input_source_destroy. */
+ * rate the script was recorded at, default 30), and a recording's lines (below).  On failure
+ * logs "FILE:LINE: expected ..." and returns NULL.  Destroy with input_source_destroy. */
 struct input_source *input_script_open(const char *path);
 /* The script's frame rate: a scripted run advances playback time by 1/fps per frame. */
 double input_script_fps(const struct input_source *s);
 /* The last frame the script names. */
 long input_script_last_frame(const struct input_source *s);
+
+/* What a recording (input_recorder) says about one frame besides its events: its clock, the
+ * head pose it was drawn with (room metres), the playback cursor after it.  Scripts may
+ * write these lines by hand too ("12 time T DT", "12 head X Y Z QX QY QZ QW",
+ * "12 cursor STEP FRACTION PLAYING"). */
+struct input_script_frame {
+    bool have_time;
+    double time_s, dt_s;
+    bool have_head;
+    float head_position[3], head_rotation[4]; /* x, y, z, w */
+    bool have_cursor;
+    int step;
+    double step_acc;
+    bool playing;
+};
+
+/* Fills OUT with what the script says about FRAME; false (OUT zeroed) when nothing. */
+bool input_script_frame(const struct input_source *s, long frame, struct input_script_frame *out);
+/* Whether any frame of the script gives the head (a recording of a tracked display). */
+bool input_script_has_head(const struct input_source *s);
+/* A recording's header: "recorded run" or "recorded render" (*FROM_RUN), "menu shown" or
+ * "menu hidden" (*MENU_SHOWN, -1 when the script does not say). */
+bool input_script_recorded(const struct input_source *s, bool *from_run, int *menu_shown);
+
+/* ---- recordings ------------------------------------------------------------------------- */
+
+/* A recording: every frame's events (window keys and buttons, the wand's ray, buttons and
+ * stick, scripted ones) with the frame's clock, the head pose it was drawn with and the
+ * playback cursor, in the script format (docs/menu.md), numbers written so that they read
+ * back to the same bits.  Written to a temporary file beside PATH and renamed into place by
+ * input_recorder_close. */
+struct input_recorder;
+
+struct input_record_frame {
+    long frame;
+    double time_s, dt_s;
+    bool have_head; /* the frame was drawn: this is its head */
+    float head_position[3], head_rotation[4];
+    int step;
+    double step_acc;
+    bool playing;
+};
+
+/* Opens a recording of COMMAND ("run", "render") whose menu starts MENU_SHOWN.  NULL (logged)
+ * when the file cannot be made. */
+struct input_recorder *input_recorder_open(const char *path, const char *command,
+                                           bool menu_shown);
+/* Appends frame F with the EVENTS it handled. */
+void input_recorder_frame(struct input_recorder *r, const struct input_record_frame *f,
+                          const struct input_queue *events);
+/* Finishes the file and renames it into place; false (logged, the temporary file removed)
+ * when a write failed.  Frees R; NULL is fine. */
+bool input_recorder_close(struct input_recorder *r);
 
 /* OpenHMD controllers: the device NAME ("null": OpenHMD's Null controller, chosen by its
  * OHMD_DEVICE_FLAGS_NULL_DEVICE flag; else a product name, substring, case-insensitive) of

@@ -87,6 +87,9 @@ struct session {
     float wand_pos[3], wand_dir[3];
     bool have_wand;
     float axis[INPUT_AXIS_COUNT];
+    /* A recording's head (input_script_frame): the frame states carry it, not the display's. */
+    bool head_given;
+    struct display_pose head;
 };
 
 /* ---- creation ------------------------------------------------------------------------- */
@@ -133,7 +136,7 @@ static bool decide_effects(struct session *s, const struct ext_volume *vol)
         .time_steps = player_step_count(s->player),
         /* anvil run plays time and moves the sun; a render plays only when a script does. */
         .playback = s->desc.playback,
-        .sun_moves = s->desc.interactive,
+        .sun_moves = s->desc.interactive || s->desc.replay_of_run,
         .display = &s->display,
         .views = s->desc.views,
         .view_count = s->desc.view_count,
@@ -158,8 +161,17 @@ static bool create_menu(struct session *s)
             return false;
         s->sources[s->n_sources++] = s->script;
     }
-    if (d->wand) {
-        struct input_source *w = input_ohmd_create(d->wand, NULL);
+    /* The display's wand (wand.*; anvil's --wand NAME makes it an OpenHMD controller). */
+    const struct display_wand *wand = &s->display.wand;
+    struct input_source *w = NULL;
+    if (wand->source == DISPLAY_WAND_OPENHMD) {
+        w = input_ohmd_create(wand->device, NULL);
+    } else if (wand->source == DISPLAY_WAND_DTRACK || wand->source == DISPLAY_WAND_VRPN) {
+        struct tracker_wand_desc wd;
+        display_wand_desc(&s->display, &wd);
+        w = tracker_wand_create(&wd);
+    }
+    if (wand->source != DISPLAY_WAND_NONE) {
         if (!w)
             return false;
         s->sources[s->n_sources++] = w;
@@ -847,6 +859,23 @@ bool session_update(struct session *s, const struct input_queue *window_events, 
         if (!input_source_poll(s->sources[i], &in, &s->queue))
             return false;
     }
+    /* A recording's frame: its clock, its head, and (below) its playback cursor. */
+    struct input_script_frame rec = {0};
+    if (s->script && input_script_frame(s->script, s->frame, &rec)) {
+        if (rec.have_time) {
+            dt = rec.dt_s;
+            time_s = rec.time_s;
+        }
+        if (rec.have_head) {
+            struct display_pose head;
+            memcpy(head.position, rec.head_position, sizeof(head.position));
+            memcpy(head.rotation, rec.head_rotation, sizeof(head.rotation));
+            *redraw = !s->head_given || memcmp(&head, &s->head, sizeof(head)) != 0;
+            s->head = head;
+            s->head_given = true;
+        }
+    }
+    bool head_moved = *redraw;
     s->frame++;
     unsigned before = 0, changes = 0;
     if (s->menu)
@@ -867,6 +896,12 @@ bool session_update(struct session *s, const struct input_queue *window_events, 
     int old_step = s->playback.step;
     bool was_playing = s->playback.playing;
     playback_tick(&s->playback, dt, wait ? NULL : ready, s->player);
+    if (rec.have_cursor && rec.step < s->playback.count) {
+        /* Where the recorded run's cursor was, stalls and all. */
+        s->playback.step = rec.step;
+        s->playback.acc = rec.step_acc;
+        s->playback.playing = rec.playing;
+    }
     if (s->menu) {
         struct menu_model *m = menu_model(s->menu);
         if (s->playback.step != m->step || s->playback.playing != m->playing) {
@@ -891,8 +926,11 @@ bool session_update(struct session *s, const struct input_queue *window_events, 
     out->frame = (uint64_t)(s->frame - 1);
     out->time_s = time_s;
     out->dt_s = dt > 0.0 ? dt : 0.0;
-    display_pose_from_euler(s->display.head.position, s->display.head.orientation_deg,
-                            &out->head);
+    if (s->head_given)
+        out->head = s->head;
+    else
+        display_pose_from_euler(s->display.head.position, s->display.head.orientation_deg,
+                                &out->head);
     out->nav = s->nav;
     out->camera = s->camera;
     if (s->menu)
@@ -910,8 +948,8 @@ bool session_update(struct session *s, const struct input_queue *window_events, 
     unsigned after = 0;
     if (s->menu)
         menu_pixels(s->menu, &(int){0}, &(int){0}, &after);
-    *redraw = events || changes || after != before || s->playback.playing || was_playing ||
-              flying ||
+    *redraw = head_moved || events || changes || after != before || s->playback.playing ||
+              was_playing || flying ||
               s->playback.step != old_step ||
               memcmp(&nav_before, &s->nav, sizeof(nav_before)) != 0 ||
               memcmp(&cam_before, &s->camera, sizeof(cam_before)) != 0;
@@ -1135,6 +1173,23 @@ long session_script_frames(const struct session *s)
 double session_script_dt(const struct session *s)
 {
     return s->script ? 1.0 / input_script_fps(s->script) : 0.0;
+}
+
+bool session_head_given(const struct session *s)
+{
+    return s->head_given;
+}
+
+const struct input_queue *session_events(const struct session *s)
+{
+    return &s->queue;
+}
+
+void session_cursor(const struct session *s, int *step, double *acc, bool *playing)
+{
+    *step = s->playback.step;
+    *acc = s->playback.acc;
+    *playing = s->playback.playing;
 }
 
 bool session_settle(struct session *s)

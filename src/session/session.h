@@ -52,12 +52,14 @@ struct session_desc {
     bool interactive;          /* anvil run: the sun moves, loads never wait */
     bool playback;             /* time can move (run, a script, frame states from elsewhere):
                                   the time series cache runs behind the first step */
-    bool menu;                 /* make the menu and the input sources (run, --input, --menu) */
+    bool menu;                 /* make the menu and the input sources (run, --input, --menu):
+                                  the script and the display's wand (display->wand) */
     bool show_menu;            /* start with the menu shown */
     const char *script;        /* --input FILE: scripted events, or NULL */
     const char *transfers_dir; /* where named transfer functions are saved ("." default) */
-    const char *wand;          /* an OpenHMD controller as the wand ("null"), or NULL */
     bool time_views;           /* time every view and build (they are reported) */
+    bool replay_of_run;        /* the script is a recording of anvil run: the effects are
+                                  decided as that run decided them (the sun could move) */
 };
 
 /* Builds the session for CFG (copied) on the current GL context: the first volume, the
@@ -142,6 +144,16 @@ double session_script_dt(const struct session *s);
 long session_script_frames(const struct session *s); /* its last frame + 1; 0 without one */
 /* Waits for the wanted volume and uploads it (the end of a scripted render). */
 bool session_settle(struct session *s);
+
+/* Recordings (input/input.h, input_recorder).  Whether the script gave the head (a recording
+ * of a tracked display): the frame states then carry it, and the frame loop does not sample
+ * the display's head. */
+bool session_head_given(const struct session *s);
+/* The events the last session_update handled, in order (window events, then the script's and
+ * the wand's).  Valid until the next session_update. */
+const struct input_queue *session_events(const struct session *s);
+/* The playback cursor after the last session_update. */
+void session_cursor(const struct session *s, int *step, double *acc, bool *playing);
 
 /* Moves the view and build times the GPU has ready into session_stats; with WAIT all of them
  * (before the report at the end of a run). */

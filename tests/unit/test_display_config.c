@@ -38,6 +38,16 @@ static void old_defaults(struct display_config *cfg)
     cfg->hmd.distortion[3] = 1.0;
     cfg->hmd.warp = true;
     cfg->openxr.resolution_scale = 1.0; /* binding and space: auto (0) */
+    /* Tracked heads and wands came later: calibrations are the identity, the wand is none. */
+    snprintf(cfg->head.tracking.axes, sizeof(cfg->head.tracking.axes), "x y z");
+    snprintf(cfg->wand.tracking.axes, sizeof(cfg->wand.tracking.axes), "x y z");
+    snprintf(cfg->wand.device, sizeof(cfg->wand.device), "null");
+    cfg->wand.flystick = true;
+    for (int b = 0; b < 4; b++)
+        cfg->wand.buttons[b] = b;
+    cfg->wand.joystick[0] = 1;
+    cfg->wand.joystick_scale[0] = cfg->wand.joystick_scale[1] = 1.0;
+    cfg->wand.dead_zone = 0.1;
     cfg->wall_count = 1;
     struct display_wall *w = &cfg->walls[0];
     w->monitor = -1;
@@ -132,7 +142,7 @@ static void test_shipped_displays(void **state)
     snprintf(pattern, sizeof(pattern), "%s/displays/*.cfg", ANVIL_SOURCE_DIR);
     glob_t g;
     assert_int_equal(glob(pattern, 0, NULL, &g), 0);
-    assert_int_equal(g.gl_pathc, 6);
+    assert_int_equal(g.gl_pathc, 8);
     static struct display_config cfg;
     for (size_t i = 0; i < g.gl_pathc; i++) {
         if (!display_config_load(g.gl_pathv[i], &cfg))
@@ -175,6 +185,93 @@ static void test_shipped_displays(void **state)
     assert_false(cfg.hmd.distortion_set);
     assert_true(cfg.hmd.distortion[3] == 1.0);
     assert_true(cfg.navigation.orientation_deg[1] == 10.0);
+
+    /* The tracked CAVEs: cave4's walls, a tracker's head and wand, their addresses read. */
+    assert_true(display_config_load(display_file("cave4-dtrack.cfg"), &cfg));
+    assert_int_equal(cfg.wall_count, 4);
+    assert_int_equal(cfg.head.source, DISPLAY_HEAD_DTRACK);
+    assert_string_equal(cfg.head.tracking.host, "");
+    assert_int_equal(cfg.head.tracking.port, 5000);
+    assert_int_equal(cfg.head.tracking.units, DISPLAY_UNITS_MM);
+    const int z_up[3] = {1, 3, -2};
+    assert_memory_equal(cfg.head.tracking.axis_map, z_up, sizeof(z_up));
+    assert_int_equal(cfg.wand.source, DISPLAY_WAND_DTRACK);
+    assert_true(cfg.wand.flystick);
+    assert_memory_equal(cfg.wand.tracking.axis_map, z_up, sizeof(z_up));
+    assert_true(display_config_load(display_file("cave4-vrpn.cfg"), &cfg));
+    assert_int_equal(cfg.head.source, DISPLAY_HEAD_VRPN);
+    assert_string_equal(cfg.head.tracking.device, "Head");
+    assert_string_equal(cfg.head.tracking.host, "tracker.local");
+    assert_int_equal(cfg.head.tracking.port, 3883);
+    assert_int_equal(cfg.wand.source, DISPLAY_WAND_VRPN);
+    assert_string_equal(cfg.wand.controls_device, "Wand");
+    assert_int_equal(cfg.wand.controls_port, 3883);
+}
+
+/* Tracked heads and wands: addresses of each protocol's form, axes that form a rotation, a
+ * controls device only for VRPN; passive walls name the right eye's output.  Every message
+ * names the file, the line and the setting. */
+static void test_tracker_settings(void **state)
+{
+    static struct display_config cfg;
+    display_config_defaults(&cfg);
+    assert_true(display_config_set(&cfg, "head.source=dtrack"));
+    unsigned before = log_error_count();
+    assert_false(display_config_validate(&cfg));
+    check_error(before, "head.address: expected \"PORT\" or \"ADDRESS:PORT\"", NULL);
+    assert_true(display_config_set(&cfg, "head.address=239.255.42.99:5001"));
+    assert_true(display_config_validate(&cfg));
+    assert_string_equal(cfg.head.tracking.host, "239.255.42.99");
+    assert_int_equal(cfg.head.tracking.port, 5001);
+    assert_true(display_config_set(&cfg, "head.address=dtrack.local:5000"));
+    assert_false(display_config_validate(&cfg));
+    assert_true(display_config_set(&cfg, "head.address=70000"));
+    assert_false(display_config_validate(&cfg));
+    assert_true(display_config_set(&cfg, "head.source=vrpn"));
+    before = log_error_count();
+    assert_false(display_config_validate(&cfg));
+    check_error(before, "head.address: expected \"Device@host\"", "got \"70000\"", NULL);
+    assert_true(display_config_set(&cfg, "head.address=DTrack@10.0.0.2:3884"));
+    assert_true(display_config_validate(&cfg));
+    assert_string_equal(cfg.head.tracking.device, "DTrack");
+    assert_int_equal(cfg.head.tracking.port, 3884);
+    assert_true(display_config_set(&cfg, "head.axes=x x z"));
+    before = log_error_count();
+    assert_false(display_config_validate(&cfg));
+    check_error(before, "head.axes: expected three tracker axes that form a rotation", NULL);
+    assert_true(display_config_set(&cfg, "head.axes=x y -z")); /* a mirror */
+    assert_false(display_config_validate(&cfg));
+    assert_true(display_config_set(&cfg, "head.axes=-z y x"));
+    assert_true(display_config_validate(&cfg));
+    EXPECT_SET_ERROR(&cfg, "head.units=inch", "--set head.units: expected one of \"auto\"");
+    EXPECT_SET_ERROR(&cfg, "wand.buttons=[0,1,2,64]", "--set wand.buttons: expected [4 numbers]");
+
+    EXPECT_LOAD_ERROR("wandsrc.cfg", "head = { source = \"fixed\"; };\nwand = {\n"
+                                     "  source = \"dtrack\";\n  address = \"5000\";\n"
+                                     "  controls = \"Buttons@localhost\";\n};\n",
+                      "wandsrc.cfg:5: wand.controls: expected no controls device unless "
+                      "wand.source = \"vrpn\"");
+    EXPECT_LOAD_ERROR("noaddr.cfg", "head = {\n  source = \"vrpn\";\n};\n",
+                      "noaddr.cfg:2: head.address: expected \"Device@host\"");
+    EXPECT_LOAD_ERROR("passive.cfg",
+                      "walls = (\n{ name = \"a\"; " SQUARE " mode = \"passive\";\n"
+                      "  output = \"DP-1\"; } );\n",
+                      "passive.cfg:2: walls.[0].right_output: expected the right eye's output");
+    EXPECT_LOAD_ERROR("passive-vp.cfg",
+                      "walls = (\n{ name = \"a\"; " SQUARE " mode = \"passive\";\n"
+                      "  right_output = \"DP-2\"; viewport = [0, 0, 10, 10]; } );\n",
+                      "passive-vp.cfg:2: walls.[0].viewport: expected no viewport");
+    EXPECT_LOAD_ERROR("notpassive.cfg",
+                      "walls = (\n{ name = \"a\"; " SQUARE " right_output = \"DP-2\"; } );\n",
+                      "notpassive.cfg:2: walls.[0].mode: expected mode = \"passive\"");
+    const char *ok = test_write_file(
+        "passive-ok.cfg", "display = { type = \"cave\"; };\nwalls = (\n{ name = \"a\"; " SQUARE
+                          " mode = \"passive\"; output = \"DP-1\"; right_window = [1920, 0, "
+                          "1920, 1080]; } );\n");
+    assert_true(display_config_load(ok, &cfg));
+    assert_int_equal(cfg.walls[0].stereo, DISPLAY_STEREO_PASSIVE);
+    assert_string_equal(cfg.walls[0].output, "DP-1");
+    assert_true(cfg.walls[0].right_window_set && cfg.walls[0].right_window[2] == 1920);
 }
 
 static void test_set_each_kind(void **state)
@@ -263,7 +360,7 @@ static void test_set_errors(void **state)
     EXPECT_SET_ERROR(&cfg, "display.mode=polarised",
                      "--set display.mode: expected one of "
                      "\"mono\", \"side-by-side\", \"anaglyph\", \"quad-buffer\", "
-                     "got \"polarised\"");
+                     "\"passive\", got \"polarised\"");
     EXPECT_SET_ERROR(&cfg, "hmd.warp=maybe", "--set hmd.warp: expected true or false", "\"maybe\"");
     EXPECT_SET_ERROR(&cfg, "hmd.device=",
                      "--set hmd.device: expected a string of 1 to 127 "
@@ -277,10 +374,11 @@ static void test_set_errors(void **state)
                      "head.position?)");
     EXPECT_SET_ERROR(&cfg, "head.zz=1",
                      "--set head.zz: expected a known setting (one of "
-                     "source, position, orientation, path, device)");
+                     "source, position, orientation, path, device, address, sensor, units, axes, offset, "
+                     "rotation)");
     EXPECT_SET_ERROR(&cfg, "screens.x=1",
                      "--set screens.x: expected a known group (display, "
-                     "head, navigation, hmd, openxr, walls)");
+                     "head, navigation, hmd, openxr, wand, walls)");
     EXPECT_SET_ERROR(&cfg, "walls.[0].nmae=x",
                      "--set walls.[0].nmae: expected a known "
                      "setting (did you mean walls.[0].name?)");
@@ -591,8 +689,8 @@ static void test_reference(void **state)
         assert_memory_equal(&cfg, &before, sizeof(cfg));
         set_back++;
     }
-    assert_int_equal(rows, 2 + 33);
-    assert_int_equal(set_back, 23);
+    assert_int_equal(rows, 2 + 57);
+    assert_int_equal(set_back, 19 + 4 + 17);
 
     const char *docs[] = {"/docs/config-reference.md", "/docs/displays.md"};
     for (int i = 0; i < 2; i++) {
@@ -617,7 +715,7 @@ int main(void)
         cmocka_unit_test(test_mode_reaches_walls), cmocka_unit_test(test_validate_after_set),
         cmocka_unit_test(test_walls_errors),       cmocka_unit_test(test_include_and_paths),
         cmocka_unit_test(test_has_setting),        cmocka_unit_test(test_route_sets),
-        cmocka_unit_test(test_reference),
+        cmocka_unit_test(test_reference),          cmocka_unit_test(test_tracker_settings),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
