@@ -11,7 +11,8 @@
 static int usage(FILE *out)
 {
     fprintf(out,
-            "usage: anvil bench [--quick] [--views-only | --quality-only | --movie-only] [-o DIR]\n"
+            "usage: anvil bench [--quick] [--views-only | --quality-only | --movie-only |\n"
+            "                   --cluster-only] [-o DIR]\n"
             "                   [--cache DIR]\n"
             "                   [--configs DIR] [--spp N] [--scene sphere|storm|katrina]...\n"
             "                   [--paraview] [--quiet]\n"
@@ -24,6 +25,8 @@ static int usage(FILE *out)
             "           wall under 4 suns against Monte Carlo\n"
             "  movie    frames per second of the default storm's movie, drawn only and\n"
             "           written through the encoder (movie-table.md)\n"
+            "  cluster  cave4 and cave6 drawn by 1, 2 and 4 ranks through mpirun: ms a frame\n"
+            "           and the collectives' share (cluster-table.md; left out without MPI)\n"
             "  -o DIR         where views.md, accuracy.csv, accuracy-table.md, accuracy.png\n"
             "                 and angles-table.md go (default docs/bench)\n"
             "  --cache DIR    Monte Carlo references are kept here (default: bench-cache\n"
@@ -52,11 +55,13 @@ static int parse(int argc, char **argv, struct bench_options *o)
         {"scene", required_argument, NULL, 's'},  {"quiet", no_argument, NULL, 'q'},
         {"paraview", no_argument, NULL, 'P'},     {"configs", required_argument, NULL, 'C'},
         {"movie-only", no_argument, NULL, 'M'},   {"help", no_argument, NULL, 'h'},
+        {"cluster-only", no_argument, NULL, 'L'},
         {NULL, 0, NULL, 0},
     };
     bench_options_defaults(o);
     o->out = "docs/bench";
     o->configs = ANVIL_SOURCE_DIR "/configs";
+    o->displays = ANVIL_SOURCE_DIR "/displays";
     o->paraview_script = ANVIL_SOURCE_DIR "/src/bench/paraview_views.py";
     o->report = stdout;
     optind = 1;
@@ -68,15 +73,19 @@ static int parse(int argc, char **argv, struct bench_options *o)
             o->quick = true;
             break;
         case 'V':
-            o->quality = o->movie = false;
+            o->quality = o->movie = o->cluster = false;
             only++;
             break;
         case 'A':
-            o->views = o->movie = false;
+            o->views = o->movie = o->cluster = false;
             only++;
             break;
         case 'M':
-            o->views = o->quality = false;
+            o->views = o->quality = o->cluster = false;
+            only++;
+            break;
+        case 'L':
+            o->views = o->quality = o->movie = false;
             only++;
             break;
         case 'o':
@@ -118,7 +127,8 @@ static int parse(int argc, char **argv, struct bench_options *o)
         return EXIT_USAGE;
     }
     if (only > 1) {
-        log_error("bench: --views-only, --quality-only and --movie-only exclude each other");
+        log_error("bench: --views-only, --quality-only, --movie-only and --cluster-only exclude "
+                  "each other");
         return EXIT_USAGE;
     }
     if (o->paraview && !o->views) {

@@ -621,7 +621,9 @@ static int command(int argc, char **argv, bool run)
         goto done;
     }
     app_cluster_swap_group(d);
+    double loop_start = time_now_ms();
     rc = loop_run(d, s, &ld);
+    session_stats(s)->loop_ms = time_now_ms() - loop_start;
     if (counted) {
         session_set_progress(s, NULL);
         progress_end(&pr);
@@ -644,7 +646,7 @@ static int command(int argc, char **argv, bool run)
         log_warn("%zu pixels are not finite", st->nonfinite_pixels);
     st->gpu_bytes = gpu_bytes_allocated();
     st->total_ms = time_now_ms() - start;
-    st->sync_ms = sync_ms;
+    st->sync_ms += sync_ms; /* the swap barrier's, beside the loop's own collectives */
     /* Every rank reaches here together (the loop ends on all): rank 0 gathers their stats. */
     if (o.stats && (rc == EXIT_OK || cw->active) &&
         !app_cluster_stats(st, cw, o.stats, rc == EXIT_OK))

@@ -77,6 +77,12 @@ static double frame_dt(struct session *s, double *last_ms)
     return script > 0.0 ? script : dt;
 }
 
+/* Adds the time since T (the start of a collective) to --stats' sync_ms. */
+static void synced(struct loop *l, double t)
+{
+    session_stats(l->s)->sync_ms += time_now_ms() - t;
+}
+
 /* ---- rank 0: the next frame ---------------------------------------------------------------- */
 
 /* A run: the input since the last frame, drawn when something changed. */
@@ -214,6 +220,7 @@ static bool share(struct loop *l, struct shared_frame *sf, struct frame_state *f
     }
     if (!cluster_active())
         return true;
+    double t = time_now_ms();
     cluster_broadcast(sf, sizeof(*sf));
     if (sf->flags & SF_SETTINGS) {
         struct session_settings set;
@@ -239,6 +246,7 @@ static bool share(struct loop *l, struct shared_frame *sf, struct frame_state *f
             cluster_abort(EXIT_FAILED);
         }
     }
+    synced(l, t);
     if (!l->root && !(sf->flags & SF_QUIT) && !frame_state_read(sf->state, FRAME_STATE_BYTES, f)) {
         log_error("rank %d: rank 0's frame state is not one (a different anvil?)",
                   cluster_rank());
@@ -256,7 +264,9 @@ static void hold(struct loop *l, struct frame_state *f)
     int next = f->time_step + 1 < session_step_count(l->s) ? f->time_step + 1 : f->time_step;
     uint32_t mine = (session_step_loaded(l->s, f->time_step) ? 1u : 0u) |
                     (f->step_fraction == 0.0f || session_step_loaded(l->s, next) ? 2u : 0u);
+    double t = time_now_ms();
     uint32_t all = cluster_and(mine);
+    synced(l, t);
     if (!(all & 1u)) {
         f->time_step = session_step_shown(l->s);
         f->step_fraction = 0.0f;
@@ -290,8 +300,10 @@ static bool consume(struct loop *l, struct shared_frame *sf, struct frame_state 
     hold(l, f);
     ok = ok && session_apply(l->s, f, &changed);
     /* A volume that arrived on any rank is drawn on all. */
+    double t = time_now_ms();
     if (cluster_active() && l->ld->run && !cluster_all(!changed))
         changed = true;
+    synced(l, t);
     bool draw = (sf->flags & SF_DRAW) || changed;
     if (draw) {
         ok = ok && session_light(l->s);
@@ -299,7 +311,9 @@ static bool consume(struct loop *l, struct shared_frame *sf, struct frame_state 
          * cluster's. */
         if (l->root && !session_head_given(l->s))
             ok = ok && display_sample_head(l->d, f->time_s, &f->head);
+        t = time_now_ms();
         cluster_broadcast(&f->head, sizeof(f->head));
+        synced(l, t);
         ok = ok && session_draw(l->s, l->d, f);
         if (ok && (sf->flags & SF_WRITE))
             ok = frame_output_add(l->ld->output, l->d, sf->number);
@@ -312,7 +326,10 @@ static bool consume(struct loop *l, struct shared_frame *sf, struct frame_state 
         l->frames_left--;
     l->idle = !draw;
     /* A rank that failed ends the job's loop on every rank, naming itself. */
-    if (cluster_active() && !cluster_all(ok)) {
+    t = time_now_ms();
+    bool all_ok = !cluster_active() || cluster_all(ok);
+    synced(l, t);
+    if (!all_ok) {
         if (!ok)
             log_error("rank %d failed (see above); the cluster stops", cluster_rank());
         return false;
@@ -412,7 +429,8 @@ int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
         progress_begin(&l.pr, "render", "frame", (uint64_t)session_script_frames(s));
     }
     int rc = EXIT_OK;
-    for (;;) {
+    double start = time_now_ms();
+    for (bool first = true;; first = false) {
         struct shared_frame sf;
         struct frame_state f;
         memset(&sf, 0, sizeof(sf));
@@ -436,6 +454,10 @@ int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
         if (!consume(&l, &sf, &f)) {
             rc = EXIT_FAILED;
             break;
+        }
+        if (first) { /* shaders compiled, the light map built: --stats keeps it apart */
+            session_stats(s)->first_frame_ms = time_now_ms() - start;
+            session_stats(s)->first_sync_ms = session_stats(s)->sync_ms;
         }
         if (l.root && ld->run) {
             unsigned requests = session_take_requests(s);

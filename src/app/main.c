@@ -9,6 +9,7 @@
 #include "common/log.h"
 #include "config/config.h"
 #include "config/display_config.h"
+#include "display/display.h"
 
 struct command {
     const char *name;
@@ -48,6 +49,9 @@ int main(int argc, char **argv)
             return EXIT_OK;
         } else if (strcmp(argv[i], "--version") == 0) {
             printf("anvil %s\n", ANVIL_VERSION);
+            /* What the build found of its optional parts. */
+            printf("clusters (MPI): %s\nOpenXR headsets: %s\n", cluster_available() ? "yes" : "no",
+                   display_type_available(DISPLAY_TYPE_OPENXR) ? "yes" : "no");
             return EXIT_OK;
         } else if (strcmp(argv[i], "--quiet") == 0 || strcmp(argv[i], "-q") == 0) {
             log_set_level(LOG_ERROR);

@@ -13,6 +13,7 @@
 
 #include "bench/bench.h"
 #include "bench/experiments.h"
+#include "bench/cluster.h"
 #include "bench/movie.h"
 #include "bench/paraview.h"
 #include "bench/tables.h"
@@ -26,7 +27,7 @@
 void bench_options_defaults(struct bench_options *o)
 {
     memset(o, 0, sizeof(*o));
-    o->views = o->quality = o->movie = true;
+    o->views = o->quality = o->movie = o->cluster = true;
 }
 
 __attribute__((format(printf, 2, 3))) static void echo(const struct bench_options *o,
@@ -267,7 +268,8 @@ static bool run_angles(const struct bench_options *o, const char *device, struct
 enum bench_status bench_run(const struct bench_options *opts)
 {
     assert(opts && opts->out && opts->configs);
-    assert(opts->views || opts->quality || opts->movie);
+    assert(opts->views || opts->quality || opts->movie || opts->cluster);
+    assert(!opts->cluster || opts->displays);
     assert(!opts->paraview || opts->paraview_script);
     struct bench_options o = *opts;
     char cache[PATH_MAX];
@@ -314,6 +316,16 @@ enum bench_status bench_run(const struct bench_options *opts)
                                                            .context = ctx,
                                                            .report = o.report},
                                 &movie))
+        goto done;
+    bool cluster_only = !o.views && !o.quality && !o.movie;
+    if (o.cluster && !cluster_only && !bench_cluster_possible())
+        log_warn("bench: the cluster benchmark is left out (it needs anvil built with MPI and "
+                 "mpirun on PATH: libopenmpi-dev, openmpi-bin)");
+    else if (o.cluster && !bench_cluster(&(struct bench_cluster_desc){.quick = o.quick,
+                                                                     .out = o.out,
+                                                                     .displays = o.displays,
+                                                                     .device = device,
+                                                                     .report = o.report}))
         goto done;
     status = BENCH_DONE;
 done:

@@ -5,7 +5,8 @@
  * their Monte Carlo references, and the experiments of bench/experiments.h, written as
  * views-table.md, accuracy.csv, accuracy-table.md, accuracy.png, accuracy-self.png and
  * angles-table.md into one folder; and what a movie of the default storm costs
- * (movie-table.md, bench/movie.h).
+ * (movie-table.md, bench/movie.h); and a CAVE on 1, 2 and 4 ranks (cluster-table.md,
+ * bench/cluster.h).
  *
  * It makes its own headless GL context.  It must not know the command line or where the
  * source tree lies: the folders (output, reference cache, configs) and the ParaView script
@@ -25,6 +26,10 @@ struct bench_options {
     bool quick;           /* small scenes and images, one repeat: a CI-sized run */
     bool views, quality;  /* which benchmarks run (all three by default; at least one) */
     bool movie;           /* the default storm's movie: frames per second (bench/movie.h) */
+    bool cluster;         /* cave4 and cave6 on 1, 2 and 4 ranks (bench/cluster.h); left out
+                             with a warning where MPI or mpirun is missing, unless it is the
+                             only one asked for */
+    const char *displays; /* folder of cave4.cfg and cave6.cfg (the cluster benchmark) */
     bool paraview;        /* also time ParaView on the views (needs views and paraview_script) */
     const char *out;      /* folder for the tables and plots, created with its parents */
     const char *cache;    /* folder of the cached Monte Carlo references; NULL or "":

@@ -59,7 +59,8 @@ bool session_stats_json(const struct session_stats *st, int rank, const char *wa
     if (rank >= 0) {
         fprintf(f, ",\n  \"rank\": %d,\n  \"walls\": ", rank);
         write_string(f, walls);
-        fprintf(f, ",\n  \"sync_ms\": %.3f", st->sync_ms);
+        fprintf(f, ",\n  \"sync_ms\": %.3f,\n  \"first_sync_ms\": %.3f", st->sync_ms,
+                st->first_sync_ms);
     }
     fprintf(f, ",\n  \"device\": ");
     write_string(f, st->device);
@@ -82,7 +83,8 @@ bool session_stats_json(const struct session_stats *st, int rank, const char *wa
             st->volume_uploads, st->load_ms, st->convert_ms);
     fprintf(f, "  \"wait_ms\": %.3f,\n  \"upload_ms_total\": %.3f,\n", st->wait_ms,
             st->upload_ms_total);
-    fprintf(f, "  \"frame_ms_max\": %.3f,\n", st->frame_ms_max);
+    fprintf(f, "  \"frame_ms_max\": %.3f,\n  \"loop_ms\": %.3f,\n  \"first_frame_ms\": %.3f,\n",
+            st->frame_ms_max, st->loop_ms, st->first_frame_ms);
     fprintf(f, "  \"volume_ms\": %.3f,\n  \"upload_ms\": %.3f,\n  \"total_ms\": %.3f\n}\n",
             st->volume_ms, st->upload_ms, st->total_ms);
     if (fclose(f) != 0 || !*text) {

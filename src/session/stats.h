@@ -33,8 +33,12 @@ struct session_stats {
                                  also each next step's, into the second texture) */
     double load_ms, convert_ms, wait_ms, upload_ms_total;
     double frame_ms_max;      /* longest frame of the loop */
-    double sync_ms;           /* a cluster's rank: time in the swap barrier (its wait for the
-                                 slowest rank included) */
+    double loop_ms;           /* the frame loop, start to end (total_ms less the start) */
+    double first_frame_ms;    /* its first frame (shaders compiled, the first light map) */
+    double first_sync_ms;     /* sync_ms by the end of the first frame */
+    double sync_ms;           /* a cluster's rank: time in the cluster's collectives (the frame
+                                 broadcast, the step and failure agreements, the swap barrier;
+                                 its wait for the slowest rank included) */
 };
 
 /* Counts a view drawn and a light map built; their times go to view_times and build_times. */

@@ -82,4 +82,15 @@ check "wall table has its rows" test "$(grep -c '^| \(10\|20\|45\|70\) | [0-9.]*
 wall45=$(grep -m1 '^| 45 |' "$tmp/b/angles-table.md" | awk -F'|' '{ print $3 }' | awk '{ print $1 }')
 check "wall at a 45 degree sun within 25 % of Monte Carlo ($wall45)" \
     awk -v v="$wall45" 'BEGIN { exit !(v >= 0.8 && v <= 1.25) }'
+
+# The cluster benchmark: cave4 and cave6 on 1, 2 and 4 ranks (only with MPI and mpirun).
+expect_exit 2 "bench: --cluster-only excludes --movie-only" "$anvil" bench --cluster-only --movie-only
+if command -v mpirun >/dev/null && "$anvil" --version | grep -q "clusters (MPI): yes"; then
+    "$anvil" bench --quick --cluster-only -o "$tmp/c" >"$tmp/out" 2>"$tmp/err"
+    check "cluster bench exits 0" test $? -eq 0
+    check "cluster table: six rows" test "$(grep -c '^| cave[46] | [124] | ' "$tmp/c/cluster-table.md")" -eq 6
+    check "one process is its own yardstick" grep -q '^| cave4 | 1 | [0-9.]* | 1.00 | 0.00 |' "$tmp/c/cluster-table.md"
+    check "ranks spend time in the collectives" \
+        awk -F'|' '$3 == " 4 " && $6 + 0 > 0 { found = 1 } END { exit !found }' "$tmp/c/cluster-table.md"
+fi
 finish

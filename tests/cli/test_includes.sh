@@ -21,7 +21,7 @@ declare -A allowed=(
     [display]="common config gpu input render shaders"
     [reference]="common optics data render"
     [session]="common optics config data gpu input render light menu display reference"
-    [bench]="common optics config data gpu input render light menu display reference session"
+    [bench]="common optics config data gpu input cluster render light menu display reference session"
     [app]="common optics config data gpu input render light menu display reference session bench cluster"
 )
 for part in */; do
