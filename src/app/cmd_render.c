@@ -549,6 +549,10 @@ static int command(int argc, char **argv, bool run)
                            .transfers_dir = o.transfers,
                            /* An interactive run times its views only when they are reported. */
                            .time_views = o.stats || !run,
+                           /* tests: a slow disk (on one rank of a cluster, say) */
+                           .load_delay_ms = getenv("ANVIL_TEST_LOAD_DELAY_MS")
+                                                ? strtod(getenv("ANVIL_TEST_LOAD_DELAY_MS"), NULL)
+                                                : 0.0,
                        },
                        &rc);
     if (!s) {

@@ -268,6 +268,11 @@ static void hold(struct loop *l, struct frame_state *f)
     uint32_t all = cluster_and(mine);
     synced(l, t);
     if (!(all & 1u)) {
+        /* Shown: the old step; loading, on every rank that lacks it: the wanted one. */
+        if (!(mine & 1u))
+            session_want_step(l->s, f->time_step);
+        if (f->time_step != session_step_shown(l->s))
+            session_stats(l->s)->frames_held++;
         f->time_step = session_step_shown(l->s);
         f->step_fraction = 0.0f;
     } else if (!(all & 2u)) {
@@ -284,8 +289,8 @@ static void check_sync(struct loop *l, const struct shared_frame *sf)
     cluster_gather_u64(key, keys);
     for (int r = 1; l->root && r < n; r++) {
         if (keys[r] != keys[0]) {
-            log_error("--check-sync: rank %d is out of step with rank 0 (its config, data or "
-                      "settings differ)",
+            log_error("--check-sync: rank %d is out of step with rank 0 (its config, data, "
+                      "settings or the step it shows differ)",
                       r);
             cluster_abort(EXIT_FAILED);
         }

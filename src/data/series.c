@@ -314,6 +314,17 @@ const struct ext_volume *series_try_acquire(struct series *s, int step)
     return v;
 }
 
+void series_want(struct series *s, int step)
+{
+    if (!valid_step(s, step))
+        return;
+    pthread_mutex_lock(&s->lock);
+    const struct entry *e = &s->entries[step];
+    if (e->state != ENTRY_READY && e->state != ENTRY_FAILED)
+        set_window(s, step, true);
+    pthread_mutex_unlock(&s->lock);
+}
+
 void series_invalidate(struct series *s)
 {
     pthread_mutex_lock(&s->lock);

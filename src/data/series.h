@@ -65,6 +65,10 @@ const struct ext_volume *series_acquire(struct series *s, int step);
  * after asking the background thread for it; the previous volume stays valid. */
 const struct ext_volume *series_try_acquire(struct series *s, int step);
 
+/* Asks the background thread for STEP (and its neighbours) without making it current: the
+ * current volume stays as it is (a cluster's rank loading the step the others wait for). */
+void series_want(struct series *s, int step);
+
 /* Drops every cached step and any load in progress (its result is thrown away), because
  * what the loader produces has changed (species, tints, transfer function); the current step
  * and its neighbours are loaded again in the background.  Pointers returned before are

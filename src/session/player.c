@@ -388,6 +388,12 @@ bool player_ready(struct player *p, int step)
     return p->series ? series_ready(p->series, step) : step == p->shown;
 }
 
+void player_want(struct player *p, int step)
+{
+    if (p->series)
+        series_want(p->series, step);
+}
+
 bool player_has_fields(const struct player *p)
 {
     return p->ld.kind == PLAYER_STORM || p->ld.kind == PLAYER_FIELDS;

@@ -71,6 +71,9 @@ int player_step_count(const struct player *p);
 /* "2005-08-28_06:00:00" or "" (static per player, valid until destroy). */
 const char *player_step_date(struct player *p, int step);
 bool player_ready(struct player *p, int step);
+/* Starts loading STEP in the background without showing it (series_want); no-op without a
+ * series. */
+void player_want(struct player *p, int step);
 /* Whether the look can change the volume (storm and WRF/Isabel data: yes; test scenes and
  * extinction files: no). */
 bool player_has_fields(const struct player *p);

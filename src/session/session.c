@@ -219,7 +219,8 @@ struct session *session_create(const struct config *cfg, const struct session_de
 
     /* The data, opened once: the first step now, the rest behind a cache when time can play. */
     double t = time_now_ms();
-    s->player = player_create(cfg, &(struct player_desc){.still = !d->playback});
+    s->player = player_create(cfg, &(struct player_desc){.still = !d->playback,
+                                                         .delay_ms = d->load_delay_ms});
     if (!s->player) {
         *rc = 1;
         goto error;
@@ -1211,7 +1212,8 @@ uint64_t session_sync_key(const struct session *s)
      * light map's key (its parameters and the steps it holds). */
     struct lightmaps_params p;
     light_params(s, &p);
-    uint64_t ids[2] = {s->light.step_id, s->light.next_id};
+    /* The next step's map counts only while it is blended in (a rank may hold it earlier). */
+    uint64_t ids[2] = {s->light.step_id, s->drawn.temporal_f > 0.0f ? s->light.next_id : 0};
     const void *parts[] = {&s->cfg, &s->settings, &s->effects, &s->shown, &p, ids};
     const size_t sizes[] = {sizeof(s->cfg), sizeof(s->settings), sizeof(s->effects),
                             sizeof(s->shown), sizeof(p), sizeof(ids)};
@@ -1222,6 +1224,12 @@ uint64_t session_sync_key(const struct session *s)
             h *= 1099511628211ull;
         }
     return h;
+}
+
+void session_want_step(struct session *s, int step)
+{
+    if (step >= 0 && step < s->playback.count)
+        player_want(s->player, step);
 }
 
 bool session_step_loaded(struct session *s, int step)

@@ -58,6 +58,7 @@ struct session_desc {
     const char *script;        /* --input FILE: scripted events, or NULL */
     const char *transfers_dir; /* where named transfer functions are saved ("." default) */
     bool time_views;           /* time every view and build (they are reported) */
+    double load_delay_ms;      /* tests: every time step of the series loads this much slower */
     bool replay_of_run;        /* the script is a recording of anvil run: the effects are
                                   decided as that run decided them (the sun could move) */
 };
@@ -167,6 +168,9 @@ uint64_t session_sync_key(const struct session *s);
 /* Whether STEP's volume is in memory (the cluster holds its walls at the old step until every
  * rank has the new one). */
 bool session_step_loaded(struct session *s, int step);
+/* Has STEP (and the next, for effects.temporal) loaded in the background while an older step
+ * stays on screen: a cluster's rank whose step the others wait for. */
+void session_want_step(struct session *s, int step);
 /* The menu's meshes (rank 0): false without a menu; *PIXELS its image. */
 struct menu_view_state;
 bool session_menu_state(struct session *s, struct menu_view_state *st, const uint8_t **pixels);

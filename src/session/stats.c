@@ -79,6 +79,7 @@ bool session_stats_json(const struct session_stats *st, int rank, const char *wa
             st->cache_misses);
     fprintf(f, "  \"cache_loads\": %u,\n  \"frames_waited\": %u,\n  \"frames_stale\": %u,\n",
             st->cache_loads, st->frames_waited, st->frames_stale);
+    fprintf(f, "  \"frames_held\": %u,\n", st->frames_held);
     fprintf(f, "  \"volume_uploads\": %u,\n  \"load_ms\": %.3f,\n  \"convert_ms\": %.3f,\n",
             st->volume_uploads, st->load_ms, st->convert_ms);
     fprintf(f, "  \"wait_ms\": %.3f,\n  \"upload_ms_total\": %.3f,\n", st->wait_ms,

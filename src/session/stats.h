@@ -29,6 +29,8 @@ struct session_stats {
     unsigned cache_hits, cache_misses, cache_loads;
     unsigned frames_waited;   /* frames that blocked on a load (only a scripted run's end) */
     unsigned frames_stale;    /* frames that showed an older step: the wanted one was loading */
+    unsigned frames_held;     /* a cluster: frames every rank showed the older step because some
+                                 rank was still loading the wanted one */
     unsigned volume_uploads;  /* volumes uploaded after the first (with effects.temporal
                                  also each next step's, into the second texture) */
     double load_ms, convert_ms, wait_ms, upload_ms_total;

@@ -123,6 +123,33 @@ static void test_still_walls_equal_one_process(void **state)
     free(json);
 }
 
+/* A head that moves (a path, sampled on rank 0 and sent): the walls still equal one process's
+ * at the same moment, and differ from the fixed head's. */
+static void test_moving_head_is_rank_0s(void **state)
+{
+    (void)state;
+    FILE *f = fopen(test_tmp_path("head.txt"), "w");
+    fprintf(f, "0 0.0 1.6 0.5 0 0 0\n5 0.8 1.2 -0.5 40 -20 0\n");
+    fclose(f);
+    char args[1024];
+    const char *head = "--set 'head.source=\"path\"' --set 'head.path=\"head.txt\"' --time 2.5";
+    assert_int_equal(shell("mkdir -p h1 h4 && '%s' --quiet render %s %s %s -o h1/", anvil, cave,
+                           small, head),
+                     0);
+    snprintf(args, sizeof(args), "render %s %s %s -o h4/ --check-sync", cave, small, head);
+    assert_int_equal(mpi(4, args), 0);
+    for (size_t i = 0; i < sizeof(walls) / sizeof(walls[0]); i++) {
+        char a[128], b[128];
+        snprintf(a, sizeof(a), "h1/%s.pfm", walls[i]);
+        snprintf(b, sizeof(b), "h4/%s.pfm", walls[i]);
+        double d = diff(a, b);
+        if (d > 1e-6)
+            fail_msg("%s: the cluster's differs from one process's by %g", walls[i], d);
+    }
+    /* The path moved the head: rank 3's floor is not the fixed head's floor. */
+    assert_true(diff("h4/floor-left.pfm", "four/floor-left.pfm") > 1e-3);
+}
+
 static void test_script_frames_equal_one_process(void **state)
 {
     (void)state;
@@ -177,6 +204,37 @@ static void test_check_sync_names_the_rank(void **state)
                     "--quiet render %s %s --set render.exposure=2 -o sync/",
              anvil, cave, small, anvil, cave, small);
     assert_int_equal(shell("%s", args), 0);
+}
+
+/* anvil run under Xvfb, rank 1 reading its disk slowly while the series plays: every rank
+ * shows the same step every frame (--check-sync compares the steps shown), the cluster held
+ * the old step while rank 1 loaded, and playback still reached the end. */
+static void test_slow_rank_holds_the_step(void **state)
+{
+    (void)state;
+    if (system("command -v xvfb-run >/dev/null 2>&1") != 0)
+        skip();
+    FILE *f = fopen(test_tmp_path("play.txt"), "w");
+    fprintf(f, "fps 10\n0 key play\n300 key quit\n");
+    fclose(f);
+    const char *args = "run series.cfg --display " ANVIL_SOURCE_DIR "/displays/cave4.cfg "
+                       "--input play.txt --check-sync --stats held.json "
+                       "--set display.window_size=[48,48] --set walls.[0].monitor=-1 "
+                       "--set lightmap.resolution=[16,16,16]";
+    assert_int_equal(shell("xvfb-run -a -s '-screen 0 640x480x24' " MPIRUN
+                           " -np 1 -x DISPLAY '%s' --quiet %s : -np 1 -x DISPLAY "
+                           "-x ANVIL_TEST_LOAD_DELAY_MS=300 '%s' --quiet %s",
+                           anvil, args, anvil, args),
+                     0);
+    char *json = file_read_all(test_tmp_path("held.json"), NULL);
+    assert_non_null(json);
+    const char *held = strstr(json, "\"frames_held\": ");
+    assert_non_null(held);
+    int n = atoi(held + strlen("\"frames_held\": "));
+    print_message("frames held for rank 1: %d\n", n);
+    assert_true(n > 0);
+    assert_non_null(strstr(json, "\"time_step\": 3")); /* the last of 4 */
+    free(json);
 }
 
 static void test_refusals(void **state)
@@ -304,8 +362,10 @@ int main(void)
     fclose(f);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_still_walls_equal_one_process),
+        cmocka_unit_test(test_moving_head_is_rank_0s),
         cmocka_unit_test(test_script_frames_equal_one_process),
         cmocka_unit_test(test_check_sync_names_the_rank),
+        cmocka_unit_test(test_slow_rank_holds_the_step),
         cmocka_unit_test(test_refusals),
         cmocka_unit_test(test_killed_rank_ends_the_job),
     };
