@@ -133,7 +133,6 @@ void cluster_barrier(void)
 
 char **cluster_gather_text(const char *text)
 {
-    int len = (int)strlen(text) + 1;
     if (size <= 1 || !started) {
         char **out = calloc(1, sizeof(char *));
         if (out)
@@ -141,7 +140,12 @@ char **cluster_gather_text(const char *text)
         return out;
     }
 #ifdef ANVIL_HAVE_MPI
+    int len = (int)strlen(text) + 1;
     int *lens = rank == 0 ? calloc((size_t)size, sizeof(int)) : NULL;
+    if (rank == 0 && !lens) {
+        log_error("out of memory");
+        cluster_abort(4);
+    }
     MPI_Gather(&len, 1, MPI_INT, lens, 1, MPI_INT, 0, MPI_COMM_WORLD);
     int *offsets = NULL;
     char *all = NULL;
@@ -153,6 +157,10 @@ char **cluster_gather_text(const char *text)
             total += lens[i];
         }
         all = malloc((size_t)total);
+        if (!offsets || !all) {
+            log_error("out of memory");
+            cluster_abort(4);
+        }
     }
     MPI_Gatherv(text, len, MPI_CHAR, all, lens, offsets, MPI_CHAR, 0, MPI_COMM_WORLD);
     char **out = NULL;
