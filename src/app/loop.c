@@ -314,8 +314,12 @@ static bool consume(struct loop *l, struct shared_frame *sf, struct frame_state 
         ok = ok && session_light(l->s);
         /* The head, sampled last, on rank 0 (unless a recording gave it): its trackers are the
          * cluster's. */
-        if (l->root && !session_head_given(l->s))
+        if (l->root && !session_head_given(l->s)) {
             ok = ok && display_sample_head(l->d, f->time_s, &f->head);
+        } else if (l->root && display_paces_frames(l->d)) {
+            struct display_pose runtime; /* its frame begun; the recording's head drawn */
+            ok = ok && display_sample_head(l->d, f->time_s, &runtime);
+        }
         t = time_now_ms();
         cluster_broadcast(&f->head, sizeof(f->head));
         synced(l, t);

@@ -131,6 +131,11 @@ bool display_uses_camera(const struct display *d)
     return d->impl == &display_orbit_impl;
 }
 
+bool display_paces_frames(const struct display *d)
+{
+    return d->impl->sample_head != NULL;
+}
+
 bool display_head_moves(const struct display *d)
 {
     return d->cfg.head.source != DISPLAY_HEAD_FIXED || d->impl->sample_head != NULL;

@@ -201,6 +201,11 @@ void display_list(void (*print)(const char *name, const char *what, void *user),
 struct display *display_create(const struct display_config *cfg, const struct display_desc *desc);
 void display_destroy(struct display *d);
 
+/* Whether D paces its frames through a runtime of its own (OpenXR: display_sample_head begins
+ * the runtime's frame), so display_sample_head must be called every frame, even when the
+ * caller has the head from elsewhere (a recording). */
+bool display_paces_frames(const struct display *d);
+
 /* Whether every window of D joined desc.swap_group (false without windows or swap groups). */
 bool display_swap_grouped(const struct display *d);
 
