@@ -393,7 +393,7 @@ static void screenshot(struct display *d, struct session *s)
 /* C: the view as a block to paste, and a bookmark file that renders it again. */
 static void bookmark(struct session *s, const struct loop_desc *ld)
 {
-    char view[1024], sun[256], name[64], text[4096];
+    char view[1024], sun[256], name[64], text[PATH_MAX + 2048];
     session_view_text(s, view, sizeof(view));
     session_sun_text(s, sun, sizeof(sun));
     bool tracker = session_uses_tracker(s);
@@ -404,11 +404,14 @@ static void bookmark(struct session *s, const struct loop_desc *ld)
     if (include && !realpath(include, full))
         snprintf(full, sizeof(full), "%s", include);
     free_name("bookmark", ".cfg", name, sizeof(name));
-    snprintf(text, sizeof(text), "# anvil bookmark: %s\n%s%s%s%s%s",
-             tracker ? "the navigation of a display (anvil render SCENE --display THIS)"
-                     : "a view of a scene (anvil render THIS -o view.png)",
-             full[0] ? "@include \"" : "", full, full[0] ? "\"\n" : "", view, tracker ? "" : sun);
-    if (file_write_atomic(name, text, strlen(text)))
+    int n = snprintf(text, sizeof(text), "# anvil bookmark: %s\n%s%s%s%s%s",
+                     tracker ? "the navigation of a display (anvil render SCENE --display THIS)"
+                             : "a view of a scene (anvil render THIS -o view.png)",
+                     full[0] ? "@include \"" : "", full, full[0] ? "\"\n" : "", view,
+                     tracker ? "" : sun);
+    if (n < 0 || (size_t)n >= sizeof(text))
+        log_warn("bookmark: not saved (the view does not fit in %zu bytes)", sizeof(text));
+    else if (file_write_atomic(name, text, strlen(text)))
         log_info("bookmark: %s", name);
 }
 
