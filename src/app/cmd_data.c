@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "app/app.h"
 #include "session/scene.h"
@@ -316,12 +317,13 @@ static void convert_usage(FILE *out)
 /* NetCDF files start with "CDF" (classic) or the HDF5 signature. */
 static bool is_netcdf(const char *path)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
+    char why[160];
+    int fd = file_open_regular(path, why, sizeof(why));
+    if (fd < 0)
         return false;
     unsigned char b[8] = {0};
-    size_t n = fread(b, 1, sizeof(b), f);
-    fclose(f);
+    ssize_t n = read(fd, b, sizeof(b));
+    close(fd);
     return n >= 4 && ((b[0] == 'C' && b[1] == 'D' && b[2] == 'F') ||
                       (b[0] == 0x89 && b[1] == 'H' && b[2] == 'D' && b[3] == 'F'));
 }

@@ -1,8 +1,10 @@
 #include "common/log.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <pthread.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -64,45 +66,116 @@ const char *log_last_error(void)
     return last_error;
 }
 
-char *file_read_all(const char *path, size_t *len_out)
+int file_open_regular(const char *path, char *why, size_t why_size)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        log_error("%s: cannot open: %s", path, strerror(errno));
+    /* O_NONBLOCK: opening a FIFO for reading would wait for a writer. */
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        snprintf(why, why_size, "cannot open: %s", strerror(errno));
+        return -1;
+    }
+    struct stat st;
+    if (fstat(fd, &st) != 0) {
+        snprintf(why, why_size, "cannot read: %s", strerror(errno));
+        close(fd);
+        return -1;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        const char *kind = S_ISDIR(st.st_mode)    ? "a folder"
+                           : S_ISFIFO(st.st_mode) ? "a FIFO"
+                           : S_ISCHR(st.st_mode)  ? "a character device"
+                           : S_ISBLK(st.st_mode)  ? "a block device"
+                           : S_ISSOCK(st.st_mode) ? "a socket"
+                                                  : "not a file";
+        snprintf(why, why_size, "not a regular file (%s)", kind);
+        close(fd);
+        return -1;
+    }
+    int flags = fcntl(fd, F_GETFL);
+    if (flags >= 0)
+        fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+    return fd;
+}
+
+/* "64 MiB", "512 KiB", "100 bytes". */
+static void format_size(size_t n, char *buf, size_t size)
+{
+    if (n >= ((size_t)1 << 20) && n % ((size_t)1 << 20) == 0)
+        snprintf(buf, size, "%zu MiB", n >> 20);
+    else if (n >= 1024 && n % 1024 == 0)
+        snprintf(buf, size, "%zu KiB", n >> 10);
+    else
+        snprintf(buf, size, "%zu bytes", n);
+}
+
+char *file_read_text(const char *path, size_t max, size_t *len_out, char *why, size_t why_size)
+{
+    int fd = file_open_regular(path, why, why_size);
+    if (fd < 0)
+        return NULL;
+    char limit[32];
+    format_size(max, limit, sizeof(limit));
+    struct stat st;
+    if (fstat(fd, &st) == 0 && (uint64_t)st.st_size > (uint64_t)max) {
+        snprintf(why, why_size, "%lld bytes: larger than the %s a file of this kind may be",
+                 (long long)st.st_size, limit);
+        close(fd);
         return NULL;
     }
-    size_t cap = 4096, len = 0;
+    /* The size is a hint (a file may grow while read, /proc files say 0): read to the end. */
+    size_t cap = st.st_size > 0 ? (size_t)st.st_size + 1 : 4096, len = 0;
     char *buf = malloc(cap);
     if (!buf)
-        goto error_file;
+        goto error_memory;
     for (;;) {
         if (len + 1 >= cap) {
-            char *grown = realloc(buf, cap * 2);
-            if (!grown)
+            if (cap >= max + 2) { /* more than MAX bytes read */
+                snprintf(why, why_size, "larger than the %s a file of this kind may be", limit);
                 goto error_buf;
+            }
+            size_t grown_cap = cap * 2 > max + 2 ? max + 2 : cap * 2;
+            char *grown = realloc(buf, grown_cap);
+            if (!grown)
+                goto error_memory;
             buf = grown;
-            cap *= 2;
+            cap = grown_cap;
         }
-        size_t n = fread(buf + len, 1, cap - len - 1, f);
-        len += n;
+        ssize_t n = read(fd, buf + len, cap - len - 1);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            snprintf(why, why_size, "read failed: %s", strerror(errno));
+            goto error_buf;
+        }
         if (n == 0)
             break;
+        len += (size_t)n;
     }
-    if (ferror(f)) {
-        log_error("%s: read failed: %s", path, strerror(errno));
+    if (len > max) {
+        snprintf(why, why_size, "larger than the %s a file of this kind may be", limit);
         goto error_buf;
     }
-    fclose(f);
+    close(fd);
     buf[len] = '\0';
     if (len_out)
         *len_out = len;
     return buf;
 
+error_memory:
+    snprintf(why, why_size, "out of memory reading it");
 error_buf:
     free(buf);
-error_file:
-    fclose(f);
+    close(fd);
     return NULL;
+}
+
+char *file_read_all(const char *path, size_t *len_out)
+{
+    char why[160];
+    char *text = file_read_text(path, FILE_TEXT_MAX, len_out, why, sizeof(why));
+    if (!text)
+        log_error("%s: %s", path, why);
+    return text;
 }
 
 bool file_write_atomic(const char *path, const void *data, size_t len)

@@ -1092,40 +1092,6 @@ static struct where locate(const struct source *src, const struct chunk *ch, int
     return (struct where){src->files[o->file], o->line};
 }
 
-/* Reads a whole file; NULL with errno set on failure. */
-static char *read_file(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    size_t cap = 4096, len = 0;
-    char *buf = malloc(cap);
-    while (buf) {
-        len += fread(buf + len, 1, cap - len - 1, f);
-        if (ferror(f) || feof(f))
-            break;
-        char *grown = realloc(buf, cap * 2);
-        if (!grown) {
-            free(buf);
-            buf = NULL;
-            errno = ENOMEM;
-            break;
-        }
-        buf = grown;
-        cap *= 2;
-    }
-    int err = ferror(f) ? (errno ? errno : EIO) : 0;
-    fclose(f);
-    if (buf && err) {
-        free(buf);
-        errno = err;
-        return NULL;
-    }
-    if (buf)
-        buf[len] = '\0';
-    return buf;
-}
-
 /* Follows block comments and open brackets through line L..END. */
 static void scan_line(const char *l, const char *end, bool *in_comment, int *depth)
 {
@@ -1198,13 +1164,19 @@ static bool expand_file(struct source *src, const char *path, int depth, const s
                   from->line, INCLUDE_DEPTH_MAX);
         return false;
     }
-    char *text = read_file(path);
+    char why[160];
+    size_t len = 0;
+    char *text = file_read_text(path, FILE_TEXT_MAX, &len, why, sizeof(why));
     if (!text) {
         if (from)
-            log_error("%s:%d: @include: cannot read %s: %s", from->file, from->line, path,
-                      strerror(errno));
+            log_error("%s:%d: @include: %s: %s", from->file, from->line, path, why);
         else
-            log_error("%s: cannot read: %s", path, strerror(errno));
+            log_error("%s: %s", path, why);
+        return false;
+    }
+    if (strlen(text) != len) {
+        log_error("%s: not a text file (a NUL byte at offset %zu)", path, strlen(text));
+        free(text);
         return false;
     }
     struct stat st;

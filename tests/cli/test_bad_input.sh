@@ -1,0 +1,31 @@
+#!/bin/bash
+# Bad input found by fuzzing and fault injection: each case gets one clear message and its
+# documented exit code (docs/user-guide.md), never a signal, a hang or silent zeros.
+# Arguments: ANVIL_BINARY SOURCE_DIR SHARED_DATA_DIR.
+. "$(dirname "$0")/lib.sh"
+cd "$tmp" || exit 1
+small=(--set render.width=8 --set render.height=8)
+# Whether an OpenGL 4.5 context can be made (the cases that need one are skipped otherwise).
+gl=1
+"$anvil" render --quiet "$src/configs/empty.cfg" "${small[@]}" -o probe.png 2>/dev/null
+[ $? -eq 3 ] && gl=0 && echo "no OpenGL context: the render cases are skipped"
+
+# ---- text inputs: regular files only, at most 64 MiB ------------------------------------
+mkfifo fifo
+# A FIFO without a writer would block for ever, /dev/zero never ends: both refused at once.
+expect_exit 1 "a config that is /dev/zero" timeout 20 "$anvil" render /dev/zero -o x.png
+check "it says it is no regular file" stderr_has "/dev/zero: not a regular file (a character device)"
+expect_exit 1 "a config that is a FIFO" timeout 20 "$anvil" render fifo -o x.png
+check "it says it is a FIFO" stderr_has "fifo: not a regular file (a FIFO)"
+printf 'scene = { kind = "empty"; };\n@include "fifo"\n' >inc.cfg
+expect_exit 1 "an @include of a FIFO" timeout 20 "$anvil" render inc.cfg -o x.png
+check "it names the including line" stderr_has "inc.cfg:2: @include: .*fifo: not a regular file"
+truncate -s 65M big.cfg
+expect_exit 1 "a 65 MiB config" timeout 20 "$anvil" render big.cfg -o x.png
+check "it gives the limit" stderr_has "big.cfg: 68157440 bytes: larger than the 64 MiB"
+if [ $gl -eq 1 ]; then
+    expect_exit 1 "--input FIFO" timeout 60 "$anvil" render "$src/configs/empty.cfg" \
+        "${small[@]}" --input fifo -o x.png
+    check "it says so" stderr_has "fifo: not a regular file (a FIFO)"
+fi
+finish
