@@ -10,6 +10,7 @@
 
 #include "common/log.h"
 #include "data/nclock.h"
+#include "data/ncopen.h"
 
 const char *coast_file(char resolution)
 {
@@ -95,11 +96,10 @@ static bool binned_read(const char *path, struct binned *b)
     memset(b, 0, sizeof(*b));
     data_nc_lock();
     int ncid;
-    int st = nc_open(path, NC_NOWRITE, &ncid);
-    if (st != NC_NOERR) {
+    char why[512];
+    if (!data_nc_open(path, &ncid, NULL, why, sizeof(why))) {
         data_nc_unlock();
-        log_warn("%s: cannot read the coastlines: %s (Debian package gmt-gshhg-low)", path,
-                  nc_strerror(st));
+        log_warn("%s: cannot read the coastlines: %s (Debian package gmt-gshhg-low)", path, why);
         return false;
     }
     bool ok = read_scalar(path, ncid, "Bin_size_in_minutes", &b->bin_minutes) &&

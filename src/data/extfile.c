@@ -10,6 +10,7 @@
 
 #include "common/log.h"
 #include "data/nclock.h"
+#include "data/ncopen.h"
 
 #define DATE_LEN 19
 #define MAX_STEPS 100000
@@ -300,6 +301,7 @@ void extfile_writer_destroy(struct extfile_writer *w)
 struct extfile {
     char *path;
     int ncid;
+    struct data_nc_layout layout;
     int steps;
     char (*dates)[DATE_LEN + 1];
     struct grid3 grid;
@@ -333,8 +335,9 @@ static bool read_axis(struct extfile *f, int a, int dimid)
 bool extfile_probe(const char *path)
 {
     int nc, var;
+    char why[512];
     data_nc_lock();
-    bool yes = nc_open(path, NC_NOWRITE, &nc) == NC_NOERR;
+    bool yes = data_nc_open(path, &nc, NULL, why, sizeof(why));
     if (yes) {
         yes = nc_inq_varid(nc, beta_names[0], &var) == NC_NOERR;
         nc_close(nc);
@@ -358,10 +361,9 @@ struct extfile *extfile_open(const char *path)
         return NULL;
     }
     data_nc_lock();
-    int st = nc_open(path, NC_NOWRITE, &f->ncid);
-    if (st != NC_NOERR) {
-        f->ncid = -1;
-        log_error("%s: cannot open as NetCDF: %s", path, nc_strerror(st));
+    char why[512];
+    if (!data_nc_open(path, &f->ncid, &f->layout, why, sizeof(why))) {
+        log_error("%s: %s", path, why);
         goto error;
     }
     int dims[4];
@@ -466,7 +468,7 @@ bool extfile_read_step(struct extfile *f, int step, struct ext_volume *out,
         log_error("%s: time step %d out of range (0 to %d)", f->path, step, f->steps - 1);
         return false;
     }
-    if (!ext_volume_init(out, &f->grid))
+    if (!data_nc_still_whole(f->path, &f->layout) || !ext_volume_init(out, &f->grid))
         return false;
     const struct grid3 *g = &f->grid;
     size_t plane = (size_t)g->n[0] * g->n[1];

@@ -13,6 +13,7 @@
 
 #include "common/log.h"
 #include "data/nclock.h"
+#include "data/ncopen.h"
 #include "data/wrf_write.h"
 
 static const char *var_names[WRF_VAR_COUNT] = {
@@ -26,6 +27,7 @@ static const enum wrf_var required_vars[] = {WRF_P, WRF_PB, WRF_T, WRF_PH, WRF_P
 struct wrf_file {
     char *path;
     int ncid;
+    struct data_nc_layout layout; /* what the header promised at open */
     int ntimes;
     int varid[WRF_VAR_COUNT]; /* -1 when absent */
 };
@@ -389,10 +391,9 @@ static bool wind_shape_ok(const struct wrf_file *f, enum wrf_var v, const int di
 static bool open_file(struct wrf_file *f, const struct wrf *ref_w, const struct wrf_file *ref,
                       int *nx, int *ny, int *nz, int *nzs)
 {
-    int st = nc_open(f->path, NC_NOWRITE, &f->ncid);
-    if (st != NC_NOERR) {
-        f->ncid = -1;
-        log_error("%s: cannot open as NetCDF: %s", f->path, nc_strerror(st));
+    char why[512];
+    if (!data_nc_open(f->path, &f->ncid, &f->layout, why, sizeof(why))) {
+        log_error("%s: %s", f->path, why);
         return false;
     }
     int dims[4], dstag[4], lx, ly, lz, lzs, lt;
@@ -1064,7 +1065,8 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     }
     const char *path = w->files[w->steps[step].file].path;
     struct selection s;
-    if (!make_selection(w, d, &s))
+    if (!make_selection(w, d, &s) ||
+        !data_nc_still_whole(path, &w->files[w->steps[step].file].layout))
         return false;
     size_t need = wrf_step_bytes(w, d);
     if (d->memory_mb > 0 && (double)need > d->memory_mb * 1048576.0) {

@@ -28,4 +28,14 @@ if [ $gl -eq 1 ]; then
         "${small[@]}" --input fifo -o x.png
     check "it says so" stderr_has "fifo: not a regular file (a FIFO)"
 fi
+
+# ---- NetCDF: the header checked against the file before netcdf-c reads it ---------------
+"$anvil" --quiet synth -o storm.nc --size 8x8x4 --steps 3 || fail=1
+head -c 30000 storm.nc >cut.nc
+expect_exit 1 "info on a synth file cut short" "$anvil" info cut.nc
+check "it names the file and says truncated" stderr_has "cut.nc: 64-bit offset NetCDF header: .*truncated"
+check "nothing was described" test ! -s out
+head -c 14 storm.nc >tiny.nc
+expect_exit 1 "info on the file's first 14 bytes" "$anvil" info tiny.nc
+check "it says the header ends early" stderr_has "tiny.nc: .*the header ends early"
 finish

@@ -43,8 +43,8 @@ static const char *make_binned(const char *name, const struct binned_desc *d)
     int vfirst, vnseg, vinfo, vp0, vlon, vlat;
     CHECK(nc_def_var(nc, "Id_of_first_segment_in_a_bin", NC_INT, 1, &db, &vfirst));
     CHECK(nc_def_var(nc, "N_segments_in_a_bin", NC_SHORT, 1, &db, &vnseg));
-    CHECK(nc_def_var(nc, "Embedded_npts_levels_exit_entry_for_a_segment", NC_INT, 1, &dseg,
-                     &vinfo));
+    CHECK(
+        nc_def_var(nc, "Embedded_npts_levels_exit_entry_for_a_segment", NC_INT, 1, &dseg, &vinfo));
     CHECK(nc_def_var(nc, "Id_of_first_point_in_a_segment", NC_INT, 1, &dseg, &vp0));
     CHECK(nc_def_var(nc, "Relative_longitude_from_SW_corner_of_bin", NC_SHORT, 1, &dp, &vlon));
     CHECK(nc_def_var(nc, "Relative_latitude_from_SW_corner_of_bin", NC_SHORT, 1, &dp, &vlat));
@@ -76,9 +76,15 @@ static const char *make_binned(const char *name, const struct binned_desc *d)
 }
 
 /* 2 x 1 bins of 180 degrees: bin 0 covers longitudes 0..180, latitudes -90..90. */
-static const struct binned_desc good = {
-    .bin_minutes = 10800, .bins_x = 2, .bins_y = 1, .n_bins = 2,
-    .seg_bin_first = 0, .seg_bin_count = 1, .p0 = 0, .npts = 5, .n_points = 5};
+static const struct binned_desc good = {.bin_minutes = 10800,
+                                        .bins_x = 2,
+                                        .bins_y = 1,
+                                        .n_bins = 2,
+                                        .seg_bin_first = 0,
+                                        .seg_bin_count = 1,
+                                        .p0 = 0,
+                                        .npts = 5,
+                                        .n_points = 5};
 
 static const double whole_bin[4] = {-90.0, 90.0, 0.0, 180.0};
 
