@@ -346,7 +346,7 @@ bool extfile_probe(const char *path)
     return yes;
 }
 
-struct extfile *extfile_open(const char *path)
+struct extfile *extfile_open(const char *path, double memory_mb)
 {
     struct extfile *f = calloc(1, sizeof(*f));
     if (!f) {
@@ -384,6 +384,16 @@ struct extfile *extfile_open(const char *path)
     for (int a = 0; a < 3; a++) {
         if (!read_axis(f, a, dims[3 - a]))
             goto error;
+    }
+    /* A step becomes two floats per voxel; judged from the dimensions, in double (their
+     * product may not fit a size_t). */
+    const int *n = f->grid.n;
+    double step_bytes = 2.0 * sizeof(float) * n[0] * n[1] * n[2] + sizeof(float) * n[0] * n[1];
+    if ((memory_mb > 0 && step_bytes > memory_mb * 1048576.0) || step_bytes > 0x1p62) {
+        log_error("%s: one time step of %d x %d x %d voxels needs %.0f MiB, above the budget "
+                  "data.memory = %.0f MiB",
+                  path, n[0], n[1], n[2], step_bytes / 1048576.0, memory_mb);
+        goto error;
     }
     for (int b = 0; b < 2; b++) {
         nc_type type;

@@ -518,7 +518,30 @@ error:
     return NULL;
 }
 
-struct wrf *wrf_open(const char *const *paths, int count)
+/* What opening allocates, in bytes, judged from the dimensions before anything is read: up to
+ * five 2-D metadata fields (XLAT, XLONG, HGT, LANDMASK, LU_INDEX) and two planes of the model
+ * top's scratch, the dates and the steps of every file. */
+static bool open_fits(const struct wrf *w, double memory_mb)
+{
+    const char *path = w->files[0].path;
+    double plane = (double)w->meta.nx * w->meta.ny * sizeof(float), steps = 0.0;
+    for (int i = 0; i < w->file_count; i++)
+        steps += w->files[i].ntimes;
+    double need = 7.0 * plane + steps * (256.0 + sizeof(struct wrf_step));
+    if (memory_mb > 0 && need > memory_mb * 1048576.0) {
+        log_error("%s: opening a grid of %d x %d columns and %.0f time steps needs %.0f MiB, "
+                  "above the budget data.memory = %.0f MiB",
+                  path, w->meta.nx, w->meta.ny, steps, need / 1048576.0, memory_mb);
+        return false;
+    }
+    if (steps > INT32_MAX) {
+        log_error("%s: %.0f time steps in all: more than anvil counts", path, steps);
+        return false;
+    }
+    return true;
+}
+
+struct wrf *wrf_open(const char *const *paths, int count, double memory_mb)
 {
     if (count <= 0) {
         log_error("no WRF files given");
@@ -557,8 +580,11 @@ struct wrf *wrf_open(const char *const *paths, int count)
         if (!open_file(&w->files[i], i ? w : NULL, i ? &w->files[0] : NULL, &w->meta.nx,
                        &w->meta.ny, &w->meta.nz, &w->nzs))
             goto error;
-        total += w->files[i].ntimes;
     }
+    if (!open_fits(w, memory_mb))
+        goto error;
+    for (int i = 0; i < n; i++)
+        total += w->files[i].ntimes; /* at most INT32_MAX in all (open_fits) */
     w->steps = calloc((size_t)total, sizeof(*w->steps));
     if (!w->steps) {
         log_error("out of memory for %d time steps", total);
@@ -697,16 +723,18 @@ size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d)
     struct selection s;
     if (!make_selection(w, d, &s))
         return 0;
-    size_t cols = (size_t)s.nx * s.ny;
-    size_t out = arrays_out(w, d) * cols * (size_t)s.nz * sizeof(float);
+    /* In double: the dimensions come from the file, and their product may not fit. */
+    double cols = (double)s.nx * s.ny;
+    double out = (double)arrays_out(w, d) * cols * s.nz * sizeof(float);
     /* Scratch: summed geopotential on staggered levels and two mass-level buffers. */
-    size_t scratch = cols * ((size_t)w->nzs + 2 * (size_t)w->meta.nz) * sizeof(float);
+    double scratch = cols * ((double)w->nzs + 2.0 * w->meta.nz) * sizeof(float);
     /* Temperature and wind speed: a third mass-level buffer; W on its staggered levels. */
     if (d->temperature || (d->wind && w->meta.has_wind))
-        scratch += cols * (size_t)w->meta.nz * sizeof(float);
+        scratch += cols * w->meta.nz * sizeof(float);
     if (d->wind && w->meta.has_w)
-        scratch += cols * (size_t)w->nzs * sizeof(float);
-    return out + scratch;
+        scratch += cols * w->nzs * sizeof(float);
+    double total = out + scratch;
+    return total >= (double)SIZE_MAX ? SIZE_MAX : (size_t)total;
 }
 
 /* Reads V over the selection's columns shifted by (OX, OY) points (a staggered variable's
@@ -1069,7 +1097,7 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         !data_nc_still_whole(path, &w->files[w->steps[step].file].layout))
         return false;
     size_t need = wrf_step_bytes(w, d);
-    if (d->memory_mb > 0 && (double)need > d->memory_mb * 1048576.0) {
+    if ((d->memory_mb > 0 && (double)need > d->memory_mb * 1048576.0) || need == SIZE_MAX) {
         log_error("%s: one time step on a %d x %d x %d grid needs %.0f MiB, above the budget "
                   "data.memory = %.0f MiB: subsample with data.stride or data.crop (or fewer "
                   "data.levels)",

@@ -38,4 +38,12 @@ check "nothing was described" test ! -s out
 head -c 14 storm.nc >tiny.nc
 expect_exit 1 "info on the file's first 14 bytes" "$anvil" info tiny.nc
 check "it says the header ends early" stderr_has "tiny.nc: .*the header ends early"
+# 20000 x 20000 columns declared in 18 KB: opening is bounded by the budget (info's --memory).
+ncgen -k nc4 -o huge.nc "$src/tests/data/hostile/wrf_20000x20000.cdl"
+expect_exit 1 "info on 20000 x 20000 columns in 18 KB" timeout 20 "$anvil" info huge.nc
+check "it gives the budget" stderr_has "huge.nc: opening a grid of 20000 x 20000 columns .* data.memory = 4096 MiB"
+"$anvil" --quiet synth -o step.nc --size 40x40x20 || fail=1
+expect_exit 1 "info --memory 1 on a 40 x 40 x 20 step" "$anvil" info --memory 1 step.nc
+check "its step is above that budget" stderr_has "step.nc: one time step .* data.memory = 1 MiB"
+expect_exit 1 "info --memory with no number" "$anvil" info --memory lots storm.nc
 finish

@@ -76,7 +76,7 @@ static double now_s(void)
 /* Opens PATH and reads every step: true only when all of it reads. */
 static bool read_all(const char *path)
 {
-    struct wrf *w = wrf_open(&path, 1);
+    struct wrf *w = wrf_open(&path, 1, 0.0);
     if (!w)
         return false;
     struct wrf_desc d;
@@ -130,7 +130,7 @@ static void test_cut_short_while_open(void **state)
     snprintf(path, sizeof(path), "%s", test_tmp_path("open.nc"));
     write_synth(path, 6, 5, 4, 3, 0);
     const char *p = path;
-    struct wrf *w = wrf_open(&p, 1);
+    struct wrf *w = wrf_open(&p, 1, 0.0);
     assert_non_null(w);
     struct wrf_desc d;
     wrf_desc_defaults(&d);
@@ -185,6 +185,53 @@ static void test_one_byte_changed(void **state)
     free(b);
 }
 
+static void test_budget_bounds_opening(void **state)
+{
+    /* 20000 x 20000 columns declared in a few KB of NetCDF-4, no data written: the metadata
+     * alone would take 10 GiB (6.3 GB of it touched before the budget applied to opening). */
+    char path[512];
+    snprintf(path, sizeof(path), "%s", test_tmp_path("huge.nc"));
+    int nc, dt, ds, dx, dy, dz, dzs, v;
+    assert_int_equal(nc_create(path, NC_CLOBBER | NC_NETCDF4, &nc), NC_NOERR);
+    nc_def_dim(nc, "Time", NC_UNLIMITED, &dt);
+    nc_def_dim(nc, "DateStrLen", 19, &ds);
+    nc_def_dim(nc, "west_east", 20000, &dx);
+    nc_def_dim(nc, "south_north", 20000, &dy);
+    nc_def_dim(nc, "bottom_top", 2, &dz);
+    nc_def_dim(nc, "bottom_top_stag", 3, &dzs);
+    float dxy = 1000.0f;
+    nc_put_att_float(nc, NC_GLOBAL, "DX", NC_FLOAT, 1, &dxy);
+    nc_put_att_float(nc, NC_GLOBAL, "DY", NC_FLOAT, 1, &dxy);
+    int d3[3] = {dt, dy, dx}, d4[4] = {dt, dz, dy, dx}, d4s[4] = {dt, dzs, dy, dx};
+    int dtimes[2] = {dt, ds};
+    nc_def_var(nc, "Times", NC_CHAR, 2, dtimes, &v);
+    const char *meta[3] = {"XLAT", "XLONG", "HGT"}, *mass[3] = {"P", "PB", "T"};
+    for (int i = 0; i < 3; i++) {
+        nc_def_var(nc, meta[i], NC_FLOAT, 3, d3, &v);
+        nc_def_var(nc, mass[i], NC_FLOAT, 4, d4, &v);
+    }
+    nc_def_var(nc, "PH", NC_FLOAT, 4, d4s, &v);
+    nc_def_var(nc, "PHB", NC_FLOAT, 4, d4s, &v);
+    nc_enddef(nc);
+    size_t start[2] = {0, 0}, count[2] = {1, 19};
+    int vt;
+    nc_inq_varid(nc, "Times", &vt);
+    assert_int_equal(nc_put_vara_text(nc, vt, start, count, "2000-01-01_00:00:00"), NC_NOERR);
+    assert_int_equal(nc_close(nc), NC_NOERR);
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    assert_true(st.st_size < 100000);
+
+    unsigned errors = log_error_count();
+    double t0 = now_s();
+    const char *p = path;
+    assert_null(wrf_open(&p, 1, 4096.0));
+    assert_true(now_s() - t0 < 1.0);
+    assert_int_equal(log_error_count(), errors + 1);
+    assert_non_null(strstr(log_last_error(), path));
+    assert_non_null(strstr(log_last_error(), "data.memory = 4096 MiB"));
+}
+
 int main(void)
 {
     log_set_level(LOG_NONE);
@@ -192,6 +239,7 @@ int main(void)
         cmocka_unit_test(test_cut_short_before_open),
         cmocka_unit_test(test_cut_short_while_open),
         cmocka_unit_test(test_one_byte_changed),
+        cmocka_unit_test(test_budget_bounds_opening),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
