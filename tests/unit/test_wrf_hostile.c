@@ -232,14 +232,153 @@ static void test_budget_bounds_opening(void **state)
     assert_non_null(strstr(log_last_error(), "data.memory = 4096 MiB"));
 }
 
+/* Sets the global attribute NAME of PATH to V. */
+static void set_global(const char *path, const char *name, double v)
+{
+    int nc;
+    assert_int_equal(nc_open(path, NC_WRITE, &nc), NC_NOERR);
+    assert_int_equal(nc_redef(nc), NC_NOERR);
+    assert_int_equal(nc_put_att_double(nc, NC_GLOBAL, name, NC_FLOAT, 1, &v), NC_NOERR);
+    assert_int_equal(nc_close(nc), NC_NOERR);
+}
+
+static void expect_open_refused(const char *const *paths, int n, const char *word)
+{
+    unsigned errors = log_error_count();
+    assert_null(wrf_open(paths, n, 0.0));
+    assert_int_equal(log_error_count(), errors + 1);
+    if (!strstr(log_last_error(), paths[n - 1]) || !strstr(log_last_error(), word)) {
+        fprintf(stderr, "message \"%s\" lacks \"%s\"\n", log_last_error(), word);
+        fail();
+    }
+}
+
+static void test_implausible_spacing(void **state)
+{
+    char path[512];
+    snprintf(path, sizeof(path), "%s", test_tmp_path("dx.nc"));
+    write_synth(path, 4, 4, 3, 1, 0);
+    const char *p = path;
+    /* DX = 1e-30 m was accepted (a 188 M-vertex mesh, a minute of work, exit 0). */
+    set_global(path, "DX", 1e-30);
+    expect_open_refused(&p, 1, "DX = 1e-30 m");
+    set_global(path, "DX", 1500.0);
+    set_global(path, "DY", 1e9);
+    expect_open_refused(&p, 1, "expected a grid spacing from 0.1 m to 1000 km");
+    set_global(path, "DY", 1500.0);
+    struct wrf *w = wrf_open(&p, 1, 0.0);
+    assert_non_null(w);
+    wrf_close(w);
+}
+
+static void test_series_spacing_differs(void **state)
+{
+    /* Two files of one grid, one with a different DX: not one series (the first DX was
+     * taken for both). */
+    char a[512], b[512];
+    snprintf(a, sizeof(a), "%s", test_tmp_path("s0.nc"));
+    snprintf(b, sizeof(b), "%s", test_tmp_path("s1.nc"));
+    write_synth(a, 4, 4, 3, 1, 0);
+    write_synth(b, 4, 4, 3, 1, 10);
+    set_global(b, "DX", 3000.0);
+    const char *paths[2] = {a, b};
+    expect_open_refused(paths, 2, "differs from");
+    assert_non_null(strstr(log_last_error(), a));
+}
+
+/* Variable NAME of PATH (a float variable) times K plus ADD, everywhere. */
+static void scale_var(const char *path, const char *name, float k, float add)
+{
+    int nc, v, ndims, dims[NC_MAX_VAR_DIMS];
+    assert_int_equal(nc_open(path, NC_WRITE, &nc), NC_NOERR);
+    assert_int_equal(nc_inq_varid(nc, name, &v), NC_NOERR);
+    assert_int_equal(nc_inq_varndims(nc, v, &ndims), NC_NOERR);
+    assert_int_equal(nc_inq_vardimid(nc, v, dims), NC_NOERR);
+    size_t n = 1;
+    for (int i = 0; i < ndims; i++) {
+        size_t len;
+        nc_inq_dimlen(nc, dims[i], &len);
+        n *= len;
+    }
+    float *buf = malloc(n * sizeof(float));
+    assert_int_equal(nc_get_var_float(nc, v, buf), NC_NOERR);
+    for (size_t i = 0; i < n; i++)
+        buf[i] = buf[i] * k + add;
+    assert_int_equal(nc_put_var_float(nc, v, buf), NC_NOERR);
+    free(buf);
+    assert_int_equal(nc_close(nc), NC_NOERR);
+}
+
+static void test_implausible_heights(void **state)
+{
+    /* Geopotential a thousand times too large: heights of thousands of km. */
+    char path[512];
+    snprintf(path, sizeof(path), "%s", test_tmp_path("z.nc"));
+    write_synth(path, 4, 4, 3, 2, 0);
+    scale_var(path, "PHB", 1000.0f, 0.0f);
+    scale_var(path, "PH", 1000.0f, 0.0f);
+    expect_refused(path, "a model top at");
+    assert_non_null(strstr(log_last_error(), "expected -1000 m to 100 km above sea level"));
+    /* Every level 5 km lower: a plausible top, a ground 4 km below the Dead Sea. */
+    write_synth(path, 4, 4, 3, 2, 0);
+    scale_var(path, "PH", 1.0f, -5000.0f * 9.81f);
+    expect_refused(path, "a height of -5000 m in column (0, 0), level 0");
+}
+
+static void test_implausible_times(void **state)
+{
+    char path[512];
+    snprintf(path, sizeof(path), "%s", test_tmp_path("t.nc"));
+    write_synth(path, 4, 4, 3, 2, 0);
+    int nc, v;
+    assert_int_equal(nc_open(path, NC_WRITE, &nc), NC_NOERR);
+    assert_int_equal(nc_inq_varid(nc, "Times", &v), NC_NOERR);
+    size_t start[2] = {1, 0}, count[2] = {1, 19};
+    assert_int_equal(nc_put_vara_text(nc, v, start, count, "2000-13-45_99:\377\001:00"), NC_NOERR);
+    assert_int_equal(nc_close(nc), NC_NOERR);
+    const char *p = path;
+    expect_open_refused(&p, 1, "time 1: \"2000-13-45_99:\\xff\\x01:00\" is not a date");
+}
+
+static void test_series_with_a_gap(void **state)
+{
+    /* Five files ten minutes apart matched by a glob, the fourth gone: the series opens, and
+     * one warning says which step is missing. */
+    char dir[512], pattern[600];
+    snprintf(dir, sizeof(dir), "%s/gap", test_tmpdir());
+    assert_int_equal(mkdir(dir, 0700), 0);
+    for (int i = 0; i < 5; i++) {
+        char path[600];
+        snprintf(path, sizeof(path), "%s/wrfout_%d.nc", dir, i);
+        write_synth(path, 4, 4, 3, 1, 10 * i);
+        if (i == 3)
+            assert_int_equal(unlink(path), 0);
+    }
+    snprintf(pattern, sizeof(pattern), "%s/wrfout_*.nc", dir);
+    const char *p = pattern;
+    unsigned warns = log_warn_count();
+    struct wrf *w = wrf_open(&p, 1, 0.0);
+    assert_non_null(w);
+    assert_int_equal(wrf_step_count(w), 4);
+    assert_int_equal(log_warn_count(), warns + 1);
+    wrf_close(w);
+    /* Evenly spaced: no warning. */
+    snprintf(pattern, sizeof(pattern), "%s/wrfout_[012].nc", dir);
+    w = wrf_open(&p, 1, 0.0);
+    assert_non_null(w);
+    assert_int_equal(log_warn_count(), warns + 1);
+    wrf_close(w);
+}
+
 int main(void)
 {
     log_set_level(LOG_NONE);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_cut_short_before_open),
-        cmocka_unit_test(test_cut_short_while_open),
-        cmocka_unit_test(test_one_byte_changed),
-        cmocka_unit_test(test_budget_bounds_opening),
+        cmocka_unit_test(test_cut_short_before_open), cmocka_unit_test(test_cut_short_while_open),
+        cmocka_unit_test(test_one_byte_changed),      cmocka_unit_test(test_budget_bounds_opening),
+        cmocka_unit_test(test_implausible_spacing),   cmocka_unit_test(test_series_spacing_differs),
+        cmocka_unit_test(test_implausible_heights),   cmocka_unit_test(test_implausible_times),
+        cmocka_unit_test(test_series_with_a_gap),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
