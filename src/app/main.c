@@ -5,6 +5,7 @@
 #include "app/app.h"
 #include "app/cmd_bench.h"
 #include "app/cmd_data.h"
+#include "common/fatal.h"
 #include "common/log.h"
 #include "config/config.h"
 #include "config/display_config.h"
@@ -39,6 +40,7 @@ static void usage(FILE *out)
 
 int main(int argc, char **argv)
 {
+    fatal_install();
     int i = 1;
     for (; i < argc && argv[i][0] == '-'; i++) {
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
@@ -68,8 +70,11 @@ int main(int argc, char **argv)
         return EXIT_USAGE;
     }
     for (size_t c = 0; c < sizeof(commands) / sizeof(commands[0]); c++) {
-        if (strcmp(argv[i], commands[c].name) == 0)
-            return commands[c].run(argc - i, argv + i);
+        if (strcmp(argv[i], commands[c].name) == 0) {
+            int rc = commands[c].run(argc - i, argv + i);
+            fatal_exiting(rc); /* the libraries' exit handlers run after this */
+            return rc;
+        }
     }
     fprintf(stderr, "anvil: unknown command \"%s\"\n", argv[i]);
     usage(stderr);

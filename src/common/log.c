@@ -12,6 +12,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "common/fatal.h"
+
 static pthread_mutex_t log_lock = PTHREAD_MUTEX_INITIALIZER;
 static enum log_level current_level = LOG_INFO;
 static unsigned errors, warnings;
@@ -191,6 +193,7 @@ bool file_write_atomic(const char *path, const void *data, size_t len)
         free(tmp);
         return false;
     }
+    fatal_track(tmp); /* removed if a signal ends the process before the rename */
     /* mkstemp makes the file 0600: give it what a plain create would (0666 less umask). */
     mode_t mask = umask(0);
     umask(mask);
@@ -223,6 +226,7 @@ bool file_write_atomic(const char *path, const void *data, size_t len)
         log_error("%s: cannot replace: %s", path, strerror(errno));
         goto error_tmp;
     }
+    fatal_untrack(tmp);
     free(tmp);
     return true;
 
@@ -230,6 +234,7 @@ error_tmp:
     if (fd >= 0)
         close(fd);
     unlink(tmp);
+    fatal_untrack(tmp);
     free(tmp);
     return false;
 }

@@ -94,7 +94,7 @@ static void *read_array(const char *path, int ncid, const char *name, size_t n, 
 static bool binned_read(const char *path, struct binned *b)
 {
     memset(b, 0, sizeof(*b));
-    data_nc_lock();
+    data_nc_lock_file(path, "reading", false);
     int ncid;
     char why[512];
     if (!data_nc_open(path, &ncid, NULL, why, sizeof(why))) {

@@ -237,7 +237,7 @@ bool extfile_writer_add(struct extfile_writer *w, const struct ext_volume *v, co
     }
     if (!date)
         date = "";
-    data_nc_lock();
+    data_nc_lock_file(w->path, "writing", true);
     bool ok = true;
     if (!w->defined) {
         ok = define(w, date);
@@ -353,7 +353,7 @@ bool extfile_probe(const char *path)
 {
     int nc, var;
     char why[512];
-    data_nc_lock();
+    data_nc_lock_file(path, "reading", false);
     bool yes = data_nc_open(path, &nc, NULL, why, sizeof(why));
     if (yes) {
         yes = nc_inq_varid(nc, beta_names[0], &var) == NC_NOERR;
@@ -377,7 +377,7 @@ struct extfile *extfile_open(const char *path, double memory_mb)
         log_error("%s: out of memory", path);
         return NULL;
     }
-    data_nc_lock();
+    data_nc_lock_file(f->path, "reading", false);
     char why[512];
     if (!data_nc_open(path, &f->ncid, &f->layout, why, sizeof(why))) {
         log_error("%s: %s", path, why);
@@ -458,7 +458,7 @@ void extfile_close(struct extfile *f)
     if (!f)
         return;
     if (f->ncid >= 0) {
-        data_nc_lock();
+        data_nc_lock_file(f->path, "closing", false);
         nc_close(f->ncid);
         data_nc_unlock();
     }
@@ -500,7 +500,7 @@ bool extfile_read_step(struct extfile *f, int step, struct ext_volume *out,
     const struct grid3 *g = &f->grid;
     size_t plane = (size_t)g->n[0] * g->n[1];
     bool ok = true;
-    data_nc_lock();
+    data_nc_lock_file(f->path, "reading", false);
     for (int b = 0; b < 2 && ok; b++) {
         float fv = NC_FILL_FLOAT;
         bool has_fv = nc_get_att_float(f->ncid, f->var_beta[b], "_FillValue", &fv) == NC_NOERR;

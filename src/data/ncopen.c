@@ -469,7 +469,7 @@ bool data_nc_open(const char *path, int *ncid, struct data_nc_layout *layout, ch
     close(fd);
     if (!ok)
         return false;
-    data_nc_lock();
+    data_nc_lock_file(path, "opening", false);
     int status = nc_open(path, NC_NOWRITE, ncid);
     data_nc_unlock();
     if (status != NC_NOERR) {

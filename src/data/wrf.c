@@ -651,8 +651,11 @@ struct wrf *wrf_open(const char *const *paths, int count, double memory_mb)
     data_nc_lock();
     int total = 0;
     for (int i = 0; i < n; i++) {
-        if (!open_file(&w->files[i], i ? w : NULL, i ? &w->files[0] : NULL, &w->meta.nx,
-                       &w->meta.ny, &w->meta.nz, &w->nzs))
+        data_nc_lock_file(w->files[i].path, "reading", false);
+        bool ok = open_file(&w->files[i], i ? w : NULL, i ? &w->files[0] : NULL, &w->meta.nx,
+                            &w->meta.ny, &w->meta.nz, &w->nzs);
+        data_nc_unlock();
+        if (!ok)
             goto error;
     }
     if (!open_fits(w, memory_mb))
@@ -666,9 +669,12 @@ struct wrf *wrf_open(const char *const *paths, int count, double memory_mb)
     }
     int dims_time;
     for (int i = 0, at = 0; i < n; i++) {
+        data_nc_lock_file(w->files[i].path, "reading", false);
         nc_inq_dimid(w->files[i].ncid, "Time", &dims_time);
-        if (!read_times(w->files[i].path, w->files[i].ncid, dims_time, w->files[i].ntimes,
-                        w->steps + at, i))
+        bool ok = read_times(w->files[i].path, w->files[i].ncid, dims_time, w->files[i].ntimes,
+                             w->steps + at, i);
+        data_nc_unlock();
+        if (!ok)
             goto error;
         at += w->files[i].ntimes;
     }
@@ -686,7 +692,10 @@ struct wrf *wrf_open(const char *const *paths, int count, double memory_mb)
             }
         }
     }
-    if (!read_meta(w) || !compute_auto_top(w))
+    data_nc_lock_file(w->files[w->steps[0].file].path, "reading", false);
+    bool meta_ok = read_meta(w) && compute_auto_top(w);
+    data_nc_unlock();
+    if (!meta_ok)
         goto error;
     data_nc_unlock();
     if (dated)
@@ -703,13 +712,14 @@ void wrf_close(struct wrf *w)
 {
     if (!w)
         return;
-    data_nc_lock();
     for (int i = 0; i < w->file_count; i++) {
-        if (w->files[i].ncid >= 0)
+        if (w->files[i].ncid >= 0) {
+            data_nc_lock_file(w->files[i].path, "closing", false);
             nc_close(w->files[i].ncid);
+            data_nc_unlock();
+        }
         free(w->files[i].path);
     }
-    data_nc_unlock();
     free(w->files);
     free(w->steps);
     free(w->meta.xlat);
@@ -1199,7 +1209,7 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         goto done;
     }
 
-    data_nc_lock();
+    data_nc_lock_file(path, "reading", false);
     /* Heights: (PH + PHB) / g on staggered levels. */
     float *phb = malloc(c.cols * (size_t)c.nzs * sizeof(float));
     if (!phb) {

@@ -46,4 +46,46 @@ check "it gives the budget" stderr_has "huge.nc: opening a grid of 20000 x 20000
 expect_exit 1 "info --memory 1 on a 40 x 40 x 20 step" "$anvil" info --memory 1 step.nc
 check "its step is above that budget" stderr_has "step.nc: one time step .* data.memory = 1 MiB"
 expect_exit 1 "info --memory with no number" "$anvil" info --memory lots storm.nc
+
+# ---- a full disk: HDF5 crashed in its exit handler after the failed write (exit 139) -------
+# A file size limit with SIGXFSZ ignored makes writes fail as on a full disk.
+echo "the old file" >full.nc
+(trap '' XFSZ; ulimit -f 20; exec "$anvil" --quiet convert step.nc -o full.nc) 2>"$tmp/err"
+rc=$?
+check "convert onto a full disk exits 4 (got $rc)" test $rc -eq 4
+check "it names the file and the library's error" stderr_has "full.nc.tmp.*NetCDF: HDF error"
+check "no temporary file is left" test -z "$(compgen -G 'full.nc.tmp*')"
+check "the old file is kept" grep -q "the old file" full.nc
+
+# ---- signals: SIGINT and SIGTERM remove the temporary file and keep the old one -----------
+# Runs COMMAND... in the background (SIGINT not ignored, as it is for a script's background
+# jobs), waits for its temporary file OUT.tmp*, sends SIG, and leaves the exit code in $rc.
+interrupt() { # SIG OUT COMMAND...
+    local sig=$1 out=$2
+    shift 2
+    env --default-signal=INT "$@" 2>"$tmp/err" &
+    local pid=$! n=0
+    until compgen -G "$out.tmp*" >/dev/null || ! kill -0 $pid 2>/dev/null || [ $n -ge 2000 ]; do
+        sleep 0.01
+        n=$((n + 1))
+    done
+    kill -"$sig" $pid
+    wait $pid
+    rc=$?
+}
+"$anvil" --quiet synth -o series.nc --size 64x64x32 --steps 8 || fail=1
+for sig in INT TERM; do
+    code=$([ $sig = INT ] && echo 130 || echo 143)
+    echo "the old file" >kept.nc
+    interrupt $sig kept.nc "$anvil" synth -o kept.nc --size 128x128x32 --steps 10000
+    check "synth stopped by SIG$sig exits $code (got $rc)" test $rc -eq $code
+    check "it says so and what it removed" stderr_has "interrupted (SIG$sig); removed kept.nc.tmp"
+    check "no temporary file is left" test -z "$(compgen -G 'kept.nc.tmp*')"
+    check "the old file is kept" grep -q "the old file" kept.nc
+    interrupt $sig kept.nc "$anvil" convert series.nc -o kept.nc
+    check "convert stopped by SIG$sig exits $code (got $rc)" test $rc -eq $code
+    check "no temporary file is left" test -z "$(compgen -G 'kept.nc.tmp*')"
+    check "the old file is kept" grep -q "the old file" kept.nc
+done
+rm -f series.nc
 finish
