@@ -180,13 +180,69 @@ char *file_read_all(const char *path, size_t *len_out)
     return text;
 }
 
+bool file_write_target(const char *path, char *target, size_t size, unsigned *mode)
+{
+    mode_t mask = umask(0);
+    umask(mask);
+    *mode = 0666 & ~mask;
+    struct stat st;
+    if (lstat(path, &st) != 0) {
+        if (errno != ENOENT) {
+            log_error("%s: cannot write: %s", path, strerror(errno));
+            return false;
+        }
+        if (snprintf(target, size, "%s", path) >= (int)size) {
+            log_error("%s: path too long", path);
+            return false;
+        }
+        return true; /* a new file */
+    }
+    if (S_ISLNK(st.st_mode)) {
+        /* Through the link: the file it points to is replaced, the link stays. */
+        char *real = realpath(path, NULL);
+        if (!real) {
+            log_error("%s: a symbolic link to %s: %s", path,
+                      errno == ENOENT ? "a file that does not exist" : "a file not reached",
+                      strerror(errno));
+            return false;
+        }
+        bool fits = snprintf(target, size, "%s", real) < (int)size;
+        free(real);
+        if (!fits || stat(target, &st) != 0) {
+            log_error("%s: the file its link points to cannot be written", path);
+            return false;
+        }
+    } else if (snprintf(target, size, "%s", path) >= (int)size) {
+        log_error("%s: path too long", path);
+        return false;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        log_error("%s: not a regular file: not replaced", path);
+        return false;
+    }
+    if ((st.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0 || access(target, W_OK) != 0) {
+        log_error("%s: read-only (mode %04o): not replaced (make it writable, or save under "
+                  "another name)",
+                  path, (unsigned)(st.st_mode & 07777));
+        return false;
+    }
+    *mode = st.st_mode & 07777;
+    return true;
+}
+
 bool file_write_atomic(const char *path, const void *data, size_t len)
 {
-    size_t plen = strlen(path);
-    char *tmp = malloc(plen + 16);
-    if (!tmp)
+    char target[4096];
+    unsigned mode;
+    if (!file_write_target(path, target, sizeof(target), &mode))
         return false;
-    snprintf(tmp, plen + 16, "%s.tmpXXXXXX", path);
+    size_t plen = strlen(target);
+    char *tmp = malloc(plen + 16);
+    if (!tmp) {
+        log_error("%s: out of memory", path);
+        return false;
+    }
+    snprintf(tmp, plen + 16, "%s.tmpXXXXXX", target);
     int fd = mkstemp(tmp);
     if (fd < 0) {
         log_error("%s: cannot create a temporary file beside it: %s", path, strerror(errno));
@@ -194,10 +250,8 @@ bool file_write_atomic(const char *path, const void *data, size_t len)
         return false;
     }
     fatal_track(tmp); /* removed if a signal ends the process before the rename */
-    /* mkstemp makes the file 0600: give it what a plain create would (0666 less umask). */
-    mode_t mask = umask(0);
-    umask(mask);
-    if (fchmod(fd, 0666 & ~mask) != 0)
+    /* mkstemp makes the file 0600: give it the old file's mode, or what a plain create would. */
+    if (fchmod(fd, (mode_t)mode) != 0)
         log_warn("%s: cannot set the file's permissions: %s", path, strerror(errno));
     const char *p = data;
     size_t left = len;
@@ -222,7 +276,7 @@ bool file_write_atomic(const char *path, const void *data, size_t len)
         goto error_tmp;
     }
     fd = -1;
-    if (rename(tmp, path) != 0) {
+    if (rename(tmp, target) != 0) {
         log_error("%s: cannot replace: %s", path, strerror(errno));
         goto error_tmp;
     }

@@ -59,8 +59,16 @@ char *file_read_text(const char *path, size_t max, size_t *len_out, char *why, s
 /* file_read_text with MAX = FILE_TEXT_MAX that logs "PATH: reason" on failure. */
 char *file_read_all(const char *path, size_t *len_out);
 
-/* Writes LEN bytes to PATH atomically: a temporary file in the same folder, fsync, rename.
- * On failure the old file is untouched and the reason is logged. */
+/* Where a file written to PATH goes (every writer asks first): PATH itself, or, when PATH is
+ * a symbolic link, the file it points to (so the link stays a link).  An existing target must
+ * be a regular file that may be written: a read-only one (no write permission for us, or for
+ * anyone) is refused rather than replaced.  TARGET (SIZE bytes) receives the path to write and
+ * *MODE the permissions to give it (the existing file's, else 0666 less the umask).  False
+ * after one log_error naming PATH. */
+bool file_write_target(const char *path, char *target, size_t size, unsigned *mode);
+
+/* Writes LEN bytes to PATH atomically (file_write_target, then a temporary file in the same
+ * folder, fsync, rename).  On failure the old file is untouched and the reason is logged. */
 bool file_write_atomic(const char *path, const void *data, size_t len);
 
 /* Monotonic time in milliseconds. */

@@ -62,14 +62,19 @@ void data_nc_unlock(void)
 bool data_nc_create_beside(const char *path, int cmode, char **tmp, int *ncid)
 {
     *ncid = -1;
-    size_t len = strlen(path) + 32;
+    *tmp = NULL;
+    char target[4096];
+    unsigned mode;
+    if (!file_write_target(path, target, sizeof(target), &mode))
+        return false;
+    size_t len = strlen(target) + 32;
     *tmp = malloc(len);
     if (!*tmp) {
         log_error("%s: out of memory", path);
         return false;
     }
     /* A name no other writer can take: mkstemp reserves it, nc_create then clobbers it. */
-    snprintf(*tmp, len, "%s.tmpXXXXXX", path);
+    snprintf(*tmp, len, "%s.tmpXXXXXX", target);
     int fd = mkstemp(*tmp);
     if (fd < 0) {
         log_error("%s: cannot create a temporary file beside it: %s", path, strerror(errno));
@@ -104,6 +109,10 @@ bool data_nc_finish_beside(const char *path, char **tmp, int *ncid, bool ok, int
         log_error("%s: cannot finish writing: %s", *tmp, nc_strerror(st));
         ok = false;
     }
+    char target[4096];
+    unsigned mode = 0644;
+    if (ok)
+        ok = file_write_target(path, target, sizeof(target), &mode);
     if (ok) {
         /* On disk before it replaces the old file. */
         int fd = open(*tmp, O_RDONLY);
@@ -113,11 +122,9 @@ bool data_nc_finish_beside(const char *path, char **tmp, int *ncid, bool ok, int
         }
         if (fd >= 0)
             close(fd);
-        mode_t mask = umask(0);
-        umask(mask);
-        chmod(*tmp, 0666 & ~mask);
+        chmod(*tmp, (mode_t)mode);
     }
-    if (ok && rename(*tmp, path) != 0) {
+    if (ok && rename(*tmp, target) != 0) {
         log_error("%s: cannot move %s into place: %s", path, *tmp, strerror(errno));
         ok = false;
     }

@@ -29,6 +29,26 @@ if [ $gl -eq 1 ]; then
     check "it says so" stderr_has "fifo: not a regular file (a FIFO)"
 fi
 
+# ---- saving a transfer function respects the file it would replace ---------------------
+if [ $gl -eq 1 ]; then
+    printf '0 key menu\n0 aim tab.transfer\n1 button trigger down\n2 button trigger up\n' >save.txt
+    printf '3 aim transfer.function\n4 button trigger down\n5 button trigger up\n' >>save.txt
+    printf '6 aim transfer.save\n7 button trigger down\n8 button trigger up\n' >>save.txt
+    mkdir -p ro link
+    echo "# mine" >ro/tf-1.cfg
+    chmod 0444 ro/tf-1.cfg
+    "$anvil" render "$src/configs/empty.cfg" "${small[@]}" --input save.txt --transfers ro \
+        -o ro.png 2>"$tmp/err"
+    check "a read-only tf-1.cfg is refused" stderr_has "ro/tf-1.cfg: read-only (mode 0444): not replaced"
+    check "and left as it was" test "$(cat ro/tf-1.cfg)" = "# mine" -a "$(stat -c %a ro/tf-1.cfg)" = 444
+    echo "# old" >real.cfg
+    ln -s ../real.cfg link/tf-1.cfg
+    "$anvil" render --quiet "$src/configs/empty.cfg" "${small[@]}" --input save.txt \
+        --transfers link -o link.png
+    check "a symlinked tf-1.cfg stays a link" test -L link/tf-1.cfg
+    check "the file it points to holds the save" grep -q "transfer" real.cfg
+fi
+
 # ---- NetCDF: the header checked against the file before netcdf-c reads it ---------------
 "$anvil" --quiet synth -o storm.nc --size 8x8x4 --steps 3 || fail=1
 head -c 30000 storm.nc >cut.nc
