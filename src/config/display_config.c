@@ -21,8 +21,7 @@ static_assert(sizeof(enum display_head_source) == sizeof(int), "enum size");
 
 static const char *const type_names[] = {"headless", "desktop", "stereo", "cave",
                                          "hmd",      "orbit",   NULL};
-static const char *const stereo_names[] = {"mono", "side-by-side", "anaglyph", "quad-buffer",
-                                           NULL};
+static const char *const stereo_names[] = {"mono", "side-by-side", "anaglyph", "quad-buffer", NULL};
 static const char *const head_names[] = {"fixed", "path", "openhmd", NULL};
 
 const char *display_type_name(enum display_type t)
@@ -273,6 +272,9 @@ static bool check(struct display_config *cfg, const struct config_trace *trace)
         if (trace)
             config_trace_find(trace, at, &file, &w->line);
     }
+    if (!(cfg->near_m < cfg->far_m))
+        return fail(cfg, trace, "display.far", "display.far",
+                    "a far plane beyond display.near (%g m), got %g m", cfg->near_m, cfg->far_m);
     if (cfg->head.source == DISPLAY_HEAD_PATH && cfg->head.path[0] == '\0')
         return fail(cfg, trace, "head.source", "head.path",
                     "a pose file when head.source = \"path\"");
