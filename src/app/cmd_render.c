@@ -237,11 +237,15 @@ static int command(int argc, char **argv, bool run)
     if ((rc = load_configs(&o, cfg, dcfg)) != EXIT_OK)
         goto done;
 
-    struct display_desc dd = {.offscreen = !run, .height = cfg->render.height};
+    enum display_failure why = DISPLAY_FAILED_NONE;
+    struct display_desc dd = {.offscreen = !run, .height = cfg->render.height, .failure = &why};
     scene_camera(cfg, &dd.camera);
     d = display_create(dcfg, &dd);
     if (!d) {
-        rc = !run || !o.display ? EXIT_NO_GPU : EXIT_FAILED;
+        /* 3 is for a missing OpenGL context only: a bad pose file or device is bad input. */
+        rc = why == DISPLAY_FAILED_CONTEXT ? EXIT_NO_GPU
+             : why == DISPLAY_FAILED_INPUT ? EXIT_BAD_INPUT
+                                           : EXIT_FAILED;
         goto done;
     }
     if (!display_update(d, o.time)) {

@@ -101,8 +101,10 @@ static struct display *cave_create(const struct display *base)
                 .stereo = quad,
                 .share_window = gpu_context_window(d->context),
             });
-            if (!ctx)
+            if (!ctx) {
+                display_fail(d, DISPLAY_FAILED_CONTEXT);
                 goto error;
+            }
             display_watch_window(d, gpu_context_window(ctx));
             c->windows[c->window_count++] = ctx;
         }

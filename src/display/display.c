@@ -38,8 +38,12 @@ struct display *display_create(const struct display_config *cfg, const struct di
         if (strcmp(backends[i]->name, name) == 0)
             impl = backends[i];
     }
+    if (desc && desc->failure)
+        *desc->failure = DISPLAY_FAILED_NONE;
     if (!impl) {
         log_error("%s: no display backend \"%s\"", cfg->path, name);
+        if (desc && desc->failure)
+            *desc->failure = DISPLAY_FAILED_INPUT;
         return NULL;
     }
     struct display base = {.impl = impl, .cfg = *cfg};
@@ -48,10 +52,14 @@ struct display *display_create(const struct display_config *cfg, const struct di
     if (base.desc.height < 1)
         base.desc.height = 480;
     struct display *d = impl->create(&base);
-    if (!d)
+    if (!d) {
+        display_fail(&base, DISPLAY_FAILED_OTHER); /* unless the backend said why */
         return NULL;
-    if (!display_head_tracker_init(&d->head, &cfg->head))
+    }
+    if (!display_head_tracker_init(&d->head, &cfg->head)) {
+        display_fail(d, DISPLAY_FAILED_INPUT); /* a pose file, a tracker device */
         goto error;
+    }
     if (!gpu_program_init(&d->compose, "display_compose.comp", NULL))
         goto error;
     if (!display_update(d, 0.0))
@@ -59,8 +67,15 @@ struct display *display_create(const struct display_config *cfg, const struct di
     return d;
 
 error:
+    display_fail(d, DISPLAY_FAILED_OTHER);
     display_destroy(d);
     return NULL;
+}
+
+void display_fail(const struct display *d, enum display_failure why)
+{
+    if (d->desc.failure && *d->desc.failure == DISPLAY_FAILED_NONE)
+        *d->desc.failure = why;
 }
 
 void display_destroy(struct display *d)
@@ -181,6 +196,8 @@ bool display_open_primary(struct display *d, int w, int h, int monitor, bool ste
     d->own_context = d->context != NULL;
     if (d->context && !d->desc.offscreen)
         display_watch_window(d, gpu_context_window(d->context));
+    if (!d->context)
+        display_fail(d, DISPLAY_FAILED_CONTEXT);
     return d->context != NULL;
 }
 

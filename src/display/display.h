@@ -133,6 +133,14 @@ void view_set_finish(struct view_set *set);
 
 struct display;
 
+/* Why display_create returned NULL (the program's exit code follows from it). */
+enum display_failure {
+    DISPLAY_FAILED_NONE,
+    DISPLAY_FAILED_INPUT,   /* what the display config names is wrong: a pose file, a device */
+    DISPLAY_FAILED_CONTEXT, /* no OpenGL 4.5 context (no driver; for windows, no display) */
+    DISPLAY_FAILED_OTHER,   /* anything else (out of memory, a shader) */
+};
+
 struct display_desc {
     bool offscreen;              /* render into textures only (anvil render): no windows */
     struct gpu_context *context; /* offscreen: use this context (not owned); NULL: create an
@@ -140,6 +148,7 @@ struct display_desc {
     int height;                  /* image height of walls without a size (render.height) */
     struct display_camera camera; /* the orbit display's camera until display_layout is given
                                      another (the scene's camera) */
+    enum display_failure *failure; /* receives why display_create failed (may be NULL) */
 };
 
 /* Lists the backends (name, one-line description) for --display help. */
@@ -147,8 +156,8 @@ void display_list(void (*print)(const char *name, const char *what, void *user),
 
 /* Opens the display CFG describes: its windows (or offscreen targets), its HMD device, its
  * head tracker.  The primary context is current on return.  CFG is copied.  Returns NULL
- * (reason logged) when a window, context or device cannot be had.  Destroy with
- * display_destroy (which accepts NULL). */
+ * (reason logged, and its kind in *DESC->failure) when a window, context or device cannot be
+ * had.  Destroy with display_destroy (which accepts NULL). */
 struct display *display_create(const struct display_config *cfg, const struct display_desc *desc);
 void display_destroy(struct display *d);
 

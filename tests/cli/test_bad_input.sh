@@ -29,6 +29,26 @@ if [ $gl -eq 1 ]; then
     check "it says so" stderr_has "fifo: not a regular file (a FIFO)"
 fi
 
+# ---- exit 3 only for a missing OpenGL context: a bad pose file or device is bad input --------
+expect_exit 1 "an unknown OpenHMD device" "$anvil" render "$src/configs/empty.cfg" \
+    --display "$src/displays/hmd.cfg" --set hmd.device=nosuch -o hmd/
+check "it names the device" stderr_has 'no HMD named "nosuch"'
+expect_exit 3 "run without a window system" env -u DISPLAY -u WAYLAND_DISPLAY "$anvil" run \
+    "$src/configs/empty.cfg" --display "$src/displays/hmd.cfg"
+if [ $gl -eq 1 ]; then
+    printf '0 0 1.6 0 0 0 0\n1 0 1.6 0 zero 0 0\n' >bad.path
+    printf 'display = { type = "headless"; };\nhead = { source = "path"; path = "bad.path"; };\n' \
+        >pose.cfg
+    expect_exit 1 "a bad head pose file" "$anvil" render "$src/configs/empty.cfg" \
+        --display pose.cfg -o pose/
+    check "it names the file and line" stderr_has "bad.path:2: expected 7 numbers"
+    printf 'display = { type = "headless"; };\nhead = { source = "path"; path = "fifo"; };\n' \
+        >fifo.cfg
+    expect_exit 1 "a head path that is a FIFO" timeout 20 "$anvil" render \
+        "$src/configs/empty.cfg" --display fifo.cfg -o pose/
+    check "it says so" stderr_has "fifo: not a regular file (a FIFO)"
+fi
+
 # ---- saving a transfer function respects the file it would replace ---------------------
 if [ $gl -eq 1 ]; then
     printf '0 key menu\n0 aim tab.transfer\n1 button trigger down\n2 button trigger up\n' >save.txt
