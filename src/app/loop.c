@@ -6,7 +6,8 @@
 #include "app/app.h"
 #include "common/log.h"
 
-#define SCRIPT_FRAMES_MAX 1000000
+/* A script names frames up to INPUT_SCRIPT_FRAMES_MAX; playing it may take a little more. */
+#define SCRIPT_FRAMES_MAX (INPUT_SCRIPT_FRAMES_MAX + 100000)
 
 /* Seconds since the last call (or the script's frame time); the longest frame for --stats. */
 static double frame_dt(struct session *s, double *last_ms)

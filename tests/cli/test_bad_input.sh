@@ -49,6 +49,22 @@ if [ $gl -eq 1 ]; then
     check "it says so" stderr_has "fifo: not a regular file (a FIFO)"
 fi
 
+# ---- scripts: every frame bounded, every widget known before the first frame ---------------
+if [ $gl -eq 1 ]; then
+    printf '0 key play\n9000000000000000000 key quit\n' >far.txt
+    expect_exit 1 "a script frame of 9e18" timeout 60 "$anvil" render "$src/configs/empty.cfg" \
+        "${small[@]}" --input far.txt -o far.png
+    check "it names the line and the limit" stderr_has "far.txt:2: expected a frame number from 0 to 1000000"
+    printf '0 key menu\n1 aim time.paly\n2 button trigger down\n' >typo.txt
+    expect_exit 1 "a misspelled widget" "$anvil" render "$src/configs/empty.cfg" "${small[@]}" \
+        --input typo.txt -o typo.png
+    check "it names the line and the widget" stderr_has 'typo.txt:2: expected a widget of the menu .*"time.paly"'
+    check "no picture is written" test ! -e typo.png
+    printf '0 key menu\n1 aim light.azimuth\n' >other.txt
+    expect_exit 0 "a widget of another page is known" "$anvil" render "$src/configs/empty.cfg" \
+        "${small[@]}" --input other.txt -o other.png
+fi
+
 # ---- saving a transfer function respects the file it would replace ---------------------
 if [ $gl -eq 1 ]; then
     printf '0 key menu\n0 aim tab.transfer\n1 button trigger down\n2 button trigger up\n' >save.txt
