@@ -1481,15 +1481,25 @@ static char *check_literals(const struct source *src, const struct chunk *ch)
         if (c == '\n') {
             line++;
             out[n++] = t[i++];
-        } else if (c == '"') { /* a string, with its escapes */
+        } else if (c == '"') { /* a string, with its escapes, over lines if it goes on */
+            int first = line;
             out[n++] = t[i++];
-            while (i < len && t[i] != '"' && t[i] != '\n') {
-                if (t[i] == '\\' && i + 1 < len && t[i + 1] != '\n')
+            while (i < len && t[i] != '"') {
+                if (t[i] == '\\' && i + 1 < len)
                     out[n++] = t[i++];
+                line += t[i] == '\n';
                 out[n++] = t[i++];
             }
-            if (i < len && t[i] == '"')
-                out[n++] = t[i++];
+            if (i >= len) {
+                /* (libconfig 1.5 also leaks its string buffer over this) */
+                struct where w = locate(src, ch, first);
+                log_error("%s:%d: syntax error: a string without its closing quote", w.file,
+                          w.line);
+                free(ends);
+                free(out);
+                return NULL;
+            }
+            out[n++] = t[i++];
             last = '"';
         } else if (c == '#' || (c == '/' && i + 1 < len && t[i + 1] == '/')) {
             while (i < len && t[i] != '\n')
@@ -1522,6 +1532,7 @@ static char *check_literals(const struct source *src, const struct chunk *ch)
                 log_error("%s:%d: %.*s: expected a finite number (libconfig has no NaN or "
                           "infinity)",
                           w.file, w.line, (int)(i - start), t + start);
+                free(ends);
                 free(out);
                 return NULL;
             }
@@ -1570,6 +1581,7 @@ static char *check_literals(const struct source *src, const struct chunk *ch)
                 struct where w = locate(src, ch, line);
                 log_error("%s:%d: %.*s: expected an integer of at most 64 bits", w.file, w.line,
                           (int)(end - start), t + start);
+                free(ends);
                 free(out);
                 return NULL;
             }

@@ -70,6 +70,14 @@ static void test_nan_and_infinity(void **state)
     LOAD_ERROR("inf.cfg", "scene = { extent = [60.0, -Inf, 16.0]; };\n",
                "inf.cfg:1: -Inf: expected a finite number");
     LOAD_ERROR("infinity.cfg", "light : { azimuth : INFINITY; };\n", "INFINITY: expected a finite");
+    /* After an integer in an array (its bookkeeping leaked then). */
+    LOAD_ERROR("arr.cfg", "scene = { size = [64, 64, nan]; };\n",
+               "arr.cfg:1: nan: expected a finite");
+    /* A string left open: refused where it begins (libconfig said "syntax error" and leaked). */
+    LOAD_ERROR("open.cfg", "scene = {\n  kind = \"empty;\n};\n",
+               "open.cfg:2: syntax error: a string without its closing quote");
+    /* A string may hold line breaks, and nan or 99999999999 inside it is text. */
+    load_ok("text.cfg", "data = { files = [\"a\nnan 99999999999.nc\"]; };\n");
     /* A setting may be called nan. */
     LOAD_ERROR("name.cfg", "nan = 1;\n", "nan");
     assert_null(strstr(log_last_error(), "finite"));
