@@ -35,7 +35,7 @@ static void usage(FILE *out)
         fprintf(out, "  %-10s %s\n", commands[i].name, commands[i].summary);
     fprintf(out, "\nanvil COMMAND --help shows a command's options.  Exit codes: 0 done, 1 bad "
                  "input (config, data, option value), 2 usage, 3 no OpenGL 4.5 context, "
-                 "4 other failure.\n");
+                 "4 other failure, 130/143 interrupted (SIGINT/SIGTERM).\n");
 }
 
 int main(int argc, char **argv)

@@ -94,6 +94,13 @@ check "nothing was described" test ! -s out
 head -c 14 storm.nc >tiny.nc
 expect_exit 1 "info on the file's first 14 bytes" "$anvil" info tiny.nc
 check "it says the header ends early" stderr_has "tiny.nc: .*the header ends early"
+# A NetCDF-4 file HDF5 crashes on while netcdf-c opens it (found by fuzzing HDF5 inputs; it
+# aborted anvil, exit 134): the crash is the library's, named with the file, exit 1.
+gunzip -c "$src/tests/data/hostile/hdf5_crash.nc.gz" >h5crash.nc
+expect_exit 1 "a file HDF5 crashes on" "$anvil" info h5crash.nc
+check "it names the file" stderr_has "h5crash.nc"
+check "and the library when it crashed" bash -c "! grep -q 'crashed' '$tmp/err' ||
+    grep -q 'netCDF-C (with HDF5) crashed (SIG[A-Z]*) opening h5crash.nc' '$tmp/err'"
 # 20000 x 20000 columns declared in 18 KB: opening is bounded by the budget (info's --memory).
 ncgen -k nc4 -o huge.nc "$src/tests/data/hostile/wrf_20000x20000.cdl"
 expect_exit 1 "info on 20000 x 20000 columns in 18 KB" timeout 20 "$anvil" info huge.nc
