@@ -220,10 +220,12 @@ bool file_write_target(const char *path, char *target, size_t size, unsigned *mo
         log_error("%s: not a regular file: not replaced", path);
         return false;
     }
-    if ((st.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0 || access(target, W_OK) != 0) {
-        log_error("%s: read-only (mode %04o): not replaced (make it writable, or save under "
-                  "another name)",
-                  path, (unsigned)(st.st_mode & 07777));
+    bool read_only = (st.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0;
+    if (read_only || access(target, W_OK) != 0) {
+        log_error("%s: %s (mode %04o): not replaced (make it writable, or save under another "
+                  "name)",
+                  path, read_only ? "read-only" : "not writable by this user",
+                  (unsigned)(st.st_mode & 07777));
         return false;
     }
     *mode = st.st_mode & 07777;
