@@ -291,8 +291,8 @@ int cmd_synth(int argc, char **argv)
             (a == 2 && sd.extent_m[a] > DATA_HEIGHT_MAX_M)) {
             log_error("synth: --size %dx%dx%d --extent %gx%gx%g: cells of %g m along %c; "
                       "expected %g m to %g km, and at most %g km high",
-                      size[0], size[1], size[2], extent_km[0], extent_km[1], extent_km[2],
-                      spacing, "xyz"[a], DATA_SPACING_MIN_M, DATA_SPACING_MAX_M / 1000.0,
+                      size[0], size[1], size[2], extent_km[0], extent_km[1], extent_km[2], spacing,
+                      "xyz"[a], DATA_SPACING_MIN_M, DATA_SPACING_MAX_M / 1000.0,
                       DATA_HEIGHT_MAX_M / 1000.0);
             return EXIT_BAD_INPUT;
         }

@@ -331,9 +331,8 @@ static bool read_axis(struct extfile *f, int a, int dimid)
     f->grid.spacing[a] = b[1] - b[0];
     double top = b[0] + (double)n * (b[1] - b[0]);
     if (f->grid.spacing[a] < DATA_SPACING_MIN_M || f->grid.spacing[a] > DATA_SPACING_MAX_M) {
-        log_error("%s: variable %s: cells of %g m: expected %g m to %g km", f->path,
-                  bnds_names[a], f->grid.spacing[a], DATA_SPACING_MIN_M,
-                  DATA_SPACING_MAX_M / 1000.0);
+        log_error("%s: variable %s: cells of %g m: expected %g m to %g km", f->path, bnds_names[a],
+                  f->grid.spacing[a], DATA_SPACING_MIN_M, DATA_SPACING_MAX_M / 1000.0);
         return false;
     }
     if (a == 2 && (b[0] < DATA_HEIGHT_MIN_M || top > DATA_HEIGHT_MAX_M)) {

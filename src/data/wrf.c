@@ -189,16 +189,16 @@ static bool read_times(const char *path, int ncid, int time_dim, int ntimes, str
         for (int i = (int)n - 1; i >= 0 && (out[t].date[i] == ' ' || out[t].date[i] == '\0'); i--)
             out[t].date[i] = '\0';
         double seconds;
-        if (out[t].date[0] && (strlen(out[t].date) != WRF_DATE_LEN ||
-                               !extfile_parse_date(out[t].date, &seconds))) {
+        if (out[t].date[0] &&
+            (strlen(out[t].date) != WRF_DATE_LEN || !extfile_parse_date(out[t].date, &seconds))) {
             char shown[WRF_DATE_LEN * 4 + 1];
             size_t k = 0;
             for (const char *p = out[t].date; *p && k + 4 < sizeof(shown); p++)
                 k += (size_t)snprintf(shown + k, sizeof(shown) - k,
                                       (*p >= ' ' && *p <= '~') ? "%c" : "\\x%02x",
                                       (unsigned char)*p);
-            log_error("%s: variable Times, time %d: \"%s\" is not a date YYYY-MM-DD_hh:mm:ss",
-                      path, t, shown);
+            log_error("%s: variable Times, time %d: \"%s\" is not a date YYYY-MM-DD_hh:mm:ss", path,
+                      t, shown);
             ok = false;
         }
     }
@@ -436,8 +436,8 @@ static bool open_file(struct wrf_file *f, const struct wrf *ref_w, const struct 
                   f->path);
         return false;
     }
-    if (f->dx < DATA_SPACING_MIN_M || f->dx > DATA_SPACING_MAX_M ||
-        f->dy < DATA_SPACING_MIN_M || f->dy > DATA_SPACING_MAX_M) {
+    if (f->dx < DATA_SPACING_MIN_M || f->dx > DATA_SPACING_MAX_M || f->dy < DATA_SPACING_MIN_M ||
+        f->dy > DATA_SPACING_MAX_M) {
         log_error("%s: global attributes DX = %g m, DY = %g m: expected a grid spacing from %g m "
                   "to %g km",
                   f->path, f->dx, f->dy, DATA_SPACING_MIN_M, DATA_SPACING_MAX_M / 1000.0);
@@ -584,8 +584,8 @@ static void warn_gaps(const struct wrf *w)
             if (k > 1.5 && fabs(k - round(k)) < 1e-6)
                 log_warn("%s: no step between %s and %s (%.0f missing: the other steps are "
                          "%g s apart); a file missing from the series?",
-                         w->files[w->steps[s].file].path, w->steps[s - 1].date,
-                         w->steps[s].date, round(k) - 1.0, usual);
+                         w->files[w->steps[s].file].path, w->steps[s - 1].date, w->steps[s].date,
+                         round(k) - 1.0, usual);
         }
     }
     free(t);
