@@ -19,6 +19,8 @@ enum {
     EXIT_NO_GPU = 3,    /* no OpenGL 4.5 context could be made */
     EXIT_FAILED = 4,    /* the work failed for another reason (out of memory, write error) */
 };
+/* And from common/fatal.h: 128 + the signal after SIGHUP, SIGINT or SIGTERM (129, 130, 143);
+ * 1 or 4 when a library crashed reading or writing a file. */
 
 /* Number options, checked alike in every command (app/options.c): S, the value of OPTION of
  * COMMAND, as an integer (a number) in [LO, HI] into *OUT.  Otherwise false, with "COMMAND:

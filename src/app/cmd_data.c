@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "app/app.h"
 #include "session/scene.h"
@@ -30,9 +31,12 @@ static void print_range(const char *name, const struct wrf_var_stats *s)
     printf("\n");
 }
 
-static int info_extinction(const char *path)
+/* What info may hold of one file (and one step): the default of data.memory. */
+#define INFO_MEMORY_MB 4096.0
+
+static int info_extinction(const char *path, double memory_mb)
 {
-    struct extfile *f = extfile_open(path);
+    struct extfile *f = extfile_open(path, memory_mb);
     if (!f)
         return EXIT_BAD_INPUT;
     const struct grid3 *g = extfile_grid(f);
@@ -70,9 +74,9 @@ static int info_extinction(const char *path)
     return rc;
 }
 
-static int info_wrf(char **paths, int count)
+static int info_wrf(char **paths, int count, double memory_mb)
 {
-    struct wrf *w = wrf_open((const char *const *)paths, count);
+    struct wrf *w = wrf_open((const char *const *)paths, count, memory_mb);
     if (!w)
         return EXIT_BAD_INPUT;
     const struct wrf_meta *m = wrf_get_meta(w);
@@ -106,6 +110,7 @@ static int info_wrf(char **paths, int count)
     struct wrf_desc d;
     wrf_desc_defaults(&d);
     d.qvapor = true;
+    d.memory_mb = memory_mb;
     int rc = EXIT_OK;
     for (int s = 0; s < wrf_step_count(w); s++) {
         struct field_volume v;
@@ -131,17 +136,26 @@ static int info_wrf(char **paths, int count)
 
 int cmd_info(int argc, char **argv)
 {
-    if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
-        FILE *out = argc < 2 ? stderr : stdout;
-        fprintf(out, "usage: anvil info FILE... \n"
+    double memory_mb = INFO_MEMORY_MB;
+    int first = 1;
+    if (argc >= 3 && !strcmp(argv[1], "--memory")) {
+        if (!app_option_double("info", "--memory", argv[2], 1.0, 1048576.0, &memory_mb))
+            return EXIT_BAD_INPUT;
+        first = 3;
+    }
+    if (argc <= first || !strcmp(argv[first], "--help") || !strcmp(argv[first], "-h")) {
+        FILE *out = argc <= first ? stderr : stdout;
+        fprintf(out, "usage: anvil info [--memory MIB] FILE...\n"
                      "  Describes WRF output (one series: several files are ordered by Times)\n"
                      "  or an extinction file: dimensions, species present and absent, time\n"
-                     "  steps and dates, extent, lat/lon box, value ranges, bad-value counts.\n");
-        return argc < 2 ? EXIT_USAGE : EXIT_OK;
+                     "  steps and dates, extent, lat/lon box, value ranges, bad-value counts.\n"
+                     "  --memory: what opening the files and reading one step may take (default\n"
+                     "  4096 MiB, as data.memory).\n");
+        return argc <= first ? EXIT_USAGE : EXIT_OK;
     }
-    if (argc == 2 && extfile_probe(argv[1]))
-        return info_extinction(argv[1]);
-    return info_wrf(argv + 1, argc - 1);
+    if (argc == first + 1 && extfile_probe(argv[first]))
+        return info_extinction(argv[first], memory_mb);
+    return info_wrf(argv + first, argc - first, memory_mb);
 }
 
 /* ---- anvil synth ------------------------------------------------------------------------ */
@@ -272,6 +286,17 @@ int cmd_synth(int argc, char **argv)
     for (int a = 0; a < 3; a++) {
         sd.n[a] = size[a];
         sd.extent_m[a] = extent_km[a] * 1000.0;
+        double spacing = sd.extent_m[a] / size[a];
+        /* What the readers take (data/volume.h): a file they would refuse is not written. */
+        if (spacing < DATA_SPACING_MIN_M || spacing > DATA_SPACING_MAX_M ||
+            (a == 2 && sd.extent_m[a] > DATA_HEIGHT_MAX_M)) {
+            log_error("synth: --size %dx%dx%d --extent %gx%gx%g: cells of %g m along %c; "
+                      "expected %g m to %g km, and at most %g km high",
+                      size[0], size[1], size[2], extent_km[0], extent_km[1], extent_km[2], spacing,
+                      "xyz"[a], DATA_SPACING_MIN_M, DATA_SPACING_MAX_M / 1000.0,
+                      DATA_HEIGHT_MAX_M / 1000.0);
+            return EXIT_BAD_INPUT;
+        }
     }
     struct wrf_write_desc wd = {.cen_lat = lat, .cen_lon = lon};
     struct wrf_writer *w = NULL;
@@ -322,12 +347,13 @@ static void convert_usage(FILE *out)
 /* NetCDF files start with "CDF" (classic) or the HDF5 signature. */
 static bool is_netcdf(const char *path)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
+    char why[160];
+    int fd = file_open_regular(path, why, sizeof(why));
+    if (fd < 0)
         return false;
     unsigned char b[8] = {0};
-    size_t n = fread(b, 1, sizeof(b), f);
-    fclose(f);
+    ssize_t n = read(fd, b, sizeof(b));
+    close(fd);
     return n >= 4 && ((b[0] == 'C' && b[1] == 'D' && b[2] == 'F') ||
                       (b[0] == 0x89 && b[1] == 'H' && b[2] == 'D' && b[3] == 'F'));
 }

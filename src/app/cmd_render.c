@@ -491,7 +491,8 @@ static int command(int argc, char **argv, bool run)
                  (!have_path && !run && o.output &&
                   (o.frames || strchr(o.output, '%') || video_path_supported(o.output)));
 
-    struct display_desc dd = {.offscreen = !run, .height = cfg->render.height};
+    enum display_failure why = DISPLAY_FAILED_NONE;
+    struct display_desc dd = {.offscreen = !run, .height = cfg->render.height, .failure = &why};
     if (cw->active) {
         dd.gpu_device = cluster_local_rank(); /* one GPU per rank of a node */
         dd.partial = true;
@@ -503,9 +504,11 @@ static int command(int argc, char **argv, bool run)
     scene_camera(cfg, &dd.camera);
     d = display_create(dcfg, &dd);
     if (!d) {
-        /* An OpenXR display fails for want of a runtime or a headset, not of a context. */
-        rc = (!run || !o.display) && dcfg->type != DISPLAY_TYPE_OPENXR ? EXIT_NO_GPU
-                                                                       : EXIT_FAILED;
+        /* 3 is for a missing OpenGL context only: a bad pose file or device is bad input, and
+         * an OpenXR display fails for want of a runtime or a headset, not of a context. */
+        rc = why == DISPLAY_FAILED_CONTEXT && dcfg->type != DISPLAY_TYPE_OPENXR ? EXIT_NO_GPU
+             : why == DISPLAY_FAILED_INPUT                                        ? EXIT_BAD_INPUT
+                                                                                  : EXIT_FAILED;
         goto done;
     }
     if (!display_update(d, o.time)) {

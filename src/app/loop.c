@@ -24,7 +24,8 @@
 #include "session/animation.h"
 #include "session/menu_view.h"
 
-#define SCRIPT_FRAMES_MAX 1000000
+/* A script names frames up to INPUT_SCRIPT_FRAMES_MAX; playing it may take a little more. */
+#define SCRIPT_FRAMES_MAX (INPUT_SCRIPT_FRAMES_MAX + 100000)
 
 /* What rank 0 sends every frame. */
 enum {

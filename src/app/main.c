@@ -6,6 +6,7 @@
 #include "app/cmd_bench.h"
 #include "app/cmd_data.h"
 #include "cluster/cluster.h"
+#include "common/fatal.h"
 #include "common/log.h"
 #include "config/config.h"
 #include "config/display_config.h"
@@ -37,11 +38,12 @@ static void usage(FILE *out)
         fprintf(out, "  %-10s %s\n", commands[i].name, commands[i].summary);
     fprintf(out, "\nanvil COMMAND --help shows a command's options.  Exit codes: 0 done, 1 bad "
                  "input (config, data, option value), 2 usage, 3 no OpenGL 4.5 context, "
-                 "4 other failure.\n");
+                 "4 other failure, 130/143 interrupted (SIGINT/SIGTERM).\n");
 }
 
 int main(int argc, char **argv)
 {
+    fatal_install();
     int i = 1;
     for (; i < argc && argv[i][0] == '-'; i++) {
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
@@ -80,6 +82,7 @@ int main(int argc, char **argv)
                 return EXIT_FAILED;
             int rc = commands[c].run(argc - i, argv + i);
             cluster_finish();
+            fatal_exiting(rc); /* the libraries' exit handlers run after this */
             return rc;
         }
     }

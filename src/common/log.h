@@ -51,12 +51,34 @@ const char *log_last_error(void);
 #define log_info(...) log_msg(LOG_INFO, __VA_ARGS__)
 #define log_debug(...) log_msg(LOG_DEBUG, __VA_ARGS__)
 
-/* Reads a whole file into a NUL-terminated buffer the caller frees.  On failure logs
- * "PATH: reason" and returns NULL.  *len_out (may be NULL) receives the length. */
+/* The largest text file the program reads whole (configs and their @includes, scripts, head
+ * paths, transfer functions, shaders, fonts): 64 MiB. */
+#define FILE_TEXT_MAX ((size_t)64 << 20)
+
+/* Opens PATH for reading when it is a regular file, without waiting on a FIFO: anything else
+ * (a FIFO, a device such as /dev/zero, a folder) is refused.  Returns the descriptor, or -1
+ * with the reason in WHY ("not a regular file (a FIFO)", strerror's words); logs nothing. */
+int file_open_regular(const char *path, char *why, size_t why_size);
+
+/* Reads the regular file PATH (file_open_regular) whole into a NUL-terminated buffer the
+ * caller frees, refusing a file of more than MAX bytes before reading it (and one that grows
+ * past MAX while read).  On failure returns NULL with the reason in WHY; logs nothing.
+ * *LEN_OUT (may be NULL) receives the length. */
+char *file_read_text(const char *path, size_t max, size_t *len_out, char *why, size_t why_size);
+
+/* file_read_text with MAX = FILE_TEXT_MAX that logs "PATH: reason" on failure. */
 char *file_read_all(const char *path, size_t *len_out);
 
-/* Writes LEN bytes to PATH atomically: a temporary file in the same folder, fsync, rename.
- * On failure the old file is untouched and the reason is logged. */
+/* Where a file written to PATH goes (every writer asks first): PATH itself, or, when PATH is
+ * a symbolic link, the file it points to (so the link stays a link).  An existing target must
+ * be a regular file that may be written: a read-only one (no write permission for us, or for
+ * anyone) is refused rather than replaced.  TARGET (SIZE bytes) receives the path to write and
+ * *MODE the permissions to give it (the existing file's, else 0666 less the umask).  False
+ * after one log_error naming PATH. */
+bool file_write_target(const char *path, char *target, size_t size, unsigned *mode);
+
+/* Writes LEN bytes to PATH atomically (file_write_target, then a temporary file in the same
+ * folder, fsync, rename).  On failure the old file is untouched and the reason is logged. */
 bool file_write_atomic(const char *path, const void *data, size_t len);
 
 /* Monotonic time in milliseconds. */

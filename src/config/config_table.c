@@ -1092,40 +1092,6 @@ static struct where locate(const struct source *src, const struct chunk *ch, int
     return (struct where){src->files[o->file], o->line};
 }
 
-/* Reads a whole file; NULL with errno set on failure. */
-static char *read_file(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    size_t cap = 4096, len = 0;
-    char *buf = malloc(cap);
-    while (buf) {
-        len += fread(buf + len, 1, cap - len - 1, f);
-        if (ferror(f) || feof(f))
-            break;
-        char *grown = realloc(buf, cap * 2);
-        if (!grown) {
-            free(buf);
-            buf = NULL;
-            errno = ENOMEM;
-            break;
-        }
-        buf = grown;
-        cap *= 2;
-    }
-    int err = ferror(f) ? (errno ? errno : EIO) : 0;
-    fclose(f);
-    if (buf && err) {
-        free(buf);
-        errno = err;
-        return NULL;
-    }
-    if (buf)
-        buf[len] = '\0';
-    return buf;
-}
-
 /* Follows block comments and open brackets through line L..END. */
 static void scan_line(const char *l, const char *end, bool *in_comment, int *depth)
 {
@@ -1180,6 +1146,12 @@ static bool expand_include(struct source *src, const char *line, const char *end
         return false;
     }
     char rel[CONFIG_PATH_MAX], dir[CONFIG_PATH_MAX], full[CONFIG_PATH_MAX];
+    if ((size_t)(close - name) >= sizeof(rel)) {
+        /* Cut short, the name could be another file's. */
+        log_error("%s:%d: @include: a name of %zu characters (at most %zu)", here->file, here->line,
+                  (size_t)(close - name), sizeof(rel) - 1);
+        return false;
+    }
     snprintf(rel, sizeof(rel), "%.*s", (int)(close - name), name);
     dir_of(here->file, dir, sizeof(dir));
     if (!join_path(dir, rel, full, sizeof(full))) {
@@ -1198,13 +1170,19 @@ static bool expand_file(struct source *src, const char *path, int depth, const s
                   from->line, INCLUDE_DEPTH_MAX);
         return false;
     }
-    char *text = read_file(path);
+    char why[160];
+    size_t len = 0;
+    char *text = file_read_text(path, FILE_TEXT_MAX, &len, why, sizeof(why));
     if (!text) {
         if (from)
-            log_error("%s:%d: @include: cannot read %s: %s", from->file, from->line, path,
-                      strerror(errno));
+            log_error("%s:%d: @include: %s: %s", from->file, from->line, path, why);
         else
-            log_error("%s: cannot read: %s", path, strerror(errno));
+            log_error("%s: %s", path, why);
+        return false;
+    }
+    if (strlen(text) != len) {
+        log_error("%s: not a text file (a NUL byte at offset %zu)", path, strlen(text));
+        free(text);
         return false;
     }
     struct stat st;
@@ -1469,6 +1447,193 @@ static bool walk_group(const struct reader *rd, const config_setting_t *group,
     return true;
 }
 
+/* Debian's libconfig 1.5 reads an integer without the L suffix into an int, so 4294967297
+ * became 1 (and 0x100000010, 16), and it has no NaN or infinity: "nan" is a bare syntax
+ * error.  Before libconfig sees a chunk, its literals are checked here: an integer outside
+ * the int range gets the L that makes libconfig read it whole (the table's ranges then judge
+ * it), one beyond 64 bits and a NaN or infinity where a value goes are refused with the file
+ * and line.  Line breaks are kept, so libconfig's line numbers still map.  Returns the
+ * checked text (the caller frees it), or NULL after one log_error. */
+
+static bool name_char(char c, bool first)
+{
+    return isalpha((unsigned char)c) || c == '*' ||
+           (!first && (isdigit((unsigned char)c) || c == '-' || c == '_'));
+}
+
+static char *check_literals(const struct source *src, const struct chunk *ch)
+{
+    const char *t = ch->text ? ch->text : "";
+    size_t len = strlen(t), n = 0;
+    char *out = malloc(2 * len + 1); /* at most one L per literal */
+    if (!out) {
+        log_error("%s: out of memory", locate(src, ch, 1).file);
+        return NULL;
+    }
+    int line = 1;
+    char last = ';'; /* the last character that was not blank or a comment */
+    /* An array's elements must share a type: in an array with one wide integer, every integer
+     * gets the L.  Where its integers end in OUT, and whether one is wide. */
+    bool in_array = false, array_wide = false;
+    size_t *ends = NULL, n_ends = 0, cap_ends = 0;
+    for (size_t i = 0; i < len;) {
+        char c = t[i];
+        if (c == '\n') {
+            line++;
+            out[n++] = t[i++];
+        } else if (c == '"') { /* a string, with its escapes, over lines if it goes on */
+            int first = line;
+            out[n++] = t[i++];
+            while (i < len && t[i] != '"') {
+                if (t[i] == '\\' && i + 1 < len)
+                    out[n++] = t[i++];
+                line += t[i] == '\n';
+                out[n++] = t[i++];
+            }
+            if (i >= len) {
+                /* (libconfig 1.5 also leaks its string buffer over this) */
+                struct where w = locate(src, ch, first);
+                log_error("%s:%d: syntax error: a string without its closing quote", w.file,
+                          w.line);
+                free(ends);
+                free(out);
+                return NULL;
+            }
+            out[n++] = t[i++];
+            last = '"';
+        } else if (c == '#' || (c == '/' && i + 1 < len && t[i + 1] == '/')) {
+            while (i < len && t[i] != '\n')
+                out[n++] = t[i++];
+        } else if (c == '/' && i + 1 < len && t[i + 1] == '*') {
+            out[n++] = t[i++];
+            out[n++] = t[i++];
+            while (i < len && !(t[i] == '*' && i + 1 < len && t[i + 1] == '/')) {
+                line += t[i] == '\n';
+                out[n++] = t[i++];
+            }
+            for (int k = 0; k < 2 && i < len; k++)
+                out[n++] = t[i++];
+        } else if (name_char(c, true) ||
+                   ((c == '-' || c == '+') && i + 1 < len && isalpha((unsigned char)t[i + 1]))) {
+            size_t start = i;
+            if (c == '-' || c == '+')
+                out[n++] = t[i++];
+            size_t word = i;
+            while (i < len && name_char(t[i], i == word))
+                out[n++] = t[i++];
+            char token[16];
+            size_t wl = i - word;
+            snprintf(token, sizeof(token), "%.*s", (int)(wl < 15 ? wl : 15), t + word);
+            bool value_place =
+                last == '=' || last == ':' || last == ',' || last == '[' || last == '(';
+            if (value_place && (strcasecmp(token, "nan") == 0 || strcasecmp(token, "inf") == 0 ||
+                                strcasecmp(token, "infinity") == 0)) {
+                struct where w = locate(src, ch, line);
+                log_error("%s:%d: %.*s: expected a finite number (libconfig has no NaN or "
+                          "infinity)",
+                          w.file, w.line, (int)(i - start), t + start);
+                free(ends);
+                free(out);
+                return NULL;
+            }
+            last = 'a';
+        } else if (isdigit((unsigned char)c) ||
+                   ((c == '-' || c == '+') && i + 1 < len && isdigit((unsigned char)t[i + 1]))) {
+            size_t start = i;
+            bool negative = c == '-';
+            if (c == '-' || c == '+')
+                i++;
+            bool hex = t[i] == '0' && i + 1 < len && (t[i + 1] == 'x' || t[i + 1] == 'X');
+            size_t digits = hex ? i + 2 : i, end = digits;
+            while (end < len &&
+                   (hex ? isxdigit((unsigned char)t[end]) : isdigit((unsigned char)t[end])))
+                end++;
+            bool is_float = !hex && end < len && (t[end] == '.' || t[end] == 'e' || t[end] == 'E');
+            if (is_float) { /* copied as it is, exponent and all */
+                end++;
+                while (end < len && (isdigit((unsigned char)t[end]) || t[end] == 'e' ||
+                                     t[end] == 'E' || t[end] == '.' ||
+                                     ((t[end] == '-' || t[end] == '+') &&
+                                      (t[end - 1] == 'e' || t[end - 1] == 'E'))))
+                    end++;
+            }
+            memcpy(out + n, t + start, end - start);
+            n += end - start;
+            i = end;
+            last = '0';
+            if (is_float || (i < len && t[i] == 'L'))
+                continue;
+            /* The magnitude, saturated above 2^64. */
+            unsigned long long v = 0;
+            bool huge = false;
+            for (size_t k = digits; k < end; k++) {
+                unsigned d = isdigit((unsigned char)t[k])
+                                 ? (unsigned)(t[k] - '0')
+                                 : (unsigned)(tolower((unsigned char)t[k]) - 'a' + 10);
+                unsigned base = hex ? 16 : 10;
+                if (v > (ULLONG_MAX - d) / base)
+                    huge = true;
+                else
+                    v = v * base + d;
+            }
+            if (huge || (!hex && v > (unsigned long long)LLONG_MAX + (negative ? 1u : 0u)) ||
+                (hex && v > (unsigned long long)LLONG_MAX)) {
+                struct where w = locate(src, ch, line);
+                log_error("%s:%d: %.*s: expected an integer of at most 64 bits", w.file, w.line,
+                          (int)(end - start), t + start);
+                free(ends);
+                free(out);
+                return NULL;
+            }
+            bool fits = hex ? v <= (unsigned long long)INT_MAX
+                            : (negative ? v <= (unsigned long long)INT_MAX + 1u
+                                        : v <= (unsigned long long)INT_MAX);
+            if (in_array) {
+                array_wide = array_wide || !fits;
+                if (n_ends == cap_ends) {
+                    cap_ends = cap_ends ? 2 * cap_ends : 16;
+                    size_t *grown = realloc(ends, cap_ends * sizeof(*ends));
+                    if (!grown) {
+                        log_error("%s: out of memory", locate(src, ch, line).file);
+                        free(ends);
+                        free(out);
+                        return NULL;
+                    }
+                    ends = grown;
+                }
+                ends[n_ends++] = n;
+            } else if (!fits) {
+                out[n++] = 'L';
+            }
+        } else {
+            if (c == '[') {
+                in_array = true;
+                array_wide = false;
+                n_ends = 0;
+            } else if (c == ']' && in_array) {
+                in_array = false;
+                /* Widen every integer of the array: insert the L's from the last one back. */
+                if (array_wide) {
+                    size_t shift = n_ends, tail = n;
+                    for (size_t k = n_ends; k-- > 0;) {
+                        memmove(out + ends[k] + shift, out + ends[k], tail - ends[k]);
+                        out[ends[k] + shift - 1] = 'L';
+                        tail = ends[k];
+                        shift--;
+                    }
+                    n += n_ends;
+                }
+            }
+            if (c != ' ' && c != '\t' && c != '\r')
+                last = c;
+            out[n++] = t[i++];
+        }
+    }
+    free(ends);
+    out[n] = '\0';
+    return out;
+}
+
 /* Parses one chunk and applies what it sets. */
 static bool read_chunk(const struct source *src, const struct chunk *ch,
                        const struct config_table *t, void *base, struct config_trace *trace)
@@ -1479,10 +1644,13 @@ static bool read_chunk(const struct source *src, const struct chunk *ch,
         log_error("%s: more than %d lines in one piece with its includes", w.file, USHRT_MAX);
         return false;
     }
+    char *checked = check_literals(src, ch);
+    if (!checked)
+        return false;
     config_t lc;
     config_init(&lc);
     bool ok = false;
-    if (!config_read_string(&lc, ch->text ? ch->text : "")) {
+    if (!config_read_string(&lc, checked)) {
         struct where w = locate(src, ch, config_error_line(&lc));
         const char *text = config_error_text(&lc);
         if (strcmp(text, "syntax error") == 0)
@@ -1499,6 +1667,7 @@ static bool read_chunk(const struct source *src, const struct chunk *ch,
     ok = walk_group(&rd, config_root_setting(&lc), t, base, "", "");
 done:
     config_destroy(&lc);
+    free(checked);
     return ok;
 }
 

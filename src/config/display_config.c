@@ -551,6 +551,9 @@ static bool check(struct display_config *cfg, const struct config_trace *trace)
         if (trace)
             config_trace_find(trace, at, &file, &w->line);
     }
+    if (!(cfg->near_m < cfg->far_m))
+        return fail(cfg, trace, "display.far", "display.far",
+                    "a far plane beyond display.near (%g m), got %g m", cfg->near_m, cfg->far_m);
     if (cfg->head.source == DISPLAY_HEAD_PATH && cfg->head.path[0] == '\0')
         return fail(cfg, trace, "head.source", "head.path",
                     "a pose file when head.source = \"path\"");

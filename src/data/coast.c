@@ -10,6 +10,7 @@
 
 #include "common/log.h"
 #include "data/nclock.h"
+#include "data/ncopen.h"
 
 const char *coast_file(char resolution)
 {
@@ -93,13 +94,12 @@ static void *read_array(const char *path, int ncid, const char *name, size_t n, 
 static bool binned_read(const char *path, struct binned *b)
 {
     memset(b, 0, sizeof(*b));
-    data_nc_lock();
+    data_nc_lock_file(path, "reading", false);
     int ncid;
-    int st = nc_open(path, NC_NOWRITE, &ncid);
-    if (st != NC_NOERR) {
+    char why[512];
+    if (!data_nc_open(path, &ncid, NULL, why, sizeof(why))) {
         data_nc_unlock();
-        log_warn("%s: cannot read the coastlines: %s (Debian package gmt-gshhg-low)", path,
-                  nc_strerror(st));
+        log_warn("%s: cannot read the coastlines: %s (Debian package gmt-gshhg-low)", path, why);
         return false;
     }
     bool ok = read_scalar(path, ncid, "Bin_size_in_minutes", &b->bin_minutes) &&
@@ -108,9 +108,11 @@ static bool binned_read(const char *path, struct binned *b)
               read_scalar(path, ncid, "N_bins_in_file", &b->n_bins) &&
               read_scalar(path, ncid, "N_segments_in_file", &b->n_segs) &&
               read_scalar(path, ncid, "N_points_in_file", &b->n_points);
+    /* Products in 64 bits: the file's ints may be anything. */
     if (ok && (b->bin_minutes <= 0 || b->bins_x <= 0 || b->bins_y <= 0 ||
-               b->n_bins != b->bins_x * b->bins_y || b->n_segs < 0 || b->n_points < 0 ||
-               b->bins_x * b->bin_minutes != 360 * 60)) {
+               (int64_t)b->n_bins != (int64_t)b->bins_x * b->bins_y || b->n_segs < 0 ||
+               b->n_points < 0 || (int64_t)b->bins_x * b->bin_minutes != 360 * 60 ||
+               (int64_t)b->bins_y * b->bin_minutes != 180 * 60)) {
         log_warn("%s: inconsistent GSHHG bin layout (%d x %d bins of %d')", path, b->bins_x,
                   b->bins_y, b->bin_minutes);
         ok = false;
@@ -222,14 +224,16 @@ bool coast_read(const char *path, const double box[4], int max_level, struct coa
         if (lat_sw > box[1] || lat_sw + bin_deg < box[0] || lon_sw > box[3] ||
             lon_sw + bin_deg < box[2])
             continue;
+        /* Segments s0 .. s0 + ns - 1 and points p0 .. p0 + npts - 1, compared so that no
+         * sum can overflow. */
         int s0 = b.bin_first_seg[bin], ns = b.bin_n_segs[bin];
+        if (s0 < 0 || ns < 0 || ns > b.n_segs - s0)
+            continue;
         for (int s = s0; s < s0 + ns && !bd.failed; s++) {
-            if (s < 0 || s >= b.n_segs)
-                break;
             int info = b.seg_info[s];
             int npts = (int)((unsigned)info >> 9), level = (info >> 6) & 7;
             int p0 = b.seg_first_point[s];
-            if (level > max_level || npts < 2 || p0 < 0 || p0 + npts > b.n_points)
+            if (level > max_level || npts < 2 || p0 < 0 || npts > b.n_points - p0)
                 continue;
             /* Runs of points inside the box, each with one neighbour outside kept. */
             bool open = false;

@@ -10,6 +10,7 @@
 
 #include "common/log.h"
 #include "data/nclock.h"
+#include "data/ncopen.h"
 
 #define DATE_LEN 19
 #define MAX_STEPS 100000
@@ -236,7 +237,7 @@ bool extfile_writer_add(struct extfile_writer *w, const struct ext_volume *v, co
     }
     if (!date)
         date = "";
-    data_nc_lock();
+    data_nc_lock_file(w->path, "writing", true);
     bool ok = true;
     if (!w->defined) {
         ok = define(w, date);
@@ -300,6 +301,7 @@ void extfile_writer_destroy(struct extfile_writer *w)
 struct extfile {
     char *path;
     int ncid;
+    struct data_nc_layout layout;
     int steps;
     char (*dates)[DATE_LEN + 1];
     struct grid3 grid;
@@ -327,14 +329,31 @@ static bool read_axis(struct extfile *f, int a, int dimid)
     }
     f->grid.origin[a] = b[0];
     f->grid.spacing[a] = b[1] - b[0];
+    double top = b[0] + (double)n * (b[1] - b[0]);
+    if (f->grid.spacing[a] < DATA_SPACING_MIN_M || f->grid.spacing[a] > DATA_SPACING_MAX_M) {
+        log_error("%s: variable %s: cells of %g m: expected %g m to %g km", f->path, bnds_names[a],
+                  f->grid.spacing[a], DATA_SPACING_MIN_M, DATA_SPACING_MAX_M / 1000.0);
+        return false;
+    }
+    if (a == 2 && (b[0] < DATA_HEIGHT_MIN_M || top > DATA_HEIGHT_MAX_M)) {
+        log_error("%s: variable z_bnds: heights from %g m to %g m: expected %g m to %g km above "
+                  "sea level",
+                  f->path, b[0], top, DATA_HEIGHT_MIN_M, DATA_HEIGHT_MAX_M / 1000.0);
+        return false;
+    }
+    if (!(fabs(b[0]) < 1e9)) {
+        log_error("%s: variable %s: the first cell starts at %g m", f->path, bnds_names[a], b[0]);
+        return false;
+    }
     return true;
 }
 
 bool extfile_probe(const char *path)
 {
     int nc, var;
-    data_nc_lock();
-    bool yes = nc_open(path, NC_NOWRITE, &nc) == NC_NOERR;
+    char why[512];
+    data_nc_lock_file(path, "reading", false);
+    bool yes = data_nc_open(path, &nc, NULL, why, sizeof(why));
     if (yes) {
         yes = nc_inq_varid(nc, beta_names[0], &var) == NC_NOERR;
         nc_close(nc);
@@ -343,7 +362,7 @@ bool extfile_probe(const char *path)
     return yes;
 }
 
-struct extfile *extfile_open(const char *path)
+struct extfile *extfile_open(const char *path, double memory_mb)
 {
     struct extfile *f = calloc(1, sizeof(*f));
     if (!f) {
@@ -357,11 +376,10 @@ struct extfile *extfile_open(const char *path)
         log_error("%s: out of memory", path);
         return NULL;
     }
-    data_nc_lock();
-    int st = nc_open(path, NC_NOWRITE, &f->ncid);
-    if (st != NC_NOERR) {
-        f->ncid = -1;
-        log_error("%s: cannot open as NetCDF: %s", path, nc_strerror(st));
+    data_nc_lock_file(f->path, "reading", false);
+    char why[512];
+    if (!data_nc_open(path, &f->ncid, &f->layout, why, sizeof(why))) {
+        log_error("%s: %s", path, why);
         goto error;
     }
     int dims[4];
@@ -382,6 +400,16 @@ struct extfile *extfile_open(const char *path)
     for (int a = 0; a < 3; a++) {
         if (!read_axis(f, a, dims[3 - a]))
             goto error;
+    }
+    /* A step becomes two floats per voxel; judged from the dimensions, in double (their
+     * product may not fit a size_t). */
+    const int *n = f->grid.n;
+    double step_bytes = 2.0 * sizeof(float) * n[0] * n[1] * n[2] + sizeof(float) * n[0] * n[1];
+    if ((memory_mb > 0 && step_bytes > memory_mb * 1048576.0) || step_bytes > 0x1p62) {
+        log_error("%s: one time step of %d x %d x %d voxels needs %.0f MiB, above the budget "
+                  "data.memory = %.0f MiB",
+                  path, n[0], n[1], n[2], step_bytes / 1048576.0, memory_mb);
+        goto error;
     }
     for (int b = 0; b < 2; b++) {
         nc_type type;
@@ -429,7 +457,7 @@ void extfile_close(struct extfile *f)
     if (!f)
         return;
     if (f->ncid >= 0) {
-        data_nc_lock();
+        data_nc_lock_file(f->path, "closing", false);
         nc_close(f->ncid);
         data_nc_unlock();
     }
@@ -466,12 +494,12 @@ bool extfile_read_step(struct extfile *f, int step, struct ext_volume *out,
         log_error("%s: time step %d out of range (0 to %d)", f->path, step, f->steps - 1);
         return false;
     }
-    if (!ext_volume_init(out, &f->grid))
+    if (!data_nc_still_whole(f->path, &f->layout) || !ext_volume_init(out, &f->grid))
         return false;
     const struct grid3 *g = &f->grid;
     size_t plane = (size_t)g->n[0] * g->n[1];
     bool ok = true;
-    data_nc_lock();
+    data_nc_lock_file(f->path, "reading", false);
     for (int b = 0; b < 2 && ok; b++) {
         float fv = NC_FILL_FLOAT;
         bool has_fv = nc_get_att_float(f->ncid, f->var_beta[b], "_FillValue", &fv) == NC_NOERR;

@@ -46,9 +46,10 @@ struct extfile;
  * nothing. */
 bool extfile_probe(const char *path);
 
-/* Opens an extinction file and checks its layout.  NULL after one log_error naming the file
- * and variable.  Free with extfile_close. */
-struct extfile *extfile_open(const char *path);
+/* Opens an extinction file and checks its layout; a step must fit MEMORY_MB (MiB, judged from
+ * the dimensions before anything is read; 0 = no limit).  NULL after one log_error naming the
+ * file and variable.  Free with extfile_close. */
+struct extfile *extfile_open(const char *path, double memory_mb);
 void extfile_close(struct extfile *f); /* NULL is fine */
 
 int extfile_step_count(const struct extfile *f);

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "common/log.h"
 
@@ -63,14 +64,18 @@ static float from_big_endian(uint32_t raw)
 /* Reads one brick of COUNT values into OUT, converting and cleaning in place. */
 static bool read_brick(const char *path, size_t count, float *out, struct isabel_stats *st)
 {
-    FILE *fp = fopen(path, "rb");
+    char why[160];
+    int fd = file_open_regular(path, why, sizeof(why));
+    FILE *fp = fd >= 0 ? fdopen(fd, "rb") : NULL;
     if (!fp) {
-        log_error("%s: cannot open: %s", path, strerror(errno));
+        log_error("%s: %s", path, fd >= 0 ? strerror(errno) : why);
+        if (fd >= 0)
+            close(fd);
         return false;
     }
     struct stat sb;
-    if (fstat(fileno(fp), &sb) != 0 || !S_ISREG(sb.st_mode)) {
-        log_error("%s: not a regular file", path);
+    if (fstat(fileno(fp), &sb) != 0) {
+        log_error("%s: cannot read: %s", path, strerror(errno));
         fclose(fp);
         return false;
     }

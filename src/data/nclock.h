@@ -10,6 +10,12 @@
 
 void data_nc_lock(void);
 void data_nc_unlock(void);
+/* data_nc_lock for work on the file PATH (DOING: "reading", "writing"; both must stay valid
+ * until the matching data_nc_unlock): a crash inside netcdf-c or HDF5 meanwhile is reported
+ * as the library's, naming the file (common/fatal.h). */
+void data_nc_lock_file(const char *path, const char *doing, bool writing);
+
+#define DATA_NC_LIBRARY "netCDF-C (with HDF5)"
 
 /* NetCDF files written atomically: created as a temporary sibling of PATH and moved onto PATH
  * only when complete, so a failed write never leaves a half-written file nor loses the old

@@ -28,7 +28,7 @@ struct data_source *data_source_open(const struct data_source_desc *d)
     s->desc = *d;
     switch (d->format) {
     case DATA_SOURCE_WRF:
-        s->wrf = wrf_open(d->files, d->file_count);
+        s->wrf = wrf_open(d->files, d->file_count, d->wrf.memory_mb);
         if (!s->wrf)
             goto error;
         break;
@@ -43,7 +43,7 @@ struct data_source *data_source_open(const struct data_source_desc *d)
             log_warn("%s: an extinction file holds the whole series: the other %d files are "
                      "ignored",
                      d->files[0], d->file_count - 1);
-        s->ext = extfile_open(d->files[0]);
+        s->ext = extfile_open(d->files[0], d->wrf.memory_mb);
         if (!s->ext)
             goto error;
         break;

@@ -24,6 +24,15 @@ struct grid3 {
     double origin[3];  /* box minimum corner, metres */
 };
 
+/* What a file's grid may be: outside these it is refused as damaged (a DX of 1e-30 m once
+ * made a 188 M-vertex mesh).  Spacing along any axis and heights above sea level, m: a large
+ * eddy simulation's decimetres to a global model's 1000 km; the Dead Sea shore to the top of
+ * the height grid data.top may ask for. */
+#define DATA_SPACING_MIN_M 0.1
+#define DATA_SPACING_MAX_M 1.0e6
+#define DATA_HEIGHT_MIN_M (-1000.0)
+#define DATA_HEIGHT_MAX_M 100000.0
+
 static inline size_t grid3_count(const struct grid3 *g)
 {
     return (size_t)g->n[0] * (size_t)g->n[1] * (size_t)g->n[2];

@@ -12,7 +12,9 @@
 #include <netcdf.h>
 
 #include "common/log.h"
+#include "data/extfile.h"
 #include "data/nclock.h"
+#include "data/ncopen.h"
 #include "data/wrf_write.h"
 
 static const char *var_names[WRF_VAR_COUNT] = {
@@ -26,6 +28,8 @@ static const enum wrf_var required_vars[] = {WRF_P, WRF_PB, WRF_T, WRF_PH, WRF_P
 struct wrf_file {
     char *path;
     int ncid;
+    struct data_nc_layout layout; /* what the header promised at open */
+    double dx, dy;                /* global DX, DY */
     int ntimes;
     int varid[WRF_VAR_COUNT]; /* -1 when absent */
 };
@@ -176,16 +180,30 @@ static bool read_times(const char *path, int ncid, int time_dim, int ntimes, str
         free(buf);
         return false;
     }
-    for (int t = 0; t < ntimes; t++) {
+    bool ok = true;
+    for (int t = 0; t < ntimes && ok; t++) {
         size_t n = len < WRF_DATE_LEN ? len : WRF_DATE_LEN;
         memcpy(out[t].date, buf + (size_t)t * len, n);
         out[t].date[n] = '\0';
         /* Strip trailing NULs/spaces some writers pad with. */
         for (int i = (int)n - 1; i >= 0 && (out[t].date[i] == ' ' || out[t].date[i] == '\0'); i--)
             out[t].date[i] = '\0';
+        double seconds;
+        if (out[t].date[0] &&
+            (strlen(out[t].date) != WRF_DATE_LEN || !extfile_parse_date(out[t].date, &seconds))) {
+            char shown[WRF_DATE_LEN * 4 + 1];
+            size_t k = 0;
+            for (const char *p = out[t].date; *p && k + 4 < sizeof(shown); p++)
+                k += (size_t)snprintf(shown + k, sizeof(shown) - k,
+                                      (*p >= ' ' && *p <= '~') ? "%c" : "\\x%02x",
+                                      (unsigned char)*p);
+            log_error("%s: variable Times, time %d: \"%s\" is not a date YYYY-MM-DD_hh:mm:ss", path,
+                      t, shown);
+            ok = false;
+        }
     }
     free(buf);
-    return true;
+    return ok;
 }
 
 static int compare_steps(const void *a, const void *b)
@@ -268,16 +286,24 @@ static bool compute_auto_top(struct wrf *w)
     int st = nc_get_vara_float(f->ncid, f->varid[WRF_PH], start, count, a);
     if (st == NC_NOERR)
         st = nc_get_vara_float(f->ncid, f->varid[WRF_PHB], start, count, b);
-    double top = 0.0;
+    double top = 0.0, wild = 0.0;
     for (size_t i = 0; st == NC_NOERR && i < plane; i++) {
         double z = ((double)a[i] + (double)b[i]) / WRF_G;
-        if (isfinite(z) && fabs(z) < 1e6 && z > top)
+        if (isfinite(z) && (z < DATA_HEIGHT_MIN_M || z > DATA_HEIGHT_MAX_M) && wild == 0.0)
+            wild = z;
+        else if (isfinite(z) && z > top)
             top = z;
     }
     free(a);
     free(b);
     if (st != NC_NOERR) {
         log_error("%s: variables PH, PHB: cannot read the model top: %s", f->path, nc_strerror(st));
+        return false;
+    }
+    if (wild != 0.0) {
+        log_error("%s: variables PH, PHB: a model top at %g m: expected %g m to %g km above sea "
+                  "level",
+                  f->path, wild, DATA_HEIGHT_MIN_M, DATA_HEIGHT_MAX_M / 1000.0);
         return false;
     }
     if (!(top > 0.0)) {
@@ -293,13 +319,8 @@ static bool read_meta(struct wrf *w)
     struct wrf_meta *m = &w->meta;
     const struct wrf_file *f = &w->files[w->steps[0].file];
     int ncid = f->ncid;
-    m->dx = global_double(ncid, "DX", NAN);
-    m->dy = global_double(ncid, "DY", NAN);
-    if (!(m->dx > 0) || !(m->dy > 0)) {
-        log_error("%s: global attributes DX and DY (grid spacing, m) missing or not positive",
-                  f->path);
-        return false;
-    }
+    m->dx = f->dx;
+    m->dy = f->dy;
     m->map_proj = (int)global_double(ncid, "MAP_PROJ", 0);
     m->mp_physics = (int)global_double(ncid, "MP_PHYSICS", -1);
     m->cen_lat = global_double(ncid, "CEN_LAT", NAN);
@@ -389,10 +410,9 @@ static bool wind_shape_ok(const struct wrf_file *f, enum wrf_var v, const int di
 static bool open_file(struct wrf_file *f, const struct wrf *ref_w, const struct wrf_file *ref,
                       int *nx, int *ny, int *nz, int *nzs)
 {
-    int st = nc_open(f->path, NC_NOWRITE, &f->ncid);
-    if (st != NC_NOERR) {
-        f->ncid = -1;
-        log_error("%s: cannot open as NetCDF: %s", f->path, nc_strerror(st));
+    char why[512];
+    if (!data_nc_open(f->path, &f->ncid, &f->layout, why, sizeof(why))) {
+        log_error("%s: %s", f->path, why);
         return false;
     }
     int dims[4], dstag[4], lx, ly, lz, lzs, lt;
@@ -407,6 +427,26 @@ static bool open_file(struct wrf_file *f, const struct wrf *ref_w, const struct 
     dstag[3] = dims[3];
     if (lzs != lz + 1) {
         log_error("%s: bottom_top_stag is %d, expected bottom_top + 1 = %d", f->path, lzs, lz + 1);
+        return false;
+    }
+    f->dx = global_double(f->ncid, "DX", NAN);
+    f->dy = global_double(f->ncid, "DY", NAN);
+    if (!(f->dx > 0) || !(f->dy > 0)) {
+        log_error("%s: global attributes DX and DY (grid spacing, m) missing or not positive",
+                  f->path);
+        return false;
+    }
+    if (f->dx < DATA_SPACING_MIN_M || f->dx > DATA_SPACING_MAX_M || f->dy < DATA_SPACING_MIN_M ||
+        f->dy > DATA_SPACING_MAX_M) {
+        log_error("%s: global attributes DX = %g m, DY = %g m: expected a grid spacing from %g m "
+                  "to %g km",
+                  f->path, f->dx, f->dy, DATA_SPACING_MIN_M, DATA_SPACING_MAX_M / 1000.0);
+        return false;
+    }
+    if (ref && (fabs(f->dx - ref->dx) > 1e-6 * ref->dx || fabs(f->dy - ref->dy) > 1e-6 * ref->dy)) {
+        log_error("%s: grid spacing DX = %g m, DY = %g m differs from %s's DX = %g m, DY = %g m "
+                  "(the files are not one series)",
+                  f->path, f->dx, f->dy, ref->path, ref->dx, ref->dy);
         return false;
     }
     if (ref_w && (lx != *nx || ly != *ny || lz != *nz)) {
@@ -517,7 +557,65 @@ error:
     return NULL;
 }
 
-struct wrf *wrf_open(const char *const *paths, int count)
+static int compare_doubles(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* A series whose steps are evenly spaced but for a gap of whole steps lacks those steps, most
+ * likely a file: one warning per gap (a glob matches only the files that are there). */
+static void warn_gaps(const struct wrf *w)
+{
+    int n = w->step_count;
+    if (n < 3)
+        return;
+    double *t = malloc((size_t)n * sizeof(double)), *dt = malloc((size_t)n * sizeof(double));
+    bool ok = t && dt;
+    for (int s = 0; ok && s < n; s++)
+        ok = extfile_parse_date(w->steps[s].date, &t[s]);
+    if (ok) {
+        for (int s = 1; s < n; s++)
+            dt[s - 1] = t[s] - t[s - 1];
+        qsort(dt, (size_t)(n - 1), sizeof(double), compare_doubles);
+        double usual = dt[(n - 1) / 2]; /* the median interval */
+        for (int s = 1; usual > 0 && s < n; s++) {
+            double k = (t[s] - t[s - 1]) / usual;
+            if (k > 1.5 && fabs(k - round(k)) < 1e-6)
+                log_warn("%s: no step between %s and %s (%.0f missing: the other steps are "
+                         "%g s apart); a file missing from the series?",
+                         w->files[w->steps[s].file].path, w->steps[s - 1].date, w->steps[s].date,
+                         round(k) - 1.0, usual);
+        }
+    }
+    free(t);
+    free(dt);
+}
+
+/* What opening allocates, in bytes, judged from the dimensions before anything is read: up to
+ * five 2-D metadata fields (XLAT, XLONG, HGT, LANDMASK, LU_INDEX) and two planes of the model
+ * top's scratch, the dates and the steps of every file. */
+static bool open_fits(const struct wrf *w, double memory_mb)
+{
+    const char *path = w->files[0].path;
+    double plane = (double)w->meta.nx * w->meta.ny * sizeof(float), steps = 0.0;
+    for (int i = 0; i < w->file_count; i++)
+        steps += w->files[i].ntimes;
+    double need = 7.0 * plane + steps * (256.0 + sizeof(struct wrf_step));
+    if (memory_mb > 0 && need > memory_mb * 1048576.0) {
+        log_error("%s: opening a grid of %d x %d columns and %.0f time steps needs %.0f MiB, "
+                  "above the budget data.memory = %.0f MiB",
+                  path, w->meta.nx, w->meta.ny, steps, need / 1048576.0, memory_mb);
+        return false;
+    }
+    if (steps > INT32_MAX) {
+        log_error("%s: %.0f time steps in all: more than anvil counts", path, steps);
+        return false;
+    }
+    return true;
+}
+
+struct wrf *wrf_open(const char *const *paths, int count, double memory_mb)
 {
     if (count <= 0) {
         log_error("no WRF files given");
@@ -553,11 +651,17 @@ struct wrf *wrf_open(const char *const *paths, int count)
     data_nc_lock();
     int total = 0;
     for (int i = 0; i < n; i++) {
-        if (!open_file(&w->files[i], i ? w : NULL, i ? &w->files[0] : NULL, &w->meta.nx,
-                       &w->meta.ny, &w->meta.nz, &w->nzs))
+        data_nc_lock_file(w->files[i].path, "reading", false);
+        bool ok = open_file(&w->files[i], i ? w : NULL, i ? &w->files[0] : NULL, &w->meta.nx,
+                            &w->meta.ny, &w->meta.nz, &w->nzs);
+        data_nc_unlock();
+        if (!ok)
             goto error;
-        total += w->files[i].ntimes;
     }
+    if (!open_fits(w, memory_mb))
+        goto error;
+    for (int i = 0; i < n; i++)
+        total += w->files[i].ntimes; /* at most INT32_MAX in all (open_fits) */
     w->steps = calloc((size_t)total, sizeof(*w->steps));
     if (!w->steps) {
         log_error("out of memory for %d time steps", total);
@@ -565,9 +669,12 @@ struct wrf *wrf_open(const char *const *paths, int count)
     }
     int dims_time;
     for (int i = 0, at = 0; i < n; i++) {
+        data_nc_lock_file(w->files[i].path, "reading", false);
         nc_inq_dimid(w->files[i].ncid, "Time", &dims_time);
-        if (!read_times(w->files[i].path, w->files[i].ncid, dims_time, w->files[i].ntimes,
-                        w->steps + at, i))
+        bool ok = read_times(w->files[i].path, w->files[i].ncid, dims_time, w->files[i].ntimes,
+                             w->steps + at, i);
+        data_nc_unlock();
+        if (!ok)
             goto error;
         at += w->files[i].ntimes;
     }
@@ -585,9 +692,14 @@ struct wrf *wrf_open(const char *const *paths, int count)
             }
         }
     }
-    if (!read_meta(w) || !compute_auto_top(w))
+    data_nc_lock_file(w->files[w->steps[0].file].path, "reading", false);
+    bool meta_ok = read_meta(w) && compute_auto_top(w);
+    data_nc_unlock();
+    if (!meta_ok)
         goto error;
     data_nc_unlock();
+    if (dated)
+        warn_gaps(w);
     return w;
 
 error:
@@ -600,13 +712,14 @@ void wrf_close(struct wrf *w)
 {
     if (!w)
         return;
-    data_nc_lock();
     for (int i = 0; i < w->file_count; i++) {
-        if (w->files[i].ncid >= 0)
+        if (w->files[i].ncid >= 0) {
+            data_nc_lock_file(w->files[i].path, "closing", false);
             nc_close(w->files[i].ncid);
+            data_nc_unlock();
+        }
         free(w->files[i].path);
     }
-    data_nc_unlock();
     free(w->files);
     free(w->steps);
     free(w->meta.xlat);
@@ -696,16 +809,18 @@ size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d)
     struct selection s;
     if (!make_selection(w, d, &s))
         return 0;
-    size_t cols = (size_t)s.nx * s.ny;
-    size_t out = arrays_out(w, d) * cols * (size_t)s.nz * sizeof(float);
+    /* In double: the dimensions come from the file, and their product may not fit. */
+    double cols = (double)s.nx * s.ny;
+    double out = (double)arrays_out(w, d) * cols * s.nz * sizeof(float);
     /* Scratch: summed geopotential on staggered levels and two mass-level buffers. */
-    size_t scratch = cols * ((size_t)w->nzs + 2 * (size_t)w->meta.nz) * sizeof(float);
+    double scratch = cols * ((double)w->nzs + 2.0 * w->meta.nz) * sizeof(float);
     /* Temperature and wind speed: a third mass-level buffer; W on its staggered levels. */
     if (d->temperature || (d->wind && w->meta.has_wind))
-        scratch += cols * (size_t)w->meta.nz * sizeof(float);
+        scratch += cols * w->meta.nz * sizeof(float);
     if (d->wind && w->meta.has_w)
-        scratch += cols * (size_t)w->nzs * sizeof(float);
-    return out + scratch;
+        scratch += cols * w->nzs * sizeof(float);
+    double total = out + scratch;
+    return total >= (double)SIZE_MAX ? SIZE_MAX : (size_t)total;
 }
 
 /* Reads V over the selection's columns shifted by (OX, OY) points (a staggered variable's
@@ -1064,10 +1179,11 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     }
     const char *path = w->files[w->steps[step].file].path;
     struct selection s;
-    if (!make_selection(w, d, &s))
+    if (!make_selection(w, d, &s) ||
+        !data_nc_still_whole(path, &w->files[w->steps[step].file].layout))
         return false;
     size_t need = wrf_step_bytes(w, d);
-    if (d->memory_mb > 0 && (double)need > d->memory_mb * 1048576.0) {
+    if ((d->memory_mb > 0 && (double)need > d->memory_mb * 1048576.0) || need == SIZE_MAX) {
         log_error("%s: one time step on a %d x %d x %d grid needs %.0f MiB, above the budget "
                   "data.memory = %.0f MiB: subsample with data.stride or data.crop (or fewer "
                   "data.levels)",
@@ -1093,7 +1209,7 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         goto done;
     }
 
-    data_nc_lock();
+    data_nc_lock_file(path, "reading", false);
     /* Heights: (PH + PHB) / g on staggered levels. */
     float *phb = malloc(c.cols * (size_t)c.nzs * sizeof(float));
     if (!phb) {
@@ -1121,6 +1237,17 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     free(phb);
     if (!hok)
         goto unlock;
+    for (size_t i = 0; i < c.cols * (size_t)c.nzs; i++) {
+        if (c.zw[i] < DATA_HEIGHT_MIN_M || c.zw[i] > DATA_HEIGHT_MAX_M) {
+            size_t col = i % c.cols;
+            log_error("%s: variables PH, PHB, time %d: a height of %g m in column (%zu, %zu), "
+                      "level %zu: expected %g m to %g km above sea level",
+                      path, w->steps[step].index, c.zw[i], s.x0 + (col % s.nx) * s.sx,
+                      s.y0 + (col / s.nx) * s.sy, i / c.cols, DATA_HEIGHT_MIN_M,
+                      DATA_HEIGHT_MAX_M / 1000.0);
+            goto unlock;
+        }
+    }
     for (size_t col = 0; col < c.cols; col++) {
         if (!column_heights(&c, col, c.zm)) {
             log_error("%s: variables PH, PHB, time %d: heights do not increase upward in column "

@@ -117,9 +117,11 @@ struct wrf;
 
 /* Opens COUNT paths (each a file or a glob pattern; patterns expand in sorted order), checks
  * that they agree on the grid and the variables the reader needs, and orders all their time
- * steps by Times.  Returns NULL after one log_error naming the file and what is wrong.
- * The paths are copied.  Free with wrf_close. */
-struct wrf *wrf_open(const char *const *paths, int count);
+ * steps by Times.  What opening allocates (the 2-D metadata, the model top's scratch, the
+ * dates) must fit MEMORY_MB (as wrf_desc.memory_mb: 0 = no limit), judged from the
+ * dimensions before anything is read.  Returns NULL after one log_error naming the file and
+ * what is wrong.  The paths are copied.  Free with wrf_close. */
+struct wrf *wrf_open(const char *const *paths, int count, double memory_mb);
 void wrf_close(struct wrf *w); /* NULL is fine */
 
 /* Valid until wrf_close. */
@@ -132,7 +134,8 @@ const char *wrf_step_date(const struct wrf *w, int step);
 const char *wrf_step_path(const struct wrf *w, int step);
 
 /* Bytes of the arrays a step read with D will allocate in OUT plus the reader's scratch
- * (what memory_mb is compared with).  Returns 0 and logs when D selects nothing. */
+ * (what memory_mb is compared with; SIZE_MAX when that does not fit a size_t).  Returns 0 and
+ * logs when D selects nothing. */
 size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d);
 
 /* Reads STEP into OUT (initialised here; the caller frees it with field_volume_finish).  STATS

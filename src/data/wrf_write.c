@@ -109,7 +109,7 @@ struct wrf_writer *wrf_writer_create(const char *path, const struct grid3 *grid,
         wrf_writer_destroy(w);
         return NULL;
     }
-    data_nc_lock();
+    data_nc_lock_file(w->path, "writing", true);
     nc_set_fill(w->ncid, NC_NOFILL, NULL);
     data_nc_unlock();
     return w;
@@ -432,7 +432,7 @@ bool wrf_writer_add(struct wrf_writer *w, const struct field_volume *v, const ch
     padded[DATE_LEN] = '\0';
     if (date)
         memcpy(padded, date, strnlen(date, DATE_LEN));
-    data_nc_lock();
+    data_nc_lock_file(w->path, "writing", true);
     bool ok = true;
     if (!w->defined) {
         ok = define(w, v, padded);

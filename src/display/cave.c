@@ -110,8 +110,10 @@ static struct display *cave_create(const struct display *base)
             } else {
                 cd.share_window = gpu_context_window(d->context);
                 struct gpu_context *ctx = gpu_context_create(&cd);
-                if (!ctx)
+                if (!ctx) {
+                    display_fail(d, DISPLAY_FAILED_CONTEXT);
                     goto error;
+                }
                 display_watch_window(d, gpu_context_window(ctx));
                 display_join_swap_group(d, ctx);
                 c->windows[c->window_count++] = ctx;

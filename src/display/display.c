@@ -51,9 +51,13 @@ bool display_type_available(enum display_type type)
 struct display *display_create(const struct display_config *cfg, const struct display_desc *desc)
 {
     const struct display_impl *impl = find_backend(cfg->type);
+    if (desc && desc->failure)
+        *desc->failure = DISPLAY_FAILED_NONE;
     if (!impl) {
         log_error("%s: no display backend \"%s\" in this build", cfg->path,
                   display_type_name(cfg->type));
+        if (desc && desc->failure)
+            *desc->failure = DISPLAY_FAILED_INPUT;
         return NULL;
     }
     struct display base = {.impl = impl, .cfg = *cfg};
@@ -62,14 +66,18 @@ struct display *display_create(const struct display_config *cfg, const struct di
     if (base.desc.height < 1)
         base.desc.height = 480;
     struct display *d = impl->create(&base);
-    if (!d)
+    if (!d) {
+        display_fail(&base, DISPLAY_FAILED_OTHER); /* unless the backend said why */
         return NULL;
+    }
     /* A head the caller gives opens no tracker (a cluster's rank 0 samples it for all). */
     struct display_head head = cfg->head;
     if (d->desc.head_given)
         head.source = DISPLAY_HEAD_FIXED;
-    if (!display_head_tracker_init(&d->head, &head, cfg))
+    if (!display_head_tracker_init(&d->head, &head, cfg)) {
+        display_fail(d, DISPLAY_FAILED_INPUT); /* a pose file, a tracker device */
         goto error;
+    }
     if (!gpu_program_init(&d->compose, "display_compose.comp", NULL))
         goto error;
     if (!display_update(d, 0.0))
@@ -77,8 +85,15 @@ struct display *display_create(const struct display_config *cfg, const struct di
     return d;
 
 error:
+    display_fail(d, DISPLAY_FAILED_OTHER);
     display_destroy(d);
     return NULL;
+}
+
+void display_fail(const struct display *d, enum display_failure why)
+{
+    if (d->desc.failure && *d->desc.failure == DISPLAY_FAILED_NONE)
+        *d->desc.failure = why;
 }
 
 void display_destroy(struct display *d)
@@ -213,6 +228,8 @@ bool display_open_primary_on(struct display *d, const struct gpu_context_desc *w
         display_watch_window(d, gpu_context_window(d->context));
         display_join_swap_group(d, d->context);
     }
+    if (!d->context)
+        display_fail(d, DISPLAY_FAILED_CONTEXT);
     return d->context != NULL;
 }
 

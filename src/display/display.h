@@ -166,6 +166,14 @@ void view_set_finish(struct view_set *set);
 
 struct display;
 
+/* Why display_create returned NULL (the program's exit code follows from it). */
+enum display_failure {
+    DISPLAY_FAILED_NONE,
+    DISPLAY_FAILED_INPUT,   /* what the display config names is wrong: a pose file, a device */
+    DISPLAY_FAILED_CONTEXT, /* no OpenGL 4.5 context (no driver; for windows, no display) */
+    DISPLAY_FAILED_OTHER,   /* anything else (out of memory, a shader) */
+};
+
 struct display_desc {
     bool offscreen;              /* render into textures only (anvil render): no windows */
     struct gpu_context *context; /* offscreen: use this context (not owned); NULL: create an
@@ -185,6 +193,7 @@ struct display_desc {
     bool head_given;     /* every head pose comes from the caller (a cluster's other ranks:
                             rank 0 samples it): no head tracker or device is opened, though
                             the head still counts as moving (display_head_moves) */
+    enum display_failure *failure; /* receives why display_create failed (may be NULL) */
 };
 
 /* Whether this build has the backend of TYPE (openxr needs the OpenXR loader at build
@@ -196,8 +205,8 @@ void display_list(void (*print)(const char *name, const char *what, void *user),
 
 /* Opens the display CFG describes: its windows (or offscreen targets), its HMD device, its
  * head tracker.  The primary context is current on return.  CFG is copied.  Returns NULL
- * (reason logged) when a window, context or device cannot be had.  Destroy with
- * display_destroy (which accepts NULL). */
+ * (reason logged, and its kind in *DESC->failure) when a window, context or device cannot be
+ * had.  Destroy with display_destroy (which accepts NULL). */
 struct display *display_create(const struct display_config *cfg, const struct display_desc *desc);
 void display_destroy(struct display *d);
 

@@ -78,6 +78,10 @@ extern const struct display_impl display_openxr_impl; /* built with the OpenXR l
 
 /* Shared by backends. */
 
+/* Says why the display being created fails (display_desc.failure); the first reason given
+ * stands. */
+void display_fail(const struct display *d, enum display_failure why);
+
 /* The walls' image sizes offscreen (config size or desc height and aspect). */
 void display_offscreen_sizes(const struct display *d, int (*sizes)[2]);
 

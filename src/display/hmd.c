@@ -53,8 +53,10 @@ static struct display *hmd_create(const struct display *base)
     struct display *d = &h->base;
     const struct display_config *cfg = &d->cfg;
     h->device = input_ohmd_open(cfg->hmd.device, OHMD_DEVICE_CLASS_HMD);
-    if (!h->device)
+    if (!h->device) {
+        display_fail(d, DISPLAY_FAILED_INPUT); /* no such device */
         goto error;
+    }
     ohmd_device_geti(h->device, OHMD_SCREEN_HORIZONTAL_RESOLUTION, &h->resolution[0]);
     ohmd_device_geti(h->device, OHMD_SCREEN_VERTICAL_RESOLUTION, &h->resolution[1]);
     ohmd_device_getf(h->device, OHMD_SCREEN_HORIZONTAL_SIZE, &h->screen_size[0]);
@@ -71,6 +73,7 @@ static struct display *hmd_create(const struct display *base)
         h->aberration[i] = (float)cfg->hmd.aberration[i];
     if (!(h->screen_size[0] > 0.0f && h->screen_size[1] > 0.0f && h->aspect > 0.0f)) {
         log_error("OpenHMD: the device reports no panel size");
+        display_fail(d, DISPLAY_FAILED_INPUT);
         goto error;
     }
     float near = (float)cfg->near_m, far = (float)cfg->far_m;

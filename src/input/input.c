@@ -132,6 +132,7 @@ void input_source_destroy(struct input_source *s)
 
 struct timed_event {
     long frame;
+    int line; /* in the script, for messages */
     struct input_event event;
 };
 
@@ -150,6 +151,7 @@ struct script {
     bool recorded, from_run, has_head;
     int menu_shown;
     long polled; /* the last frame polled */
+    char *path;
 };
 
 static bool script_poll(struct input_source *s, const struct input_frame *frame,
@@ -175,6 +177,7 @@ static void script_destroy(struct input_source *s)
     struct script *sc = (struct script *)s;
     free(sc->events);
     free(sc->frames);
+    free(sc->path);
     free(sc);
 }
 
@@ -363,6 +366,11 @@ struct input_source *input_script_open(const char *path)
     sc->fps = 30.0;
     sc->menu_shown = -1;
     sc->polled = -1;
+    sc->path = strdup(path);
+    if (!sc->path) {
+        log_error("%s: out of memory", path);
+        goto error;
+    }
     int cap = 0, line_no = 0;
     long last = -1;
     for (char *line = text, *next; line; line = next) {
@@ -410,9 +418,10 @@ struct input_source *input_script_open(const char *path)
         char *end;
         errno = 0;
         long frame = strtol(tok[0], &end, 10);
-        if (*end || errno || frame < 0) {
-            log_error("%s:%d: expected a frame number (0, 1, ...) first, got \"%s\"", path,
-                      line_no, tok[0]);
+        if (*end || errno || frame < 0 || frame > INPUT_SCRIPT_FRAMES_MAX) {
+            /* A frame of 9e18 made a render play for hours. */
+            log_error("%s:%d: expected a frame number from 0 to %d first, got \"%s\"", path,
+                      line_no, INPUT_SCRIPT_FRAMES_MAX, tok[0]);
             goto error;
         }
         if (frame < last) {
@@ -455,7 +464,7 @@ struct input_source *input_script_open(const char *path)
             }
             sc->events = grown;
         }
-        sc->events[sc->count++] = (struct timed_event){frame, e};
+        sc->events[sc->count++] = (struct timed_event){frame, line_no, e};
         last = frame;
     }
     free(text);
@@ -470,6 +479,24 @@ error:
 double input_script_fps(const struct input_source *s)
 {
     return s->impl == &script_impl ? ((const struct script *)s)->fps : 30.0;
+}
+
+bool input_script_check_aims(const struct input_source *s,
+                             bool (*known)(const char *name, void *user), void *user)
+{
+    if (s->impl != &script_impl)
+        return true;
+    const struct script *sc = (const struct script *)s;
+    for (int i = 0; i < sc->count; i++) {
+        const struct timed_event *t = &sc->events[i];
+        if (t->event.type == INPUT_AIM && !known(t->event.target, user)) {
+            log_error("%s:%d: expected a widget of the menu (docs/menu.md lists them), got "
+                      "\"%s\"",
+                      sc->path, t->line, t->event.target);
+            return false;
+        }
+    }
+    return true;
 }
 
 long input_script_last_frame(const struct input_source *s)

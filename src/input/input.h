@@ -123,12 +123,20 @@ bool input_source_finished(const struct input_source *s);
 const char *input_source_name(const struct input_source *s);
 void input_source_destroy(struct input_source *s); /* NULL is fine */
 
+/* The last frame a script may name: a render plays every frame up to it. */
+#define INPUT_SCRIPT_FRAMES_MAX 1000000
+
 /* A scripted input file (format in docs/menu.md): one event per line,
  *   FRAME EVENT ARGS...        e.g.  "30 button trigger down", "31 aim time.play"
- * with frames counted from 0 and ascending; '#' starts a comment.  Also "fps N" (the frame
- * rate the script was recorded at, default 30), and a recording's lines (below).  On failure
- * logs "FILE:LINE: expected ..." and returns NULL.  Destroy with input_source_destroy. */
+ * with frames counted from 0 to INPUT_SCRIPT_FRAMES_MAX and ascending; '#' starts a comment.
+ * Also "fps N" (the frame rate the script was recorded at, default 30), and a recording's
+ * lines (below).  On failure logs "FILE:LINE: expected ..." and returns NULL.  Destroy with
+ * input_source_destroy. */
 struct input_source *input_script_open(const char *path);
+/* Checks every "aim WIDGET" of the script S with KNOWN (the menu's names): false after one
+ * log_error "FILE:LINE: ..." for the first one KNOWN does not know (true for other sources). */
+bool input_script_check_aims(const struct input_source *s,
+                             bool (*known)(const char *name, void *user), void *user);
 /* The script's frame rate: a scripted run advances playback time by 1/fps per frame. */
 double input_script_fps(const struct input_source *s);
 /* The last frame the script names. */

@@ -8,14 +8,16 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include "common/fatal.h"
 #include "common/log.h"
 #include "input/input.h"
 
 struct input_recorder {
     FILE *file;
-    char path[1024], temp[1100];
+    char path[1024], target[4096], temp[4200];
     bool failed;
     long frames;
 };
@@ -33,10 +35,25 @@ struct input_recorder *input_recorder_open(const char *path, const char *command
         return NULL;
     }
     snprintf(r->path, sizeof(r->path), "%s", path);
-    snprintf(r->temp, sizeof(r->temp), "%s.part", path);
-    r->file = fopen(r->temp, "w");
+    /* Written beside its target (through a link; never over a read-only file) and renamed
+     * into place at the end; a signal removes it (common/fatal). */
+    unsigned mode = 0644;
+    if (!file_write_target(path, r->target, sizeof(r->target), &mode)) {
+        free(r);
+        return NULL;
+    }
+    snprintf(r->temp, sizeof(r->temp), "%s.tmpXXXXXX", r->target);
+    int fd = fatal_mkstemp(r->temp);
+    if (fd >= 0 && fchmod(fd, (mode_t)mode) != 0)
+        log_warn("%s: cannot set the file's permissions: %s", path, strerror(errno));
+    r->file = fd >= 0 ? fdopen(fd, "w") : NULL;
     if (!r->file) {
-        log_error("%s: cannot write: %s", r->temp, strerror(errno));
+        log_error("%s: cannot write: %s", fd >= 0 ? r->temp : path, strerror(errno));
+        if (fd >= 0) {
+            close(fd);
+            remove(r->temp);
+            fatal_untrack(r->temp);
+        }
         free(r);
         return NULL;
     }
@@ -109,7 +126,7 @@ bool input_recorder_close(struct input_recorder *r)
     if (!ok && !r->failed)
         log_error("%s: cannot write: %s", r->temp, strerror(errno));
     ok = fclose(r->file) == 0 && ok;
-    if (ok && rename(r->temp, r->path) != 0) {
+    if (ok && rename(r->temp, r->target) != 0) {
         log_error("%s: cannot rename into place: %s", r->path, strerror(errno));
         ok = false;
     }
@@ -117,6 +134,7 @@ bool input_recorder_close(struct input_recorder *r)
         log_info("recorded %ld frames to %s", r->frames, r->path);
     else
         remove(r->temp);
+    fatal_untrack(r->temp);
     free(r);
     return ok;
 }

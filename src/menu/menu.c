@@ -740,6 +740,28 @@ bool menu_widget_rect(struct menu *m, const char *name, int rect[4])
     return true;
 }
 
+bool menu_widget_known(struct menu *m, const char *name)
+{
+    /* Each page, and the transfer page's two halves, laid out in turn; then the menu as it
+     * was. */
+    enum menu_page page = m->page;
+    int sub = m->sub;
+    bool found = false;
+    for (int p = 0; p < MENU_PAGE_COUNT && !found; p++) {
+        for (int s = 0; s < 2 && !found; s++) {
+            m->page = (enum menu_page)p;
+            m->sub = s;
+            layout(m);
+            for (int i = 0; i < m->n_widgets && !found; i++)
+                found = strcmp(m->widgets[i].name, name) == 0;
+        }
+    }
+    m->page = page;
+    m->sub = sub;
+    layout(m);
+    return found;
+}
+
 bool menu_widget_point(struct menu *m, const char *name, float u, float v, float out[3])
 {
     const struct widget *wd = find_widget(m, name);

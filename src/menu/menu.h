@@ -127,6 +127,8 @@ const uint8_t *menu_pixels(struct menu *m, int *w, int *h, unsigned *generation)
 /* Where the widget NAME ("time.play", "transfer.canvas") lies on the current page, in panel
  * pixels [x, y, w, h]; false when the page has no such widget. */
 bool menu_widget_rect(struct menu *m, const char *name, int rect[4]);
+/* Whether NAME is a widget of some page (and sub-page) of the menu, shown now or not. */
+bool menu_widget_known(struct menu *m, const char *name);
 /* The point in menu space at (U, V) of widget NAME (for scripted aiming and tests). */
 bool menu_widget_point(struct menu *m, const char *name, float u, float v, float out[3]);
 

@@ -180,9 +180,13 @@ static uint32_t swap32(uint32_t v)
 bool image_read_pfm(const char *path, struct image *img)
 {
     size_t len = 0;
-    char *data = file_read_all(path, &len);
-    if (!data)
+    char why[160];
+    /* Pictures are not text: up to 2 GiB (a 16384 x 16384 RGB PFM is 3 GiB: refused). */
+    char *data = file_read_text(path, (size_t)1 << 31, &len, why, sizeof(why));
+    if (!data) {
+        log_error("%s: %s", path, why);
         return false;
+    }
     char kind[3] = {0};
     int w = 0, h = 0, consumed = 0;
     double scale = 0.0;

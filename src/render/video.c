@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <libavcodec/avcodec.h>
@@ -16,10 +17,11 @@
 #include <libavutil/opt.h>
 #include <libswscale/swscale.h>
 
+#include "common/fatal.h"
 #include "common/log.h"
 
 struct video_writer {
-    char path[1024], tmp[1100];
+    char path[1024], target[4096], tmp[4200];
     AVFormatContext *oc;
     AVCodecContext *enc;
     AVStream *st;
@@ -153,7 +155,23 @@ struct video_writer *video_open(const char *path, const struct video_desc *d)
         return NULL;
     }
     snprintf(v->path, sizeof(v->path), "%s", path);
-    snprintf(v->tmp, sizeof(v->tmp), "%s.part-%ld", path, (long)getpid());
+    /* Written beside its target (through a link; never over a read-only file) and renamed
+     * into place at the end; a signal removes it (common/fatal). */
+    unsigned mode = 0644;
+    if (!file_write_target(path, v->target, sizeof(v->target), &mode)) {
+        free(v);
+        return NULL;
+    }
+    snprintf(v->tmp, sizeof(v->tmp), "%s.tmpXXXXXX", v->target);
+    int fd = fatal_mkstemp(v->tmp);
+    if (fd < 0) {
+        log_error("%s: cannot create a temporary file beside it: %s", path, strerror(errno));
+        free(v);
+        return NULL;
+    }
+    if (fchmod(fd, (mode_t)mode) != 0)
+        log_warn("%s: cannot set the file's permissions: %s", path, strerror(errno));
+    close(fd);
     /* 4:2:0 halves both sides: an odd side gets its last row or column once more. */
     v->in_width = d->width;
     v->in_height = d->height;
@@ -167,7 +185,7 @@ struct video_writer *video_open(const char *path, const struct video_desc *d)
     if (rc < 0 || !v->oc || !v->enc || !v->frame || !v->pkt || !v->rgb) {
         log_error("%s: cannot set up the movie: %s", path,
                   rc < 0 ? av_text(rc, err, sizeof(err)) : "out of memory");
-        destroy(v);
+        video_abort(v);
         return NULL;
     }
     v->st = avformat_new_stream(v->oc, NULL);
@@ -202,7 +220,7 @@ struct video_writer *video_open(const char *path, const struct video_desc *d)
     if (rc < 0) {
         log_error("%s: the %s encoder refused %dx%d at %d frames/s: %s", path, codec->name,
                   d->width, d->height, d->fps, av_text(rc, err, sizeof(err)));
-        destroy(v);
+        video_abort(v);
         return NULL;
     }
     v->st->time_base = c->time_base;
@@ -308,7 +326,7 @@ bool video_close(struct video_writer *v)
         log_error("%s: cannot write the movie: %s", v->path, strerror(errno));
         ok = false;
     }
-    if (ok && rename(v->tmp, v->path) != 0) {
+    if (ok && rename(v->tmp, v->target) != 0) {
         log_error("%s: cannot put the movie in place: %s", v->path, strerror(errno));
         ok = false;
     }
@@ -316,6 +334,7 @@ bool video_close(struct video_writer *v)
         unlink(v->tmp);
     else
         log_info("wrote %s (%d frames)", v->path, v->frames);
+    fatal_untrack(v->tmp);
     destroy(v);
     return ok;
 }
@@ -327,5 +346,6 @@ void video_abort(struct video_writer *v)
     if (v->oc && v->oc->pb)
         avio_closep(&v->oc->pb);
     unlink(v->tmp);
+    fatal_untrack(v->tmp);
     destroy(v);
 }

@@ -152,6 +152,11 @@ static bool decide_effects(struct session *s, const struct ext_volume *vol)
     return true;
 }
 
+static bool widget_known(const char *name, void *menu)
+{
+    return menu_widget_known(menu, name);
+}
+
 static bool create_menu(struct session *s)
 {
     const struct session_desc *d = &s->desc;
@@ -180,6 +185,9 @@ static bool create_menu(struct session *s)
     model_from_session(s, &model);
     s->menu = menu_create(&(struct menu_desc){.step_date = date_of, .user = s->player}, &model);
     if (!s->menu)
+        return false;
+    /* A misspelled widget is a bad line of the script, not a warning at its frame. */
+    if (s->script && !input_script_check_aims(s->script, widget_known, s->menu))
         return false;
     menu_set_visible(s->menu, d->show_menu);
     menu_take_changes(s->menu);

@@ -1,21 +1,41 @@
 #!/bin/bash
-# Builds the tracker parsers' libFuzzer harnesses with clang (AddressSanitizer, UBSan) and runs
-# each for SECONDS (default 15) from its seed corpus; fails on a crash, a leak or a broken
-# invariant.  Usage: tests/fuzz/run.sh [SECONDS] [BUILD_DIR]
-set -euo pipefail
-cd "$(dirname "$0")/../.."
-seconds=${1:-15}
-out=${2:-build-fuzz}
-mkdir -p "$out"
-flags="-g -O1 -std=c11 -D_DEFAULT_SOURCE -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -Isrc"
-for name in dtrack vrpn; do
-    clang $flags "tests/fuzz/fuzz_$name.c" "src/input/$name.c" -lm -o "$out/fuzz_$name"
-    corpus="$out/corpus-$name"
-    mkdir -p "$corpus"
-    cp tests/fuzz/seeds/$name/* "$corpus/"
-    echo "fuzz_$name: $seconds s"
-    "$out/fuzz_$name" -max_total_time="$seconds" -timeout=5 -rss_limit_mb=1024 \
-        -print_final_stats=1 "$corpus" 2>"$out/fuzz_$name.log" ||
-        { tail -40 "$out/fuzz_$name.log"; exit 1; }
-    grep -E "stat::number_of_executed_units|Done" "$out/fuzz_$name.log" | tail -2
+# Runs each libFuzzer harness of a -DANVIL_FUZZ=ON build for SECONDS (default 15) from its seeds
+# (tests/fuzz/corpus/NAME, and the shipped configs and displays for the config harnesses).
+# Fails when a harness finds a crash, a leak, undefined behaviour, a timeout (10 s for one
+# input) or an allocation over 2 GB; the input that did it is left in WORK (default a
+# temporary folder, kept then) for `fuzz_NAME INPUT` to replay.
+#   tests/fuzz/run.sh BUILD_DIR [SECONDS] [NAME...]
+set -u
+build=$(cd "$1" && pwd)
+seconds=${2:-15}
+shift $(($# < 2 ? $# : 2))
+src=$(cd "$(dirname "$0")/../.." && pwd)
+work=${ANVIL_FUZZ_WORK:-$(mktemp -d)}
+names=("$@")
+[ ${#names[@]} -eq 0 ] && names=(config display_config script transfer wrf extfile coast dtrack vrpn)
+failed=0
+for name in "${names[@]}"; do
+    seeds=("$src/tests/fuzz/corpus/$name")
+    case $name in
+    config) seeds+=("$src/configs") ;;
+    display_config) seeds+=("$src/displays") ;;
+    esac
+    mkdir -p "$work/$name/corpus" "$work/$name/crashes"
+    (cd "$work/$name" && UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+        LSAN_OPTIONS="suppressions=$src/tests/lsan.supp:print_suppressions=0" \
+        "$build/tests/fuzz/fuzz_$name" -max_total_time="$seconds" -timeout=10 \
+        -rss_limit_mb=2048 -malloc_limit_mb=2048 -print_final_stats=1 \
+        -artifact_prefix="$work/$name/crashes/" "$work/$name/corpus" "${seeds[@]}" \
+        >"$work/$name/log" 2>&1)
+    rc=$?
+    runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$work/$name/log")
+    if [ $rc -ne 0 ]; then
+        echo "fuzz_$name: FAILED (exit $rc) after ${runs:-?} runs; input and log in $work/$name:"
+        grep -E "ERROR|SUMMARY|runtime error|Test unit written" "$work/$name/log" | head -8
+        failed=1
+    else
+        echo "fuzz_$name: ${runs:-?} runs in ${seconds} s, no failure"
+    fi
 done
+[ $failed -eq 0 ] && [ -z "${ANVIL_FUZZ_WORK:-}" ] && rm -rf "$work"
+exit $failed

@@ -275,6 +275,7 @@ static void test_twelve_views_one_build(void **state)
     cfg.light.azimuth_deg += 10.0;
     struct image img;
     render(&cfg, &al, &st, NULL, &img);
+    image_finish(&img); /* each render makes a new image */
     render(&cfg, &al, &st, NULL, &img);
     assert_int_equal(st.light_builds, 2);
     image_finish(&img);

@@ -85,7 +85,7 @@ static void test_round_trip(void **state)
     nc_close(nc);
 
     /* Our reader: same grid, same values, bit for bit. */
-    struct extfile *f = extfile_open(path);
+    struct extfile *f = extfile_open(path, 0.0);
     assert_non_null(f);
     assert_int_equal(extfile_step_count(f), 3);
     assert_string_equal(extfile_step_date(f, 1), "2005-08-28_15:00:00");
@@ -129,7 +129,7 @@ static void test_failed_write_keeps_old_file(void **state)
     assert_false(extfile_writer_add(w, &b, ""));
     assert_int_equal(log_error_count(), errors + 1);
     assert_false(extfile_writer_finish(w));
-    struct extfile *f = extfile_open(path);
+    struct extfile *f = extfile_open(path, 0.0);
     assert_non_null(f);
     assert_int_equal(extfile_step_count(f), 1);
     assert_string_equal(extfile_step_date(f, 0), "");
@@ -159,7 +159,7 @@ static void test_bad_values_and_layout(void **state)
     struct extfile_writer *w = extfile_writer_create(path, &a.grid, "", "", NULL);
     assert_true(extfile_writer_add(w, &a, "2020-02-29_23:59:59"));
     assert_true(extfile_writer_finish(w));
-    struct extfile *f = extfile_open(path);
+    struct extfile *f = extfile_open(path, 0.0);
     struct ext_volume r;
     struct extfile_stats st;
     assert_true(extfile_read_step(f, 0, &r, &st));
@@ -175,8 +175,8 @@ static void test_bad_values_and_layout(void **state)
 
     /* Not an extinction file: a WRF sample, a text file. */
     unsigned errors = log_error_count();
-    assert_null(extfile_open(test_shared_data("wrf/katrina_2005_mercator_wsm3.nc")));
-    assert_null(extfile_open(test_write_file("t.nc", "hello")));
+    assert_null(extfile_open(test_shared_data("wrf/katrina_2005_mercator_wsm3.nc"), 0.0));
+    assert_null(extfile_open(test_write_file("t.nc", "hello"), 0.0));
     assert_int_equal(log_error_count(), errors + 2);
 
     /* A file missing beta_water. */
@@ -191,7 +191,7 @@ static void test_bad_values_and_layout(void **state)
     int d4[4] = {dt, dz, dy, dx};
     nc_def_var(nc, "beta_ice", NC_FLOAT, 4, d4, &v);
     nc_close(nc);
-    assert_null(extfile_open(p2));
+    assert_null(extfile_open(p2, 0.0));
 }
 
 static void test_dates(void **state)
@@ -220,7 +220,7 @@ static void test_commands(void **state)
     assert_int_equal(cmd_synth(11, synth_argv), 0);
     char *convert_argv[] = {"convert", synth, "-o", ext};
     assert_int_equal(cmd_convert(4, convert_argv), 0);
-    struct extfile *f = extfile_open(ext);
+    struct extfile *f = extfile_open(ext, 0.0);
     assert_non_null(f);
     assert_int_equal(extfile_step_count(f), 3);
     assert_string_equal(extfile_step_date(f, 2), "2000-01-01_00:20:00");
@@ -236,7 +236,7 @@ static void test_commands(void **state)
     char *kat_argv[] = {"convert", (char *)test_shared_data("wrf/katrina_2005_mercator_wsm3.nc"),
                         "-o", kat};
     assert_int_equal(cmd_convert(4, kat_argv), 0);
-    f = extfile_open(kat);
+    f = extfile_open(kat, 0.0);
     assert_non_null(f);
     assert_int_equal(extfile_step_count(f), 4);
     assert_true(extfile_read_step(f, 0, &v, NULL));

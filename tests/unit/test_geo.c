@@ -18,7 +18,7 @@
 static struct wrf *open_one(const char *shared_name)
 {
     const char *path = test_shared_data(shared_name);
-    return wrf_open(&path, 1);
+    return wrf_open(&path, 1, 0.0);
 }
 
 static void grid_map(const struct wrf_meta *m, struct geo_map *g)

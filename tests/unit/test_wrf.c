@@ -21,7 +21,7 @@
 static struct wrf *open_one(const char *shared_name)
 {
     const char *path = test_shared_data(shared_name);
-    return wrf_open(&path, 1);
+    return wrf_open(&path, 1, 0.0);
 }
 
 /* rho from P + PB and theta as in SPEC.md, with WRF's R_d = 287, c_p = 1004.5. */
@@ -409,7 +409,7 @@ static const char *make_wrf(const char *name, int nt, int h0, int nz, unsigned d
 static void expect_open_error(const char *path, const char *word)
 {
     unsigned errors = log_error_count();
-    struct wrf *w = wrf_open(&path, 1);
+    struct wrf *w = wrf_open(&path, 1, 0.0);
     assert_null(w);
     assert_int_equal(log_error_count(), errors + 1);
     assert_non_null(strstr(log_last_error(), path));
@@ -420,7 +420,7 @@ static void expect_open_error(const char *path, const char *word)
 static void test_good_small_file(void **state)
 {
     const char *path = make_wrf("good.nc", 2, 0, NZ, OK);
-    struct wrf *w = wrf_open(&path, 1);
+    struct wrf *w = wrf_open(&path, 1, 0.0);
     assert_non_null(w);
     struct wrf_desc d;
     wrf_desc_defaults(&d);
@@ -439,7 +439,7 @@ static void test_good_small_file(void **state)
 static void test_bad_values(void **state)
 {
     const char *path = make_wrf("badvalues.nc", 1, 0, NZ, QCLOUD_BAD);
-    struct wrf *w = wrf_open(&path, 1);
+    struct wrf *w = wrf_open(&path, 1, 0.0);
     assert_non_null(w);
     struct wrf_desc d;
     wrf_desc_defaults(&d);
@@ -472,7 +472,7 @@ static void test_malformed(void **state)
 
     /* All-NaN field: opens, but reading the step is one error naming the variable. */
     const char *path = make_wrf("nan.nc", 1, 0, NZ, QCLOUD_NAN);
-    struct wrf *w = wrf_open(&path, 1);
+    struct wrf *w = wrf_open(&path, 1, 0.0);
     assert_non_null(w);
     struct wrf_desc d;
     wrf_desc_defaults(&d);
@@ -522,7 +522,7 @@ static void test_truncated(void **state)
         copy_truncated(test_shared_data(KATRINA), dst, fractions[i]);
         unsigned errors = log_error_count();
         const char *p = dst;
-        struct wrf *w = wrf_open(&p, 1);
+        struct wrf *w = wrf_open(&p, 1, 0.0);
         bool ok = w != NULL;
         if (w) {
             struct wrf_desc d;
@@ -547,7 +547,7 @@ static void test_many_files(void **state)
     snprintf(a, sizeof(a), "%s", make_wrf("late.nc", 2, 6, NZ, OK));
     snprintf(b, sizeof(b), "%s", make_wrf("early.nc", 3, 0, NZ, OK));
     const char *paths[2] = {a, b};
-    struct wrf *w = wrf_open(paths, 2);
+    struct wrf *w = wrf_open(paths, 2, 0.0);
     assert_non_null(w);
     assert_int_equal(wrf_step_count(w), 5);
     assert_string_equal(wrf_step_date(w, 0), "2020-01-01_00:00:00");
@@ -565,7 +565,7 @@ static void test_many_files(void **state)
     char pattern[512];
     snprintf(pattern, sizeof(pattern), "%s/*ly.nc", test_tmpdir());
     const char *pp = pattern;
-    w = wrf_open(&pp, 1);
+    w = wrf_open(&pp, 1, 0.0);
     assert_non_null(w);
     assert_int_equal(wrf_step_count(w), 3);
     wrf_close(w);
@@ -575,7 +575,7 @@ static void test_many_files(void **state)
     snprintf(c, sizeof(c), "%s", make_wrf("other.nc", 1, 12, NZ + 2, OK));
     const char *mixed[2] = {b, c};
     unsigned errors = log_error_count();
-    assert_null(wrf_open(mixed, 2));
+    assert_null(wrf_open(mixed, 2, 0.0));
     assert_int_equal(log_error_count(), errors + 1);
     assert_non_null(strstr(log_last_error(), "other.nc"));
 
@@ -583,7 +583,7 @@ static void test_many_files(void **state)
     char e[512];
     snprintf(e, sizeof(e), "%s", make_wrf("dup.nc", 1, 1, NZ, OK));
     const char *dup[2] = {b, e};
-    assert_null(wrf_open(dup, 2));
+    assert_null(wrf_open(dup, 2, 0.0));
     assert_non_null(strstr(log_last_error(), "2020-01-01_01:00:00"));
 }
 
@@ -611,7 +611,7 @@ static void test_synth_round_trip(void **state)
     assert_true(wrf_writer_finish(ww));
 
     const char *p = path;
-    struct wrf *w = wrf_open(&p, 1);
+    struct wrf *w = wrf_open(&p, 1, 0.0);
     assert_non_null(w);
     const struct wrf_meta *m = wrf_get_meta(w);
     assert_int_equal(m->nx, 40);
@@ -677,7 +677,7 @@ static void test_partial_species_round_trip(void **state)
     assert_true(wrf_writer_add(ww, &v, "2001-02-03_04:05:06"));
     assert_true(wrf_writer_finish(ww));
     const char *p = path;
-    struct wrf *w = wrf_open(&p, 1);
+    struct wrf *w = wrf_open(&p, 1, 0.0);
     assert_non_null(w);
     assert_int_equal(wrf_get_meta(w)->mp_physics, 3);
     assert_false(wrf_get_meta(w)->has_species[SPECIES_ICE]);
@@ -725,7 +725,7 @@ static void test_isabel_size_budget(void **state)
     assert_true(wrf_writer_finish(ww));
     field_volume_finish(&v);
     const char *p = path;
-    struct wrf *w = wrf_open(&p, 1);
+    struct wrf *w = wrf_open(&p, 1, 0.0);
     assert_non_null(w);
     struct wrf_desc d;
     wrf_desc_defaults(&d);

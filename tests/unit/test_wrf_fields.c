@@ -107,7 +107,7 @@ static const char *make_file(const char *name, unsigned what)
 static bool read_one(const char *path, int stride_x, struct field_volume *out,
                      struct wrf_meta *meta)
 {
-    struct wrf *w = wrf_open(&path, 1);
+    struct wrf *w = wrf_open(&path, 1, 0.0);
     assert_non_null(w);
     if (meta)
         *meta = *wrf_get_meta(w);
@@ -204,7 +204,7 @@ static void test_synth_wind_and_temperature(void **state)
     assert_true(wrf_writer_add(ww, &in, "2000-01-01_00:00:00"));
     assert_true(wrf_writer_finish(ww));
     const char *p = path;
-    struct wrf *w = wrf_open(&p, 1);
+    struct wrf *w = wrf_open(&p, 1, 0.0);
     assert_non_null(w);
     assert_true(wrf_get_meta(w)->has_wind);
     assert_true(wrf_get_meta(w)->has_w);
@@ -245,7 +245,7 @@ static void test_synth_wind_and_temperature(void **state)
 static void test_katrina(void **state)
 {
     const char *path = test_shared_data("wrf/katrina_2005_mercator_wsm3.nc");
-    struct wrf *w = wrf_open(&path, 1);
+    struct wrf *w = wrf_open(&path, 1, 0.0);
     assert_non_null(w);
     assert_true(wrf_get_meta(w)->has_wind);
     struct wrf_desc d;
