@@ -37,6 +37,14 @@
 #define BIND_EYE_TEX_TINT 6             /* TINT 1: colour of the scattered light */
 #define BIND_EYE_TEX_BETA_NEXT 7        /* TEMPORAL 1: extinction of step k + 1 */
 #define BIND_EYE_IMG_OUT 0              /* RGBA32F radiance and transmittance */
+#define BIND_EYE_BUF_CELLS 4            /* SKIP 1: the macro-cell pyramid (cells.glsl) */
+#define BIND_EYE_BUF_COUNTERS 5         /* COUNT 1: what the rays did */
+#define BIND_EYE_BUF_RAYS 6             /* SKIP 1: the rays the second pass marches */
+
+/* ---- macro cells: empty-space skipping (shaders/cells_build.comp, cells_reduce.comp) --- */
+#define BIND_CELLS_TEX_BETA 0       /* the volume's extinction, texelFetch only */
+#define BIND_CELLS_TEX_BETA_NEXT 1  /* TEMPORAL 1: step k + 1's */
+#define BIND_CELLS_BUF_CELLS 0      /* the pyramid, written */
 
 /* ---- opaque pass (shaders/opaque.vert, opaque.frag) ---------------------------------------
  * Reads the light map's units too.  renderer_draw binds the eye pass's units before it draws
@@ -52,6 +60,7 @@
 #define BIND_BUILD_TEX_RATES 1  /* MULTIPLE and LATERAL: lateral escape rates */
 #define BIND_BUILD_IMG_LIGHT 0  /* R32F node volume, read and written */
 #define BIND_BUILD_IMG_SLICE 1  /* MULTIPLE: each slice's tau, ice share, escape rates */
+#define BIND_BUILD_BUF_CELLS 0  /* SKIP 1: the volume's macro cells (cells.glsl) */
 
 /* ---- light build: the diffuse column pass (shaders/light_diffuse.comp) ---------------- */
 #define BIND_DIFFUSE_IMG_LIGHT 0    /* the beam at each node, read */

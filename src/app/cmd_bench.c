@@ -11,7 +11,8 @@
 static int usage(FILE *out)
 {
     fprintf(out,
-            "usage: anvil bench [--quick] [--views-only | --quality-only | --movie-only] [-o DIR]\n"
+            "usage: anvil bench [--quick] [--views-only | --quality-only | --movie-only |\n"
+            "                   --scale-only] [-o DIR]\n"
             "                   [--cache DIR]\n"
             "                   [--configs DIR] [--spp N] [--scene sphere|storm|katrina]...\n"
             "                   [--paraview] [--quiet]\n"
@@ -24,6 +25,9 @@ static int usage(FILE *out)
             "           wall under 4 suns against Monte Carlo\n"
             "  movie    frames per second of the default storm's movie, drawn only and\n"
             "           written through the encoder (movie-table.md)\n"
+            "  scale    the storm, its box left empty and the storm on a 500 x 500 x 100 grid:\n"
+            "           views with and without empty-space skipping, what their rays did,\n"
+            "           the light build (scale-table.md)\n"
             "  -o DIR         where views.md, accuracy.csv, accuracy-table.md, accuracy.png\n"
             "                 and angles-table.md go (default docs/bench)\n"
             "  --cache DIR    Monte Carlo references are kept here (default: bench-cache\n"
@@ -52,6 +56,7 @@ static int parse(int argc, char **argv, struct bench_options *o)
         {"scene", required_argument, NULL, 's'},  {"quiet", no_argument, NULL, 'q'},
         {"paraview", no_argument, NULL, 'P'},     {"configs", required_argument, NULL, 'C'},
         {"movie-only", no_argument, NULL, 'M'},   {"help", no_argument, NULL, 'h'},
+        {"scale-only", no_argument, NULL, 'S'},
         {NULL, 0, NULL, 0},
     };
     bench_options_defaults(o);
@@ -68,15 +73,19 @@ static int parse(int argc, char **argv, struct bench_options *o)
             o->quick = true;
             break;
         case 'V':
-            o->quality = o->movie = false;
+            o->quality = o->movie = o->scale = false;
             only++;
             break;
         case 'A':
-            o->views = o->movie = false;
+            o->views = o->movie = o->scale = false;
             only++;
             break;
         case 'M':
-            o->views = o->quality = false;
+            o->views = o->quality = o->scale = false;
+            only++;
+            break;
+        case 'S':
+            o->views = o->quality = o->movie = false;
             only++;
             break;
         case 'o':
@@ -118,7 +127,8 @@ static int parse(int argc, char **argv, struct bench_options *o)
         return EXIT_USAGE;
     }
     if (only > 1) {
-        log_error("bench: --views-only, --quality-only and --movie-only exclude each other");
+        log_error("bench: --views-only, --quality-only, --movie-only and --scale-only exclude "
+                  "each other");
         return EXIT_USAGE;
     }
     if (o->paraview && !o->views) {

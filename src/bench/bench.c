@@ -264,6 +264,23 @@ static bool build(struct renderer *r, struct light_gpu *lg, const struct bench_s
 }
 
 static bool draw(struct renderer *r, const struct render_settings *s,
+                 const struct render_view *view, struct gpu_texture *out, double *ms);
+
+bool bench_timed_build(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
+                       bool shadows, const struct light_settings *settings,
+                       enum light_gpu_mode mode, double *ms)
+{
+    struct bench_variant v = {.shadows = shadows, .light = *settings, .mode = mode};
+    return build(r, lg, sc, &v, ms);
+}
+
+bool bench_timed_draw(struct renderer *r, const struct render_settings *s,
+                      const struct render_view *view, struct gpu_texture *out, double *ms)
+{
+    return draw(r, s, view, out, ms);
+}
+
+static bool draw(struct renderer *r, const struct render_settings *s,
                  const struct render_view *view, struct gpu_texture *out, double *ms)
 {
     struct gpu_timings t = {0};

@@ -15,6 +15,7 @@
 #include "bench/experiments.h"
 #include "bench/movie.h"
 #include "bench/paraview.h"
+#include "bench/scale.h"
 #include "bench/tables.h"
 #include "common/log.h"
 #include "common/progress.h"
@@ -26,7 +27,7 @@
 void bench_options_defaults(struct bench_options *o)
 {
     memset(o, 0, sizeof(*o));
-    o->views = o->quality = o->movie = true;
+    o->views = o->quality = o->movie = o->scale = true;
 }
 
 __attribute__((format(printf, 2, 3))) static void echo(const struct bench_options *o,
@@ -264,10 +265,31 @@ static bool run_angles(const struct bench_options *o, const char *device, struct
     return ok;
 }
 
+/* ---- scale ------------------------------------------------------------------------------ */
+
+static bool run_scale(const struct bench_options *o, const char *device)
+{
+    struct bench_scale_desc d = {.quick = o->quick, .configs = o->configs};
+    struct bench_scale_row rows[BENCH_SCALE_SCENES];
+    int n = 0;
+    if (!bench_scale(&d, rows, &n))
+        return false;
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    bench_table_head(f, o->quick, "scale");
+    bench_write_scale_table(f, &d, rows, n, device);
+    fclose(f);
+    bool ok = write_text(o, "scale-table.md", buf, len);
+    echo(o, "%.*s", (int)len, buf);
+    free(buf);
+    return ok;
+}
+
 enum bench_status bench_run(const struct bench_options *opts)
 {
     assert(opts && opts->out && opts->configs);
-    assert(opts->views || opts->quality || opts->movie);
+    assert(opts->views || opts->quality || opts->movie || opts->scale);
     assert(!opts->paraview || opts->paraview_script);
     struct bench_options o = *opts;
     char cache[PATH_MAX];
@@ -306,6 +328,8 @@ enum bench_status bench_run(const struct bench_options *opts)
     if (o.views && !run_views(&o, device, r, lg))
         goto done;
     if (o.quality && !(run_quality(&o, device, r, lg) && run_angles(&o, device, r, lg)))
+        goto done;
+    if (o.scale && !run_scale(&o, device))
         goto done;
     struct bench_movie_result movie;
     if (o.movie && !bench_movie(&(struct bench_movie_desc){.quick = o.quick,

@@ -25,6 +25,8 @@ struct bench_options {
     bool quick;           /* small scenes and images, one repeat: a CI-sized run */
     bool views, quality;  /* which benchmarks run (all three by default; at least one) */
     bool movie;           /* the default storm's movie: frames per second (bench/movie.h) */
+    bool scale;           /* the eye pass and the light build as the volume grows and empties
+                             (bench/scale.h, scale-table.md) */
     bool paraview;        /* also time ParaView on the views (needs views and paraview_script) */
     const char *out;      /* folder for the tables and plots, created with its parents */
     const char *cache;    /* folder of the cached Monte Carlo references; NULL or "":

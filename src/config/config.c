@@ -154,6 +154,9 @@ static const struct config_field settings[] = {
     BOOL("render.ground_on", render.ground_on, 1, "draw the ground plane"),
     DBL("render.termination", render.termination, 0, 1, F_MAX_OPEN, 0.001,
         "stop a ray when its transmittance falls below this"),
+    BOOL("render.skip", render.skip, 1,
+         "empty-space skipping: rays leap macro cells that hold nothing (the same picture, "
+         "faster; false for comparisons)"),
 
     ENUM("lightmap.mode", lightmap.mode, lightmap_mode_names, LIGHTMAP_DENSE,
          "deep light map storage: a dense light volume or compressed light columns"),

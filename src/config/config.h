@@ -117,6 +117,7 @@ struct config_render {
     double ground[3];      /* render.ground: ground albedo, linear RGB */
     bool ground_on;        /* render.ground_on: draw the ground plane */
     double termination;    /* render.termination: stop a ray below this transmittance */
+    bool skip;             /* render.skip: empty-space skipping (macro cells) */
 };
 
 struct config_lightmap {

@@ -464,6 +464,16 @@ void gpu_uniform_mat4(const struct gpu_program *p, const char *name, const float
     glProgramUniformMatrix4fv(p->id, glGetUniformLocation(p->id, name), 1, GL_FALSE, m);
 }
 
+/* After a dispatch: its writes are seen by what follows, an indirect dispatch's arguments
+ * included. */
+static void dispatch_barrier(void)
+{
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                    GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT |
+                    GL_BUFFER_UPDATE_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT |
+                    GL_COMMAND_BARRIER_BIT);
+}
+
 void gpu_dispatch(const struct gpu_program *prog, int w, int h, int d)
 {
     glUseProgram(prog->id);
@@ -471,9 +481,17 @@ void gpu_dispatch(const struct gpu_program *prog, int w, int h, int d)
     GLuint gy = (GLuint)((h + prog->local_size[1] - 1) / prog->local_size[1]);
     GLuint gz = (GLuint)((d + prog->local_size[2] - 1) / prog->local_size[2]);
     glDispatchCompute(gx, gy, gz);
-    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
-                    GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT |
-                    GL_BUFFER_UPDATE_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+    dispatch_barrier();
+}
+
+void gpu_dispatch_indirect(const struct gpu_program *prog, const struct gpu_buffer *args,
+                           size_t offset)
+{
+    glUseProgram(prog->id);
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, args->id);
+    glDispatchComputeIndirect((GLintptr)offset);
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+    dispatch_barrier();
 }
 
 void gpu_finish(void)

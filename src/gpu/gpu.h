@@ -142,6 +142,11 @@ void gpu_uniform_mat4(const struct gpu_program *p, const char *name, const float
  * next dispatch, texture fetch or read-back sees the writes. */
 void gpu_dispatch(const struct gpu_program *prog, int w, int h, int d);
 
+/* Runs PROG over the work groups that ARGS holds at byte OFFSET (three uint32: groups along
+ * x, y, z, as an earlier dispatch wrote them), then the same barrier as gpu_dispatch. */
+void gpu_dispatch_indirect(const struct gpu_program *prog, const struct gpu_buffer *args,
+                           size_t offset);
+
 /* Waits for all GL work. */
 void gpu_finish(void);
 

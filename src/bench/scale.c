@@ -1,0 +1,273 @@
+/* What the eye pass and the light build cost as the volume grows and empties (scale.h). */
+#include "bench/scale.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bench/scenes.h"
+#include "common/log.h"
+#include "light/light_gpu.h"
+#include "render/render.h"
+
+#define ROUNDS_MAX 16
+
+struct scene_state {
+    struct ext_volume vol;
+    struct bench_scene sc;
+    struct renderer *r;
+    struct light_gpu *lg;
+    double view[ROUNDS_MAX], noskip[ROUNDS_MAX], large[ROUNDS_MAX], build[ROUNDS_MAX];
+};
+
+static int compare_doubles(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static double median_of(const double *v, int n)
+{
+    double w[ROUNDS_MAX];
+    memcpy(w, v, sizeof(double) * (size_t)n);
+    qsort(w, (size_t)n, sizeof(double), compare_doubles);
+    return n % 2 ? w[n / 2] : 0.5 * (w[n / 2 - 1] + w[n / 2]);
+}
+
+/* The config of scene I: the storm, its box empty, the storm on a finer grid, Katrina. */
+static bool scene_config(const struct bench_scale_desc *d, int i, struct config *cfg, char *name,
+                         size_t name_size)
+{
+    static char empty[] = "scene.kind=empty";
+    static char big[] = "scene.size=[500,500,100]";
+    static char big_quick[] = "scene.size=[96,96,48]";
+    char *sets[1];
+    int n = 0;
+    const char *scene = "storm";
+    if (i == 1)
+        sets[n++] = empty;
+    else if (i == 2)
+        sets[n++] = d->quick ? big_quick : big;
+    else if (i == 3)
+        scene = "katrina";
+    if (!bench_scene_config(scene, d->configs, d->quick, sets, n, cfg))
+        return false;
+    const int *s = cfg->scene.size;
+    if (i == 3)
+        snprintf(name, name_size, "Katrina sample");
+    else
+        snprintf(name, name_size, "%s %dx%dx%d", i == 1 ? "empty box" : "storm", s[0], s[1], s[2]);
+    return true;
+}
+
+static bool counted_draw(struct scene_state *st, bool skip, struct render_counts *out)
+{
+    struct render_settings s = st->sc.settings;
+    s.no_skip = !skip;
+    struct gpu_texture target = {0};
+    double ms;
+    bool ok = renderer_set_counting(st->r, true) &&
+              bench_timed_draw(st->r, &s, &st->sc.view, &target, &ms) &&
+              renderer_counts(st->r, out);
+    renderer_set_counting(st->r, false);
+    gpu_texture_finish(&target);
+    return ok;
+}
+
+static double clear_share(const struct render_cells *c)
+{
+    float *v = render_cells_read(c);
+    if (!v)
+        return 0.0;
+    size_t n0 = (size_t)c->dims[0][0] * c->dims[0][1] * c->dims[0][2], clear = 0;
+    for (size_t i = 0; i < n0; i++)
+        clear += v[i] <= 0.0f;
+    free(v);
+    return n0 ? (double)clear / (double)n0 : 0.0;
+}
+
+bool bench_scale(const struct bench_scale_desc *d, struct bench_scale_row *rows, int *n_rows)
+{
+    int w = d->width ? d->width : d->quick ? 160 : 640;
+    int h = d->height ? d->height : d->quick ? 120 : 480;
+    int rounds = d->rounds ? d->rounds : d->quick ? 1 : 3;
+    rounds = rounds > ROUNDS_MAX ? ROUNDS_MAX : rounds;
+    int lw = d->quick ? 320 : 1280, lh = d->quick ? 256 : 1024;
+    struct scene_state st[BENCH_SCALE_SCENES];
+    memset(st, 0, sizeof(st));
+    memset(rows, 0, sizeof(*rows) * BENCH_SCALE_SCENES);
+    int n = 0;
+    bool ok = false;
+    for (int i = 0; i < BENCH_SCALE_SCENES; i++) {
+        struct config cfg;
+        char name[48];
+        if (!scene_config(d, i, &cfg, name, sizeof(name)))
+            goto done;
+        if (i == 3) {
+            const char *missing = d->quick ? "" : bench_scene_missing_data(&cfg);
+            if (missing) {
+                if (missing[0])
+                    log_warn("bench: %s not found: the Katrina scene is left out", missing);
+                continue;
+            }
+        }
+        struct scene_state *s = &st[n];
+        struct bench_scale_row *row = &rows[n];
+        n++;
+        snprintf(row->name, sizeof(row->name), "%s", name);
+        log_info("bench: scale: preparing %s", name);
+        if (!bench_scene_prepare(name, &cfg, w, h, &s->vol, &s->sc))
+            goto done;
+        if (i == 1) {
+            /* The empty box keeps the storm's effects: its light map and all they compile. */
+            const struct bench_scene *storm = &st[0].sc;
+            s->sc.settings = storm->settings;
+            s->sc.light = storm->light;
+            s->sc.shadows = storm->shadows;
+            s->sc.mode = storm->mode;
+        }
+        s->r = renderer_create();
+        s->lg = light_gpu_create();
+        if (!s->r || !s->lg || !renderer_set_optics(s->r, &cfg.optics.params) ||
+            !renderer_set_volume(s->r, &s->vol))
+            goto done;
+        const struct render_stats *rs = renderer_stats(s->r);
+        row->upload_ms = rs->upload_ms;
+        row->upload_bytes = (double)rs->upload_bytes;
+        memcpy(row->n, s->vol.grid.n, sizeof(row->n));
+        memcpy(row->light_n, s->sc.light.resolution, sizeof(row->light_n));
+        row->shadows = s->sc.shadows;
+        row->multiple = s->sc.light.multiple;
+        row->lateral = s->sc.light.multiple && s->sc.light.lateral;
+        row->cells_clear = clear_share(renderer_cells(s->r));
+        /* The CPU volume is no longer needed: the renderer holds it. */
+        ext_volume_finish(&s->vol);
+        s->sc.vol = NULL;
+    }
+    /* Warm up (compile every variant, allocate), and count what one view's rays do. */
+    for (int i = 0; i < n; i++) {
+        struct scene_state *s = &st[i];
+        double ms;
+        struct gpu_texture t = {0};
+        struct render_settings noskip = s->sc.settings;
+        noskip.no_skip = true;
+        struct render_view large = s->sc.view;
+        large.width = lw;
+        large.height = lh;
+        bool good =
+            bench_timed_build(s->r, s->lg, &s->sc, s->sc.shadows, &s->sc.light, s->sc.mode, &ms) &&
+            bench_timed_draw(s->r, &s->sc.settings, &s->sc.view, &t, &ms) &&
+            bench_timed_draw(s->r, &noskip, &s->sc.view, &t, &ms) &&
+            bench_timed_draw(s->r, &s->sc.settings, &large, &t, &ms) &&
+            counted_draw(s, true, &rows[i].counts) &&
+            counted_draw(s, false, &rows[i].counts_noskip);
+        gpu_texture_finish(&t);
+        if (!good)
+            goto done;
+    }
+    for (int k = 0; k < rounds; k++) {
+        for (int i = 0; i < n; i++) {
+            struct scene_state *s = &st[i];
+            struct gpu_texture t = {0};
+            struct render_settings noskip = s->sc.settings;
+            noskip.no_skip = true;
+            struct render_view large = s->sc.view;
+            large.width = lw;
+            large.height = lh;
+            bool good = bench_timed_build(s->r, s->lg, &s->sc, s->sc.shadows, &s->sc.light,
+                                          s->sc.mode, &s->build[k]) &&
+                        bench_timed_draw(s->r, &s->sc.settings, &s->sc.view, &t, &s->view[k]) &&
+                        bench_timed_draw(s->r, &noskip, &s->sc.view, &t, &s->noskip[k]) &&
+                        bench_timed_draw(s->r, &s->sc.settings, &large, &t, &s->large[k]);
+            gpu_texture_finish(&t);
+            if (!good)
+                goto done;
+            log_info("bench: scale: %s round %d: view %.0f ms (%.0f without skipping), "
+                     "%dx%d %.0f ms, build %.0f ms",
+                     rows[i].name, k + 1, s->view[k], s->noskip[k], lw, lh, s->large[k],
+                     s->build[k]);
+        }
+    }
+    for (int i = 0; i < n; i++) {
+        rows[i].view_ms = median_of(st[i].view, rounds);
+        rows[i].view_noskip_ms = median_of(st[i].noskip, rounds);
+        rows[i].large_ms = median_of(st[i].large, rounds);
+        rows[i].build_ms = median_of(st[i].build, rounds);
+    }
+    ok = true;
+done:
+    for (int i = 0; i < BENCH_SCALE_SCENES; i++) {
+        light_gpu_destroy(st[i].lg);
+        renderer_destroy(st[i].r);
+        ext_volume_finish(&st[i].vol);
+    }
+    *n_rows = n;
+    return ok;
+}
+
+static double per_pixel(uint64_t v, const struct render_counts *c)
+{
+    return c->rays ? (double)v / (double)c->rays : 0.0;
+}
+
+void bench_write_scale_table(FILE *f, const struct bench_scale_desc *d,
+                             const struct bench_scale_row *rows, int n, const char *device)
+{
+    int w = d->width ? d->width : d->quick ? 160 : 640;
+    int h = d->height ? d->height : d->quick ? 120 : 480;
+    int rounds = d->rounds ? d->rounds : d->quick ? 1 : 3;
+    int lw = d->quick ? 320 : 1280, lh = d->quick ? 256 : 1024;
+    fprintf(f,
+            "| scene | voxels | clear cells | view %dx%d, ms | without skipping, ms | "
+            "skipping buys | rays marched | β samples / pixel | without | light reads / pixel | "
+            "without | cells read / pixel | steps leapt / pixel | view %dx%d, ms | light "
+            "build, ms | build ÷ %dx%d view | upload, ms | upload, MiB |\n"
+            "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+            "---:|---:|\n",
+            w, h, lw, lh, lw, lh);
+    for (int i = 0; i < n; i++) {
+        const struct bench_scale_row *r = &rows[i];
+        fprintf(f,
+                "| %s | %dx%dx%d | %.0f %% | %.0f | %.0f | %.1fx | %.0f %% | %.1f | %.1f | "
+                "%.1f | %.1f | %.2f | %.1f | %.0f | %.0f | %.2f | %.0f | %.1f |\n",
+                r->name, r->n[0], r->n[1], r->n[2], 100.0 * r->cells_clear, r->view_ms,
+                r->view_noskip_ms, r->view_ms > 0 ? r->view_noskip_ms / r->view_ms : 0.0,
+                100.0 * per_pixel(r->counts.rays_marched, &r->counts),
+                per_pixel(r->counts.beta_samples, &r->counts),
+                per_pixel(r->counts_noskip.beta_samples, &r->counts_noskip),
+                per_pixel(r->counts.light_reads, &r->counts),
+                per_pixel(r->counts_noskip.light_reads, &r->counts_noskip),
+                per_pixel(r->counts.cells_read, &r->counts),
+                per_pixel(r->counts.steps_leapt, &r->counts), r->large_ms, r->build_ms,
+                r->large_ms > 0 ? r->build_ms / r->large_ms : 0.0, r->upload_ms,
+                r->upload_bytes / (1024.0 * 1024.0));
+    }
+    fprintf(f, "\n");
+    const struct bench_scale_row *storm = &rows[0];
+    for (int i = 1; i < n; i++) {
+        const struct bench_scale_row *r = &rows[i];
+        if (strncmp(r->name, "empty", 5) == 0)
+            fprintf(f,
+                    "- The empty box's view ÷ the storm's: **%.3f** (%.3f without "
+                    "skipping).\n",
+                    r->view_ms / storm->view_ms, r->view_noskip_ms / storm->view_noskip_ms);
+        else if (strncmp(r->name, "storm", 5) == 0)
+            fprintf(f,
+                    "- The %dx%dx%d storm's view ÷ the %dx%dx%d storm's at %dx%d: **%.2f** "
+                    "(%.2f without skipping).\n",
+                    r->n[0], r->n[1], r->n[2], storm->n[0], storm->n[1], storm->n[2], w, h,
+                    r->view_ms / storm->view_ms, r->view_noskip_ms / storm->view_noskip_ms);
+    }
+    fprintf(f, "\nLight maps: ");
+    for (int i = 0; i < n; i++) {
+        const struct bench_scale_row *r = &rows[i];
+        fprintf(f, "%s%s %dx%dx%d%s%s", i ? "; " : "", r->name, r->light_n[0], r->light_n[1],
+                r->light_n[2], r->multiple ? ", diffuse light" : "",
+                r->lateral ? " with lateral escape" : "");
+    }
+    fprintf(f,
+            ".  Views from the configs' cameras (the default storm's camera for the three "
+            "storm boxes), medians of %d interleaved round%s, every time waited for "
+            "(glFinish).  Device: %s.\n",
+            rounds, rounds > 1 ? "s" : "", device);
+}
