@@ -55,12 +55,15 @@
 #define BIND_TONEMAP_IMG_IN 0   /* RGBA32F radiance */
 #define BIND_TONEMAP_IMG_OUT 1  /* RGBA8 display sRGB */
 
-/* ---- light build: the beam, plane by plane (shaders/light_build.comp) ----------------- */
-#define BIND_BUILD_TEX_BETA 0   /* the volume's extinction, texelFetch only */
-#define BIND_BUILD_TEX_RATES 1  /* MULTIPLE and LATERAL: lateral escape rates */
+/* ---- light build: every slice's extinction at once (shaders/light_slices.comp) -------- */
+#define BIND_SLICES_TEX_BETA 0   /* the volume's extinction, texelFetch only */
+#define BIND_SLICES_TEX_RATES 1  /* MULTIPLE and LATERAL: lateral escape rates */
+#define BIND_SLICES_IMG_SLICE 0  /* each slice's tau, ice share (escape rates), written */
+#define BIND_SLICES_BUF_CELLS 0  /* SKIP 1: the volume's macro cells (cells.glsl) */
+
+/* ---- light build: the beam's sweep from the sun (shaders/light_build.comp) ------------ */
+#define BIND_BUILD_TEX_SLICE 0  /* the slices of light_slices.comp, texelFetch only */
 #define BIND_BUILD_IMG_LIGHT 0  /* R32F node volume, read and written */
-#define BIND_BUILD_IMG_SLICE 1  /* MULTIPLE: each slice's tau, ice share, escape rates */
-#define BIND_BUILD_BUF_CELLS 0  /* SKIP 1: the volume's macro cells (cells.glsl) */
 
 /* ---- light build: the diffuse column pass (shaders/light_diffuse.comp) ---------------- */
 #define BIND_DIFFUSE_IMG_LIGHT 0    /* the beam at each node, read */
@@ -71,6 +74,7 @@
 /* ---- light build: the lateral escape rates (shaders/light_lateral.comp) --------------- */
 #define BIND_LATERAL_TEX_BETA 0   /* the volume's extinction, texelFetch only */
 #define BIND_LATERAL_IMG_RATES 0  /* RG32F rates along x and y, read and written */
+#define BIND_LATERAL_BUF_CELLS 0  /* SKIP 1: the volume's macro cells (cells.glsl) */
 
 /* ---- stereo composition (shaders/display_compose.comp) -------------------------------- */
 #define BIND_COMPOSE_TEX_LEFT 0

@@ -250,6 +250,7 @@ static bool build(struct renderer *r, struct light_gpu *lg, const struct bench_s
         .grid = renderer_grid(r),
         .volume_id = 1,
         .generation = generation_counter++,
+        .cells = renderer_cells(r),
     };
     struct gpu_timings t = {0};
     light_gpu_set_timing(lg, &t);

@@ -129,6 +129,12 @@ void gpu_texture_upload(struct gpu_texture *tex, const void *data)
                             fi.format, fi.type, data);
 }
 
+void gpu_texture_clear(struct gpu_texture *tex)
+{
+    struct format_info fi = format_info(tex->format);
+    glClearTexImage(tex->id, 0, fi.format, fi.type, NULL);
+}
+
 void gpu_texture_read(const struct gpu_texture *tex, void *out, size_t out_bytes)
 {
     struct format_info fi = format_info(tex->format);

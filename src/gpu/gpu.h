@@ -75,6 +75,8 @@ struct gpu_texture {
  * packed float (or uint8 for GPU_RGBA8), x fastest.  Returns false (logged) on failure. */
 bool gpu_texture_init(struct gpu_texture *tex, int dims, const int size[3],
                       enum gpu_format format, const void *data);
+/* Sets every texel of level 0 to zero. */
+void gpu_texture_clear(struct gpu_texture *tex);
 /* Replaces the whole content; same layout as init. */
 void gpu_texture_upload(struct gpu_texture *tex, const void *data);
 /* Reads the whole level 0 back into OUT (bytes as for init, float or uint8). */

@@ -10,22 +10,25 @@
 
 struct light_gpu {
     struct render_light hook; /* first: the renderer's bind callback gets it back */
-    /* Build programs by variant: bit 0 FORWARD, bit 1 PERIPHERAL, bit 2 PHASE_MIX, bit 3
-     * MULTIPLE, bit 4 LATERAL (made on first use: an effect that is off is compiled out); the
-     * diffuse column pass by PHASE_MIX (bit 0) and LATERAL (bit 1). */
-    struct gpu_program build[32];
+    /* Programs by variant, made on first use (an effect that is off is compiled out): the
+     * slices by MULTIPLE (bit 0), LATERAL (bit 1) and SKIP (bit 2); the sweep by FORWARD
+     * (bit 0), PERIPHERAL (bit 1), PHASE_MIX (bit 2); the diffuse column pass by PHASE_MIX
+     * (bit 0) and LATERAL (bit 1). */
+    struct gpu_program slices[8];
+    struct gpu_program build[8];
     struct gpu_program diffuse_pass[4];
-    struct gpu_program lateral_pass;
+    struct gpu_program lateral_pass[2]; /* without and with SKIP */
     struct gpu_texture light;   /* R32F node volume */
     struct gpu_texture diffuse; /* RG32F node volume, M and N; only with multiple scattering */
-    struct gpu_texture slice;   /* RGBA32F build scratch: each slice's tau, ice share and
-                                   lateral escape rates */
+    struct gpu_texture slice;   /* build scratch, freed after the build: each slice's tau
+                                   and ice share (RG32F), with multiple scattering its lateral
+                                   escape rates too (RGBA32F) */
     struct gpu_texture rates;   /* RG32F on the volume's grid: lateral escape rates times the
                                    extinction; they depend on the volume only */
     bool have_rates;            /* rates hold the volume below */
     unsigned rates_beta;        /* its texture, identity and generation */
     uint64_t rates_volume, rates_generation;
-    struct gpu_texture adding;  /* RG32F build scratch of the column pass */
+    struct gpu_texture adding;  /* RG32F build scratch of the column pass, freed after it */
     bool built_multiple;
     struct gpu_buffer columns, nodes;
     struct light_grid grid;
@@ -76,12 +79,26 @@ static const struct gpu_program *build_program(struct light_gpu *lg, int v)
     if (lg->build[v].id)
         return &lg->build[v];
     char defines[128];
-    snprintf(defines, sizeof(defines), "#define FORWARD %d\n#define PERIPHERAL %d\n"
-             "#define PHASE_MIX %d\n#define MULTIPLE %d\n#define LATERAL %d\n", v & 1,
-             (v >> 1) & 1, (v >> 2) & 1, (v >> 3) & 1, (v >> 4) & 1);
+    snprintf(defines, sizeof(defines),
+             "#define FORWARD %d\n#define PERIPHERAL %d\n#define PHASE_MIX %d\n", v & 1,
+             (v >> 1) & 1, (v >> 2) & 1);
     if (!gpu_program_init(&lg->build[v], "light_build.comp", defines))
         return NULL;
     return &lg->build[v];
+}
+
+static const struct gpu_program *slices_program(struct light_gpu *lg, bool multiple,
+                                                bool lateral, bool skip)
+{
+    int v = (multiple ? 1 : 0) | (multiple && lateral ? 2 : 0) | (skip ? 4 : 0);
+    if (lg->slices[v].id)
+        return &lg->slices[v];
+    char defines[128];
+    snprintf(defines, sizeof(defines), "#define MULTIPLE %d\n#define LATERAL %d\n#define SKIP %d\n",
+             v & 1, (v >> 1) & 1, (v >> 2) & 1);
+    if (!gpu_program_init(&lg->slices[v], "light_slices.comp", defines))
+        return NULL;
+    return &lg->slices[v];
 }
 
 /* The diffuse column pass: its only variant is the ice/water mix (the loss shares the forward
@@ -99,8 +116,11 @@ static const struct gpu_program *diffuse_program(struct light_gpu *lg, bool mix,
     return &lg->diffuse_pass[v];
 }
 
+/* Voxels of a row one invocation of light_lateral.comp looks after (its SEGMENT). */
+#define LATERAL_SEGMENT 32
+
 /* The lateral escape rates of the volume (light_lateral.comp): one pass along x, one along
- * y, one invocation per row. */
+ * y, one invocation per stretch of a row (each walks the runs that start in it). */
 static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src)
 {
     const int *n = src->grid->n;
@@ -114,17 +134,22 @@ static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src
         if (!gpu_texture_init(&lg->rates, 3, n, GPU_RG32F, NULL))
             return false;
     }
-    if (!lg->lateral_pass.id && !gpu_program_init(&lg->lateral_pass, "light_lateral.comp", ""))
+    bool skip = src->cells && src->cells->levels > 0;
+    struct gpu_program *p = &lg->lateral_pass[skip ? 1 : 0];
+    if (!p->id && !gpu_program_init(p, "light_lateral.comp", skip ? "#define SKIP 1\n" : ""))
         return false;
-    const struct gpu_program *p = &lg->lateral_pass;
+    gpu_texture_clear(&lg->rates);
     gpu_uniform_ivec3(p, "vol_n", n);
     gpu_uniform_float(p, "clear_beta", LIGHT_CLEAR_BETA);
     gpu_texture_bind(src->beta, BIND_LATERAL_TEX_BETA);
     gpu_image_bind_rw(&lg->rates, BIND_LATERAL_IMG_RATES);
+    if (skip)
+        gpu_buffer_bind(&src->cells->buf, BIND_LATERAL_BUF_CELLS);
     for (int axis = 0; axis < 2; axis++) {
         gpu_uniform_int(p, "axis", axis);
         gpu_uniform_float(p, "spacing", (float)src->grid->spacing[axis]);
-        gpu_dispatch(p, n[1 - axis] * n[2], 1, 1);
+        /* rows x stretches of LATERAL_SEGMENT voxels x levels */
+        gpu_dispatch(p, n[1 - axis], (n[axis] + LATERAL_SEGMENT - 1) / LATERAL_SEGMENT, n[2]);
     }
     lg->have_rates = true;
     lg->rates_beta = src->beta->id;
@@ -133,14 +158,14 @@ static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src
     return true;
 }
 
-/* The variant of settings S: forward scattering, the peripheral ring, and the ice/water mix
- * (compiled out when both phases' cumulative phases are equal: the mix is then exact). */
+/* The sweep's variant for settings S: forward scattering, the peripheral ring, and the
+ * ice/water mix (compiled out when both phases' cumulative phases are equal: the mix is then
+ * exact). */
 static int build_variant(const struct light_settings *s)
 {
     bool mix = !light_settings_phases_equal(s);
     return (s->forward ? 1 : 0) | (s->forward && s->peripheral ? 2 : 0) |
-           ((s->forward || s->multiple) && mix ? 4 : 0) | (s->multiple ? 8 : 0) |
-           (s->multiple && s->lateral ? 16 : 0);
+           (s->forward && mix ? 4 : 0);
 }
 
 struct light_gpu *light_gpu_create(void)
@@ -148,8 +173,8 @@ struct light_gpu *light_gpu_create(void)
     struct light_gpu *lg = calloc(1, sizeof(*lg));
     if (!lg)
         return NULL;
-    if (!build_program(lg, 7)) {
-        free(lg);
+    if (!build_program(lg, 7) || !slices_program(lg, false, false, true)) {
+        light_gpu_destroy(lg);
         return NULL;
     }
     light_cache_init(&lg->cache);
@@ -163,15 +188,18 @@ void light_gpu_destroy(struct light_gpu *lg)
 {
     if (!lg)
         return;
-    for (int v = 0; v < 32; v++)
+    for (int v = 0; v < 8; v++) {
         gpu_program_finish(&lg->build[v]);
+        gpu_program_finish(&lg->slices[v]);
+    }
     for (int v = 0; v < 4; v++)
         gpu_program_finish(&lg->diffuse_pass[v]);
     gpu_texture_finish(&lg->light);
     gpu_texture_finish(&lg->diffuse);
     gpu_texture_finish(&lg->slice);
     gpu_texture_finish(&lg->rates);
-    gpu_program_finish(&lg->lateral_pass);
+    for (int v = 0; v < 2; v++)
+        gpu_program_finish(&lg->lateral_pass[v]);
     gpu_texture_finish(&lg->adding);
     gpu_buffer_finish(&lg->columns);
     gpu_buffer_finish(&lg->nodes);
@@ -219,16 +247,11 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
                         const double sun[3], const struct light_settings *s)
 {
     const struct light_grid *g = &lg->grid;
-    if (!node_texture(&lg->light, g->n, GPU_R32F))
+    if (!node_texture(&lg->light, g->n, GPU_R32F) ||
+        !node_texture(&lg->slice, g->n, s->multiple ? GPU_RGBA32F : GPU_RG32F))
         return false;
-    if (s->multiple) {
-        if (!node_texture(&lg->slice, g->n, GPU_RGBA32F))
-            return false;
-    } else {
+    if (!s->multiple)
         gpu_texture_finish(&lg->diffuse);
-        gpu_texture_finish(&lg->slice);
-        gpu_texture_finish(&lg->adding);
-    }
     if (s->multiple && s->lateral) {
         if (!build_rates(lg, src))
             return false;
@@ -236,8 +259,10 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
         gpu_texture_finish(&lg->rates);
         lg->have_rates = false;
     }
+    bool skip = src->cells && src->cells->levels > 0;
+    const struct gpu_program *sp = slices_program(lg, s->multiple, s->lateral, skip);
     const struct gpu_program *p = build_program(lg, build_variant(s));
-    if (!p)
+    if (!sp || !p)
         return false;
     int substeps = s->substeps > 0 ? s->substeps : light_auto_substeps(g, src->grid);
     float vol_origin[3], inv_spacing[3];
@@ -245,34 +270,48 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
         vol_origin[a] = (float)src->grid->origin[a];
         inv_spacing[a] = (float)(1.0 / src->grid->spacing[a]);
     }
+    /* Every slice's extinction at once: the costly part, all in parallel. */
+    gpu_uniform_ivec3(sp, "vol_n", src->grid->n);
+    gpu_uniform_vec3(sp, "vol_origin", vol_origin);
+    gpu_uniform_vec3(sp, "vol_inv_spacing", inv_spacing);
+    gpu_uniform_ivec3(sp, "grid_n", g->n);
+    gpu_uniform_vec3(sp, "g_origin", g->origin);
+    gpu_uniform_vec3(sp, "g_du", g->du);
+    gpu_uniform_vec3(sp, "g_dv", g->dv);
+    gpu_uniform_vec3(sp, "g_dw", g->dw);
+    gpu_uniform_int(sp, "substeps", substeps);
+    gpu_uniform_float(sp, "dsub", (float)(g->step[2] / substeps));
+    gpu_texture_bind(src->beta, BIND_SLICES_TEX_BETA);
+    if (s->multiple && s->lateral)
+        gpu_texture_bind(&lg->rates, BIND_SLICES_TEX_RATES);
+    if (skip)
+        gpu_buffer_bind(&src->cells->buf, BIND_SLICES_BUF_CELLS);
+    gpu_image_bind(&lg->slice, BIND_SLICES_IMG_SLICE, true);
+    gpu_dispatch(sp, g->n[0], g->n[1], g->n[2] - 1);
+
+    /* The sweep: a plane per dispatch with the peripheral ring (it reads the plane before's
+     * neighbours), else every column down to its end in one. */
     double r = light_peripheral_offset(s->forward_angle_deg, g->step[2]);
     float per[2];
     light_grid_peripheral_taps(g, r, per);
     float cp[4] = {(float)s->cp.water_ctr, (float)s->cp.ice_ctr, (float)s->cp.water_per,
                    (float)s->cp.ice_per};
-    gpu_uniform_ivec3(p, "vol_n", src->grid->n);
-    gpu_uniform_vec3(p, "vol_origin", vol_origin);
-    gpu_uniform_vec3(p, "vol_inv_spacing", inv_spacing);
     gpu_uniform_ivec3(p, "grid_n", g->n);
-    gpu_uniform_vec3(p, "g_origin", g->origin);
-    gpu_uniform_vec3(p, "g_du", g->du);
-    gpu_uniform_vec3(p, "g_dv", g->dv);
-    gpu_uniform_vec3(p, "g_dw", g->dw);
-    gpu_uniform_int(p, "substeps", substeps);
-    gpu_uniform_float(p, "dsub", (float)(g->step[2] / substeps));
     gpu_uniform_vec4(p, "cp", cp);
     gpu_uniform_vec2(p, "per_offset", per);
-    gpu_texture_bind(src->beta, BIND_BUILD_TEX_BETA);
-    if (s->multiple && s->lateral)
-        gpu_texture_bind(&lg->rates, BIND_BUILD_TEX_RATES);
+    gpu_texture_bind(&lg->slice, BIND_BUILD_TEX_SLICE);
     gpu_image_bind_rw(&lg->light, BIND_BUILD_IMG_LIGHT);
-    if (s->multiple)
-        gpu_image_bind(&lg->slice, BIND_BUILD_IMG_SLICE, true);
-    for (int k = 0; k < g->n[2]; k++) {
+    int per_plane = s->forward && s->peripheral ? 1 : g->n[2];
+    gpu_uniform_int(p, "planes", per_plane);
+    for (int k = 0; k < g->n[2]; k += per_plane) {
         gpu_uniform_int(p, "plane", k);
         gpu_dispatch(p, g->n[0], g->n[1], 1);
     }
-    return !s->multiple || build_diffuse(lg, sun, s);
+    bool ok = !s->multiple || build_diffuse(lg, sun, s);
+    /* The scratch served this build only: give its memory back. */
+    gpu_texture_finish(&lg->slice);
+    gpu_texture_finish(&lg->adding);
+    return ok;
 }
 
 /* Reads the light volume back, and the diffuse one too when WITH_DIFFUSE and it exists. */

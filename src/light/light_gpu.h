@@ -26,11 +26,14 @@ struct light_gpu *light_gpu_create(void);
 void light_gpu_destroy(struct light_gpu *lg);
 
 /* What a build reads: the extinction texture the renderer holds (RG32F, ice and water β),
- * its grid, and an identity for the volume's content (bump GENERATION when it changes). */
+ * its grid, an identity for the volume's content (bump GENERATION when it changes), and the
+ * volume's macro cells (renderer_cells; NULL: none), with which a sample in an empty cell
+ * reads no voxel. */
 struct light_gpu_source {
     const struct gpu_texture *beta;
     const struct grid3 *grid;
     uint64_t volume_id, generation;
+    const struct render_cells *cells;
 };
 
 /* Rebuilds the light map when anything in its key changed since the last build; *BUILT (may

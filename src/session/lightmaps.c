@@ -103,6 +103,7 @@ static bool update_temporal(struct lightmaps *al, struct renderer *r,
         .grid = renderer_grid(r),
         .volume_id = al->step_id,
         .generation = TEMPORAL_GENERATION,
+        .cells = renderer_cells(r),
     };
     al->held[cur] = 0;
     if (!build(al, cur, &src, p->sun, &p->light, p->mode, p->one_phase, st))
@@ -112,11 +113,13 @@ static bool update_temporal(struct lightmaps *al, struct renderer *r,
         renderer_set_light(r, light_gpu_render_light(maps[cur]));
         return true;
     }
+    /* The pair's cells are empty only where both steps are: they serve step k + 1 too. */
     struct light_gpu_source next = {
         .beta = renderer_next_texture(r),
         .grid = renderer_next_grid(r),
         .volume_id = al->next_id,
         .generation = TEMPORAL_GENERATION,
+        .cells = renderer_pair_cells(r),
     };
     al->held[1 - cur] = 0;
     if (!build(al, 1 - cur, &next, p->sun, &p->light, p->mode, p->one_phase, st))
@@ -162,6 +165,7 @@ bool lightmaps_update_params(struct lightmaps *al, const struct lightmaps_params
         .grid = renderer_grid(r),
         .volume_id = 1,
         .generation = al->generation,
+        .cells = renderer_cells(r),
     };
     al->held[0] = 0;
     if (!build(al, 0, &src, p->sun, &p->light, p->mode, p->one_phase, st))

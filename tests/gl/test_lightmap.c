@@ -56,8 +56,9 @@ static double gpu_vs_cpu(const char **sets, int n, bool multiple, double *diffus
 
     struct light_gpu *lg = light_gpu_create();
     assert_non_null(lg);
-    struct light_gpu_source src = {renderer_volume_texture(renderer), renderer_grid(renderer),
-                                   1, 1};
+    /* With the volume's macro cells: samples in empty cells read no voxel. */
+    struct light_gpu_source src = {renderer_volume_texture(renderer), renderer_grid(renderer), 1,
+                                   1, renderer_cells(renderer)};
     bool built = false;
     assert_true(light_gpu_update(lg, &src, sun, &s, LIGHT_GPU_DENSE, &built));
     assert_true(built);
@@ -245,6 +246,41 @@ static void test_compressed_within_epsilon_of_dense(void **state)
     image_finish(&dense);
     image_finish(&comp);
     lightmaps_finish(&al);
+    ext_volume_finish(&vol);
+}
+
+/* After a build the GPU holds the map and nothing of its making: the light (R32F), the
+ * diffuse light (RG32F) and the volume's lateral escape rates (RG32F, kept for the next sun);
+ * the slices and the column pass's scratch are given back.  Without multiple scattering only
+ * the light stays. */
+static void test_build_keeps_only_the_map(void **state)
+{
+    struct config cfg;
+    const char *sets[] = {"scene.size=[32,32,16]", "lightmap.resolution=[24,20,28]"};
+    test_config_from(&cfg, sets, 2);
+    struct ext_volume vol = {0};
+    test_upload_scene(renderer, &cfg, &vol);
+    struct light_settings s;
+    settings_of(&cfg, &s);
+    double sun[3];
+    light_sun_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
+    const size_t nodes = 24 * 20 * 28, voxels = 32 * 32 * 16;
+    for (int multiple = 1; multiple >= 0; multiple--) {
+        s.multiple = multiple;
+        size_t before = gpu_bytes_allocated();
+        struct light_gpu *lg = light_gpu_create();
+        assert_non_null(lg);
+        struct light_gpu_source src = {renderer_volume_texture(renderer),
+                                       renderer_grid(renderer), 1, 1, renderer_cells(renderer)};
+        assert_true(light_gpu_update(lg, &src, sun, &s, LIGHT_GPU_DENSE, NULL));
+        size_t kept = gpu_bytes_allocated() - before;
+        size_t want = multiple ? nodes * (4 + 8) + voxels * 8 : nodes * 4;
+        print_message("multiple %d: %zu bytes kept after the build (want %zu)\n", multiple, kept,
+                      want);
+        assert_int_equal(kept, want);
+        light_gpu_destroy(lg);
+        assert_int_equal(gpu_bytes_allocated(), before);
+    }
     ext_volume_finish(&vol);
 }
 
@@ -649,6 +685,7 @@ int main(void)
         cmocka_unit_test(test_gpu_matches_cpu_sphere),
         cmocka_unit_test(test_gpu_matches_cpu_slab),
         cmocka_unit_test(test_gpu_matches_cpu_storm),
+        cmocka_unit_test(test_build_keeps_only_the_map),
         cmocka_unit_test(test_gpu_matches_cpu_diffuse),
         cmocka_unit_test(test_compressed_within_epsilon_of_dense),
         cmocka_unit_test(test_twelve_views_one_build),

@@ -93,8 +93,9 @@ static void gpu_light_map_with(const struct config *cfg, bool forward, bool peri
     light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
     struct light_gpu *lg = light_gpu_create();
     assert_non_null(lg);
-    struct light_gpu_source src = {renderer_volume_texture(renderer), renderer_grid(renderer),
-                                   1, 1};
+    /* With the volume's macro cells: samples in empty cells read no voxel. */
+    struct light_gpu_source src = {renderer_volume_texture(renderer), renderer_grid(renderer), 1,
+                                   1, renderer_cells(renderer)};
     assert_true(light_gpu_update(lg, &src, sun, &s, LIGHT_GPU_DENSE, NULL));
     assert_true(light_gpu_read(lg, map));
     size_t count = (size_t)map->grid.n[0] * map->grid.n[1] * map->grid.n[2];
