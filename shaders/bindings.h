@@ -21,10 +21,12 @@
  * the eye pass and the opaque pass. */
 #define BIND_LIGHTMAP_TEX_LIGHT 2          /* LIGHTMAP 1: dense light volume, R32F */
 #define BIND_LIGHTMAP_TEX_LIGHT_NEXT 8     /* ... of step k + 1 */
-#define BIND_LIGHTMAP_TEX_DIFFUSE 9        /* MULTIPLE 1: diffuse light M, N, RG32F */
+#define BIND_LIGHTMAP_TEX_DIFFUSE 9        /* MULTIPLE 1 and LIGHTMAP 1: diffuse light M, N */
 #define BIND_LIGHTMAP_TEX_DIFFUSE_NEXT 10  /* ... of step k + 1 */
-#define BIND_LIGHTMAP_BUF_COLUMNS 0        /* LIGHTMAP 2: first node and count per column */
-#define BIND_LIGHTMAP_BUF_NODES 1          /* LIGHTMAP 2: depth and light per node */
+#define BIND_LIGHTMAP_BUF_COLUMNS 0        /* LIGHTMAP 2: first node and count per column (of
+                                              the light, then of the diffuse light) */
+#define BIND_LIGHTMAP_BUF_NODES 1          /* LIGHTMAP 2: the light's nodes, then the diffuse
+                                              light's */
 #define BIND_LIGHTMAP_BUF_COLUMNS_NEXT 2   /* ... of step k + 1 */
 #define BIND_LIGHTMAP_BUF_NODES_NEXT 3     /* ... of step k + 1 */
 
@@ -70,6 +72,12 @@
 #define BIND_DIFFUSE_IMG_SLICE 1    /* the slices of the beam pass, read */
 #define BIND_DIFFUSE_IMG_ADDING 2   /* scratch, read and written */
 #define BIND_DIFFUSE_IMG_DIFFUSE 3  /* RG32F diffuse light, written */
+
+/* ---- light build: compression on the GPU (shaders/light_compress.comp, light_scan.comp) */
+#define BIND_COMPRESS_IMG_VALUES 0   /* the dense light (or diffuse light) volume, read */
+#define BIND_COMPRESS_BUF_COLUMNS 0  /* first node and count per column */
+#define BIND_COMPRESS_BUF_NODES 1    /* PASS 2: the nodes, written */
+#define BIND_SCAN_BUF_COLUMNS 0      /* counts in, first nodes out */
 
 /* ---- light build: the lateral escape rates (shaders/light_lateral.comp) --------------- */
 #define BIND_LATERAL_TEX_BETA 0   /* the volume's extinction, texelFetch only */

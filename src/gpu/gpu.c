@@ -440,6 +440,16 @@ void gpu_uniform_float(const struct gpu_program *p, const char *name, float v)
     glProgramUniform1f(p->id, glGetUniformLocation(p->id, name), v);
 }
 
+void gpu_uniform_uint(const struct gpu_program *p, const char *name, unsigned v)
+{
+    glProgramUniform1ui(p->id, glGetUniformLocation(p->id, name), v);
+}
+
+void gpu_uniform_double(const struct gpu_program *p, const char *name, double v)
+{
+    glProgramUniform1d(p->id, glGetUniformLocation(p->id, name), v);
+}
+
 void gpu_uniform_vec2(const struct gpu_program *p, const char *name, const float v[2])
 {
     glProgramUniform2fv(p->id, glGetUniformLocation(p->id, name), 1, v);

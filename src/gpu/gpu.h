@@ -133,6 +133,8 @@ void gpu_program_use(const struct gpu_program *prog);
  * ignored. */
 void gpu_uniform_int(const struct gpu_program *p, const char *name, int v);
 void gpu_uniform_float(const struct gpu_program *p, const char *name, float v);
+void gpu_uniform_uint(const struct gpu_program *p, const char *name, unsigned v);
+void gpu_uniform_double(const struct gpu_program *p, const char *name, double v);
 void gpu_uniform_vec2(const struct gpu_program *p, const char *name, const float v[2]);
 void gpu_uniform_vec3(const struct gpu_program *p, const char *name, const float v[3]);
 void gpu_uniform_ivec2(const struct gpu_program *p, const char *name, const int v[2]);

@@ -19,7 +19,9 @@ struct light_gpu {
     struct gpu_program diffuse_pass[4];
     struct gpu_program lateral_pass[2]; /* without and with SKIP */
     struct gpu_texture light;   /* R32F node volume */
-    struct gpu_texture diffuse; /* RG32F node volume, M and N; only with multiple scattering */
+    struct gpu_texture diffuse; /* RG32F node volume, M and N; only with multiple scattering
+                                   (in compressed mode the build's scratch) */
+    struct gpu_program compress[4], scan; /* PASS 1, 2 of the light; of the diffuse light */
     struct gpu_texture slice;   /* build scratch, freed after the build: each slice's tau
                                    and ice share (RG32F), with multiple scattering its lateral
                                    escape rates too (RGBA32F) */
@@ -37,11 +39,12 @@ struct light_gpu {
     bool have_key_mode;
     enum light_gpu_mode built_mode;
     double built_epsilon;
-    size_t compressed_bytes;
+    size_t compressed_bytes;   /* the columns and nodes, the diffuse light's included */
+    uint32_t compressed_nodes, diffuse_nodes; /* nodes of the light and of the diffuse light */
+    uint32_t diffuse_columns_at, diffuse_nodes_at; /* where its part starts in the buffers */
     struct gpu_timer_queue timers;
     struct gpu_timings *timing; /* where build times go; NULL: untimed */
-    bool last_timed;            /* the last build was timed (its CPU part: last_cpu_ms) */
-    double last_cpu_ms;
+    bool last_timed;            /* the last build was timed */
     char defines[64];
 };
 
@@ -50,9 +53,15 @@ void light_gpu_bind(const struct light_gpu *lg, const struct gpu_program *prog, 
     gpu_uniform_mat4(prog, next ? "light_world_to_tex_next" : "light_world_to_tex",
                      lg->grid.world_to_tex);
     gpu_uniform_ivec3(prog, next ? "light_n_next" : "light_n", lg->grid.n);
-    if (lg->built_multiple)
+    if (lg->built_multiple && lg->built_mode == LIGHT_GPU_DENSE) {
         gpu_texture_bind(&lg->diffuse,
                          next ? BIND_LIGHTMAP_TEX_DIFFUSE_NEXT : BIND_LIGHTMAP_TEX_DIFFUSE);
+    } else if (lg->built_multiple) {
+        gpu_uniform_uint(prog, next ? "light_diffuse_columns_next" : "light_diffuse_columns",
+                         lg->diffuse_columns_at);
+        gpu_uniform_uint(prog, next ? "light_diffuse_nodes_next" : "light_diffuse_nodes",
+                         lg->diffuse_nodes_at);
+    }
     if (lg->built_mode == LIGHT_GPU_DENSE) {
         gpu_texture_bind(&lg->light, next ? BIND_LIGHTMAP_TEX_LIGHT_NEXT : BIND_LIGHTMAP_TEX_LIGHT);
     } else {
@@ -196,6 +205,9 @@ void light_gpu_destroy(struct light_gpu *lg)
         gpu_program_finish(&lg->diffuse_pass[v]);
     gpu_texture_finish(&lg->light);
     gpu_texture_finish(&lg->diffuse);
+    for (int v = 0; v < 4; v++)
+        gpu_program_finish(&lg->compress[v]);
+    gpu_program_finish(&lg->scan);
     gpu_texture_finish(&lg->slice);
     gpu_texture_finish(&lg->rates);
     for (int v = 0; v < 2; v++)
@@ -347,27 +359,95 @@ bool light_gpu_read(const struct light_gpu *lg, struct light_map *map)
     return read_back(lg, map, true);
 }
 
+/* Compresses part CH (0 the light, 1 the diffuse light) of the dense map into the columns
+ * buffer from word BASE on (light_compress.comp, PASS 1, then light_scan.comp). */
+static void count_part(struct light_gpu *lg, int ch, uint32_t base, double epsilon)
+{
+    const int *n = lg->grid.n;
+    const struct gpu_program *p = &lg->compress[2 * ch];
+    gpu_image_bind(ch ? &lg->diffuse : &lg->light, BIND_COMPRESS_IMG_VALUES, false);
+    gpu_buffer_bind(&lg->columns, BIND_COMPRESS_BUF_COLUMNS);
+    gpu_uniform_ivec3(p, "grid_n", n);
+    gpu_uniform_double(p, "epsilon", epsilon);
+    gpu_uniform_uint(p, "base", base);
+    gpu_dispatch(p, n[0], n[1], 1);
+    gpu_buffer_bind(&lg->columns, BIND_SCAN_BUF_COLUMNS);
+    gpu_uniform_uint(&lg->scan, "column_count", (unsigned)((size_t)n[0] * n[1]));
+    gpu_uniform_uint(&lg->scan, "base", base);
+    gpu_dispatch(&lg->scan, 1024, 1, 1);
+}
+
+/* Writes part CH's nodes from float NODE_BASE of the nodes buffer on (PASS 2). */
+static void write_part(struct light_gpu *lg, int ch, uint32_t base, uint32_t node_base,
+                       double epsilon)
+{
+    const int *n = lg->grid.n;
+    const struct gpu_program *p = &lg->compress[2 * ch + 1];
+    gpu_image_bind(ch ? &lg->diffuse : &lg->light, BIND_COMPRESS_IMG_VALUES, false);
+    gpu_buffer_bind(&lg->columns, BIND_COMPRESS_BUF_COLUMNS);
+    gpu_buffer_bind(&lg->nodes, BIND_COMPRESS_BUF_NODES);
+    gpu_uniform_ivec3(p, "grid_n", n);
+    gpu_uniform_double(p, "epsilon", epsilon);
+    gpu_uniform_uint(p, "base", base);
+    gpu_uniform_uint(p, "node_base", node_base);
+    gpu_dispatch(p, n[0], n[1], 1);
+}
+
+/* The dense map's columns compressed on the GPU, as the reference compressor does: the light's
+ * (depth, light) nodes, and with multiple scattering the diffuse light's (depth, M, N), each
+ * part's columns and nodes after the light's in the same two buffers.  Every column's nodes
+ * are counted, the counts turned into first indices, then the nodes written; the node buffer
+ * is made for the totals the GPU found, the one thing read back (it waits for the build).
+ * The dense volumes are freed after. */
 static bool build_compressed(struct light_gpu *lg, double epsilon)
 {
-    struct light_map dense; /* the compressor needs the light only: the diffuse volume stays */
-    if (!read_back(lg, &dense, false))
+    const int *n = lg->grid.n;
+    size_t ncol = (size_t)n[0] * n[1];
+    bool diffuse = lg->diffuse.id != 0;
+    if ((double)ncol * (n[2] + 1) * (diffuse ? 3 : 1) >= 4294967295.0) {
+        log_error("light map: %dx%dx%d nodes are too many to compress (at most 2^32 nodes)",
+                  n[0], n[1], n[2]);
         return false;
-    struct light_compressed c;
-    bool ok = light_compressed_build(&dense, epsilon, &c);
-    light_map_finish(&dense);
-    if (!ok)
+    }
+    for (int v = 0; v < (diffuse ? 4 : 2); v++) {
+        char defines[64];
+        snprintf(defines, sizeof(defines), "#define PASS %d\n#define CHANNELS %d\n", 1 + v % 2,
+                 1 + v / 2);
+        if (!lg->compress[v].id && !gpu_program_init(&lg->compress[v], "light_compress.comp",
+                                                     defines))
+            return false;
+    }
+    if (!lg->scan.id && !gpu_program_init(&lg->scan, "light_scan.comp", NULL))
         return false;
-    size_t col_bytes = (size_t)c.grid.n[0] * c.grid.n[1] * 2 * sizeof(uint32_t);
-    size_t node_bytes = c.node_count * 2 * sizeof(float);
     gpu_buffer_finish(&lg->columns);
     gpu_buffer_finish(&lg->nodes);
-    ok = gpu_buffer_init(&lg->columns, col_bytes, c.columns) &&
-         gpu_buffer_init(&lg->nodes, node_bytes, c.nodes);
-    lg->compressed_bytes = light_compressed_bytes(&c);
-    light_compressed_finish(&c);
-    /* The dense volume was only the build's scratch: give its memory back. */
+    /* The light's columns and their total, then the diffuse light's. */
+    uint32_t dbase = (uint32_t)(2 * ncol + 1);
+    if (!gpu_buffer_init(&lg->columns, (diffuse ? 2 : 1) * (size_t)dbase * sizeof(uint32_t), NULL))
+        return false;
+    count_part(lg, 0, 0, epsilon);
+    if (diffuse)
+        count_part(lg, 1, dbase, epsilon);
+    uint32_t total[2] = {0, 0};
+    gpu_buffer_read(&lg->columns, 2 * ncol * sizeof(uint32_t), sizeof(uint32_t), &total[0]);
+    if (diffuse)
+        gpu_buffer_read(&lg->columns, (dbase + 2 * ncol) * sizeof(uint32_t), sizeof(uint32_t),
+                        &total[1]);
+    size_t floats = 2 * (size_t)total[0] + 3 * (size_t)total[1];
+    if (!gpu_buffer_init(&lg->nodes, (floats ? floats : 1) * sizeof(float), NULL))
+        return false;
+    write_part(lg, 0, 0, 0, epsilon);
+    if (diffuse)
+        write_part(lg, 1, dbase, 2 * total[0], epsilon);
+    lg->compressed_nodes = total[0];
+    lg->diffuse_nodes = total[1];
+    lg->diffuse_columns_at = dbase;
+    lg->diffuse_nodes_at = 2 * total[0];
+    lg->compressed_bytes = (diffuse ? 2 : 1) * ncol * 2 * sizeof(uint32_t) + floats * sizeof(float);
+    /* The dense volumes were only the build's scratch: give their memory back. */
     gpu_texture_finish(&lg->light);
-    return ok;
+    gpu_texture_finish(&lg->diffuse);
+    return true;
 }
 
 bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
@@ -390,21 +470,15 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
     if (log)
         gpu_timer_queue_begin(&lg->timers);
     bool ok = build_dense(lg, src, sun, settings);
-    unsigned number = log ? gpu_timer_queue_end(&lg->timers, log) : 0;
-    lg->last_timed = number != 0;
-    lg->last_cpu_ms = 0.0;
     if (ok && mode == LIGHT_GPU_COMPRESSED) {
-        /* The read-back waits for the GPU anyway: the CPU compresses what it built. */
-        double start = time_now_ms();
         ok = build_compressed(lg, settings->epsilon);
-        lg->last_cpu_ms = time_now_ms() - start;
-        if (number)
-            gpu_timings_add(log, number, lg->last_cpu_ms);
     } else {
         gpu_buffer_finish(&lg->columns);
         gpu_buffer_finish(&lg->nodes);
         lg->compressed_bytes = 0;
     }
+    unsigned number = log ? gpu_timer_queue_end(&lg->timers, log) : 0;
+    lg->last_timed = number != 0;
     if (!ok) {
         light_cache_invalidate(&lg->cache);
         return false;
@@ -447,15 +521,54 @@ bool light_gpu_last_build_ms(struct light_gpu *lg, double *ms)
     /* The last build is the newest measurement: known once none is in flight. */
     if (!lg->last_timed || light_gpu_collect_timings(lg, false) > 0)
         return false;
-    *ms = lg->timers.last_ms + lg->last_cpu_ms;
+    *ms = lg->timers.last_ms;
     return true;
 }
 
 void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed)
 {
-    /* What the dense volume takes (or would take, in compressed mode, for comparison). */
+    /* What the dense map takes (or would take, in compressed mode, for comparison): the light
+     * in R32F and the diffuse light in RG32F. */
     size_t nodes = (size_t)lg->grid.n[0] * lg->grid.n[1] * lg->grid.n[2];
     size_t diffuse = lg->built_multiple ? 2 * nodes * sizeof(float) : 0;
     *dense = nodes * sizeof(float) + diffuse;
-    *compressed = lg->compressed_bytes ? lg->compressed_bytes + diffuse : 0;
+    *compressed = lg->compressed_bytes;
+}
+
+bool light_gpu_read_compressed(const struct light_gpu *lg, struct light_compressed *out)
+{
+    memset(out, 0, sizeof(*out));
+    if (!lg->compressed_bytes) {
+        log_error("light map: no compressed map on the GPU (none built, or dense mode)");
+        return false;
+    }
+    out->grid = lg->grid;
+    out->epsilon = lg->built_epsilon;
+    out->node_count = lg->compressed_nodes;
+    size_t ncol = (size_t)lg->grid.n[0] * lg->grid.n[1];
+    out->columns = malloc(2 * ncol * sizeof(uint32_t));
+    out->nodes = malloc((out->node_count ? out->node_count : 1) * 2 * sizeof(float));
+    if (!out->columns || !out->nodes) {
+        log_error("light map: out of memory reading %zu nodes back", out->node_count);
+        light_compressed_finish(out);
+        return false;
+    }
+    gpu_buffer_read(&lg->columns, 0, 2 * ncol * sizeof(uint32_t), out->columns);
+    gpu_buffer_read(&lg->nodes, 0, out->node_count * 2 * sizeof(float), out->nodes);
+    if (lg->built_multiple) {
+        out->diffuse_node_count = lg->diffuse_nodes;
+        out->diffuse_columns = malloc(2 * ncol * sizeof(uint32_t));
+        out->diffuse_nodes = malloc((out->diffuse_node_count ? out->diffuse_node_count : 1) * 3 *
+                                    sizeof(float));
+        if (!out->diffuse_columns || !out->diffuse_nodes) {
+            log_error("light map: out of memory reading %zu nodes back", out->diffuse_node_count);
+            light_compressed_finish(out);
+            return false;
+        }
+        gpu_buffer_read(&lg->columns, lg->diffuse_columns_at * sizeof(uint32_t),
+                        2 * ncol * sizeof(uint32_t), out->diffuse_columns);
+        gpu_buffer_read(&lg->nodes, lg->diffuse_nodes_at * sizeof(float),
+                        out->diffuse_node_count * 3 * sizeof(float), out->diffuse_nodes);
+    }
+    return true;
 }

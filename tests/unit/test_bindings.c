@@ -65,6 +65,10 @@ static void test_programs_do_not_collide(void **state)
     DISTINCT("light build images", MIN_IMAGE_UNITS, BIND_BUILD_IMG_LIGHT);
     DISTINCT("diffuse pass images", MIN_IMAGE_UNITS, BIND_DIFFUSE_IMG_LIGHT,
              BIND_DIFFUSE_IMG_SLICE, BIND_DIFFUSE_IMG_ADDING, BIND_DIFFUSE_IMG_DIFFUSE);
+    DISTINCT("compression images", MIN_IMAGE_UNITS, BIND_COMPRESS_IMG_VALUES);
+    DISTINCT("compression buffers", MIN_STORAGE_BLOCKS, BIND_COMPRESS_BUF_COLUMNS,
+             BIND_COMPRESS_BUF_NODES);
+    DISTINCT("scan buffers", MIN_STORAGE_BLOCKS, BIND_SCAN_BUF_COLUMNS);
     DISTINCT("lateral pass textures", MIN_TEXTURE_UNITS, BIND_LATERAL_TEX_BETA);
     DISTINCT("lateral pass images", MIN_IMAGE_UNITS, BIND_LATERAL_IMG_RATES);
     DISTINCT("lateral pass buffers", MIN_STORAGE_BLOCKS, BIND_LATERAL_BUF_CELLS);
