@@ -6,7 +6,7 @@
 // sweep down each column on their own otherwise: one dispatch for the whole map).
 // Variants (#define, effects that are off are compiled out): FORWARD 0 = shadow only;
 // PERIPHERAL 0 = no peripheral ring; PHASE_MIX 0 = both phases' CP are equal (one phase), so
-// the ice share is not read.
+// the ice share is not read; HALF 1 = the light is stored in half floats.
 
 #include "bindings.h"
 
@@ -22,7 +22,14 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
+#ifndef HALF
+#define HALF 0
+#endif
+#if HALF // the dense map in half floats (renderer_set_half's light map)
+layout(r16f, binding = BIND_BUILD_IMG_LIGHT) uniform image3D light_img;
+#else
 layout(r32f, binding = BIND_BUILD_IMG_LIGHT) uniform image3D light_img; // node (i, j, k): light
+#endif
 // slice k-1..k: tau, ice share (and, with multiple scattering, escape rates)
 layout(binding = BIND_BUILD_TEX_SLICE) uniform sampler3D slice_tex; // texelFetch only
 

@@ -8,6 +8,7 @@
 #include "bench/scenes.h"
 #include "common/log.h"
 #include "light/light_gpu.h"
+#include "render/image.h"
 #include "render/render.h"
 
 #define ROUNDS_MAX 16
@@ -34,30 +35,66 @@ static double median_of(const double *v, int n)
     return n % 2 ? w[n / 2] : 0.5 * (w[n / 2 - 1] + w[n / 2]);
 }
 
-/* The config of scene I: the storm, its box empty, the storm on a finer grid, Katrina. */
-static bool scene_config(const struct bench_scale_desc *d, int i, struct config *cfg, char *name,
-                         size_t name_size)
+/* The config of scene KIND. */
+static bool scene_config(const struct bench_scale_desc *d, enum bench_scale_kind kind,
+                         struct config *cfg, char *name, size_t name_size)
 {
     static char empty[] = "scene.kind=empty";
     static char big[] = "scene.size=[500,500,100]";
     static char big_quick[] = "scene.size=[96,96,48]";
-    char *sets[1];
+    static char compressed[] = "lightmap.mode=compressed";
+    static char epsilon[] = "lightmap.epsilon=0.00392156862745098";
+    static char half[] = "render.precision=half";
+    char *sets[2];
     int n = 0;
     const char *scene = "storm";
-    if (i == 1)
+    if (kind == BENCH_SCALE_EMPTY)
         sets[n++] = empty;
-    else if (i == 2)
+    else if (kind == BENCH_SCALE_LARGE)
         sets[n++] = d->quick ? big_quick : big;
-    else if (i == 3)
+    else if (kind == BENCH_SCALE_COMPRESSED)
+        sets[n++] = compressed, sets[n++] = epsilon;
+    else if (kind == BENCH_SCALE_HALF)
+        sets[n++] = half;
+    else if (kind == BENCH_SCALE_KATRINA)
         scene = "katrina";
     if (!bench_scene_config(scene, d->configs, d->quick, sets, n, cfg))
         return false;
     const int *s = cfg->scene.size;
-    if (i == 3)
+    const char *what = kind == BENCH_SCALE_EMPTY        ? "empty box"
+                       : kind == BENCH_SCALE_COMPRESSED ? "storm, compressed map (ε 1/255)"
+                       : kind == BENCH_SCALE_HALF       ? "storm, half floats"
+                                                        : "storm";
+    if (kind == BENCH_SCALE_KATRINA)
         snprintf(name, name_size, "Katrina sample");
     else
-        snprintf(name, name_size, "%s %dx%dx%d", i == 1 ? "empty box" : "storm", s[0], s[1], s[2]);
+        snprintf(name, name_size, "%s %dx%dx%d", what, s[0], s[1], s[2]);
     return true;
+}
+
+/* The picture of scene ST once, untimed. */
+static bool picture(struct scene_state *st, struct image *img)
+{
+    struct gpu_texture t = {0};
+    double ms;
+    bool ok = bench_timed_draw(st->r, &st->sc.settings, &st->sc.view, &t, &ms) &&
+              renderer_read(&t, img);
+    gpu_texture_finish(&t);
+    return ok;
+}
+
+/* RMS of A - B over the RMS of B, colour channels. */
+static double rms_error(const struct image *a, const struct image *b)
+{
+    double d = 0.0, s = 0.0;
+    for (size_t i = 0; i < (size_t)a->width * a->height * 4; i++) {
+        if (i % 4 == 3)
+            continue;
+        double e = (double)a->rgba[i] - b->rgba[i];
+        d += e * e;
+        s += (double)b->rgba[i] * b->rgba[i];
+    }
+    return s > 0.0 ? sqrt(d / s) : 0.0;
 }
 
 static bool counted_draw(struct scene_state *st, bool skip, struct render_counts *out)
@@ -100,10 +137,11 @@ bool bench_scale(const struct bench_scale_desc *d, struct bench_scale_row *rows,
     bool ok = false;
     for (int i = 0; i < BENCH_SCALE_SCENES; i++) {
         struct config cfg;
-        char name[48];
-        if (!scene_config(d, i, &cfg, name, sizeof(name)))
+        char name[64];
+        enum bench_scale_kind kind = (enum bench_scale_kind)i;
+        if (!scene_config(d, kind, &cfg, name, sizeof(name)))
             goto done;
-        if (i == 3) {
+        if (kind == BENCH_SCALE_KATRINA) {
             const char *missing = d->quick ? "" : bench_scene_missing_data(&cfg);
             if (missing) {
                 if (missing[0])
@@ -115,10 +153,11 @@ bool bench_scale(const struct bench_scale_desc *d, struct bench_scale_row *rows,
         struct bench_scale_row *row = &rows[n];
         n++;
         snprintf(row->name, sizeof(row->name), "%s", name);
+        row->kind = kind;
         log_info("bench: scale: preparing %s", name);
         if (!bench_scene_prepare(name, &cfg, w, h, &s->vol, &s->sc))
             goto done;
-        if (i == 1) {
+        if (kind == BENCH_SCALE_EMPTY) {
             /* The empty box keeps the storm's effects: its light map and all they compile. */
             const struct bench_scene *storm = &st[0].sc;
             s->sc.settings = storm->settings;
@@ -128,8 +167,12 @@ bool bench_scale(const struct bench_scale_desc *d, struct bench_scale_row *rows,
         }
         s->r = renderer_create();
         s->lg = light_gpu_create();
-        if (!s->r || !s->lg || !renderer_set_optics(s->r, &cfg.optics.params) ||
-            !renderer_set_volume(s->r, &s->vol))
+        if (!s->r || !s->lg)
+            goto done;
+        bool half = cfg.render.precision == PRECISION_HALF;
+        renderer_set_half(s->r, half);
+        light_gpu_set_half(s->lg, half);
+        if (!renderer_set_optics(s->r, &cfg.optics.params) || !renderer_set_volume(s->r, &s->vol))
             goto done;
         const struct render_stats *rs = renderer_stats(s->r);
         row->upload_ms = rs->upload_ms;
@@ -164,7 +207,28 @@ bool bench_scale(const struct bench_scale_desc *d, struct bench_scale_row *rows,
         gpu_texture_finish(&t);
         if (!good)
             goto done;
+        size_t dense, compressed;
+        light_gpu_bytes(s->lg, &dense, &compressed);
+        rows[i].light_bytes = (double)(compressed ? compressed : dense);
     }
+    /* The compressed and half-float storms against the storm's picture. */
+    struct image ref = {0};
+    if (!picture(&st[0], &ref))
+        goto done;
+    for (int i = 1; i < n; i++) {
+        if (rows[i].kind != BENCH_SCALE_COMPRESSED && rows[i].kind != BENCH_SCALE_HALF)
+            continue;
+        struct image img = {0};
+        bool good = picture(&st[i], &img);
+        if (good)
+            rows[i].image_error = rms_error(&img, &ref);
+        image_finish(&img);
+        if (!good) {
+            image_finish(&ref);
+            goto done;
+        }
+    }
+    image_finish(&ref);
     for (int k = 0; k < rounds; k++) {
         for (int i = 0; i < n; i++) {
             struct scene_state *s = &st[i];
@@ -217,46 +281,51 @@ void bench_write_scale_table(FILE *f, const struct bench_scale_desc *d,
     int h = d->height ? d->height : d->quick ? 120 : 480;
     int rounds = d->rounds ? d->rounds : d->quick ? 1 : 3;
     int lw = d->quick ? 320 : 1280, lh = d->quick ? 256 : 1024;
-    fprintf(f,
-            "| scene | voxels | clear cells | view %dx%d, ms | without skipping, ms | "
-            "skipping buys | rays marched | β samples / pixel | without | light reads / pixel | "
-            "without | cells read / pixel | steps leapt / pixel | view %dx%d, ms | light "
-            "build, ms | build ÷ %dx%d view | upload, ms | upload, MiB |\n"
-            "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-            "---:|---:|\n",
+    fprintf(f, "| scene | clear cells | view %dx%d, ms | without skipping, ms | skipping buys | "
+               "rays marched | β samples / pixel | without | light reads / pixel | cells read "
+               "/ pixel | steps leapt / pixel | view %dx%d, ms | light build, ms | build ÷ "
+               "%dx%d view | light map, KiB | picture off the storm's | upload, ms | upload, "
+               "MiB |\n"
+               "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+               "---:|---:|\n",
             w, h, lw, lh, lw, lh);
     for (int i = 0; i < n; i++) {
         const struct bench_scale_row *r = &rows[i];
-        fprintf(f,
-                "| %s | %dx%dx%d | %.0f %% | %.0f | %.0f | %.1fx | %.0f %% | %.1f | %.1f | "
-                "%.1f | %.1f | %.2f | %.1f | %.0f | %.0f | %.2f | %.0f | %.1f |\n",
-                r->name, r->n[0], r->n[1], r->n[2], 100.0 * r->cells_clear, r->view_ms,
-                r->view_noskip_ms, r->view_ms > 0 ? r->view_noskip_ms / r->view_ms : 0.0,
+        char err[32] = "";
+        if (r->kind == BENCH_SCALE_COMPRESSED || r->kind == BENCH_SCALE_HALF)
+            snprintf(err, sizeof(err), "%.2f %%", 100.0 * r->image_error);
+        fprintf(f, "| %s | %.0f %% | %.0f | %.0f | %.1fx | %.0f %% | %.1f | %.1f | %.1f | %.2f | "
+                   "%.1f | %.0f | %.0f | %.2f | %.0f | %s | %.0f | %.1f |\n",
+                r->name, 100.0 * r->cells_clear, r->view_ms, r->view_noskip_ms,
+                r->view_ms > 0 ? r->view_noskip_ms / r->view_ms : 0.0,
                 100.0 * per_pixel(r->counts.rays_marched, &r->counts),
                 per_pixel(r->counts.beta_samples, &r->counts),
                 per_pixel(r->counts_noskip.beta_samples, &r->counts_noskip),
                 per_pixel(r->counts.light_reads, &r->counts),
-                per_pixel(r->counts_noskip.light_reads, &r->counts_noskip),
                 per_pixel(r->counts.cells_read, &r->counts),
                 per_pixel(r->counts.steps_leapt, &r->counts), r->large_ms, r->build_ms,
-                r->large_ms > 0 ? r->build_ms / r->large_ms : 0.0, r->upload_ms,
-                r->upload_bytes / (1024.0 * 1024.0));
+                r->large_ms > 0 ? r->build_ms / r->large_ms : 0.0, r->light_bytes / 1024.0, err,
+                r->upload_ms, r->upload_bytes / (1024.0 * 1024.0));
     }
     fprintf(f, "\n");
     const struct bench_scale_row *storm = &rows[0];
     for (int i = 1; i < n; i++) {
         const struct bench_scale_row *r = &rows[i];
-        if (strncmp(r->name, "empty", 5) == 0)
-            fprintf(f,
-                    "- The empty box's view ÷ the storm's: **%.3f** (%.3f without "
-                    "skipping).\n",
+        if (r->kind == BENCH_SCALE_EMPTY)
+            fprintf(f, "- The empty box's view ÷ the storm's: **%.3f** (%.3f without "
+                       "skipping).\n",
                     r->view_ms / storm->view_ms, r->view_noskip_ms / storm->view_noskip_ms);
-        else if (strncmp(r->name, "storm", 5) == 0)
-            fprintf(f,
-                    "- The %dx%dx%d storm's view ÷ the %dx%dx%d storm's at %dx%d: **%.2f** "
-                    "(%.2f without skipping).\n",
+        else if (r->kind == BENCH_SCALE_LARGE)
+            fprintf(f, "- The %dx%dx%d storm's view ÷ the %dx%dx%d storm's at %dx%d: **%.2f** "
+                       "(%.2f without skipping).\n",
                     r->n[0], r->n[1], r->n[2], storm->n[0], storm->n[1], storm->n[2], w, h,
                     r->view_ms / storm->view_ms, r->view_noskip_ms / storm->view_noskip_ms);
+    }
+    for (int i = 0; i < n; i++) {
+        const struct bench_scale_row *r = &rows[i];
+        if (r->kind == BENCH_SCALE_STORM || r->kind == BENCH_SCALE_LARGE)
+            fprintf(f, "- The light build ÷ one %dx%d view, %dx%dx%d storm: **%.2f**.\n", lw, lh,
+                    r->n[0], r->n[1], r->n[2], r->large_ms > 0 ? r->build_ms / r->large_ms : 0.0);
     }
     fprintf(f, "\nLight maps: ");
     for (int i = 0; i < n; i++) {
@@ -265,9 +334,8 @@ void bench_write_scale_table(FILE *f, const struct bench_scale_desc *d,
                 r->light_n[2], r->multiple ? ", diffuse light" : "",
                 r->lateral ? " with lateral escape" : "");
     }
-    fprintf(f,
-            ".  Views from the configs' cameras (the default storm's camera for the three "
-            "storm boxes), medians of %d interleaved round%s, every time waited for "
-            "(glFinish).  Device: %s.\n",
+    fprintf(f, ".  Views from the configs' cameras (the default storm's camera for the storm "
+               "boxes), medians of %d interleaved round%s, every time waited for (glFinish).  "
+               "Device: %s.\n",
             rounds, rounds > 1 ? "s" : "", device);
 }

@@ -1,8 +1,8 @@
 /*
  * bench/scale: what the eye pass and the light build cost as the volume grows and empties.
- * The default storm, its box left empty with the storm's effects (and light map) kept on,
- * the same storm on a 500 x 500 x 100 grid (Isabel's size), and the Katrina sample where its
- * data file is found: each drawn at W x H with empty-space skipping and without it, at
+ * The default storm (also with its light map compressed, and stored in half floats), its box
+ * left empty with the storm's effects (and light map) kept on, the same storm on a
+ * 500 x 500 x 100 grid (Isabel's size), and the Katrina sample where its data file is found: each drawn at W x H with empty-space skipping and without it, at
  * 1280 x 1024 with it, and its light map built, in interleaved rounds (every scene once per
  * round, so that a shared machine's load drifts over all of them alike); beside the times,
  * what the rays did (render_counts of one view each way) and the bytes uploaded.
@@ -18,10 +18,20 @@
 
 #include "bench/bench.h"
 
-#define BENCH_SCALE_SCENES 4
+#define BENCH_SCALE_SCENES 6
+
+enum bench_scale_kind {
+    BENCH_SCALE_STORM,      /* the default storm */
+    BENCH_SCALE_COMPRESSED, /* ... with its light map compressed at epsilon 1/255 */
+    BENCH_SCALE_HALF,       /* ... stored in half floats (render.precision = "half") */
+    BENCH_SCALE_EMPTY,      /* its box left empty, its effects and light map kept */
+    BENCH_SCALE_LARGE,      /* on a 500 x 500 x 100 grid */
+    BENCH_SCALE_KATRINA,    /* the Katrina sample, where its data is found */
+};
 
 struct bench_scale_row {
-    char name[48];
+    enum bench_scale_kind kind;
+    char name[64];
     int n[3];       /* voxels */
     int light_n[3]; /* light map nodes */
     bool shadows, multiple, lateral;
@@ -33,6 +43,8 @@ struct bench_scale_row {
     double upload_bytes;
     struct render_counts counts, counts_noskip; /* one W x H view */
     double cells_clear;                         /* share of level-0 cells holding nothing */
+    double light_bytes;         /* the light map on the GPU */
+    double image_error;         /* COMPRESSED, HALF: RMS over RMS against the storm's picture */
 };
 
 struct bench_scale_desc {

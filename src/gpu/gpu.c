@@ -129,6 +129,14 @@ void gpu_texture_upload(struct gpu_texture *tex, const void *data)
                             fi.format, fi.type, data);
 }
 
+void gpu_texture_upload_layers(struct gpu_texture *tex, int z0, int count, const void *data)
+{
+    struct format_info fi = format_info(tex->format);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTextureSubImage3D(tex->id, 0, 0, 0, z0, tex->size[0], tex->size[1], count, fi.format,
+                        fi.type, data);
+}
+
 void gpu_texture_clear(struct gpu_texture *tex)
 {
     struct format_info fi = format_info(tex->format);

@@ -79,6 +79,9 @@ bool gpu_texture_init(struct gpu_texture *tex, int dims, const int size[3],
 void gpu_texture_clear(struct gpu_texture *tex);
 /* Replaces the whole content; same layout as init. */
 void gpu_texture_upload(struct gpu_texture *tex, const void *data);
+/* Replaces the layers Z0 .. Z0 + COUNT - 1 of a 3D texture; DATA as for init, those layers
+ * only. */
+void gpu_texture_upload_layers(struct gpu_texture *tex, int z0, int count, const void *data);
 /* Reads the whole level 0 back into OUT (bytes as for init, float or uint8). */
 void gpu_texture_read(const struct gpu_texture *tex, void *out, size_t out_bytes);
 void gpu_texture_finish(struct gpu_texture *tex);

@@ -15,8 +15,8 @@ struct light_gpu {
      * (bit 0), PERIPHERAL (bit 1), PHASE_MIX (bit 2); the diffuse column pass by PHASE_MIX
      * (bit 0) and LATERAL (bit 1). */
     struct gpu_program slices[8];
-    struct gpu_program build[8];
-    struct gpu_program diffuse_pass[4];
+    struct gpu_program build[16];       /* bit 3: HALF */
+    struct gpu_program diffuse_pass[8]; /* bit 2: HALF */
     struct gpu_program lateral_pass[2]; /* without and with SKIP */
     struct gpu_texture light;   /* R32F node volume */
     struct gpu_texture diffuse; /* RG32F node volume, M and N; only with multiple scattering
@@ -38,6 +38,7 @@ struct light_gpu {
     enum light_gpu_mode mode;
     bool have_key_mode;
     enum light_gpu_mode built_mode;
+    bool half, built_half;      /* the dense map in half floats (light_gpu_set_half) */
     double built_epsilon;
     size_t compressed_bytes;   /* the columns and nodes, the diffuse light's included */
     uint32_t compressed_nodes, diffuse_nodes; /* nodes of the light and of the diffuse light */
@@ -89,8 +90,8 @@ static const struct gpu_program *build_program(struct light_gpu *lg, int v)
         return &lg->build[v];
     char defines[128];
     snprintf(defines, sizeof(defines),
-             "#define FORWARD %d\n#define PERIPHERAL %d\n#define PHASE_MIX %d\n", v & 1,
-             (v >> 1) & 1, (v >> 2) & 1);
+             "#define FORWARD %d\n#define PERIPHERAL %d\n#define PHASE_MIX %d\n#define HALF %d\n",
+             v & 1, (v >> 1) & 1, (v >> 2) & 1, (v >> 3) & 1);
     if (!gpu_program_init(&lg->build[v], "light_build.comp", defines))
         return NULL;
     return &lg->build[v];
@@ -112,14 +113,15 @@ static const struct gpu_program *slices_program(struct light_gpu *lg, bool multi
 
 /* The diffuse column pass: its only variant is the ice/water mix (the loss shares the forward
  * terms leave come as uniforms). */
-static const struct gpu_program *diffuse_program(struct light_gpu *lg, bool mix, bool lateral)
+static const struct gpu_program *diffuse_program(struct light_gpu *lg, bool mix, bool lateral,
+                                                bool half)
 {
-    int v = (mix ? 1 : 0) | (lateral ? 2 : 0);
+    int v = (mix ? 1 : 0) | (lateral ? 2 : 0) | (half ? 4 : 0);
     if (lg->diffuse_pass[v].id)
         return &lg->diffuse_pass[v];
     char defines[64];
-    snprintf(defines, sizeof(defines), "#define PHASE_MIX %d\n#define LATERAL %d\n", v & 1,
-             v >> 1);
+    snprintf(defines, sizeof(defines), "#define PHASE_MIX %d\n#define LATERAL %d\n#define HALF %d\n",
+             v & 1, (v >> 1) & 1, v >> 2);
     if (!gpu_program_init(&lg->diffuse_pass[v], "light_diffuse.comp", defines))
         return NULL;
     return &lg->diffuse_pass[v];
@@ -197,12 +199,12 @@ void light_gpu_destroy(struct light_gpu *lg)
 {
     if (!lg)
         return;
-    for (int v = 0; v < 8; v++) {
+    for (int v = 0; v < 16; v++)
         gpu_program_finish(&lg->build[v]);
+    for (int v = 0; v < 8; v++) {
         gpu_program_finish(&lg->slices[v]);
-    }
-    for (int v = 0; v < 4; v++)
         gpu_program_finish(&lg->diffuse_pass[v]);
+    }
     gpu_texture_finish(&lg->light);
     gpu_texture_finish(&lg->diffuse);
     for (int v = 0; v < 4; v++)
@@ -230,14 +232,14 @@ static bool node_texture(struct gpu_texture *tex, const int n[3], enum gpu_forma
 
 /* The two-stream pass down every column (light_diffuse.comp), after the beam. */
 static bool build_diffuse(struct light_gpu *lg, const double sun[3],
-                          const struct light_settings *s)
+                          const struct light_settings *s, bool half)
 {
     const struct light_grid *g = &lg->grid;
-    if (!node_texture(&lg->diffuse, g->n, GPU_RG32F) ||
+    if (!node_texture(&lg->diffuse, g->n, half ? GPU_RG16F : GPU_RG32F) ||
         !node_texture(&lg->adding, g->n, GPU_RG32F))
         return false;
     const struct gpu_program *p =
-        diffuse_program(lg, !light_settings_phases_equal(s), s->lateral);
+        diffuse_program(lg, !light_settings_phases_equal(s), s->lateral, half);
     if (!p)
         return false;
     struct light_diffuse_terms t;
@@ -256,10 +258,10 @@ static bool build_diffuse(struct light_gpu *lg, const double sun[3],
 }
 
 static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src,
-                        const double sun[3], const struct light_settings *s)
+                        const double sun[3], const struct light_settings *s, bool half)
 {
     const struct light_grid *g = &lg->grid;
-    if (!node_texture(&lg->light, g->n, GPU_R32F) ||
+    if (!node_texture(&lg->light, g->n, half ? GPU_R16F : GPU_R32F) ||
         !node_texture(&lg->slice, g->n, s->multiple ? GPU_RGBA32F : GPU_RG32F))
         return false;
     if (!s->multiple)
@@ -273,7 +275,7 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
     }
     bool skip = src->cells && src->cells->levels > 0;
     const struct gpu_program *sp = slices_program(lg, s->multiple, s->lateral, skip);
-    const struct gpu_program *p = build_program(lg, build_variant(s));
+    const struct gpu_program *p = build_program(lg, build_variant(s) | (half ? 8 : 0));
     if (!sp || !p)
         return false;
     int substeps = s->substeps > 0 ? s->substeps : light_auto_substeps(g, src->grid);
@@ -319,7 +321,7 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
         gpu_uniform_int(p, "plane", k);
         gpu_dispatch(p, g->n[0], g->n[1], 1);
     }
-    bool ok = !s->multiple || build_diffuse(lg, sun, s);
+    bool ok = !s->multiple || build_diffuse(lg, sun, s, half);
     /* The scratch served this build only: give its memory back. */
     gpu_texture_finish(&lg->slice);
     gpu_texture_finish(&lg->adding);
@@ -459,7 +461,7 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
     struct light_key key;
     light_key_init(&key, src->grid, sun, src->volume_id, src->generation, settings);
     bool stale = light_cache_stale(&lg->cache, &key) || !lg->have_key_mode ||
-                 lg->built_mode != mode ||
+                 lg->built_mode != mode || lg->built_half != lg->half ||
                  (mode == LIGHT_GPU_COMPRESSED && lg->built_epsilon != settings->epsilon);
     if (!stale)
         return true;
@@ -469,7 +471,9 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
     struct gpu_timings *log = lg->timing;
     if (log)
         gpu_timer_queue_begin(&lg->timers);
-    bool ok = build_dense(lg, src, sun, settings);
+    /* Half floats are a storage of the dense map: a compressed build stays in floats. */
+    bool half = lg->half && mode == LIGHT_GPU_DENSE;
+    bool ok = build_dense(lg, src, sun, settings, half);
     if (ok && mode == LIGHT_GPU_COMPRESSED) {
         ok = build_compressed(lg, settings->epsilon);
     } else {
@@ -489,6 +493,7 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
     lg->built_mode = mode;
     lg->built_epsilon = settings->epsilon;
     lg->built_multiple = settings->multiple;
+    lg->built_half = lg->half;
     snprintf(lg->defines, sizeof(lg->defines), "#define LIGHTMAP %d\n#define MULTIPLE %d\n",
              mode == LIGHT_GPU_DENSE ? 1 : 2, settings->multiple ? 1 : 0);
     if (built)
@@ -504,6 +509,11 @@ const struct render_light *light_gpu_render_light(struct light_gpu *lg)
 unsigned light_gpu_builds(const struct light_gpu *lg)
 {
     return lg->cache.builds;
+}
+
+void light_gpu_set_half(struct light_gpu *lg, bool half)
+{
+    lg->half = half;
 }
 
 void light_gpu_set_timing(struct light_gpu *lg, struct gpu_timings *log)
@@ -532,6 +542,8 @@ void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compress
     size_t nodes = (size_t)lg->grid.n[0] * lg->grid.n[1] * lg->grid.n[2];
     size_t diffuse = lg->built_multiple ? 2 * nodes * sizeof(float) : 0;
     *dense = nodes * sizeof(float) + diffuse;
+    if (lg->built_half && lg->built_mode == LIGHT_GPU_DENSE)
+        *dense /= 2;
     *compressed = lg->compressed_bytes;
 }
 

@@ -43,6 +43,12 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
                       const double sun[3], const struct light_settings *settings,
                       enum light_gpu_mode mode, bool *built);
 
+/* Stores the following dense maps in half floats (R16F light, RG16F diffuse light: half the
+ * memory, about three decimal digits; the build's arithmetic stays in floats) or, HALF false
+ * (the default), in floats.  A change rebuilds at the next update.  Compressed maps are
+ * floats either way. */
+void light_gpu_set_half(struct light_gpu *lg, bool half);
+
 /* The hook for renderer_set_light: valid until destroy; reads the last built map. */
 const struct render_light *light_gpu_render_light(struct light_gpu *lg);
 
@@ -69,8 +75,9 @@ int light_gpu_collect_timings(struct light_gpu *lg, bool wait);
  * while the GPU has not finished the build (or when it was not timed, or none was made). */
 bool light_gpu_last_build_ms(struct light_gpu *lg, double *ms);
 
-/* Bytes of the dense map (the light volume, and the diffuse one in RG32F when the last build
- * had multiple scattering: in compressed mode what it would take) and of the compressed map
+/* Bytes of the dense map (the light volume, and the diffuse one when the last build had
+ * multiple scattering; floats, halves when stored so: in compressed mode what it would take in
+ * floats) and of the compressed map
  * (0 in dense mode: the columns, the nodes and the half-resolution diffuse light). */
 void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed);
 

@@ -54,6 +54,7 @@ struct renderer {
     struct render_cells pair_cells; /* of beta and beta_next (effects.temporal) */
     bool pair_stale;                /* either changed since pair_cells were made */
     bool counting;                  /* COUNT 1 (renderer_set_counting) */
+    bool half;                      /* volumes in RG16F (renderer_set_half) */
     struct gpu_buffer counters;     /* 6 counts of two words each */
     struct gpu_buffer rays;         /* SKIP: the rays the second pass marches */
     struct gpu_timer_queue timers;
@@ -138,17 +139,51 @@ void renderer_destroy(struct renderer *r)
     free(r);
 }
 
+void renderer_set_half(struct renderer *r, bool half)
+{
+    r->half = half;
+}
+
+/* Puts VOL's extinction into TEX (made or remade for its size and the renderer's storage).
+ * Half floats: clamped to RENDER_HALF_MAX first (a larger float would become infinity), a few
+ * layers at a time, so the copy stays small. */
+static bool put_beta(struct renderer *r, struct gpu_texture *tex, const struct ext_volume *vol)
+{
+    const int *n = vol->grid.n;
+    enum gpu_format f = r->half ? GPU_RG16F : GPU_RG32F;
+    if (!tex->id || memcmp(tex->size, n, sizeof(int) * 3) != 0 || tex->format != f) {
+        gpu_texture_finish(tex);
+        if (!gpu_texture_init(tex, 3, n, f, NULL))
+            return false;
+    }
+    if (!r->half) {
+        gpu_texture_upload(tex, vol->beta);
+        return true;
+    }
+    size_t layer = (size_t)n[0] * n[1] * 2;
+    int step = 8;
+    float *tmp = malloc(layer * (size_t)step * sizeof(float));
+    if (!tmp) {
+        log_error("out of memory converting the volume to half floats");
+        return false;
+    }
+    for (int z = 0; z < n[2]; z += step) {
+        int count = n[2] - z < step ? n[2] - z : step;
+        const float *src = vol->beta + layer * (size_t)z;
+        for (size_t i = 0; i < layer * (size_t)count; i++)
+            tmp[i] = src[i] > RENDER_HALF_MAX ? RENDER_HALF_MAX : src[i];
+        gpu_texture_upload_layers(tex, z, count, tmp);
+    }
+    free(tmp);
+    return true;
+}
+
 bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
 {
     double start = time_now_ms();
     const int *n = vol->grid.n;
-    if (r->beta.id && memcmp(r->beta.size, n, sizeof(int) * 3) == 0) {
-        gpu_texture_upload(&r->beta, vol->beta);
-    } else {
-        gpu_texture_finish(&r->beta);
-        if (!gpu_texture_init(&r->beta, 3, n, GPU_RG32F, vol->beta))
-            return false;
-    }
+    if (!put_beta(r, &r->beta, vol))
+        return false;
     r->have_tint = vol->tint != NULL;
     if (vol->tint && r->tint.id && memcmp(r->tint.size, n, sizeof(int) * 3) == 0) {
         gpu_texture_upload(&r->tint, vol->tint);
@@ -163,7 +198,7 @@ bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
     r->have_volume = true;
     r->pair_stale = true;
     size_t voxels = (size_t)n[0] * n[1] * n[2];
-    r->stats.upload_bytes += voxels * 2 * sizeof(float) + (vol->tint ? voxels * 4 : 0);
+    r->stats.upload_bytes += voxels * (r->half ? 4 : 8) + (vol->tint ? voxels * 4 : 0);
     r->stats.uploads++;
     if (!render_cells_build(&r->cells, &r->cell_programs, &r->beta, NULL))
         return false;
@@ -179,18 +214,13 @@ bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol)
         return true;
     }
     const int *n = vol->grid.n;
-    if (r->beta_next.id && memcmp(r->beta_next.size, n, sizeof(int) * 3) == 0) {
-        gpu_texture_upload(&r->beta_next, vol->beta);
-    } else {
-        gpu_texture_finish(&r->beta_next);
-        r->have_next = false;
-        if (!gpu_texture_init(&r->beta_next, 3, n, GPU_RG32F, vol->beta))
-            return false;
-    }
+    r->have_next = false;
+    if (!put_beta(r, &r->beta_next, vol))
+        return false;
     r->grid_next = vol->grid;
     r->have_next = true;
     r->pair_stale = true;
-    r->stats.upload_bytes += (size_t)n[0] * n[1] * n[2] * 2 * sizeof(float);
+    r->stats.upload_bytes += (size_t)n[0] * n[1] * n[2] * (r->half ? 4 : 8);
     r->stats.uploads++;
     return true;
 }

@@ -88,8 +88,17 @@ struct renderer;
 struct renderer *renderer_create(void);
 void renderer_destroy(struct renderer *r);
 
+/* The largest extinction half-float storage holds, 1/m (the largest finite half float). */
+#define RENDER_HALF_MAX 65504.0f
+
+/* Stores the following volumes (renderer_set_volume, renderer_set_next_volume) in half floats
+ * (RG16F: half the memory, about three decimal digits; extinction beyond RENDER_HALF_MAX 1/m
+ * clamps to it, NaN and negative stay as they are and read as 0) or, HALF false (the default),
+ * in floats (RG32F). */
+void renderer_set_half(struct renderer *r, bool half);
+
 /* Uploads the extinction volume (replacing the last one; the texture is reused when the size
- * is unchanged).  The volume is not kept. */
+ * and storage are unchanged).  The volume is not kept. */
 bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol);
 /* The grid of the last volume set. */
 const struct grid3 *renderer_grid(const struct renderer *r);

@@ -229,6 +229,7 @@ struct session *session_create(const struct config *cfg, const struct session_de
         /* Views are timed only when reported: on a software driver a timed view waits for
          * itself (gpu.h, "timers"). */
         renderer_set_timing(s->renderer, d->time_views ? &s->stats.view_times : NULL);
+        renderer_set_half(s->renderer, cfg->render.precision == PRECISION_HALF);
         ok = renderer_set_optics(s->renderer, &cfg->optics.params) &&
              renderer_set_volume(s->renderer, &vol);
     }
