@@ -55,7 +55,8 @@
 
 /* ---- tone mapping (shaders/tonemap.comp) ---------------------------------------------- */
 #define BIND_TONEMAP_IMG_IN 0   /* RGBA32F radiance */
-#define BIND_TONEMAP_IMG_OUT 1  /* RGBA8 display sRGB */
+#define BIND_TONEMAP_IMG_OUT 1  /* RGBA8 display sRGB (PACKED 1: R32UI, the bytes of a file) */
+#define BIND_TONEMAP_BUF_NONFINITE 0  /* PACKED 1: pixels with a non-finite value */
 
 /* ---- light build: every slice's extinction at once (shaders/light_slices.comp) -------- */
 #define BIND_SLICES_TEX_BETA 0   /* the volume's extinction, texelFetch only */

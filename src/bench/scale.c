@@ -7,6 +7,7 @@
 
 #include "bench/scenes.h"
 #include "common/log.h"
+#include "gpu/gpu.h"
 #include "light/light_gpu.h"
 #include "render/image.h"
 #include "render/render.h"
@@ -19,6 +20,7 @@ struct scene_state {
     struct renderer *r;
     struct light_gpu *lg;
     double view[ROUNDS_MAX], noskip[ROUNDS_MAX], large[ROUNDS_MAX], build[ROUNDS_MAX];
+    double out_cpu[ROUNDS_MAX], out_gpu[ROUNDS_MAX];
 };
 
 static int compare_doubles(const void *a, const void *b)
@@ -123,6 +125,30 @@ static double clear_share(const struct render_cells *c)
     return n0 ? (double)clear / (double)n0 : 0.0;
 }
 
+/* Round K's times of turning the large view T into 8-bit pixels both ways. */
+static bool output_times(struct scene_state *s, const struct gpu_texture *t, int k)
+{
+    size_t n = (size_t)t->size[0] * t->size[1];
+    uint8_t *bytes = malloc(n * 4);
+    struct image img = {0};
+    if (!bytes)
+        return false;
+    gpu_finish();
+    double t0 = time_now_ms();
+    bool ok = renderer_read(t, &img);
+    for (size_t i = 0; ok && i < n; i++)
+        for (int c = 0; c < 4; c++)
+            bytes[4 * i + c] = c < 3 ? image_tonemap(img.rgba[4 * i + c], 1.0f) : 255;
+    double t1 = time_now_ms();
+    ok = ok && renderer_tonemap_read(s->r, t, 1.0f, bytes, NULL);
+    double t2 = time_now_ms();
+    s->out_cpu[k] = t1 - t0;
+    s->out_gpu[k] = t2 - t1;
+    image_finish(&img);
+    free(bytes);
+    return ok;
+}
+
 bool bench_scale(const struct bench_scale_desc *d, struct bench_scale_row *rows, int *n_rows)
 {
     int w = d->width ? d->width : d->quick ? 160 : 640;
@@ -202,6 +228,7 @@ bool bench_scale(const struct bench_scale_desc *d, struct bench_scale_row *rows,
             bench_timed_draw(s->r, &s->sc.settings, &s->sc.view, &t, &ms) &&
             bench_timed_draw(s->r, &noskip, &s->sc.view, &t, &ms) &&
             bench_timed_draw(s->r, &s->sc.settings, &large, &t, &ms) &&
+            (rows[i].kind != BENCH_SCALE_STORM || output_times(s, &t, 0)) &&
             counted_draw(s, true, &rows[i].counts) &&
             counted_draw(s, false, &rows[i].counts_noskip);
         gpu_texture_finish(&t);
@@ -243,6 +270,8 @@ bool bench_scale(const struct bench_scale_desc *d, struct bench_scale_row *rows,
                         bench_timed_draw(s->r, &s->sc.settings, &s->sc.view, &t, &s->view[k]) &&
                         bench_timed_draw(s->r, &noskip, &s->sc.view, &t, &s->noskip[k]) &&
                         bench_timed_draw(s->r, &s->sc.settings, &large, &t, &s->large[k]);
+            if (good && rows[i].kind == BENCH_SCALE_STORM && !output_times(s, &t, k))
+                good = false;
             gpu_texture_finish(&t);
             if (!good)
                 goto done;
@@ -257,6 +286,10 @@ bool bench_scale(const struct bench_scale_desc *d, struct bench_scale_row *rows,
         rows[i].view_noskip_ms = median_of(st[i].noskip, rounds);
         rows[i].large_ms = median_of(st[i].large, rounds);
         rows[i].build_ms = median_of(st[i].build, rounds);
+        if (rows[i].kind == BENCH_SCALE_STORM) {
+            rows[i].output_cpu_ms = median_of(st[i].out_cpu, rounds);
+            rows[i].output_gpu_ms = median_of(st[i].out_gpu, rounds);
+        }
     }
     ok = true;
 done:
@@ -327,6 +360,11 @@ void bench_write_scale_table(FILE *f, const struct bench_scale_desc *d,
             fprintf(f, "- The light build ÷ one %dx%d view, %dx%dx%d storm: **%.2f**.\n", lw, lh,
                     r->n[0], r->n[1], r->n[2], r->large_ms > 0 ? r->build_ms / r->large_ms : 0.0);
     }
+    fprintf(f, "- A %dx%d view into 8-bit pixels for a PNG: read back in floats and tone-mapped "
+               "on the CPU %.0f ms, tone-mapped on the GPU and read back in bytes %.0f ms "
+               "(**%.2f**).\n",
+            lw, lh, storm->output_cpu_ms, storm->output_gpu_ms,
+            storm->output_cpu_ms > 0 ? storm->output_gpu_ms / storm->output_cpu_ms : 0.0);
     fprintf(f, "\nLight maps: ");
     for (int i = 0; i < n; i++) {
         const struct bench_scale_row *r = &rows[i];

@@ -45,6 +45,9 @@ struct bench_scale_row {
     double cells_clear;                         /* share of level-0 cells holding nothing */
     double light_bytes;         /* the light map on the GPU */
     double image_error;         /* COMPRESSED, HALF: RMS over RMS against the storm's picture */
+    double output_cpu_ms;       /* STORM: a large view to 8-bit pixels, read back as floats and
+                                   tone-mapped on the CPU (median of the rounds) */
+    double output_gpu_ms;       /* ... tone-mapped on the GPU and read back as bytes */
 };
 
 struct bench_scale_desc {

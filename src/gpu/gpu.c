@@ -40,6 +40,8 @@ static struct format_info format_info(enum gpu_format f)
         return (struct format_info){GL_R16F, GL_RED, GL_FLOAT, 4};
     case GPU_RG16F:
         return (struct format_info){GL_RG16F, GL_RG, GL_FLOAT, 8};
+    case GPU_R32UI:
+        return (struct format_info){GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, 4};
     }
     return (struct format_info){GL_RGBA32F, GL_RGBA, GL_FLOAT, 16};
 }
@@ -103,8 +105,9 @@ bool gpu_texture_init(struct gpu_texture *tex, int dims, const int size[3],
         tex->id = 0;
         return false;
     }
-    glTextureParameteri(tex->id, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTextureParameteri(tex->id, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    GLint filter = format == GPU_R32UI ? GL_NEAREST : GL_LINEAR; /* integers: no filtering */
+    glTextureParameteri(tex->id, GL_TEXTURE_MIN_FILTER, filter);
+    glTextureParameteri(tex->id, GL_TEXTURE_MAG_FILTER, filter);
     glTextureParameteri(tex->id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTextureParameteri(tex->id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     glTextureParameteri(tex->id, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);

@@ -61,7 +61,7 @@ const char *gpu_renderer_name(void);
 
 /* ---- textures ------------------------------------------------------------------------ */
 
-enum gpu_format { GPU_R32F, GPU_RG32F, GPU_RGBA32F, GPU_RGBA8, GPU_R16F, GPU_RG16F };
+enum gpu_format { GPU_R32F, GPU_RG32F, GPU_RGBA32F, GPU_RGBA8, GPU_R16F, GPU_RG16F, GPU_R32UI };
 
 struct gpu_texture {
     unsigned id;
@@ -72,7 +72,7 @@ struct gpu_texture {
 };
 
 /* Creates a texture with linear filtering and clamp-to-edge; DATA (may be NULL) is tightly
- * packed float (or uint8 for GPU_RGBA8), x fastest.  Returns false (logged) on failure. */
+ * packed float (uint8 for GPU_RGBA8, uint32 for GPU_R32UI), x fastest.  Returns false (logged) on failure. */
 bool gpu_texture_init(struct gpu_texture *tex, int dims, const int size[3],
                       enum gpu_format format, const void *data);
 /* Sets every texel of level 0 to zero. */

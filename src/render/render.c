@@ -38,7 +38,9 @@ struct renderer {
     bool have_next;
     struct gpu_texture phase;
     float mean_cosine[2]; /* g of the ice and the water phase (MULTIPLE) */
-    struct gpu_program tonemap;
+    struct gpu_program tonemap, tonemap_packed;
+    struct gpu_texture packed;   /* R32UI: the tone-mapped bytes of a file */
+    struct gpu_buffer nonfinite; /* their count of non-finite pixels */
     struct variant variants[MAX_VARIANTS];
     int n_variants;
     uint64_t variant_clock;
@@ -102,6 +104,7 @@ struct renderer *renderer_create(void)
     if (!r)
         return NULL;
     if (!variant(r, NULL) || !gpu_program_init(&r->tonemap, "tonemap.comp", NULL) ||
+        !gpu_program_init(&r->tonemap_packed, "tonemap.comp", "#define PACKED 1\n") ||
         !render_cells_programs_init(&r->cell_programs)) {
         renderer_destroy(r);
         return NULL;
@@ -125,6 +128,9 @@ void renderer_destroy(struct renderer *r)
     gpu_texture_finish(&r->tint);
     gpu_texture_finish(&r->phase);
     gpu_program_finish(&r->tonemap);
+    gpu_program_finish(&r->tonemap_packed);
+    gpu_texture_finish(&r->packed);
+    gpu_buffer_finish(&r->nonfinite);
     for (int i = 0; i < r->n_variants; i++)
         gpu_program_finish(&r->variants[i].prog);
     for (int i = 0; i < r->n_opaque; i++)
@@ -513,6 +519,40 @@ bool renderer_tonemap(struct renderer *r, const struct gpu_texture *in, float ex
     gpu_image_bind(in, BIND_TONEMAP_IMG_IN, false);
     gpu_image_bind(out, BIND_TONEMAP_IMG_OUT, true);
     gpu_dispatch(&r->tonemap, in->size[0], in->size[1], 1);
+    return true;
+}
+
+bool renderer_tonemap_read(struct renderer *r, const struct gpu_texture *in, float exposure,
+                           uint8_t *rgba, size_t *nonfinite)
+{
+    if (!ensure_texture(&r->packed, in->size[0], in->size[1], GPU_R32UI))
+        return false;
+    uint32_t zero = 0;
+    if (!r->nonfinite.id && !gpu_buffer_init(&r->nonfinite, sizeof(zero), &zero))
+        return false;
+    gpu_buffer_upload(&r->nonfinite, 0, sizeof(zero), &zero);
+    const struct gpu_program *p = &r->tonemap_packed;
+    gpu_uniform_ivec2(p, "image_size", in->size);
+    gpu_uniform_float(p, "exposure", exposure);
+    gpu_image_bind(in, BIND_TONEMAP_IMG_IN, false);
+    gpu_image_bind(&r->packed, BIND_TONEMAP_IMG_OUT, true);
+    gpu_buffer_bind(&r->nonfinite, BIND_TONEMAP_BUF_NONFINITE);
+    gpu_dispatch(p, in->size[0], in->size[1], 1);
+    /* r | g << 8 | b << 16 | a << 24 in a little-endian word: the bytes r, g, b, a. */
+    size_t n = (size_t)in->size[0] * in->size[1];
+    gpu_texture_read(&r->packed, rgba, n * 4);
+    const uint32_t one = 1;
+    if (*(const uint8_t *)&one == 0) { /* a big-endian host: the word's bytes the other way */
+        for (size_t i = 0; i < n; i++) {
+            uint8_t *p4 = rgba + 4 * i, t0 = p4[0], t1 = p4[1];
+            p4[0] = p4[3], p4[1] = p4[2], p4[2] = t1, p4[3] = t0;
+        }
+    }
+    if (nonfinite) {
+        uint32_t count = 0;
+        gpu_buffer_read(&r->nonfinite, 0, sizeof(count), &count);
+        *nonfinite = count;
+    }
     return true;
 }
 

@@ -134,6 +134,13 @@ bool renderer_tonemap(struct renderer *r, const struct gpu_texture *in, float ex
 bool renderer_set_counting(struct renderer *r, bool on);
 bool renderer_counts(struct renderer *r, struct render_counts *out);
 
+/* Tone maps IN (RGBA32F) on the GPU as image_tonemap does on the CPU (to within one step of
+ * the last bit where pow differs) and reads the bytes back into RGBA (w x h x 4, the caller's),
+ * rows bottom to top; *NONFINITE (may be NULL) the pixels with a non-finite colour, as
+ * image_count_nonfinite counts them.  Waits for the GPU. */
+bool renderer_tonemap_read(struct renderer *r, const struct gpu_texture *in, float exposure,
+                           uint8_t *rgba, size_t *nonfinite);
+
 /* Reads an RGBA32F texture back into IMG (initialised here). */
 bool renderer_read(const struct gpu_texture *tex, struct image *img);
 

@@ -57,6 +57,7 @@ static void test_programs_do_not_collide(void **state)
              BIND_LIGHTMAP_TEX_LIGHT, BIND_LIGHTMAP_TEX_LIGHT_NEXT, BIND_LIGHTMAP_TEX_DIFFUSE,
              BIND_LIGHTMAP_TEX_DIFFUSE_NEXT);
     DISTINCT("tone mapping images", MIN_IMAGE_UNITS, BIND_TONEMAP_IMG_IN, BIND_TONEMAP_IMG_OUT);
+    DISTINCT("tone mapping buffers", MIN_STORAGE_BLOCKS, BIND_TONEMAP_BUF_NONFINITE);
     DISTINCT("slice pass textures", MIN_TEXTURE_UNITS, BIND_SLICES_TEX_BETA,
              BIND_SLICES_TEX_RATES);
     DISTINCT("slice pass images", MIN_IMAGE_UNITS, BIND_SLICES_IMG_SLICE);
