@@ -465,6 +465,7 @@ static int command(int argc, char **argv, bool run)
                            .wand = o.wand,
                            /* An interactive run times its views only when they are reported. */
                            .time_views = o.stats || !run,
+                           .count_rays = o.stats != NULL,
                        },
                        &rc);
     if (!s) {

@@ -230,6 +230,7 @@ struct session *session_create(const struct config *cfg, const struct session_de
          * itself (gpu.h, "timers"). */
         renderer_set_timing(s->renderer, d->time_views ? &s->stats.view_times : NULL);
         renderer_set_half(s->renderer, cfg->render.precision == PRECISION_HALF);
+        renderer_set_counting(s->renderer, d->count_rays);
         ok = renderer_set_optics(s->renderer, &cfg->optics.params) &&
              renderer_set_volume(s->renderer, &vol);
     }
@@ -990,6 +991,10 @@ void session_collect_timings(struct session *s, bool wait)
 {
     renderer_collect_timings(s->renderer, wait);
     lightmaps_collect_timings(&s->light, wait);
+    const struct render_stats *rs = renderer_stats(s->renderer);
+    s->stats.upload_bytes = (double)rs->upload_bytes;
+    if (wait && s->desc.count_rays && renderer_counts(s->renderer, &s->stats.counts))
+        s->stats.counted = true;
 }
 
 bool session_light(struct session *s)

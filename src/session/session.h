@@ -58,6 +58,8 @@ struct session_desc {
     const char *transfers_dir; /* where named transfer functions are saved ("." default) */
     const char *wand;          /* an OpenHMD controller as the wand ("null"), or NULL */
     bool time_views;           /* time every view and build (they are reported) */
+    bool count_rays;           /* count what the views' rays do (renderer_set_counting; the
+                                  counts go to the stats at session_collect_timings(s, true)) */
 };
 
 /* Builds the session for CFG (copied) on the current GL context: the first volume, the

@@ -9,6 +9,7 @@
 #include <stddef.h>
 
 #include "gpu/gpu.h"
+#include "render/render.h"
 
 struct session_stats {
     const char *command;
@@ -33,6 +34,10 @@ struct session_stats {
                                  also each next step's, into the second texture) */
     double load_ms, convert_ms, wait_ms, upload_ms_total;
     double frame_ms_max;      /* longest frame of the loop */
+    /* What the views' rays did (render_counts), when counted; and the volume bytes uploaded. */
+    bool counted;
+    struct render_counts counts;
+    double upload_bytes;
 };
 
 /* Counts a view drawn and a light map built; their times go to view_times and build_times. */
