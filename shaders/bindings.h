@@ -85,6 +85,10 @@
 #define BIND_LATERAL_IMG_RATES 0  /* RG32F rates along x and y, read and written */
 #define BIND_LATERAL_BUF_CELLS 0  /* SKIP 1: the volume's macro cells (cells.glsl) */
 
+/* ---- the peak fetch rate of anvil bench --gpu (shaders/fetch_peak.comp) -------------- */
+#define BIND_PEAK_TEX_VOLUME 0
+#define BIND_PEAK_IMG_OUT 0
+
 /* ---- stereo composition (shaders/display_compose.comp) -------------------------------- */
 #define BIND_COMPOSE_TEX_LEFT 0
 #define BIND_COMPOSE_TEX_RIGHT 1

@@ -12,7 +12,7 @@ static int usage(FILE *out)
 {
     fprintf(out,
             "usage: anvil bench [--quick] [--views-only | --quality-only | --movie-only |\n"
-            "                   --scale-only] [-o DIR]\n"
+            "                   --scale-only | --gpu] [-o DIR]\n"
             "                   [--cache DIR]\n"
             "                   [--configs DIR] [--spp N] [--scene sphere|storm|katrina]...\n"
             "                   [--paraview] [--quiet]\n"
@@ -28,6 +28,10 @@ static int usage(FILE *out)
             "  scale    the storm, its box left empty and the storm on a 500 x 500 x 100 grid:\n"
             "           views with and without empty-space skipping, what their rays did,\n"
             "           the light build (scale-table.md)\n"
+            "  --gpu    the storm on 500 x 500 x 100 voxels as an HMD frame (2 x 1440 x 1600)\n"
+            "           and as displays/cave4.cfg (8 x 1280 x 1024) sharing one light map: GPU\n"
+            "           ms per frame, the rebuild, fetches per second against the device's\n"
+            "           peak (gpu-table.md); minutes on a GPU, far longer on a CPU rasteriser\n"
             "  -o DIR         where views.md, accuracy.csv, accuracy-table.md, accuracy.png\n"
             "                 and angles-table.md go (default docs/bench)\n"
             "  --cache DIR    Monte Carlo references are kept here (default: bench-cache\n"
@@ -56,13 +60,14 @@ static int parse(int argc, char **argv, struct bench_options *o)
         {"scene", required_argument, NULL, 's'},  {"quiet", no_argument, NULL, 'q'},
         {"paraview", no_argument, NULL, 'P'},     {"configs", required_argument, NULL, 'C'},
         {"movie-only", no_argument, NULL, 'M'},   {"help", no_argument, NULL, 'h'},
-        {"scale-only", no_argument, NULL, 'S'},
+        {"scale-only", no_argument, NULL, 'S'},   {"gpu", no_argument, NULL, 'G'},
         {NULL, 0, NULL, 0},
     };
     bench_options_defaults(o);
     o->out = "docs/bench";
     o->configs = ANVIL_SOURCE_DIR "/configs";
     o->paraview_script = ANVIL_SOURCE_DIR "/src/bench/paraview_views.py";
+    o->displays = ANVIL_SOURCE_DIR "/displays";
     o->report = stdout;
     optind = 1;
     int c, only = 0;
@@ -86,6 +91,11 @@ static int parse(int argc, char **argv, struct bench_options *o)
             break;
         case 'S':
             o->views = o->quality = o->movie = false;
+            only++;
+            break;
+        case 'G':
+            o->views = o->quality = o->movie = o->scale = false;
+            o->device = true;
             only++;
             break;
         case 'o':
@@ -127,8 +137,8 @@ static int parse(int argc, char **argv, struct bench_options *o)
         return EXIT_USAGE;
     }
     if (only > 1) {
-        log_error("bench: --views-only, --quality-only, --movie-only and --scale-only exclude "
-                  "each other");
+        log_error("bench: --views-only, --quality-only, --movie-only, --scale-only and --gpu "
+                  "exclude each other");
         return EXIT_USAGE;
     }
     if (o->paraview && !o->views) {

@@ -27,6 +27,9 @@ struct bench_options {
     bool movie;           /* the default storm's movie: frames per second (bench/movie.h) */
     bool scale;           /* the eye pass and the light build as the volume grows and empties
                              (bench/scale.h, scale-table.md) */
+    bool device;          /* --gpu: the Isabel-sized storm on an HMD and a CAVE frame
+                             (bench/device.h, gpu-table.md) */
+    const char *displays; /* the folder of cave4.cfg (device) */
     bool paraview;        /* also time ParaView on the views (needs views and paraview_script) */
     const char *out;      /* folder for the tables and plots, created with its parents */
     const char *cache;    /* folder of the cached Monte Carlo references; NULL or "":

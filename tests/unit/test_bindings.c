@@ -73,6 +73,8 @@ static void test_programs_do_not_collide(void **state)
     DISTINCT("lateral pass textures", MIN_TEXTURE_UNITS, BIND_LATERAL_TEX_BETA);
     DISTINCT("lateral pass images", MIN_IMAGE_UNITS, BIND_LATERAL_IMG_RATES);
     DISTINCT("lateral pass buffers", MIN_STORAGE_BLOCKS, BIND_LATERAL_BUF_CELLS);
+    DISTINCT("peak textures", MIN_TEXTURE_UNITS, BIND_PEAK_TEX_VOLUME);
+    DISTINCT("peak images", MIN_IMAGE_UNITS, BIND_PEAK_IMG_OUT);
     DISTINCT("compose textures", MIN_TEXTURE_UNITS, BIND_COMPOSE_TEX_LEFT,
              BIND_COMPOSE_TEX_RIGHT);
     DISTINCT("compose images", MIN_IMAGE_UNITS, BIND_COMPOSE_IMG_OUT);
