@@ -56,14 +56,15 @@ static bool write_text(const struct bench_options *o, const char *name, const ch
 
 /* ---- views ------------------------------------------------------------------------------ */
 
-static bool run_views(const struct bench_options *o, const char *device, struct renderer *r,
-                      struct light_gpu *lg)
+/* The views benchmark at one image size W x H into OUT (the folder of ParaView's side). */
+static bool views_at(const struct bench_options *o, const char *device, struct renderer *r,
+                     struct light_gpu *lg, int w, int h, const char *out, FILE *table)
 {
     struct config cfg;
     char *extra[] = {"render.ground_on=false"};
     if (!bench_scene_config("storm", o->configs, o->quick, extra, 1, &cfg))
         return false;
-    int w = o->quick ? 64 : 160, h = o->quick ? 48 : 120, repeats = o->quick ? 1 : 3;
+    int repeats = o->quick ? 1 : 3;
     struct ext_volume vol = {0};
     struct bench_scene sc;
     bool ok = bench_scene_prepare("storm", &cfg, w, h, &vol, &sc) &&
@@ -75,21 +76,15 @@ static bool run_views(const struct bench_options *o, const char *device, struct 
         ext_volume_finish(&vol);
         return false;
     }
-    char *buf = NULL;
-    size_t len = 0;
-    FILE *f = open_memstream(&buf, &len);
-    bench_table_head(f, o->quick, "views");
-    bench_write_views_table(f, &sc, rows, 4, w, h, repeats, device);
-    fclose(f);
-    ok = write_text(o, "views-table.md", buf, len);
-    free(buf);
+    fprintf(table, "\n### %d × %d\n\n", w, h);
+    bench_write_views_table(table, &sc, rows, 4, w, h, repeats, device);
     if (o->report)
         bench_write_views_summary(o->report, rows, 4, device);
-    if (ok && o->paraview) {
+    if (o->paraview) {
         struct bench_paraview_desc pd = {
             .script = o->paraview_script,
             .cache_dir = o->cache,
-            .out_dir = o->out,
+            .out_dir = out,
             .sun_azimuth_deg = cfg.light.azimuth_deg,
             .sun_elevation_deg = cfg.light.elevation_deg,
             .width = w,
@@ -97,9 +92,33 @@ static bool run_views(const struct bench_options *o, const char *device, struct 
             .repeats = repeats,
             .report = o->report,
         };
-        ok = bench_paraview_views(&pd, &vol, rows, 4);
+        ok = bench_make_dir(out) && bench_paraview_views(&pd, &vol, rows, 4);
     }
     ext_volume_finish(&vol);
+    return ok;
+}
+
+/* The views benchmark at 160 x 120 and 640 x 480 (quick: 64 x 48), into views-table.md;
+ * ParaView's side of the second size goes to OUT/640x480/. */
+static bool run_views(const struct bench_options *o, const char *device, struct renderer *r,
+                      struct light_gpu *lg)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    bench_table_head(f, o->quick, "views");
+    bool ok;
+    if (o->quick) {
+        ok = views_at(o, device, r, lg, 64, 48, o->out, f);
+    } else {
+        char second[PATH_MAX];
+        snprintf(second, sizeof(second), "%s/640x480", o->out);
+        ok = views_at(o, device, r, lg, 160, 120, o->out, f) &&
+             views_at(o, device, r, lg, 640, 480, second, f);
+    }
+    fclose(f);
+    ok = ok && write_text(o, "views-table.md", buf, len);
+    free(buf);
     return ok;
 }
 
