@@ -153,7 +153,7 @@ bool bench_scale(const struct bench_scale_desc *d, struct bench_scale_row *rows,
 {
     int w = d->width ? d->width : d->quick ? 160 : 640;
     int h = d->height ? d->height : d->quick ? 120 : 480;
-    int rounds = d->rounds ? d->rounds : d->quick ? 1 : 3;
+    int rounds = d->rounds ? d->rounds : d->quick ? 1 : 5;
     rounds = rounds > ROUNDS_MAX ? ROUNDS_MAX : rounds;
     int lw = d->quick ? 320 : 1280, lh = d->quick ? 256 : 1024;
     struct scene_state st[BENCH_SCALE_SCENES];
@@ -312,7 +312,7 @@ void bench_write_scale_table(FILE *f, const struct bench_scale_desc *d,
 {
     int w = d->width ? d->width : d->quick ? 160 : 640;
     int h = d->height ? d->height : d->quick ? 120 : 480;
-    int rounds = d->rounds ? d->rounds : d->quick ? 1 : 3;
+    int rounds = d->rounds ? d->rounds : d->quick ? 1 : 5;
     int lw = d->quick ? 320 : 1280, lh = d->quick ? 256 : 1024;
     fprintf(f, "| scene | clear cells | view %dx%d, ms | without skipping, ms | skipping buys | "
                "rays marched | β samples / pixel | without | light reads / pixel | cells read "

@@ -54,7 +54,7 @@ struct bench_scale_desc {
     bool quick;          /* small grids and images, one round */
     const char *configs; /* katrina.cfg's folder */
     int width, height;   /* 0: 640 x 480 (quick: 160 x 120) */
-    int rounds;          /* 0: 3 (quick: 1) */
+    int rounds;          /* 0: 5 (quick: 1) */
 };
 
 /* Measures the scenes into ROWS (at most BENCH_SCALE_SCENES; *N how many).  False (logged)
