@@ -210,6 +210,13 @@ const struct render_cells *renderer_cells(const struct renderer *r);
  * serve the next volume's light build too: a cell empty in the pair is empty in both. */
 const struct render_cells *renderer_pair_cells(struct renderer *r);
 
+/* The rate of trilinear RG32F 3D texture fetches this device reaches, per second: a
+ * fetch-only pass (shaders/fetch_peak.comp) over a volume that stays in the texture cache, the
+ * best of three timed runs (GPU timer queries; wall time on a software driver).  What the eye
+ * pass's fetches are measured against (anvil bench --gpu).  False (logged) when the program or
+ * its textures cannot be made.  Needs the GL context. */
+bool render_fetch_peak(double *per_second);
+
 /* ---- opaque geometry -----------------------------------------------------------------
  * Meshes drawn in every view before the ray cast: each view's rays stop at their distance and
  * see their colour as the background (ground, terrain, coastlines, the menu, the wand). */
