@@ -21,10 +21,12 @@
  * the eye pass and the opaque pass. */
 #define BIND_LIGHTMAP_TEX_LIGHT 2          /* LIGHTMAP 1: dense light volume, R32F */
 #define BIND_LIGHTMAP_TEX_LIGHT_NEXT 8     /* ... of step k + 1 */
-#define BIND_LIGHTMAP_TEX_DIFFUSE 9        /* MULTIPLE 1: diffuse light M, N, RG32F */
+#define BIND_LIGHTMAP_TEX_DIFFUSE 9        /* MULTIPLE 1 and LIGHTMAP 1: diffuse light M, N */
 #define BIND_LIGHTMAP_TEX_DIFFUSE_NEXT 10  /* ... of step k + 1 */
-#define BIND_LIGHTMAP_BUF_COLUMNS 0        /* LIGHTMAP 2: first node and count per column */
-#define BIND_LIGHTMAP_BUF_NODES 1          /* LIGHTMAP 2: depth and light per node */
+#define BIND_LIGHTMAP_BUF_COLUMNS 0        /* LIGHTMAP 2: first node and count per column (of
+                                              the light, then of the diffuse light) */
+#define BIND_LIGHTMAP_BUF_NODES 1          /* LIGHTMAP 2: the light's nodes, then the diffuse
+                                              light's */
 #define BIND_LIGHTMAP_BUF_COLUMNS_NEXT 2   /* ... of step k + 1 */
 #define BIND_LIGHTMAP_BUF_NODES_NEXT 3     /* ... of step k + 1 */
 
@@ -37,6 +39,14 @@
 #define BIND_EYE_TEX_TINT 6             /* TINT 1: colour of the scattered light */
 #define BIND_EYE_TEX_BETA_NEXT 7        /* TEMPORAL 1: extinction of step k + 1 */
 #define BIND_EYE_IMG_OUT 0              /* RGBA32F radiance and transmittance */
+#define BIND_EYE_BUF_CELLS 4            /* SKIP 1: the macro-cell pyramid (cells.glsl) */
+#define BIND_EYE_BUF_COUNTERS 5         /* COUNT 1: what the rays did */
+#define BIND_EYE_BUF_RAYS 6             /* SKIP 1: the rays the second pass marches */
+
+/* ---- macro cells: empty-space skipping (shaders/cells_build.comp, cells_reduce.comp) --- */
+#define BIND_CELLS_TEX_BETA 0       /* the volume's extinction, texelFetch only */
+#define BIND_CELLS_TEX_BETA_NEXT 1  /* TEMPORAL 1: step k + 1's */
+#define BIND_CELLS_BUF_CELLS 0      /* the pyramid, written */
 
 /* ---- opaque pass (shaders/opaque.vert, opaque.frag) ---------------------------------------
  * Reads the light map's units too.  renderer_draw binds the eye pass's units before it draws
@@ -45,13 +55,18 @@
 
 /* ---- tone mapping (shaders/tonemap.comp) ---------------------------------------------- */
 #define BIND_TONEMAP_IMG_IN 0   /* RGBA32F radiance */
-#define BIND_TONEMAP_IMG_OUT 1  /* RGBA8 display sRGB */
+#define BIND_TONEMAP_IMG_OUT 1  /* RGBA8 display sRGB (PACKED 1: R32UI, the bytes of a file) */
+#define BIND_TONEMAP_BUF_NONFINITE 0  /* PACKED 1: pixels with a non-finite value */
 
-/* ---- light build: the beam, plane by plane (shaders/light_build.comp) ----------------- */
-#define BIND_BUILD_TEX_BETA 0   /* the volume's extinction, texelFetch only */
-#define BIND_BUILD_TEX_RATES 1  /* MULTIPLE and LATERAL: lateral escape rates */
+/* ---- light build: every slice's extinction at once (shaders/light_slices.comp) -------- */
+#define BIND_SLICES_TEX_BETA 0   /* the volume's extinction, texelFetch only */
+#define BIND_SLICES_TEX_RATES 1  /* MULTIPLE and LATERAL: lateral escape rates */
+#define BIND_SLICES_IMG_SLICE 0  /* each slice's tau, ice share (escape rates), written */
+#define BIND_SLICES_BUF_CELLS 0  /* SKIP 1: the volume's macro cells (cells.glsl) */
+
+/* ---- light build: the beam's sweep from the sun (shaders/light_build.comp) ------------ */
+#define BIND_BUILD_TEX_SLICE 0  /* the slices of light_slices.comp, texelFetch only */
 #define BIND_BUILD_IMG_LIGHT 0  /* R32F node volume, read and written */
-#define BIND_BUILD_IMG_SLICE 1  /* MULTIPLE: each slice's tau, ice share, escape rates */
 
 /* ---- light build: the diffuse column pass (shaders/light_diffuse.comp) ---------------- */
 #define BIND_DIFFUSE_IMG_LIGHT 0    /* the beam at each node, read */
@@ -59,9 +74,20 @@
 #define BIND_DIFFUSE_IMG_ADDING 2   /* scratch, read and written */
 #define BIND_DIFFUSE_IMG_DIFFUSE 3  /* RG32F diffuse light, written */
 
+/* ---- light build: compression on the GPU (shaders/light_compress.comp, light_scan.comp) */
+#define BIND_COMPRESS_IMG_VALUES 0   /* the dense light (or diffuse light) volume, read */
+#define BIND_COMPRESS_BUF_COLUMNS 0  /* first node and count per column */
+#define BIND_COMPRESS_BUF_NODES 1    /* PASS 2: the nodes, written */
+#define BIND_SCAN_BUF_COLUMNS 0      /* counts in, first nodes out */
+
 /* ---- light build: the lateral escape rates (shaders/light_lateral.comp) --------------- */
 #define BIND_LATERAL_TEX_BETA 0   /* the volume's extinction, texelFetch only */
 #define BIND_LATERAL_IMG_RATES 0  /* RG32F rates along x and y, read and written */
+#define BIND_LATERAL_BUF_CELLS 0  /* SKIP 1: the volume's macro cells (cells.glsl) */
+
+/* ---- the peak fetch rate of anvil bench --gpu (shaders/fetch_peak.comp) -------------- */
+#define BIND_PEAK_TEX_VOLUME 0
+#define BIND_PEAK_IMG_OUT 0
 
 /* ---- stereo composition (shaders/display_compose.comp) -------------------------------- */
 #define BIND_COMPOSE_TEX_LEFT 0

@@ -19,10 +19,21 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 // the beam at each node; slice k-1..k: tau, ice share, escape rates x, y; 1 - A, g;
 // 2 (U + V), 2 (U - V)
+#ifndef HALF
+#define HALF 0
+#endif
+#if HALF // the dense map in half floats: the light read, the diffuse light written
+layout(r16f, binding = BIND_DIFFUSE_IMG_LIGHT) uniform readonly image3D light_img;
+#else
 layout(r32f, binding = BIND_DIFFUSE_IMG_LIGHT) uniform readonly image3D light_img;
+#endif
 layout(rgba32f, binding = BIND_DIFFUSE_IMG_SLICE) uniform readonly image3D slice_img;
 layout(rg32f, binding = BIND_DIFFUSE_IMG_ADDING) uniform image3D adding_img;
+#if HALF
+layout(rg16f, binding = BIND_DIFFUSE_IMG_DIFFUSE) uniform writeonly image3D diffuse_img;
+#else
 layout(rg32f, binding = BIND_DIFFUSE_IMG_DIFFUSE) uniform writeonly image3D diffuse_img;
+#endif
 
 uniform ivec3 grid_n;
 uniform vec2 loss;  // the beam's loss share: water, ice

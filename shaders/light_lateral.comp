@@ -1,26 +1,40 @@
 // Deep light map, multiple scattering with lateral escape: each voxel's extinction times its
-// lateral escape rate along one horizontal axis, one invocation per row of the volume
-// (docs/lightmap.md, "Lateral escape").  The rate is 1 / w, w the optical width of the run of
-// cloudy voxels that holds the voxel; clear voxels get 0.  Mirrors light_lateral_rates() in
-// src/light/transport.c operation for operation in float32: the pass along x writes .r (and
-// clears .g), the pass along y then writes .g beside it.
+// lateral escape rate along one horizontal axis (docs/lightmap.md, "Lateral escape").  The
+// rate is 1 / w, w the optical width of the run of cloudy voxels that holds the voxel; clear
+// voxels keep the 0 the texture was cleared to.  One invocation per stretch of SEGMENT voxels
+// of a row: for every run that starts in its stretch it walks the run (into the next
+// stretches if it goes on), summing its width from its lower end, then walks it again writing
+// each voxel's rate; so the stretches of every row go in parallel.  Mirrors
+// light_lateral_rates() in src/light/transport.c operation for operation in float32: the pass
+// along x writes .r, the pass along y then writes .g beside it.
+// SKIP 1: an empty macro cell (render/cells.c) holds no cloudy voxel: it is passed in one step.
 
 #include "bindings.h"
 
-layout(local_size_x = 64) in;
+#ifndef SKIP
+#define SKIP 0
+#endif
+
+// voxels a stretch of a row holds (four macro cells)
+#define SEGMENT 32
+
+layout(local_size_x = 8, local_size_y = 1, local_size_z = 8) in;
 
 layout(binding = BIND_LATERAL_TEX_BETA) uniform sampler3D beta_tex;       // texelFetch only
 layout(rg32f, binding = BIND_LATERAL_IMG_RATES) uniform image3D rates_img; // beta / w: x, y
+#if SKIP
+layout(std430, binding = BIND_LATERAL_BUF_CELLS) readonly buffer macro_cells {
+    ivec4 cell_dims[16]; // cells along x, y, z and the level's first index
+    ivec4 cell_header;   // levels, voxels per cell edge
+    float cell_max[];
+};
+#include "cells.glsl"
+#endif
 
 uniform ivec3 vol_n;
-uniform int axis;         // 0: rows along x, 1: rows along y
+uniform int axis;         // 0: runs along x, 1: along y
 uniform float spacing;    // metres between voxels along the axis
 uniform float clear_beta; // LIGHT_CLEAR_BETA
-
-ivec3 voxel(int i, int r, int k)
-{
-    return axis == 0 ? ivec3(i, r, k) : ivec3(r, i, k);
-}
 
 float beta_at(ivec3 c)
 {
@@ -28,38 +42,51 @@ float beta_at(ivec3 c)
     return b.x + b.y;
 }
 
-// Two sweeps of the row, the same length for every invocation: forward, each cloudy voxel
-// keeps the optical width of its run so far (in the axis' own channel); backward, the run's
-// last voxel holds the whole width, which every voxel of the run then divides its
-// extinction by.
 void main()
 {
+    // x: the row (y for runs along x, x for runs along y), y: the stretch, z: the level
     int len = vol_n[axis], rows = vol_n[1 - axis];
-    int id = int(gl_GlobalInvocationID.x);
-    if (id >= rows * vol_n.z)
+    ivec3 id = ivec3(gl_GlobalInvocationID);
+    int start = id.y * SEGMENT;
+    if (id.x >= rows || start >= len || id.z >= vol_n.z)
         return;
-    int r = id % rows, k = id / rows;
-    float w = 0.0;
-    for (int i = 0; i < len; i++) {
-        ivec3 c = voxel(i, r, k);
-        float b = beta_at(c);
-        w = b >= clear_beta ? w + min(b, 1e30) * spacing : 0.0; // 0 also for NaN
-        if (axis == 0)
-            imageStore(rates_img, c, vec4(w, 0.0, 0.0, 0.0));
-        else
-            imageStore(rates_img, c, vec4(imageLoad(rates_img, c).r, w, 0.0, 0.0));
-    }
-    float total = 0.0;
-    for (int i = len - 1; i >= 0; i--) {
-        ivec3 c = voxel(i, r, k);
-        vec2 v = imageLoad(rates_img, c).rg;
-        float here = axis == 0 ? v.x : v.y;
-        // A run's last voxel (cloudy, and the next one is not) holds the run's width.
-        total = here > 0.0 ? (total > 0.0 ? total : here) : 0.0;
-        float rate = here > 0.0 ? min(beta_at(c), 1e30) / total : 0.0;
-        if (axis == 0)
-            imageStore(rates_img, c, vec4(rate, 0.0, 0.0, 0.0));
-        else
-            imageStore(rates_img, c, vec4(v.x, rate, 0.0, 0.0));
+    ivec3 step = axis == 0 ? ivec3(1, 0, 0) : ivec3(0, 1, 0);
+    ivec3 row = axis == 0 ? ivec3(0, id.x, id.z) : ivec3(id.x, 0, id.z);
+    int stop = min(start + SEGMENT, len);
+    int i = start;
+    // A run that came in from the stretch before is that stretch's: pass it.
+    if (i > 0 && beta_at(row + (i - 1) * step) >= clear_beta)
+        while (i < len && beta_at(row + i * step) >= clear_beta)
+            i++;
+    while (i < stop) {
+#if SKIP
+        int b = cell_header.y;
+        if (cell_max[cell_index((row + i * step) / b, 0)] <= 0.0) {
+            i = (i / b + 1) * b; // the rest of an empty cell: clear
+            continue;
+        }
+#endif
+        if (!(beta_at(row + i * step) >= clear_beta)) { // clear, or NaN
+            i++;
+            continue;
+        }
+        // A run starts at i: its width, then every voxel's rate.
+        float w = 0.0;
+        int end = i;
+        for (; end < len; end++) {
+            float be = beta_at(row + end * step);
+            if (!(be >= clear_beta))
+                break;
+            w = w + min(be, 1e30) * spacing;
+        }
+        for (int m = i; m < end; m++) {
+            ivec3 v = row + m * step;
+            float rate = min(beta_at(v), 1e30) / w;
+            if (axis == 0)
+                imageStore(rates_img, v, vec4(rate, 0.0, 0.0, 0.0));
+            else
+                imageStore(rates_img, v, vec4(imageLoad(rates_img, v).r, rate, 0.0, 0.0));
+        }
+        i = end;
     }
 }

@@ -9,9 +9,10 @@
 //               (the second at the *_NEXT bindings of bindings.h, uniforms *_next); the
 //               light is mix(L_k, L_k+1, temporal_f).
 //   MULTIPLE 1 (effects.multiple): the map also holds the diffuse light of its two-stream
-//               column pass, M = 2 (U + V) and N = 2 (U - V) (light.h, light_map.diffuse), a
-//               dense RG volume at BIND_LIGHTMAP_TEX_DIFFUSE (step k + 1: *_NEXT) in either
-//               storage; lightmap_diffuse() reads it (0 beside the light columns).
+//               column pass, M = 2 (U + V) and N = 2 (U - V) (light.h, light_map.diffuse):
+//               dense, an RG volume at BIND_LIGHTMAP_TEX_DIFFUSE (step k + 1: *_NEXT);
+//               compressed, its columns of (depth, M, N) nodes after the light's in the same
+//               two buffers; lightmap_diffuse() reads it (0 beside the light columns).
 
 #include "bindings.h"
 
@@ -167,7 +168,7 @@ float lightmap_light(vec3 p)
 #endif
 #endif
 
-#if LIGHTMAP != 0 && MULTIPLE
+#if LIGHTMAP == 1 && MULTIPLE
 layout(binding = BIND_LIGHTMAP_TEX_DIFFUSE) uniform sampler3D diffuse_tex;
 #if LIGHTMAP_PAIR
 layout(binding = BIND_LIGHTMAP_TEX_DIFFUSE_NEXT) uniform sampler3D diffuse_tex_next;
@@ -184,7 +185,77 @@ vec2 lightmap_diffuse(vec3 p)
 #endif
     return d;
 }
+#elif LIGHTMAP == 2 && MULTIPLE
+// The diffuse light's columns follow the light's in the columns buffer (from word
+// light_diffuse_columns on), its nodes (depth, M, N) the light's in the nodes buffer (from
+// light_diffuse_nodes on): light_compressed_sample_diffuse.
+uniform uint light_diffuse_columns, light_diffuse_nodes;
+#if LIGHTMAP_PAIR
+uniform uint light_diffuse_columns_next, light_diffuse_nodes_next;
+#endif
 
+vec2 diffuse_column_eval(int m, ivec3 n, int i, int j, float depth)
+{
+#if LIGHTMAP_PAIR
+    uint cbase = m == 0 ? light_diffuse_columns : light_diffuse_columns_next;
+    uint nbase = m == 0 ? light_diffuse_nodes : light_diffuse_nodes_next;
+#else
+    uint cbase = light_diffuse_columns, nbase = light_diffuse_nodes;
+#endif
+    uint col = uint(i + n.x * j);
+    uint first = COLUMN_WORD(m, cbase + 2u * col), count = COLUMN_WORD(m, cbase + 2u * col + 1u);
+    if (count == 0u)
+        return vec2(0.0);
+    uint at0 = nbase + 3u * first, last = nbase + 3u * (first + count - 1u);
+    if (!(depth > NODE_WORD(m, at0)))
+        return vec2(NODE_WORD(m, at0 + 1u), NODE_WORD(m, at0 + 2u));
+    if (depth >= NODE_WORD(m, last))
+        return vec2(NODE_WORD(m, last + 1u), NODE_WORD(m, last + 2u));
+    uint a = 0u, b = count - 1u;
+    while (b - a > 1u) {
+        uint mid = a + (b - a) / 2u;
+        if (NODE_WORD(m, at0 + 3u * mid) <= depth)
+            a = mid;
+        else
+            b = mid;
+    }
+    uint pa = at0 + 3u * a, pb = at0 + 3u * b;
+    float d0 = NODE_WORD(m, pa), d1 = NODE_WORD(m, pb);
+    float f = (depth - d0) / (d1 - d0);
+    vec2 v0 = vec2(NODE_WORD(m, pa + 1u), NODE_WORD(m, pa + 2u));
+    vec2 v1 = vec2(NODE_WORD(m, pb + 1u), NODE_WORD(m, pb + 2u));
+    return v0 + (v1 - v0) * f;
+}
+
+vec2 compressed_diffuse(int m, mat4 w, ivec3 n, vec3 p)
+{
+    vec3 tex = (w * vec4(p, 1.0)).xyz;
+    if (outside_light_columns(tex))
+        return vec2(0.0);
+    float tx, ty;
+    int i = tex_column(tex.x, n.x, tx);
+    int j = tex_column(tex.y, n.y, ty);
+    float depth = clamp(tex.z * float(n.z) - 0.5, 0.0, float(n.z - 1));
+    vec2 v00 = diffuse_column_eval(m, n, i, j, depth);
+    vec2 v10 = diffuse_column_eval(m, n, i + 1, j, depth);
+    vec2 v01 = diffuse_column_eval(m, n, i, j + 1, depth);
+    vec2 v11 = diffuse_column_eval(m, n, i + 1, j + 1, depth);
+    vec2 r0 = v00 + tx * (v10 - v00);
+    vec2 r1 = v01 + tx * (v11 - v01);
+    return r0 + ty * (r1 - r0);
+}
+
+vec2 lightmap_diffuse(vec3 p)
+{
+    vec2 d = compressed_diffuse(0, light_world_to_tex, light_n, p);
+#if LIGHTMAP_PAIR
+    d = mix(d, compressed_diffuse(1, light_world_to_tex_next, light_n_next, p), temporal_f);
+#endif
+    return d;
+}
+#endif
+
+#if LIGHTMAP != 0 && MULTIPLE
 // The diffuse light scattered toward the eye by a phase of mean cosine G, as a multiple of the
 // sun radiance scale: with the Eddington radiance I0 + I1 mu (mu the cosine with the axis of
 // the diffuse light's anisotropy, diffuse_mu_eye) and the phase's first moment,

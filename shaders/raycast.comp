@@ -14,6 +14,10 @@
 // temporal_f) from a second extinction texture (the light map pair is LIGHTMAP_PAIR).
 // MULTIPLE 1 = multiple scattering (effects.multiple): the light map's diffuse light (an
 // Eddington field along the light) is scattered toward the eye beside the sun's.
+// SKIP 1 = empty-space skipping (render/cells.c): steps whose extinction sample lies in a
+// macro cell holding nothing are leapt, exactly (they would add nothing and take nothing off);
+// with TEMPORAL the cells hold the larger of both steps.  COUNT 1 = add what each ray did
+// (extinction samples, light map reads, cells read, steps leapt) to the counters buffer.
 uniform vec2 mean_cosine;    // g of the ice and the water phase (MULTIPLE)
 
 #include "bindings.h"
@@ -29,7 +33,29 @@ uniform vec2 mean_cosine;    // g of the ice and the water phase (MULTIPLE)
 #define THICK_STEP 0.3
 #endif
 
+// PASS 0: one pass marches every pixel (SKIP 0).  With SKIP 1 two: PASS 1 finds the rays
+// that cross only empty cells and draws them (the background), listing the others, which
+// PASS 2 marches, one invocation per listed ray (an indirect dispatch of the list's size).
+#ifndef PASS
+#define PASS 0
+#endif
+#if PASS == 2
+layout(local_size_x = 64) in;
+#else
 layout(local_size_x = 8, local_size_y = 8) in;
+#endif
+#if PASS != 0
+// The rays to march: PASS 2's indirect dispatch (work groups of 64), their count, and per
+// ray its pixel (x | y << 16) and the float bits of the parameter up to which it is clear.
+layout(std430, binding = BIND_EYE_BUF_RAYS) buffer ray_list {
+    uint rays_groups[3];
+    uint rays_count;
+    uvec2 rays[];
+};
+#endif
+#if PASS == 1
+shared uint group_count, group_base;
+#endif
 
 layout(rgba32f, binding = BIND_EYE_IMG_OUT) uniform writeonly image2D out_image;
 // r: ice-phase beta, g: water-phase beta [1/m]; r: ice, g: water eye phase over psi in [0, pi]
@@ -56,6 +82,38 @@ uniform float phase_size;    // entries in phase_tex
 #ifndef OPAQUE
 #define OPAQUE 0
 #endif
+#ifndef SKIP
+#define SKIP 0
+#endif
+#ifndef COUNT
+#define COUNT 0
+#endif
+#if SKIP
+layout(std430, binding = BIND_EYE_BUF_CELLS) readonly buffer macro_cells {
+    ivec4 cell_dims[16]; // cells along x, y, z and the level's first index
+    ivec4 cell_header;   // levels, voxels per cell edge
+    float cell_max[];
+};
+uniform vec3 cell_size;  // metres, a level-0 cell
+#include "cells.glsl"
+#endif
+#if COUNT
+// extinction samples, light map reads, cells read, steps leapt, rays, rays marched (PASS 2);
+// each a 64-bit count (low word, high word)
+layout(std430, binding = BIND_EYE_BUF_COUNTERS) buffer eye_counters {
+    uint counts[12];
+};
+void count_add(int i, uint v)
+{
+    if (v == 0u)
+        return;
+    uint old = atomicAdd(counts[2 * i], v);
+    if (old + v < old)
+        atomicAdd(counts[2 * i + 1], 1u);
+}
+#endif
+// What the ray did (COUNT); kept whether or not it is counted, the compiler drops it.
+uint n_beta = 0u, n_light = 0u, n_cells = 0u, n_leapt = 0u;
 #ifndef TINT
 #define TINT 0
 #endif
@@ -111,6 +169,7 @@ float scattering_depth(float tau)
 // pass (docs/stability.md); with TEMPORAL the blend of the two time steps.
 vec2 beta_at(vec3 p)
 {
+    n_beta++;
     vec2 b = texture(beta_tex, (p - box_min) / box_size).rg;
     b = vec2(b.x >= 0.0 ? min(b.x, 1e30) : 0.0, b.y >= 0.0 ? min(b.y, 1e30) : 0.0);
 #if TEMPORAL
@@ -139,6 +198,9 @@ void march_step(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
 #else
     float pv = phase.g;
 #endif
+#if LIGHTMAP != 0
+    n_light += 2u;
+#endif
 #if MULTIPLE
     vec3 q = origin + dir * (ta + scattering_depth(tau) * ds);
     float beam = lightmap_light(q);
@@ -163,9 +225,21 @@ void march_step(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
 
 void main()
 {
-    ivec2 pix = ivec2(gl_GlobalInvocationID.xy) + ivec2(0, row_offset);
-    if (pix.x >= image_size.x || pix.y >= image_size.y)
+#if PASS == 2
+    uint slot = gl_GlobalInvocationID.x;
+    if (slot >= rays_count)
         return;
+    uvec2 entry = rays[slot];
+    ivec2 pix = ivec2(int(entry.x & 0xffffu), int(entry.x >> 16));
+    bool inside = true;
+#else
+    ivec2 pix = ivec2(gl_GlobalInvocationID.xy) + ivec2(0, row_offset);
+    bool inside = pix.x < image_size.x && pix.y < image_size.y;
+#if PASS == 0
+    if (!inside)
+        return;
+#endif
+#endif
     vec2 ndc = (vec2(pix) + 0.5) / vec2(image_size) * 2.0 - 1.0;
     vec4 pn = inv_view_proj * vec4(ndc, -1.0, 1.0);
     vec4 pf = inv_view_proj * vec4(ndc, 1.0, 1.0);
@@ -180,7 +254,8 @@ void main()
 
     float t_opaque = 1e30;
 #if OPAQUE
-    t_opaque = texelFetch(opaque_distance, pix, 0).r;
+    if (inside)
+        t_opaque = texelFetch(opaque_distance, pix, 0).r;
 #endif
 
     vec2 t = ray_box(origin, dir, box_min, box_min + box_size);
@@ -189,6 +264,46 @@ void main()
 
     vec3 radiance = vec3(0.0);
     float trans = 1.0;
+#if SKIP
+    vec3 inv_dir = 1.0 / dir_stand_in(dir);
+    float nudge = 1e-3 * min(voxel_size.x, min(voxel_size.y, voxel_size.z));
+#endif
+#if PASS == 1
+    // Empty-space skipping, first pass: a ray that crosses only cells holding nothing sees the
+    // background as it is (every step would add nothing and take nothing off), and is done
+    // here; the others go to the list that the second pass marches, each with the parameter
+    // up to which it is known to be clear.  Packing them keeps a SIMD group's rays alike.
+    float t_clear = t0, t_occupied;
+    bool listed = false;
+    if (inside && t1 > t0) {
+        t_clear = cells_skip(origin, dir, inv_dir, t0, t1, box_min, cell_size, nudge,
+                             t_occupied, n_cells);
+        listed = t_clear < t1;
+    }
+    if (gl_LocalInvocationIndex == 0u)
+        group_count = 0u;
+    barrier();
+    uint local = 0u;
+    if (listed)
+        local = atomicAdd(group_count, 1u);
+    barrier();
+    if (gl_LocalInvocationIndex == 0u && group_count > 0u) {
+        group_base = atomicAdd(rays_count, group_count);
+        atomicMax(rays_groups[0], (group_base + group_count + 63u) / 64u);
+    }
+    barrier();
+    if (listed)
+        rays[group_base + local] = uvec2(uint(pix.x) | (uint(pix.y) << 16),
+                                         floatBitsToUint(t_clear));
+#if COUNT
+    if (listed)
+        count_add(2, n_cells); // the others count theirs below
+    if (inside)
+        count_add(4, 1u);
+#endif
+    if (!inside || listed)
+        return;
+#else
     float cos_psi = dot(dir, sun_dir); // scattering angle between sunlight and the eye ray
     vec2 phase = eye_phase(cos_psi);
     if (t1 > t0) {
@@ -222,11 +337,35 @@ void main()
         // beam and the diffuse light are read where the step's scattering happens on average
         // (scattering_depth); without it the beam is read at the step's two ends and
         // integrated exactly as an exponential between them (beam_step).
+#if SKIP
+        // Empty-space skipping, second pass: [t0, t_clear) is known to lie in cells holding
+        // nothing (the first pass found where), [t_clear, t_occupied) in an occupied level-0
+        // cell; past that the cells are read again.  A step whose extinction sample (and, in
+        // parts, far end) lies in a clear cell adds nothing, so leaping it changes no bit of
+        // the picture.
+        float t_clear = uintBitsToFloat(entry.y), t_occupied = t_clear;
+#endif
         if (parts <= 1) {
             for (int i = 0; i < n; i++) {
-                march_step(origin, dir, t0 + float(i) * ds, ds,
-                           beta_at(origin + dir * (t0 + (float(i) + 0.5) * ds)), phase, radiance,
-                           trans);
+                float tm = t0 + (float(i) + 0.5) * ds;
+#if SKIP
+                if (tm < t_clear || tm >= t_occupied) {
+                    if (tm >= t_clear)
+                        t_clear = cells_skip(origin, dir, inv_dir, tm, t1, box_min, cell_size,
+                                             nudge, t_occupied, n_cells);
+                    if (t_clear > tm) {
+                        // On to the first step whose sample lies at or beyond t_clear.
+                        int next = max(i + 1, int(ceil((t_clear - t0) / ds - 0.5)));
+                        n_leapt += uint(min(next, n) - i);
+                        i = next;
+                        if (i >= n)
+                            break;
+                        tm = t0 + (float(i) + 0.5) * ds;
+                    }
+                }
+#endif
+                march_step(origin, dir, t0 + float(i) * ds, ds, beta_at(origin + dir * tm),
+                           phase, radiance, trans);
                 if (trans < termination)
                     break;
             }
@@ -240,6 +379,25 @@ void main()
                 if (left <= 0.01 * fine)
                     break;
                 float d = min(ds, left);
+#if SKIP
+                // Steps with both samples in clear cells are steps of d = min(ds, left) that
+                // add nothing: t advances over them exactly as it would, without reading the
+                // volume.
+                if (t + d > t_clear && t >= t_occupied)
+                    t_clear = cells_skip(origin, dir, inv_dir, t, t1, box_min, cell_size, nudge,
+                                         t_occupied, n_cells);
+                while (t + d <= t_clear && i < max_steps) {
+                    t += d;
+                    i++;
+                    n_leapt++;
+                    left = t1 - t;
+                    d = min(ds, left);
+                    if (left <= 0.01 * fine)
+                        break;
+                }
+                if (left <= 0.01 * fine || i >= max_steps)
+                    break;
+#endif
                 vec2 b = beta_at(origin + dir * (t + 0.5 * d));
                 vec2 be = beta_at(origin + dir * (t + d));
                 if (max(b.r + b.g, be.r + be.g) * d > THICK_STEP) {
@@ -255,6 +413,7 @@ void main()
         if (trans < termination)
             trans = 0.0;
     }
+#endif
 
     vec3 background;
 #if OPAQUE
@@ -275,4 +434,16 @@ void main()
     }
     radiance += trans * background;
     imageStore(out_image, pix + pixel_offset, vec4(radiance, trans));
+#if COUNT
+    count_add(0, n_beta);
+    count_add(1, n_light);
+    count_add(2, n_cells);
+    count_add(3, n_leapt);
+#if PASS == 0
+    count_add(4, 1u);
+#endif
+#if PASS != 1
+    count_add(5, 1u);
+#endif
+#endif
 }

@@ -1,12 +1,26 @@
 // Linear radiance to display sRGB: x / (1 + x) with x = exposure L per channel (Reinhard et al.
-// 2002, the global operator), then the sRGB curve.
-// Must match image_tonemap() in src/render/image.c.
+// 2002, the global operator), then the sRGB curve; negative and non-finite radiance read as 0
+// (infinite exposure times radiance as white).  Must match image_tonemap() in
+// src/render/image.c.  PACKED 1: the 8-bit values, rounded as image_tonemap rounds them, packed
+// into one uint per pixel (r | g << 8 | b << 16 | 255 << 24) for a file, and the pixels with a
+// non-finite value counted; else an RGBA8 image to show.
 
 #include "bindings.h"
 
+#ifndef PACKED
+#define PACKED 0
+#endif
+
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = BIND_TONEMAP_IMG_IN) uniform readonly image2D in_image;
+#if PACKED
+layout(r32ui, binding = BIND_TONEMAP_IMG_OUT) uniform writeonly uimage2D out_image;
+layout(std430, binding = BIND_TONEMAP_BUF_NONFINITE) buffer nonfinite_count {
+    uint nonfinite;
+};
+#else
 layout(rgba8, binding = BIND_TONEMAP_IMG_OUT) uniform writeonly image2D out_image;
+#endif
 uniform float exposure;
 uniform ivec2 image_size;
 
@@ -15,13 +29,26 @@ float srgb(float c)
     return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
 }
 
+float tone(float l)
+{
+    l = l > 0.0 && !isinf(l) ? l : 0.0; // NaN fails l > 0
+    float x = exposure * l;
+    return srgb(isinf(x) ? 1.0 : x / (1.0 + x));
+}
+
 void main()
 {
     ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
     if (pix.x >= image_size.x || pix.y >= image_size.y)
         return;
-    vec3 l = imageLoad(in_image, pix).rgb;
-    vec3 x = exposure * max(l, vec3(0.0));
-    vec3 c = x / (1.0 + x);
-    imageStore(out_image, pix, vec4(srgb(c.r), srgb(c.g), srgb(c.b), 1.0));
+    vec4 v = imageLoad(in_image, pix);
+    vec3 c = vec3(tone(v.r), tone(v.g), tone(v.b));
+#if PACKED
+    uvec3 q = uvec3(clamp(roundEven(c * 255.0), 0.0, 255.0));
+    imageStore(out_image, pix, uvec4(q.r | (q.g << 8) | (q.b << 16) | (255u << 24)));
+    if (any(isnan(v.rgb)) || any(isinf(v.rgb))) // as image_count_nonfinite
+        atomicAdd(nonfinite, 1u);
+#else
+    imageStore(out_image, pix, vec4(c, 1.0));
+#endif
 }

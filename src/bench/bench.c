@@ -250,6 +250,7 @@ static bool build(struct renderer *r, struct light_gpu *lg, const struct bench_s
         .grid = renderer_grid(r),
         .volume_id = 1,
         .generation = generation_counter++,
+        .cells = renderer_cells(r),
     };
     struct gpu_timings t = {0};
     light_gpu_set_timing(lg, &t);
@@ -261,6 +262,23 @@ static bool build(struct renderer *r, struct light_gpu *lg, const struct bench_s
     *ms = t.total_ms;
     renderer_set_light(r, light_gpu_render_light(lg));
     return true;
+}
+
+static bool draw(struct renderer *r, const struct render_settings *s,
+                 const struct render_view *view, struct gpu_texture *out, double *ms);
+
+bool bench_timed_build(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
+                       bool shadows, const struct light_settings *settings,
+                       enum light_gpu_mode mode, double *ms)
+{
+    struct bench_variant v = {.shadows = shadows, .light = *settings, .mode = mode};
+    return build(r, lg, sc, &v, ms);
+}
+
+bool bench_timed_draw(struct renderer *r, const struct render_settings *s,
+                      const struct render_view *view, struct gpu_texture *out, double *ms)
+{
+    return draw(r, s, view, out, ms);
 }
 
 static bool draw(struct renderer *r, const struct render_settings *s,

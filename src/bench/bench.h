@@ -153,6 +153,15 @@ bool bench_no_worse(const struct bench_result *b, const struct bench_result *a, 
 double bench_error(const struct bench_result *r, bool self);
 void bench_pareto(struct bench_result *res, int n);
 
+/* Builds the light map of SC with SETTINGS and MODE (forced: a new generation), waits for it
+ * and points R at it; *MS its time (0 and no map when SHADOWS is false). */
+bool bench_timed_build(struct renderer *r, struct light_gpu *lg, const struct bench_scene *sc,
+                       bool shadows, const struct light_settings *settings,
+                       enum light_gpu_mode mode, double *ms);
+/* Draws VIEW with S into OUT and waits for it; *MS its time. */
+bool bench_timed_draw(struct renderer *r, const struct render_settings *s,
+                      const struct render_view *view, struct gpu_texture *out, double *ms);
+
 /* ---- views -------------------------------------------------------------------------- */
 
 struct bench_views_row {

@@ -12,10 +12,12 @@
 #include <unistd.h>
 
 #include "bench/bench.h"
+#include "bench/device.h"
 #include "bench/experiments.h"
 #include "bench/cluster.h"
 #include "bench/movie.h"
 #include "bench/paraview.h"
+#include "bench/scale.h"
 #include "bench/tables.h"
 #include "common/log.h"
 #include "common/progress.h"
@@ -27,7 +29,7 @@
 void bench_options_defaults(struct bench_options *o)
 {
     memset(o, 0, sizeof(*o));
-    o->views = o->quality = o->movie = o->cluster = true;
+    o->views = o->quality = o->movie = o->scale = o->cluster = true;
 }
 
 __attribute__((format(printf, 2, 3))) static void echo(const struct bench_options *o,
@@ -55,14 +57,15 @@ static bool write_text(const struct bench_options *o, const char *name, const ch
 
 /* ---- views ------------------------------------------------------------------------------ */
 
-static bool run_views(const struct bench_options *o, const char *device, struct renderer *r,
-                      struct light_gpu *lg)
+/* The views benchmark at one image size W x H into OUT (the folder of ParaView's side). */
+static bool views_at(const struct bench_options *o, const char *device, struct renderer *r,
+                     struct light_gpu *lg, int w, int h, const char *out, FILE *table)
 {
     struct config cfg;
     char *extra[] = {"render.ground_on=false"};
     if (!bench_scene_config("storm", o->configs, o->quick, extra, 1, &cfg))
         return false;
-    int w = o->quick ? 64 : 160, h = o->quick ? 48 : 120, repeats = o->quick ? 1 : 3;
+    int repeats = o->quick ? 1 : 3;
     struct ext_volume vol = {0};
     struct bench_scene sc;
     bool ok = bench_scene_prepare("storm", &cfg, w, h, &vol, &sc) &&
@@ -74,21 +77,15 @@ static bool run_views(const struct bench_options *o, const char *device, struct 
         ext_volume_finish(&vol);
         return false;
     }
-    char *buf = NULL;
-    size_t len = 0;
-    FILE *f = open_memstream(&buf, &len);
-    bench_table_head(f, o->quick, "views");
-    bench_write_views_table(f, &sc, rows, 4, w, h, repeats, device);
-    fclose(f);
-    ok = write_text(o, "views-table.md", buf, len);
-    free(buf);
+    fprintf(table, "\n### %d × %d\n\n", w, h);
+    bench_write_views_table(table, &sc, rows, 4, w, h, repeats, device);
     if (o->report)
         bench_write_views_summary(o->report, rows, 4, device);
-    if (ok && o->paraview) {
+    if (o->paraview) {
         struct bench_paraview_desc pd = {
             .script = o->paraview_script,
             .cache_dir = o->cache,
-            .out_dir = o->out,
+            .out_dir = out,
             .sun_azimuth_deg = cfg.light.azimuth_deg,
             .sun_elevation_deg = cfg.light.elevation_deg,
             .width = w,
@@ -96,9 +93,33 @@ static bool run_views(const struct bench_options *o, const char *device, struct 
             .repeats = repeats,
             .report = o->report,
         };
-        ok = bench_paraview_views(&pd, &vol, rows, 4);
+        ok = bench_make_dir(out) && bench_paraview_views(&pd, &vol, rows, 4);
     }
     ext_volume_finish(&vol);
+    return ok;
+}
+
+/* The views benchmark at 160 x 120 and 640 x 480 (quick: 64 x 48), into views-table.md;
+ * ParaView's side of the second size goes to OUT/640x480/. */
+static bool run_views(const struct bench_options *o, const char *device, struct renderer *r,
+                      struct light_gpu *lg)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    bench_table_head(f, o->quick, "views");
+    bool ok;
+    if (o->quick) {
+        ok = views_at(o, device, r, lg, 64, 48, o->out, f);
+    } else {
+        char second[PATH_MAX];
+        snprintf(second, sizeof(second), "%s/640x480", o->out);
+        ok = views_at(o, device, r, lg, 160, 120, o->out, f) &&
+             views_at(o, device, r, lg, 640, 480, second, f);
+    }
+    fclose(f);
+    ok = ok && write_text(o, "views-table.md", buf, len);
+    free(buf);
     return ok;
 }
 
@@ -265,11 +286,54 @@ static bool run_angles(const struct bench_options *o, const char *device, struct
     return ok;
 }
 
+/* ---- scale ------------------------------------------------------------------------------ */
+
+static bool run_scale(const struct bench_options *o, const char *device)
+{
+    struct bench_scale_desc d = {.quick = o->quick, .configs = o->configs};
+    struct bench_scale_row rows[BENCH_SCALE_SCENES];
+    int n = 0;
+    if (!bench_scale(&d, rows, &n))
+        return false;
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    bench_table_head(f, o->quick, "scale");
+    bench_write_scale_table(f, &d, rows, n, device);
+    fclose(f);
+    bool ok = write_text(o, "scale-table.md", buf, len);
+    echo(o, "%.*s", (int)len, buf);
+    free(buf);
+    return ok;
+}
+
+/* ---- the GPU benchmark ------------------------------------------------------------------ */
+
+static bool run_device(const struct bench_options *o)
+{
+    struct bench_device_desc d = {.quick = o->quick, .displays = o->displays};
+    struct bench_device_result res;
+    if (!bench_device(&d, &res))
+        return false;
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    fprintf(f, "<!-- generated by `anvil bench%s --gpu`; do not edit by hand -->\n",
+            o->quick ? " --quick" : "");
+    bench_write_device_table(f, &d, &res);
+    fclose(f);
+    bool ok = write_text(o, "gpu-table.md", buf, len);
+    echo(o, "%.*s", (int)len, buf);
+    free(buf);
+    return ok;
+}
+
 enum bench_status bench_run(const struct bench_options *opts)
 {
     assert(opts && opts->out && opts->configs);
-    assert(opts->views || opts->quality || opts->movie || opts->cluster);
-    assert(!opts->cluster || opts->displays);
+    assert(opts->views || opts->quality || opts->movie || opts->scale || opts->cluster ||
+           opts->device);
+    assert(!(opts->cluster || opts->device) || opts->displays);
     assert(!opts->paraview || opts->paraview_script);
     struct bench_options o = *opts;
     char cache[PATH_MAX];
@@ -309,6 +373,10 @@ enum bench_status bench_run(const struct bench_options *opts)
         goto done;
     if (o.quality && !(run_quality(&o, device, r, lg) && run_angles(&o, device, r, lg)))
         goto done;
+    if (o.scale && !run_scale(&o, device))
+        goto done;
+    if (o.device && !run_device(&o))
+        goto done;
     struct bench_movie_result movie;
     if (o.movie && !bench_movie(&(struct bench_movie_desc){.quick = o.quick,
                                                            .out = o.out,
@@ -317,7 +385,7 @@ enum bench_status bench_run(const struct bench_options *opts)
                                                            .report = o.report},
                                 &movie))
         goto done;
-    bool cluster_only = !o.views && !o.quality && !o.movie;
+    bool cluster_only = !o.views && !o.quality && !o.movie && !o.scale && !o.device;
     if (o.cluster && !cluster_only && !bench_cluster_possible())
         log_warn("bench: the cluster benchmark is left out (it needs anvil built with MPI and "
                  "mpirun on PATH: libopenmpi-dev, openmpi-bin)");

@@ -26,10 +26,15 @@ struct bench_options {
     bool quick;           /* small scenes and images, one repeat: a CI-sized run */
     bool views, quality;  /* which benchmarks run (all three by default; at least one) */
     bool movie;           /* the default storm's movie: frames per second (bench/movie.h) */
+    bool scale;           /* the eye pass and the light build as the volume grows and empties
+                             (bench/scale.h, scale-table.md) */
     bool cluster;         /* cave4 and cave6 on 1, 2 and 4 ranks (bench/cluster.h); left out
                              with a warning where MPI or mpirun is missing, unless it is the
                              only one asked for */
-    const char *displays; /* folder of cave4.cfg and cave6.cfg (the cluster benchmark) */
+    bool device;          /* --gpu: the Isabel-sized storm on an HMD and a CAVE frame
+                             (bench/device.h, gpu-table.md) */
+    const char *displays; /* folder of cave4.cfg and cave6.cfg (the cluster and device
+                             benchmarks) */
     bool paraview;        /* also time ParaView on the views (needs views and paraview_script) */
     const char *out;      /* folder for the tables and plots, created with its parents */
     const char *cache;    /* folder of the cached Monte Carlo references; NULL or "":

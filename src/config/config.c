@@ -17,6 +17,7 @@
 static_assert(sizeof(enum scene_kind) == sizeof(int), "enum size");
 static_assert(sizeof(enum data_format) == sizeof(int), "enum size");
 static_assert(sizeof(enum lightmap_mode) == sizeof(int), "enum size");
+static_assert(sizeof(enum render_precision) == sizeof(int), "enum size");
 static_assert(sizeof(enum phase_choice) == sizeof(int), "enum size");
 static_assert(sizeof(enum effect_mode) == sizeof(int), "enum size");
 static_assert(sizeof(enum coast_resolution) == sizeof(int), "enum size");
@@ -29,6 +30,7 @@ static const char *const scene_kind_names[] = {
 };
 static const char *const data_format_names[] = {"wrf", "isabel", "extinction", NULL};
 static const char *const lightmap_mode_names[] = {"dense", "compressed", NULL};
+static const char *const precision_names[] = {"float", "half", NULL}; /* render_precision */
 static const char *const lightmap_grid_names[] = {"auto", "upright", NULL}; /* light_grid_kind */
 static const char *const effect_mode_names[] = {"auto", "on", "off", NULL};
 static const char *const phase_names[] = {"water", "ice", NULL};
@@ -154,6 +156,12 @@ static const struct config_field settings[] = {
     BOOL("render.ground_on", render.ground_on, 1, "draw the ground plane"),
     DBL("render.termination", render.termination, 0, 1, F_MAX_OPEN, 0.001,
         "stop a ray when its transmittance falls below this"),
+    BOOL("render.skip", render.skip, 1,
+         "empty-space skipping: rays leap macro cells that hold nothing (the same picture, "
+         "faster; false for comparisons)"),
+    ENUM("render.precision", render.precision, precision_names, PRECISION_FLOAT,
+         "storage of the extinction volume and the dense light map: float, or half (half the "
+         "memory, about three digits; extinction beyond 65504 per metre clamps to it)"),
 
     ENUM("lightmap.mode", lightmap.mode, lightmap_mode_names, LIGHTMAP_DENSE,
          "deep light map storage: a dense light volume or compressed light columns"),

@@ -34,6 +34,7 @@ enum data_format { DATA_WRF, DATA_ISABEL, DATA_EXTINCTION };
 
 /* How the light map is stored; whether there is one at all is effects.shadows. */
 enum lightmap_mode { LIGHTMAP_DENSE, LIGHTMAP_COMPRESSED };
+enum render_precision { PRECISION_FLOAT, PRECISION_HALF };
 
 /* What the renderer simulates (docs/effects.md).  Each is on, off, or decided from the scene
  * (app/effects.h); an effect that is off is compiled out of the shaders. */
@@ -117,6 +118,8 @@ struct config_render {
     double ground[3];      /* render.ground: ground albedo, linear RGB */
     bool ground_on;        /* render.ground_on: draw the ground plane */
     double termination;    /* render.termination: stop a ray below this transmittance */
+    bool skip;             /* render.skip: empty-space skipping (macro cells) */
+    enum render_precision precision; /* render.precision: float | half storage */
 };
 
 struct config_lightmap {

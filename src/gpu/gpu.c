@@ -40,6 +40,8 @@ static struct format_info format_info(enum gpu_format f)
         return (struct format_info){GL_R16F, GL_RED, GL_FLOAT, 4};
     case GPU_RG16F:
         return (struct format_info){GL_RG16F, GL_RG, GL_FLOAT, 8};
+    case GPU_R32UI:
+        return (struct format_info){GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, 4};
     }
     return (struct format_info){GL_RGBA32F, GL_RGBA, GL_FLOAT, 16};
 }
@@ -103,8 +105,9 @@ bool gpu_texture_init(struct gpu_texture *tex, int dims, const int size[3],
         tex->id = 0;
         return false;
     }
-    glTextureParameteri(tex->id, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTextureParameteri(tex->id, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    GLint filter = format == GPU_R32UI ? GL_NEAREST : GL_LINEAR; /* integers: no filtering */
+    glTextureParameteri(tex->id, GL_TEXTURE_MIN_FILTER, filter);
+    glTextureParameteri(tex->id, GL_TEXTURE_MAG_FILTER, filter);
     glTextureParameteri(tex->id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTextureParameteri(tex->id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     glTextureParameteri(tex->id, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
@@ -127,6 +130,20 @@ void gpu_texture_upload(struct gpu_texture *tex, const void *data)
     else
         glTextureSubImage3D(tex->id, 0, 0, 0, 0, tex->size[0], tex->size[1], tex->size[2],
                             fi.format, fi.type, data);
+}
+
+void gpu_texture_upload_layers(struct gpu_texture *tex, int z0, int count, const void *data)
+{
+    struct format_info fi = format_info(tex->format);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTextureSubImage3D(tex->id, 0, 0, 0, z0, tex->size[0], tex->size[1], count, fi.format,
+                        fi.type, data);
+}
+
+void gpu_texture_clear(struct gpu_texture *tex)
+{
+    struct format_info fi = format_info(tex->format);
+    glClearTexImage(tex->id, 0, fi.format, fi.type, NULL);
 }
 
 void gpu_texture_read(const struct gpu_texture *tex, void *out, size_t out_bytes)
@@ -434,6 +451,16 @@ void gpu_uniform_float(const struct gpu_program *p, const char *name, float v)
     glProgramUniform1f(p->id, glGetUniformLocation(p->id, name), v);
 }
 
+void gpu_uniform_uint(const struct gpu_program *p, const char *name, unsigned v)
+{
+    glProgramUniform1ui(p->id, glGetUniformLocation(p->id, name), v);
+}
+
+void gpu_uniform_double(const struct gpu_program *p, const char *name, double v)
+{
+    glProgramUniform1d(p->id, glGetUniformLocation(p->id, name), v);
+}
+
 void gpu_uniform_vec2(const struct gpu_program *p, const char *name, const float v[2])
 {
     glProgramUniform2fv(p->id, glGetUniformLocation(p->id, name), 1, v);
@@ -464,6 +491,16 @@ void gpu_uniform_mat4(const struct gpu_program *p, const char *name, const float
     glProgramUniformMatrix4fv(p->id, glGetUniformLocation(p->id, name), 1, GL_FALSE, m);
 }
 
+/* After a dispatch: its writes are seen by what follows, an indirect dispatch's arguments
+ * included. */
+static void dispatch_barrier(void)
+{
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                    GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT |
+                    GL_BUFFER_UPDATE_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT |
+                    GL_COMMAND_BARRIER_BIT);
+}
+
 void gpu_dispatch(const struct gpu_program *prog, int w, int h, int d)
 {
     glUseProgram(prog->id);
@@ -471,9 +508,17 @@ void gpu_dispatch(const struct gpu_program *prog, int w, int h, int d)
     GLuint gy = (GLuint)((h + prog->local_size[1] - 1) / prog->local_size[1]);
     GLuint gz = (GLuint)((d + prog->local_size[2] - 1) / prog->local_size[2]);
     glDispatchCompute(gx, gy, gz);
-    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
-                    GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT |
-                    GL_BUFFER_UPDATE_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+    dispatch_barrier();
+}
+
+void gpu_dispatch_indirect(const struct gpu_program *prog, const struct gpu_buffer *args,
+                           size_t offset)
+{
+    glUseProgram(prog->id);
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, args->id);
+    glDispatchComputeIndirect((GLintptr)offset);
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+    dispatch_barrier();
 }
 
 void gpu_finish(void)

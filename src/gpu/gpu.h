@@ -90,7 +90,7 @@ const char *gpu_renderer_name(void);
 
 /* ---- textures ------------------------------------------------------------------------ */
 
-enum gpu_format { GPU_R32F, GPU_RG32F, GPU_RGBA32F, GPU_RGBA8, GPU_R16F, GPU_RG16F };
+enum gpu_format { GPU_R32F, GPU_RG32F, GPU_RGBA32F, GPU_RGBA8, GPU_R16F, GPU_RG16F, GPU_R32UI };
 
 struct gpu_texture {
     unsigned id;
@@ -101,11 +101,16 @@ struct gpu_texture {
 };
 
 /* Creates a texture with linear filtering and clamp-to-edge; DATA (may be NULL) is tightly
- * packed float (or uint8 for GPU_RGBA8), x fastest.  Returns false (logged) on failure. */
+ * packed float (uint8 for GPU_RGBA8, uint32 for GPU_R32UI), x fastest.  Returns false (logged) on failure. */
 bool gpu_texture_init(struct gpu_texture *tex, int dims, const int size[3],
                       enum gpu_format format, const void *data);
+/* Sets every texel of level 0 to zero. */
+void gpu_texture_clear(struct gpu_texture *tex);
 /* Replaces the whole content; same layout as init. */
 void gpu_texture_upload(struct gpu_texture *tex, const void *data);
+/* Replaces the layers Z0 .. Z0 + COUNT - 1 of a 3D texture; DATA as for init, those layers
+ * only. */
+void gpu_texture_upload_layers(struct gpu_texture *tex, int z0, int count, const void *data);
 /* Reads the whole level 0 back into OUT (bytes as for init, float or uint8). */
 void gpu_texture_read(const struct gpu_texture *tex, void *out, size_t out_bytes);
 void gpu_texture_finish(struct gpu_texture *tex);
@@ -160,6 +165,8 @@ void gpu_program_use(const struct gpu_program *prog);
  * ignored. */
 void gpu_uniform_int(const struct gpu_program *p, const char *name, int v);
 void gpu_uniform_float(const struct gpu_program *p, const char *name, float v);
+void gpu_uniform_uint(const struct gpu_program *p, const char *name, unsigned v);
+void gpu_uniform_double(const struct gpu_program *p, const char *name, double v);
 void gpu_uniform_vec2(const struct gpu_program *p, const char *name, const float v[2]);
 void gpu_uniform_vec3(const struct gpu_program *p, const char *name, const float v[3]);
 void gpu_uniform_ivec2(const struct gpu_program *p, const char *name, const int v[2]);
@@ -170,6 +177,11 @@ void gpu_uniform_mat4(const struct gpu_program *p, const char *name, const float
 /* Runs PROG over enough groups to cover W x H x D invocations, then a memory barrier so the
  * next dispatch, texture fetch or read-back sees the writes. */
 void gpu_dispatch(const struct gpu_program *prog, int w, int h, int d);
+
+/* Runs PROG over the work groups that ARGS holds at byte OFFSET (three uint32: groups along
+ * x, y, z, as an earlier dispatch wrote them), then the same barrier as gpu_dispatch. */
+void gpu_dispatch_indirect(const struct gpu_program *prog, const struct gpu_buffer *args,
+                           size_t offset);
 
 /* Waits for all GL work. */
 void gpu_finish(void);

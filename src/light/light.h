@@ -251,6 +251,14 @@ size_t light_map_bytes(const struct light_map *m);
 int light_compress_column(const float *depth, const float *value, int count, double epsilon,
                           float *out);
 
+/* The same for two functions of the same samples at once (the diffuse light's M and N):
+ * nodes (OUT[3 m] = depth, OUT[3 m + 1], OUT[3 m + 2] = the two values) such that linear
+ * interpolation keeps each within EPSILON of its samples; a segment ends where either would
+ * leave its hoops, a flat start or tail is one where both are flat.  OUT holds 3 COUNT floats.
+ * With one function it is light_compress_column, node for node. */
+int light_compress_column2(const float *depth, const float *value0, const float *value1,
+                           int count, double epsilon, float *out);
+
 /* Value of a compressed visibility function at DEPTH: binary search for the segment, then linear
  * interpolation; clamped to the first and last node; a step (equal depths) takes the later
  * node; the result is clamped to [0, 1]. */
@@ -259,17 +267,22 @@ float light_column_eval(const float *nodes, uint32_t count, float depth);
 /* The compressed deep light map in a GPU-friendly layout (two SSBOs): per column (i + n0 j)
  * columns[2 c] = index of its first node, columns[2 c + 1] = its node count; nodes[2 m] = depth
  * in node-plane units (k, so depth d is at light coordinate lo_w + d step_w), nodes[2 m + 1] =
- * intensity. */
+ * intensity.  With multiple scattering the diffuse light likewise, M and N compressed together
+ * (light_compress_column2): diffuse_columns as columns, diffuse_nodes[3 m] = depth,
+ * [3 m + 1] = M, [3 m + 2] = N. */
 struct light_compressed {
     struct light_grid grid;
     uint32_t *columns; /* 2 n0 n1, owned */
     float *nodes;      /* 2 node_count, owned */
     size_t node_count;
+    uint32_t *diffuse_columns; /* 2 n0 n1, owned; NULL without the diffuse light */
+    float *diffuse_nodes;      /* 3 diffuse_node_count, owned */
+    size_t diffuse_node_count;
     double epsilon;
 };
 
-/* Compresses every column of MAP within EPSILON.  OUT is initialised here; on failure (logged)
- * it is finished. */
+/* Compresses every column of MAP within EPSILON, its diffuse light too when it has one.  OUT
+ * is initialised here; on failure (logged) it is finished. */
 bool light_compressed_build(const struct light_map *map, double epsilon,
                             struct light_compressed *out);
 
@@ -279,7 +292,13 @@ void light_compressed_finish(struct light_compressed *c);
  * neighbouring columns (clamped to the edge), each evaluated at the depth by light_column_eval. */
 float light_compressed_sample(const struct light_compressed *c, const float tex[3]);
 
-/* Bytes of both arrays as SSBOs. */
+/* The diffuse light at TEX, mirroring light_map_sample_diffuse: bilinear over the four
+ * columns, each by binary search and linear interpolation along it (clamped to its first and
+ * last node, not to [0, 1]); 0 and 0 without the diffuse light. */
+void light_compressed_sample_diffuse(const struct light_compressed *c, const float tex[3],
+                                     float out[2]);
+
+/* Bytes of all arrays as SSBOs. */
 size_t light_compressed_bytes(const struct light_compressed *c);
 
 /* ---- rebuild on change ------------------------------------------------------------------- */

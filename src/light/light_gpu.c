@@ -10,22 +10,27 @@
 
 struct light_gpu {
     struct render_light hook; /* first: the renderer's bind callback gets it back */
-    /* Build programs by variant: bit 0 FORWARD, bit 1 PERIPHERAL, bit 2 PHASE_MIX, bit 3
-     * MULTIPLE, bit 4 LATERAL (made on first use: an effect that is off is compiled out); the
-     * diffuse column pass by PHASE_MIX (bit 0) and LATERAL (bit 1). */
-    struct gpu_program build[32];
-    struct gpu_program diffuse_pass[4];
-    struct gpu_program lateral_pass;
+    /* Programs by variant, made on first use (an effect that is off is compiled out): the
+     * slices by MULTIPLE (bit 0), LATERAL (bit 1) and SKIP (bit 2); the sweep by FORWARD
+     * (bit 0), PERIPHERAL (bit 1), PHASE_MIX (bit 2); the diffuse column pass by PHASE_MIX
+     * (bit 0) and LATERAL (bit 1). */
+    struct gpu_program slices[8];
+    struct gpu_program build[16];       /* bit 3: HALF */
+    struct gpu_program diffuse_pass[8]; /* bit 2: HALF */
+    struct gpu_program lateral_pass[2]; /* without and with SKIP */
     struct gpu_texture light;   /* R32F node volume */
-    struct gpu_texture diffuse; /* RG32F node volume, M and N; only with multiple scattering */
-    struct gpu_texture slice;   /* RGBA32F build scratch: each slice's tau, ice share and
-                                   lateral escape rates */
+    struct gpu_texture diffuse; /* RG32F node volume, M and N; only with multiple scattering
+                                   (in compressed mode the build's scratch) */
+    struct gpu_program compress[4], scan; /* PASS 1, 2 of the light; of the diffuse light */
+    struct gpu_texture slice;   /* build scratch, freed after the build: each slice's tau
+                                   and ice share (RG32F), with multiple scattering its lateral
+                                   escape rates too (RGBA32F) */
     struct gpu_texture rates;   /* RG32F on the volume's grid: lateral escape rates times the
                                    extinction; they depend on the volume only */
     bool have_rates;            /* rates hold the volume below */
     unsigned rates_beta;        /* its texture, identity and generation */
     uint64_t rates_volume, rates_generation;
-    struct gpu_texture adding;  /* RG32F build scratch of the column pass */
+    struct gpu_texture adding;  /* RG32F build scratch of the column pass, freed after it */
     bool built_multiple;
     struct gpu_buffer columns, nodes;
     struct light_grid grid;
@@ -33,12 +38,14 @@ struct light_gpu {
     enum light_gpu_mode mode;
     bool have_key_mode;
     enum light_gpu_mode built_mode;
+    bool half, built_half;      /* the dense map in half floats (light_gpu_set_half) */
     double built_epsilon;
-    size_t compressed_bytes;
+    size_t compressed_bytes;   /* the columns and nodes, the diffuse light's included */
+    uint32_t compressed_nodes, diffuse_nodes; /* nodes of the light and of the diffuse light */
+    uint32_t diffuse_columns_at, diffuse_nodes_at; /* where its part starts in the buffers */
     struct gpu_timer_queue timers;
     struct gpu_timings *timing; /* where build times go; NULL: untimed */
-    bool last_timed;            /* the last build was timed (its CPU part: last_cpu_ms) */
-    double last_cpu_ms;
+    bool last_timed;            /* the last build was timed */
     char defines[64];
 };
 
@@ -47,9 +54,15 @@ void light_gpu_bind(const struct light_gpu *lg, const struct gpu_program *prog, 
     gpu_uniform_mat4(prog, next ? "light_world_to_tex_next" : "light_world_to_tex",
                      lg->grid.world_to_tex);
     gpu_uniform_ivec3(prog, next ? "light_n_next" : "light_n", lg->grid.n);
-    if (lg->built_multiple)
+    if (lg->built_multiple && lg->built_mode == LIGHT_GPU_DENSE) {
         gpu_texture_bind(&lg->diffuse,
                          next ? BIND_LIGHTMAP_TEX_DIFFUSE_NEXT : BIND_LIGHTMAP_TEX_DIFFUSE);
+    } else if (lg->built_multiple) {
+        gpu_uniform_uint(prog, next ? "light_diffuse_columns_next" : "light_diffuse_columns",
+                         lg->diffuse_columns_at);
+        gpu_uniform_uint(prog, next ? "light_diffuse_nodes_next" : "light_diffuse_nodes",
+                         lg->diffuse_nodes_at);
+    }
     if (lg->built_mode == LIGHT_GPU_DENSE) {
         gpu_texture_bind(&lg->light, next ? BIND_LIGHTMAP_TEX_LIGHT_NEXT : BIND_LIGHTMAP_TEX_LIGHT);
     } else {
@@ -76,31 +89,49 @@ static const struct gpu_program *build_program(struct light_gpu *lg, int v)
     if (lg->build[v].id)
         return &lg->build[v];
     char defines[128];
-    snprintf(defines, sizeof(defines), "#define FORWARD %d\n#define PERIPHERAL %d\n"
-             "#define PHASE_MIX %d\n#define MULTIPLE %d\n#define LATERAL %d\n", v & 1,
-             (v >> 1) & 1, (v >> 2) & 1, (v >> 3) & 1, (v >> 4) & 1);
+    snprintf(defines, sizeof(defines),
+             "#define FORWARD %d\n#define PERIPHERAL %d\n#define PHASE_MIX %d\n#define HALF %d\n",
+             v & 1, (v >> 1) & 1, (v >> 2) & 1, (v >> 3) & 1);
     if (!gpu_program_init(&lg->build[v], "light_build.comp", defines))
         return NULL;
     return &lg->build[v];
 }
 
+static const struct gpu_program *slices_program(struct light_gpu *lg, bool multiple,
+                                                bool lateral, bool skip)
+{
+    int v = (multiple ? 1 : 0) | (multiple && lateral ? 2 : 0) | (skip ? 4 : 0);
+    if (lg->slices[v].id)
+        return &lg->slices[v];
+    char defines[128];
+    snprintf(defines, sizeof(defines), "#define MULTIPLE %d\n#define LATERAL %d\n#define SKIP %d\n",
+             v & 1, (v >> 1) & 1, (v >> 2) & 1);
+    if (!gpu_program_init(&lg->slices[v], "light_slices.comp", defines))
+        return NULL;
+    return &lg->slices[v];
+}
+
 /* The diffuse column pass: its only variant is the ice/water mix (the loss shares the forward
  * terms leave come as uniforms). */
-static const struct gpu_program *diffuse_program(struct light_gpu *lg, bool mix, bool lateral)
+static const struct gpu_program *diffuse_program(struct light_gpu *lg, bool mix, bool lateral,
+                                                bool half)
 {
-    int v = (mix ? 1 : 0) | (lateral ? 2 : 0);
+    int v = (mix ? 1 : 0) | (lateral ? 2 : 0) | (half ? 4 : 0);
     if (lg->diffuse_pass[v].id)
         return &lg->diffuse_pass[v];
     char defines[64];
-    snprintf(defines, sizeof(defines), "#define PHASE_MIX %d\n#define LATERAL %d\n", v & 1,
-             v >> 1);
+    snprintf(defines, sizeof(defines), "#define PHASE_MIX %d\n#define LATERAL %d\n#define HALF %d\n",
+             v & 1, (v >> 1) & 1, v >> 2);
     if (!gpu_program_init(&lg->diffuse_pass[v], "light_diffuse.comp", defines))
         return NULL;
     return &lg->diffuse_pass[v];
 }
 
+/* Voxels of a row one invocation of light_lateral.comp looks after (its SEGMENT). */
+#define LATERAL_SEGMENT 32
+
 /* The lateral escape rates of the volume (light_lateral.comp): one pass along x, one along
- * y, one invocation per row. */
+ * y, one invocation per stretch of a row (each walks the runs that start in it). */
 static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src)
 {
     const int *n = src->grid->n;
@@ -114,17 +145,22 @@ static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src
         if (!gpu_texture_init(&lg->rates, 3, n, GPU_RG32F, NULL))
             return false;
     }
-    if (!lg->lateral_pass.id && !gpu_program_init(&lg->lateral_pass, "light_lateral.comp", ""))
+    bool skip = src->cells && src->cells->levels > 0;
+    struct gpu_program *p = &lg->lateral_pass[skip ? 1 : 0];
+    if (!p->id && !gpu_program_init(p, "light_lateral.comp", skip ? "#define SKIP 1\n" : ""))
         return false;
-    const struct gpu_program *p = &lg->lateral_pass;
+    gpu_texture_clear(&lg->rates);
     gpu_uniform_ivec3(p, "vol_n", n);
     gpu_uniform_float(p, "clear_beta", LIGHT_CLEAR_BETA);
     gpu_texture_bind(src->beta, BIND_LATERAL_TEX_BETA);
     gpu_image_bind_rw(&lg->rates, BIND_LATERAL_IMG_RATES);
+    if (skip)
+        gpu_buffer_bind(&src->cells->buf, BIND_LATERAL_BUF_CELLS);
     for (int axis = 0; axis < 2; axis++) {
         gpu_uniform_int(p, "axis", axis);
         gpu_uniform_float(p, "spacing", (float)src->grid->spacing[axis]);
-        gpu_dispatch(p, n[1 - axis] * n[2], 1, 1);
+        /* rows x stretches of LATERAL_SEGMENT voxels x levels */
+        gpu_dispatch(p, n[1 - axis], (n[axis] + LATERAL_SEGMENT - 1) / LATERAL_SEGMENT, n[2]);
     }
     lg->have_rates = true;
     lg->rates_beta = src->beta->id;
@@ -133,14 +169,14 @@ static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src
     return true;
 }
 
-/* The variant of settings S: forward scattering, the peripheral ring, and the ice/water mix
- * (compiled out when both phases' cumulative phases are equal: the mix is then exact). */
+/* The sweep's variant for settings S: forward scattering, the peripheral ring, and the
+ * ice/water mix (compiled out when both phases' cumulative phases are equal: the mix is then
+ * exact). */
 static int build_variant(const struct light_settings *s)
 {
     bool mix = !light_settings_phases_equal(s);
     return (s->forward ? 1 : 0) | (s->forward && s->peripheral ? 2 : 0) |
-           ((s->forward || s->multiple) && mix ? 4 : 0) | (s->multiple ? 8 : 0) |
-           (s->multiple && s->lateral ? 16 : 0);
+           (s->forward && mix ? 4 : 0);
 }
 
 struct light_gpu *light_gpu_create(void)
@@ -148,8 +184,8 @@ struct light_gpu *light_gpu_create(void)
     struct light_gpu *lg = calloc(1, sizeof(*lg));
     if (!lg)
         return NULL;
-    if (!build_program(lg, 7)) {
-        free(lg);
+    if (!build_program(lg, 7) || !slices_program(lg, false, false, true)) {
+        light_gpu_destroy(lg);
         return NULL;
     }
     light_cache_init(&lg->cache);
@@ -163,15 +199,21 @@ void light_gpu_destroy(struct light_gpu *lg)
 {
     if (!lg)
         return;
-    for (int v = 0; v < 32; v++)
+    for (int v = 0; v < 16; v++)
         gpu_program_finish(&lg->build[v]);
-    for (int v = 0; v < 4; v++)
+    for (int v = 0; v < 8; v++) {
+        gpu_program_finish(&lg->slices[v]);
         gpu_program_finish(&lg->diffuse_pass[v]);
+    }
     gpu_texture_finish(&lg->light);
     gpu_texture_finish(&lg->diffuse);
+    for (int v = 0; v < 4; v++)
+        gpu_program_finish(&lg->compress[v]);
+    gpu_program_finish(&lg->scan);
     gpu_texture_finish(&lg->slice);
     gpu_texture_finish(&lg->rates);
-    gpu_program_finish(&lg->lateral_pass);
+    for (int v = 0; v < 2; v++)
+        gpu_program_finish(&lg->lateral_pass[v]);
     gpu_texture_finish(&lg->adding);
     gpu_buffer_finish(&lg->columns);
     gpu_buffer_finish(&lg->nodes);
@@ -190,14 +232,14 @@ static bool node_texture(struct gpu_texture *tex, const int n[3], enum gpu_forma
 
 /* The two-stream pass down every column (light_diffuse.comp), after the beam. */
 static bool build_diffuse(struct light_gpu *lg, const double sun[3],
-                          const struct light_settings *s)
+                          const struct light_settings *s, bool half)
 {
     const struct light_grid *g = &lg->grid;
-    if (!node_texture(&lg->diffuse, g->n, GPU_RG32F) ||
+    if (!node_texture(&lg->diffuse, g->n, half ? GPU_RG16F : GPU_RG32F) ||
         !node_texture(&lg->adding, g->n, GPU_RG32F))
         return false;
     const struct gpu_program *p =
-        diffuse_program(lg, !light_settings_phases_equal(s), s->lateral);
+        diffuse_program(lg, !light_settings_phases_equal(s), s->lateral, half);
     if (!p)
         return false;
     struct light_diffuse_terms t;
@@ -216,19 +258,14 @@ static bool build_diffuse(struct light_gpu *lg, const double sun[3],
 }
 
 static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src,
-                        const double sun[3], const struct light_settings *s)
+                        const double sun[3], const struct light_settings *s, bool half)
 {
     const struct light_grid *g = &lg->grid;
-    if (!node_texture(&lg->light, g->n, GPU_R32F))
+    if (!node_texture(&lg->light, g->n, half ? GPU_R16F : GPU_R32F) ||
+        !node_texture(&lg->slice, g->n, s->multiple ? GPU_RGBA32F : GPU_RG32F))
         return false;
-    if (s->multiple) {
-        if (!node_texture(&lg->slice, g->n, GPU_RGBA32F))
-            return false;
-    } else {
+    if (!s->multiple)
         gpu_texture_finish(&lg->diffuse);
-        gpu_texture_finish(&lg->slice);
-        gpu_texture_finish(&lg->adding);
-    }
     if (s->multiple && s->lateral) {
         if (!build_rates(lg, src))
             return false;
@@ -236,8 +273,10 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
         gpu_texture_finish(&lg->rates);
         lg->have_rates = false;
     }
-    const struct gpu_program *p = build_program(lg, build_variant(s));
-    if (!p)
+    bool skip = src->cells && src->cells->levels > 0;
+    const struct gpu_program *sp = slices_program(lg, s->multiple, s->lateral, skip);
+    const struct gpu_program *p = build_program(lg, build_variant(s) | (half ? 8 : 0));
+    if (!sp || !p)
         return false;
     int substeps = s->substeps > 0 ? s->substeps : light_auto_substeps(g, src->grid);
     float vol_origin[3], inv_spacing[3];
@@ -245,34 +284,48 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
         vol_origin[a] = (float)src->grid->origin[a];
         inv_spacing[a] = (float)(1.0 / src->grid->spacing[a]);
     }
+    /* Every slice's extinction at once: the costly part, all in parallel. */
+    gpu_uniform_ivec3(sp, "vol_n", src->grid->n);
+    gpu_uniform_vec3(sp, "vol_origin", vol_origin);
+    gpu_uniform_vec3(sp, "vol_inv_spacing", inv_spacing);
+    gpu_uniform_ivec3(sp, "grid_n", g->n);
+    gpu_uniform_vec3(sp, "g_origin", g->origin);
+    gpu_uniform_vec3(sp, "g_du", g->du);
+    gpu_uniform_vec3(sp, "g_dv", g->dv);
+    gpu_uniform_vec3(sp, "g_dw", g->dw);
+    gpu_uniform_int(sp, "substeps", substeps);
+    gpu_uniform_float(sp, "dsub", (float)(g->step[2] / substeps));
+    gpu_texture_bind(src->beta, BIND_SLICES_TEX_BETA);
+    if (s->multiple && s->lateral)
+        gpu_texture_bind(&lg->rates, BIND_SLICES_TEX_RATES);
+    if (skip)
+        gpu_buffer_bind(&src->cells->buf, BIND_SLICES_BUF_CELLS);
+    gpu_image_bind(&lg->slice, BIND_SLICES_IMG_SLICE, true);
+    gpu_dispatch(sp, g->n[0], g->n[1], g->n[2] - 1);
+
+    /* The sweep: a plane per dispatch with the peripheral ring (it reads the plane before's
+     * neighbours), else every column down to its end in one. */
     double r = light_peripheral_offset(s->forward_angle_deg, g->step[2]);
     float per[2];
     light_grid_peripheral_taps(g, r, per);
     float cp[4] = {(float)s->cp.water_ctr, (float)s->cp.ice_ctr, (float)s->cp.water_per,
                    (float)s->cp.ice_per};
-    gpu_uniform_ivec3(p, "vol_n", src->grid->n);
-    gpu_uniform_vec3(p, "vol_origin", vol_origin);
-    gpu_uniform_vec3(p, "vol_inv_spacing", inv_spacing);
     gpu_uniform_ivec3(p, "grid_n", g->n);
-    gpu_uniform_vec3(p, "g_origin", g->origin);
-    gpu_uniform_vec3(p, "g_du", g->du);
-    gpu_uniform_vec3(p, "g_dv", g->dv);
-    gpu_uniform_vec3(p, "g_dw", g->dw);
-    gpu_uniform_int(p, "substeps", substeps);
-    gpu_uniform_float(p, "dsub", (float)(g->step[2] / substeps));
     gpu_uniform_vec4(p, "cp", cp);
     gpu_uniform_vec2(p, "per_offset", per);
-    gpu_texture_bind(src->beta, BIND_BUILD_TEX_BETA);
-    if (s->multiple && s->lateral)
-        gpu_texture_bind(&lg->rates, BIND_BUILD_TEX_RATES);
+    gpu_texture_bind(&lg->slice, BIND_BUILD_TEX_SLICE);
     gpu_image_bind_rw(&lg->light, BIND_BUILD_IMG_LIGHT);
-    if (s->multiple)
-        gpu_image_bind(&lg->slice, BIND_BUILD_IMG_SLICE, true);
-    for (int k = 0; k < g->n[2]; k++) {
+    int per_plane = s->forward && s->peripheral ? 1 : g->n[2];
+    gpu_uniform_int(p, "planes", per_plane);
+    for (int k = 0; k < g->n[2]; k += per_plane) {
         gpu_uniform_int(p, "plane", k);
         gpu_dispatch(p, g->n[0], g->n[1], 1);
     }
-    return !s->multiple || build_diffuse(lg, sun, s);
+    bool ok = !s->multiple || build_diffuse(lg, sun, s, half);
+    /* The scratch served this build only: give its memory back. */
+    gpu_texture_finish(&lg->slice);
+    gpu_texture_finish(&lg->adding);
+    return ok;
 }
 
 /* Reads the light volume back, and the diffuse one too when WITH_DIFFUSE and it exists. */
@@ -308,27 +361,95 @@ bool light_gpu_read(const struct light_gpu *lg, struct light_map *map)
     return read_back(lg, map, true);
 }
 
+/* Compresses part CH (0 the light, 1 the diffuse light) of the dense map into the columns
+ * buffer from word BASE on (light_compress.comp, PASS 1, then light_scan.comp). */
+static void count_part(struct light_gpu *lg, int ch, uint32_t base, double epsilon)
+{
+    const int *n = lg->grid.n;
+    const struct gpu_program *p = &lg->compress[2 * ch];
+    gpu_image_bind(ch ? &lg->diffuse : &lg->light, BIND_COMPRESS_IMG_VALUES, false);
+    gpu_buffer_bind(&lg->columns, BIND_COMPRESS_BUF_COLUMNS);
+    gpu_uniform_ivec3(p, "grid_n", n);
+    gpu_uniform_double(p, "epsilon", epsilon);
+    gpu_uniform_uint(p, "base", base);
+    gpu_dispatch(p, n[0], n[1], 1);
+    gpu_buffer_bind(&lg->columns, BIND_SCAN_BUF_COLUMNS);
+    gpu_uniform_uint(&lg->scan, "column_count", (unsigned)((size_t)n[0] * n[1]));
+    gpu_uniform_uint(&lg->scan, "base", base);
+    gpu_dispatch(&lg->scan, 1024, 1, 1);
+}
+
+/* Writes part CH's nodes from float NODE_BASE of the nodes buffer on (PASS 2). */
+static void write_part(struct light_gpu *lg, int ch, uint32_t base, uint32_t node_base,
+                       double epsilon)
+{
+    const int *n = lg->grid.n;
+    const struct gpu_program *p = &lg->compress[2 * ch + 1];
+    gpu_image_bind(ch ? &lg->diffuse : &lg->light, BIND_COMPRESS_IMG_VALUES, false);
+    gpu_buffer_bind(&lg->columns, BIND_COMPRESS_BUF_COLUMNS);
+    gpu_buffer_bind(&lg->nodes, BIND_COMPRESS_BUF_NODES);
+    gpu_uniform_ivec3(p, "grid_n", n);
+    gpu_uniform_double(p, "epsilon", epsilon);
+    gpu_uniform_uint(p, "base", base);
+    gpu_uniform_uint(p, "node_base", node_base);
+    gpu_dispatch(p, n[0], n[1], 1);
+}
+
+/* The dense map's columns compressed on the GPU, as the reference compressor does: the light's
+ * (depth, light) nodes, and with multiple scattering the diffuse light's (depth, M, N), each
+ * part's columns and nodes after the light's in the same two buffers.  Every column's nodes
+ * are counted, the counts turned into first indices, then the nodes written; the node buffer
+ * is made for the totals the GPU found, the one thing read back (it waits for the build).
+ * The dense volumes are freed after. */
 static bool build_compressed(struct light_gpu *lg, double epsilon)
 {
-    struct light_map dense; /* the compressor needs the light only: the diffuse volume stays */
-    if (!read_back(lg, &dense, false))
+    const int *n = lg->grid.n;
+    size_t ncol = (size_t)n[0] * n[1];
+    bool diffuse = lg->diffuse.id != 0;
+    if ((double)ncol * (n[2] + 1) * (diffuse ? 3 : 1) >= 4294967295.0) {
+        log_error("light map: %dx%dx%d nodes are too many to compress (at most 2^32 nodes)",
+                  n[0], n[1], n[2]);
         return false;
-    struct light_compressed c;
-    bool ok = light_compressed_build(&dense, epsilon, &c);
-    light_map_finish(&dense);
-    if (!ok)
+    }
+    for (int v = 0; v < (diffuse ? 4 : 2); v++) {
+        char defines[64];
+        snprintf(defines, sizeof(defines), "#define PASS %d\n#define CHANNELS %d\n", 1 + v % 2,
+                 1 + v / 2);
+        if (!lg->compress[v].id && !gpu_program_init(&lg->compress[v], "light_compress.comp",
+                                                     defines))
+            return false;
+    }
+    if (!lg->scan.id && !gpu_program_init(&lg->scan, "light_scan.comp", NULL))
         return false;
-    size_t col_bytes = (size_t)c.grid.n[0] * c.grid.n[1] * 2 * sizeof(uint32_t);
-    size_t node_bytes = c.node_count * 2 * sizeof(float);
     gpu_buffer_finish(&lg->columns);
     gpu_buffer_finish(&lg->nodes);
-    ok = gpu_buffer_init(&lg->columns, col_bytes, c.columns) &&
-         gpu_buffer_init(&lg->nodes, node_bytes, c.nodes);
-    lg->compressed_bytes = light_compressed_bytes(&c);
-    light_compressed_finish(&c);
-    /* The dense volume was only the build's scratch: give its memory back. */
+    /* The light's columns and their total, then the diffuse light's. */
+    uint32_t dbase = (uint32_t)(2 * ncol + 1);
+    if (!gpu_buffer_init(&lg->columns, (diffuse ? 2 : 1) * (size_t)dbase * sizeof(uint32_t), NULL))
+        return false;
+    count_part(lg, 0, 0, epsilon);
+    if (diffuse)
+        count_part(lg, 1, dbase, epsilon);
+    uint32_t total[2] = {0, 0};
+    gpu_buffer_read(&lg->columns, 2 * ncol * sizeof(uint32_t), sizeof(uint32_t), &total[0]);
+    if (diffuse)
+        gpu_buffer_read(&lg->columns, (dbase + 2 * ncol) * sizeof(uint32_t), sizeof(uint32_t),
+                        &total[1]);
+    size_t floats = 2 * (size_t)total[0] + 3 * (size_t)total[1];
+    if (!gpu_buffer_init(&lg->nodes, (floats ? floats : 1) * sizeof(float), NULL))
+        return false;
+    write_part(lg, 0, 0, 0, epsilon);
+    if (diffuse)
+        write_part(lg, 1, dbase, 2 * total[0], epsilon);
+    lg->compressed_nodes = total[0];
+    lg->diffuse_nodes = total[1];
+    lg->diffuse_columns_at = dbase;
+    lg->diffuse_nodes_at = 2 * total[0];
+    lg->compressed_bytes = (diffuse ? 2 : 1) * ncol * 2 * sizeof(uint32_t) + floats * sizeof(float);
+    /* The dense volumes were only the build's scratch: give their memory back. */
     gpu_texture_finish(&lg->light);
-    return ok;
+    gpu_texture_finish(&lg->diffuse);
+    return true;
 }
 
 bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
@@ -340,7 +461,7 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
     struct light_key key;
     light_key_init(&key, src->grid, sun, src->volume_id, src->generation, settings);
     bool stale = light_cache_stale(&lg->cache, &key) || !lg->have_key_mode ||
-                 lg->built_mode != mode ||
+                 lg->built_mode != mode || lg->built_half != lg->half ||
                  (mode == LIGHT_GPU_COMPRESSED && lg->built_epsilon != settings->epsilon);
     if (!stale)
         return true;
@@ -350,22 +471,18 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
     struct gpu_timings *log = lg->timing;
     if (log)
         gpu_timer_queue_begin(&lg->timers);
-    bool ok = build_dense(lg, src, sun, settings);
-    unsigned number = log ? gpu_timer_queue_end(&lg->timers, log) : 0;
-    lg->last_timed = number != 0;
-    lg->last_cpu_ms = 0.0;
+    /* Half floats are a storage of the dense map: a compressed build stays in floats. */
+    bool half = lg->half && mode == LIGHT_GPU_DENSE;
+    bool ok = build_dense(lg, src, sun, settings, half);
     if (ok && mode == LIGHT_GPU_COMPRESSED) {
-        /* The read-back waits for the GPU anyway: the CPU compresses what it built. */
-        double start = time_now_ms();
         ok = build_compressed(lg, settings->epsilon);
-        lg->last_cpu_ms = time_now_ms() - start;
-        if (number)
-            gpu_timings_add(log, number, lg->last_cpu_ms);
     } else {
         gpu_buffer_finish(&lg->columns);
         gpu_buffer_finish(&lg->nodes);
         lg->compressed_bytes = 0;
     }
+    unsigned number = log ? gpu_timer_queue_end(&lg->timers, log) : 0;
+    lg->last_timed = number != 0;
     if (!ok) {
         light_cache_invalidate(&lg->cache);
         return false;
@@ -376,6 +493,7 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
     lg->built_mode = mode;
     lg->built_epsilon = settings->epsilon;
     lg->built_multiple = settings->multiple;
+    lg->built_half = lg->half;
     snprintf(lg->defines, sizeof(lg->defines), "#define LIGHTMAP %d\n#define MULTIPLE %d\n",
              mode == LIGHT_GPU_DENSE ? 1 : 2, settings->multiple ? 1 : 0);
     if (built)
@@ -393,6 +511,11 @@ unsigned light_gpu_builds(const struct light_gpu *lg)
     return lg->cache.builds;
 }
 
+void light_gpu_set_half(struct light_gpu *lg, bool half)
+{
+    lg->half = half;
+}
+
 void light_gpu_set_timing(struct light_gpu *lg, struct gpu_timings *log)
 {
     lg->timing = log;
@@ -408,15 +531,56 @@ bool light_gpu_last_build_ms(struct light_gpu *lg, double *ms)
     /* The last build is the newest measurement: known once none is in flight. */
     if (!lg->last_timed || light_gpu_collect_timings(lg, false) > 0)
         return false;
-    *ms = lg->timers.last_ms + lg->last_cpu_ms;
+    *ms = lg->timers.last_ms;
     return true;
 }
 
 void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed)
 {
-    /* What the dense volume takes (or would take, in compressed mode, for comparison). */
+    /* What the dense map takes (or would take, in compressed mode, for comparison): the light
+     * in R32F and the diffuse light in RG32F. */
     size_t nodes = (size_t)lg->grid.n[0] * lg->grid.n[1] * lg->grid.n[2];
     size_t diffuse = lg->built_multiple ? 2 * nodes * sizeof(float) : 0;
     *dense = nodes * sizeof(float) + diffuse;
-    *compressed = lg->compressed_bytes ? lg->compressed_bytes + diffuse : 0;
+    if (lg->built_half && lg->built_mode == LIGHT_GPU_DENSE)
+        *dense /= 2;
+    *compressed = lg->compressed_bytes;
+}
+
+bool light_gpu_read_compressed(const struct light_gpu *lg, struct light_compressed *out)
+{
+    memset(out, 0, sizeof(*out));
+    if (!lg->compressed_bytes) {
+        log_error("light map: no compressed map on the GPU (none built, or dense mode)");
+        return false;
+    }
+    out->grid = lg->grid;
+    out->epsilon = lg->built_epsilon;
+    out->node_count = lg->compressed_nodes;
+    size_t ncol = (size_t)lg->grid.n[0] * lg->grid.n[1];
+    out->columns = malloc(2 * ncol * sizeof(uint32_t));
+    out->nodes = malloc((out->node_count ? out->node_count : 1) * 2 * sizeof(float));
+    if (!out->columns || !out->nodes) {
+        log_error("light map: out of memory reading %zu nodes back", out->node_count);
+        light_compressed_finish(out);
+        return false;
+    }
+    gpu_buffer_read(&lg->columns, 0, 2 * ncol * sizeof(uint32_t), out->columns);
+    gpu_buffer_read(&lg->nodes, 0, out->node_count * 2 * sizeof(float), out->nodes);
+    if (lg->built_multiple) {
+        out->diffuse_node_count = lg->diffuse_nodes;
+        out->diffuse_columns = malloc(2 * ncol * sizeof(uint32_t));
+        out->diffuse_nodes = malloc((out->diffuse_node_count ? out->diffuse_node_count : 1) * 3 *
+                                    sizeof(float));
+        if (!out->diffuse_columns || !out->diffuse_nodes) {
+            log_error("light map: out of memory reading %zu nodes back", out->diffuse_node_count);
+            light_compressed_finish(out);
+            return false;
+        }
+        gpu_buffer_read(&lg->columns, lg->diffuse_columns_at * sizeof(uint32_t),
+                        2 * ncol * sizeof(uint32_t), out->diffuse_columns);
+        gpu_buffer_read(&lg->nodes, lg->diffuse_nodes_at * sizeof(float),
+                        out->diffuse_node_count * 3 * sizeof(float), out->diffuse_nodes);
+    }
+    return true;
 }

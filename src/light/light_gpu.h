@@ -1,9 +1,10 @@
 /*
- * light/light_gpu: the deep light map on the GPU.  The dense light volume is swept plane by
- * plane in shaders/light_build.comp, mirroring light_map_build() (the CPU reference) in
- * float32; the compressed mode compresses that volume's columns with the reference
- * compressor (light_compressed_build, on the CPU) and keeps the nodes in two storage buffers
- * that the eye pass searches.  The map is rebuilt only when its key (sun, volume, optics,
+ * light/light_gpu: the deep light map on the GPU.  Every slice's extinction at once
+ * (shaders/light_slices.comp), then the dense light volume swept from the sun
+ * (shaders/light_build.comp), mirroring light_map_build() (the CPU reference) in float32; the
+ * compressed mode compresses that volume's columns on the GPU as the reference compressor
+ * does (shaders/light_compress.comp, light_compress_column) and keeps the nodes in two storage
+ * buffers that the eye pass searches, the diffuse light's (M and N together) beside them.  The map is rebuilt only when its key (sun, volume, optics,
  * settings) changes, whatever the number of views.  Every function needs the GL context
  * current.
  */
@@ -26,11 +27,14 @@ struct light_gpu *light_gpu_create(void);
 void light_gpu_destroy(struct light_gpu *lg);
 
 /* What a build reads: the extinction texture the renderer holds (RG32F, ice and water β),
- * its grid, and an identity for the volume's content (bump GENERATION when it changes). */
+ * its grid, an identity for the volume's content (bump GENERATION when it changes), and the
+ * volume's macro cells (renderer_cells; NULL: none), with which a sample in an empty cell
+ * reads no voxel. */
 struct light_gpu_source {
     const struct gpu_texture *beta;
     const struct grid3 *grid;
     uint64_t volume_id, generation;
+    const struct render_cells *cells;
 };
 
 /* Rebuilds the light map when anything in its key changed since the last build; *BUILT (may
@@ -38,6 +42,12 @@ struct light_gpu_source {
 bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
                       const double sun[3], const struct light_settings *settings,
                       enum light_gpu_mode mode, bool *built);
+
+/* Stores the following dense maps in half floats (R16F light, RG16F diffuse light: half the
+ * memory, about three decimal digits; the build's arithmetic stays in floats) or, HALF false
+ * (the default), in floats.  A change rebuilds at the next update.  Compressed maps are
+ * floats either way. */
+void light_gpu_set_half(struct light_gpu *lg, bool half);
 
 /* The hook for renderer_set_light: valid until destroy; reads the last built map. */
 const struct render_light *light_gpu_render_light(struct light_gpu *lg);
@@ -53,8 +63,8 @@ int light_gpu_variant(const struct light_gpu *lg);
 unsigned light_gpu_builds(const struct light_gpu *lg);
 
 /* Times every following build into LOG (NULL, the default: builds are not timed, and nothing
- * in a build waits for the GPU).  A build's time is its GPU time plus, in compressed mode, the
- * CPU time of the compression.  Timing does not wait either (gpu.h, "timers"), except on
+ * in a dense build waits for the GPU; a compressed one waits for its node count, the size of
+ * its node buffer).  Timing does not wait either (gpu.h, "timers"), except on
  * software drivers: the times arrive in LOG with light_gpu_collect_timings.  LOG is borrowed:
  * it must stay valid until light_gpu_collect_timings(lg, true) returned or LG is destroyed. */
 void light_gpu_set_timing(struct light_gpu *lg, struct gpu_timings *log);
@@ -65,9 +75,15 @@ int light_gpu_collect_timings(struct light_gpu *lg, bool wait);
  * while the GPU has not finished the build (or when it was not timed, or none was made). */
 bool light_gpu_last_build_ms(struct light_gpu *lg, double *ms);
 
-/* Bytes of the dense light volume and of the compressed nodes (0 in dense mode), each with
- * the dense diffuse volume added when the last build had multiple scattering. */
+/* Bytes of the dense map (the light volume, and the diffuse one when the last build had
+ * multiple scattering; floats, halves when stored so: in compressed mode what it would take in
+ * floats) and of the compressed map
+ * (0 in dense mode: the columns, the nodes and the half-resolution diffuse light). */
 void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed);
+
+/* Reads the compressed map (compressed mode) back into OUT (initialised here, finish with
+ * light_compressed_finish): the layout of the CPU reference's light_compressed_build. */
+bool light_gpu_read_compressed(const struct light_gpu *lg, struct light_compressed *out);
 
 /* Reads the dense light volume (and the diffuse one, with multiple scattering) back into MAP
  * (initialised here, finish with light_map_finish): the same layout as the CPU reference.  Dense mode only: compressed mode

@@ -54,6 +54,11 @@ bool image_path_supported(const char *path)
     return has_suffix(path, ".png") || has_suffix(path, ".pfm");
 }
 
+bool image_path_is_png(const char *path)
+{
+    return has_suffix(path, ".png");
+}
+
 bool image_write(const struct image *img, const char *path, float exposure)
 {
     if (has_suffix(path, ".png"))
@@ -96,12 +101,46 @@ static void png_flush_mem(png_structp png)
     (void)png;
 }
 
+/* Encodes HEIGHT rows of WIDTH RGB bytes (ROWS[y], top to bottom) as PNG into PATH. */
+static bool encode_png(png_bytep *rows, int width, int height, const char *path)
+{
+    struct membuf m = {0};
+    bool ok = false;
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    png_infop info = png ? png_create_info_struct(png) : NULL;
+    if (!png || !info) {
+        png_destroy_write_struct(&png, &info);
+        log_error("%s: libpng could not start", path);
+        goto done;
+    }
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_write_struct(&png, &info);
+        log_error("%s: libpng failed to encode the image", path);
+        goto done;
+    }
+    png_set_write_fn(png, &m, png_write_mem, png_flush_mem);
+    png_set_IHDR(png, info, (png_uint_32)width, (png_uint_32)height, 8, PNG_COLOR_TYPE_RGB,
+                 PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    png_write_info(png, info);
+    png_write_image(png, rows);
+    png_write_end(png, NULL);
+    png_destroy_write_struct(&png, &info);
+    if (m.failed) {
+        log_error("%s: out of memory encoding the image", path);
+        goto done;
+    }
+    ok = file_write_atomic(path, m.data, m.len);
+done:
+    free(m.data);
+    return ok;
+}
+
 bool image_write_png(const struct image *img, const char *path, float exposure)
 {
     size_t row_bytes = (size_t)img->width * 3;
     unsigned char *pixels = malloc(row_bytes * (size_t)img->height);
     png_bytep *rows = malloc(sizeof(png_bytep) * (size_t)img->height);
-    struct membuf m = {0};
     bool ok = false;
     if (!pixels || !rows) {
         log_error("%s: out of memory", path);
@@ -116,34 +155,33 @@ bool image_write_png(const struct image *img, const char *path, float exposure)
                 dst[3 * x + c] = image_tonemap(src[4 * x + c], exposure);
         rows[y] = dst;
     }
-    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
-    png_infop info = png ? png_create_info_struct(png) : NULL;
-    if (!png || !info) {
-        png_destroy_write_struct(&png, &info);
-        log_error("%s: libpng could not start", path);
-        goto done;
-    }
-    if (setjmp(png_jmpbuf(png))) {
-        png_destroy_write_struct(&png, &info);
-        log_error("%s: libpng failed to encode the image", path);
-        goto done;
-    }
-    png_set_write_fn(png, &m, png_write_mem, png_flush_mem);
-    png_set_IHDR(png, info, (png_uint_32)img->width, (png_uint_32)img->height, 8,
-                 PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-                 PNG_FILTER_TYPE_DEFAULT);
-    png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
-    png_write_info(png, info);
-    png_write_image(png, rows);
-    png_write_end(png, NULL);
-    png_destroy_write_struct(&png, &info);
-    if (m.failed) {
-        log_error("%s: out of memory encoding the image", path);
-        goto done;
-    }
-    ok = file_write_atomic(path, m.data, m.len);
+    ok = encode_png(rows, img->width, img->height, path);
 done:
-    free(m.data);
+    free(rows);
+    free(pixels);
+    return ok;
+}
+
+bool image_write_png8(const uint8_t *rgba, int width, int height, const char *path)
+{
+    size_t row_bytes = (size_t)width * 3;
+    unsigned char *pixels = malloc(row_bytes * (size_t)height);
+    png_bytep *rows = malloc(sizeof(png_bytep) * (size_t)height);
+    bool ok = false;
+    if (!pixels || !rows) {
+        log_error("%s: out of memory", path);
+        goto done;
+    }
+    for (int y = 0; y < height; y++) {
+        const uint8_t *src = rgba + (size_t)(height - 1 - y) * width * 4;
+        unsigned char *dst = pixels + (size_t)y * row_bytes;
+        for (int x = 0; x < width; x++)
+            for (int c = 0; c < 3; c++)
+                dst[3 * x + c] = src[4 * x + c];
+        rows[y] = dst;
+    }
+    ok = encode_png(rows, width, height, path);
+done:
     free(rows);
     free(pixels);
     return ok;

@@ -28,6 +28,11 @@ bool image_write(const struct image *img, const char *path, float exposure);
 /* Whether image_write knows PATH's extension. */
 bool image_path_supported(const char *path);
 bool image_write_png(const struct image *img, const char *path, float exposure);
+/* Whether PATH names a PNG file (ends in .png, any case). */
+bool image_path_is_png(const char *path);
+/* The same from pixels already tone-mapped (renderer_tonemap_read): WIDTH x HEIGHT RGBA bytes,
+ * rows bottom to top as the image's; alpha is not written. */
+bool image_write_png8(const uint8_t *rgba, int width, int height, const char *path);
 bool image_write_pfm(const struct image *img, const char *path);
 
 /* Reads a PFM written by image_write_pfm (or any little/big-endian "PF"/"Pf" file) into IMG

@@ -11,7 +11,7 @@
 #include "shaders/bindings.h"
 
 #define PHASE_TABLE_SIZE 512
-#define MAX_VARIANTS 16
+#define MAX_VARIANTS 32
 #define MAX_MESHES 64
 
 struct render_mesh {
@@ -24,6 +24,7 @@ struct render_mesh {
 struct variant {
     char defines[384];
     struct gpu_program prog;
+    uint64_t used; /* renderer.variant_clock when last asked for */
 };
 
 struct renderer {
@@ -37,9 +38,12 @@ struct renderer {
     bool have_next;
     struct gpu_texture phase;
     float mean_cosine[2]; /* g of the ice and the water phase (MULTIPLE) */
-    struct gpu_program tonemap;
+    struct gpu_program tonemap, tonemap_packed;
+    struct gpu_texture packed;   /* R32UI: the tone-mapped bytes of a file */
+    struct gpu_buffer nonfinite; /* their count of non-finite pixels */
     struct variant variants[MAX_VARIANTS];
     int n_variants;
+    uint64_t variant_clock;
     const struct render_light *light;
     struct render_mesh *meshes[MAX_MESHES];
     int n_meshes;
@@ -47,6 +51,14 @@ struct renderer {
     char opaque_defines[MAX_VARIANTS][256];
     int n_opaque;
     struct gpu_target target;
+    struct render_cells_programs cell_programs;
+    struct render_cells cells;      /* of beta */
+    struct render_cells pair_cells; /* of beta and beta_next (effects.temporal) */
+    bool pair_stale;                /* either changed since pair_cells were made */
+    bool counting;                  /* COUNT 1 (renderer_set_counting) */
+    bool half;                      /* volumes in RG16F (renderer_set_half) */
+    struct gpu_buffer counters;     /* 6 counts of two words each */
+    struct gpu_buffer rays;         /* SKIP: the rays the second pass marches */
     struct gpu_timer_queue timers;
     struct gpu_timings *timing; /* where the views' times go; NULL: untimed */
     struct progress *progress;  /* rows drawn are counted here (renderer_set_progress) */
@@ -58,20 +70,31 @@ static const struct gpu_program *variant(struct renderer *r, const char *defines
 {
     if (!defines)
         defines = "";
+    r->variant_clock++;
     for (int i = 0; i < r->n_variants; i++) {
-        if (strcmp(r->variants[i].defines, defines) == 0)
+        if (strcmp(r->variants[i].defines, defines) == 0) {
+            r->variants[i].used = r->variant_clock;
             return &r->variants[i].prog;
+        }
     }
-    if (r->n_variants == MAX_VARIANTS) {
-        gpu_program_finish(&r->variants[0].prog);
-        memmove(&r->variants[0], &r->variants[1], sizeof(r->variants[0]) * (MAX_VARIANTS - 1));
-        r->n_variants--;
+    /* Full: the least recently used goes, in place, so that the programs a draw holds (used
+     * just now) stay where they are. */
+    int slot = r->n_variants;
+    if (slot == MAX_VARIANTS) {
+        slot = 0;
+        for (int i = 1; i < MAX_VARIANTS; i++)
+            if (r->variants[i].used < r->variants[slot].used)
+                slot = i;
+        gpu_program_finish(&r->variants[slot].prog);
+        r->variants[slot].defines[0] = '\0';
     }
-    struct variant *v = &r->variants[r->n_variants];
-    snprintf(v->defines, sizeof(v->defines), "%s", defines);
+    struct variant *v = &r->variants[slot];
     if (!gpu_program_init(&v->prog, "raycast.comp", defines))
         return NULL;
-    r->n_variants++;
+    snprintf(v->defines, sizeof(v->defines), "%s", defines);
+    v->used = r->variant_clock;
+    if (slot == r->n_variants)
+        r->n_variants++;
     return &v->prog;
 }
 
@@ -80,7 +103,9 @@ struct renderer *renderer_create(void)
     struct renderer *r = calloc(1, sizeof(*r));
     if (!r)
         return NULL;
-    if (!variant(r, NULL) || !gpu_program_init(&r->tonemap, "tonemap.comp", NULL)) {
+    if (!variant(r, NULL) || !gpu_program_init(&r->tonemap, "tonemap.comp", NULL) ||
+        !gpu_program_init(&r->tonemap_packed, "tonemap.comp", "#define PACKED 1\n") ||
+        !render_cells_programs_init(&r->cell_programs)) {
         renderer_destroy(r);
         return NULL;
     }
@@ -103,26 +128,68 @@ void renderer_destroy(struct renderer *r)
     gpu_texture_finish(&r->tint);
     gpu_texture_finish(&r->phase);
     gpu_program_finish(&r->tonemap);
+    gpu_program_finish(&r->tonemap_packed);
+    gpu_texture_finish(&r->packed);
+    gpu_buffer_finish(&r->nonfinite);
     for (int i = 0; i < r->n_variants; i++)
         gpu_program_finish(&r->variants[i].prog);
     for (int i = 0; i < r->n_opaque; i++)
         gpu_program_finish(&r->opaque[i]);
     gpu_target_finish(&r->target);
+    render_cells_finish(&r->cells);
+    render_cells_finish(&r->pair_cells);
+    render_cells_programs_finish(&r->cell_programs);
+    gpu_buffer_finish(&r->counters);
+    gpu_buffer_finish(&r->rays);
     gpu_timer_queue_finish(&r->timers);
     free(r);
+}
+
+void renderer_set_half(struct renderer *r, bool half)
+{
+    r->half = half;
+}
+
+/* Puts VOL's extinction into TEX (made or remade for its size and the renderer's storage).
+ * Half floats: clamped to RENDER_HALF_MAX first (a larger float would become infinity), a few
+ * layers at a time, so the copy stays small. */
+static bool put_beta(struct renderer *r, struct gpu_texture *tex, const struct ext_volume *vol)
+{
+    const int *n = vol->grid.n;
+    enum gpu_format f = r->half ? GPU_RG16F : GPU_RG32F;
+    if (!tex->id || memcmp(tex->size, n, sizeof(int) * 3) != 0 || tex->format != f) {
+        gpu_texture_finish(tex);
+        if (!gpu_texture_init(tex, 3, n, f, NULL))
+            return false;
+    }
+    if (!r->half) {
+        gpu_texture_upload(tex, vol->beta);
+        return true;
+    }
+    size_t layer = (size_t)n[0] * n[1] * 2;
+    int step = 8;
+    float *tmp = malloc(layer * (size_t)step * sizeof(float));
+    if (!tmp) {
+        log_error("out of memory converting the volume to half floats");
+        return false;
+    }
+    for (int z = 0; z < n[2]; z += step) {
+        int count = n[2] - z < step ? n[2] - z : step;
+        const float *src = vol->beta + layer * (size_t)z;
+        for (size_t i = 0; i < layer * (size_t)count; i++)
+            tmp[i] = src[i] > RENDER_HALF_MAX ? RENDER_HALF_MAX : src[i];
+        gpu_texture_upload_layers(tex, z, count, tmp);
+    }
+    free(tmp);
+    return true;
 }
 
 bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
 {
     double start = time_now_ms();
     const int *n = vol->grid.n;
-    if (r->beta.id && memcmp(r->beta.size, n, sizeof(int) * 3) == 0) {
-        gpu_texture_upload(&r->beta, vol->beta);
-    } else {
-        gpu_texture_finish(&r->beta);
-        if (!gpu_texture_init(&r->beta, 3, n, GPU_RG32F, vol->beta))
-            return false;
-    }
+    if (!put_beta(r, &r->beta, vol))
+        return false;
     r->have_tint = vol->tint != NULL;
     if (vol->tint && r->tint.id && memcmp(r->tint.size, n, sizeof(int) * 3) == 0) {
         gpu_texture_upload(&r->tint, vol->tint);
@@ -135,6 +202,12 @@ bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
     }
     r->grid = vol->grid;
     r->have_volume = true;
+    r->pair_stale = true;
+    size_t voxels = (size_t)n[0] * n[1] * n[2];
+    r->stats.upload_bytes += voxels * (r->half ? 4 : 8) + (vol->tint ? voxels * 4 : 0);
+    r->stats.uploads++;
+    if (!render_cells_build(&r->cells, &r->cell_programs, &r->beta, NULL))
+        return false;
     r->stats.upload_ms = time_now_ms() - start;
     return true;
 }
@@ -147,17 +220,33 @@ bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol)
         return true;
     }
     const int *n = vol->grid.n;
-    if (r->beta_next.id && memcmp(r->beta_next.size, n, sizeof(int) * 3) == 0) {
-        gpu_texture_upload(&r->beta_next, vol->beta);
-    } else {
-        gpu_texture_finish(&r->beta_next);
-        r->have_next = false;
-        if (!gpu_texture_init(&r->beta_next, 3, n, GPU_RG32F, vol->beta))
-            return false;
-    }
+    r->have_next = false;
+    if (!put_beta(r, &r->beta_next, vol))
+        return false;
     r->grid_next = vol->grid;
     r->have_next = true;
+    r->pair_stale = true;
+    r->stats.upload_bytes += (size_t)n[0] * n[1] * n[2] * (r->half ? 4 : 8);
+    r->stats.uploads++;
     return true;
+}
+
+const struct render_cells *renderer_cells(const struct renderer *r)
+{
+    return &r->cells;
+}
+
+const struct render_cells *renderer_pair_cells(struct renderer *r)
+{
+    if (!r->have_next || !r->have_volume ||
+        memcmp(r->beta.size, r->beta_next.size, sizeof(r->beta.size)) != 0)
+        return NULL;
+    if (r->pair_stale) {
+        if (!render_cells_build(&r->pair_cells, &r->cell_programs, &r->beta, &r->beta_next))
+            return NULL;
+        r->pair_stale = false;
+    }
+    return &r->pair_cells;
 }
 
 bool renderer_has_next(const struct renderer *r)
@@ -265,40 +354,11 @@ static bool draw_opaque(struct renderer *r, const struct render_settings *s,
     return true;
 }
 
-bool renderer_draw(struct renderer *r, const struct render_settings *s,
-                   const struct render_view *view, struct gpu_texture *out)
+/* The uniforms and units every eye pass program of a draw reads. */
+static void eye_uniforms(struct renderer *r, const struct gpu_program *prog,
+                         const struct render_settings *s, const struct render_view *view,
+                         mat4 inv, const struct render_cells *cells)
 {
-    if (!r->have_volume) {
-        log_error("nothing to draw: no volume was set");
-        return false;
-    }
-    if (!ensure_texture(out, view->width, view->height, GPU_RGBA32F))
-        return false;
-    const char *light_defines = r->light && r->light->defines ? r->light->defines : "";
-    bool opaque = false;
-    for (int i = 0; i < r->n_meshes; i++)
-        opaque |= r->meshes[i]->visible;
-    char defines[384];
-    /* Temporal interpolation needs the next volume; without it the pass is the plain one. */
-    bool temporal = s->temporal && r->have_next;
-    /* Effects that are off are compiled out (app/effects.h). */
-    const char *phase = !s->single_phase    ? ""
-                        : s->single_phase_ice ? "#define PHASE_MIX 0\n#define PHASE_ICE 1\n"
-                                              : "#define PHASE_MIX 0\n#define PHASE_ICE 0\n";
-    snprintf(defines, sizeof(defines), "%s%s%s%s%s%s", light_defines,
-             opaque ? "#define OPAQUE 1\n" : "", phase,
-             s->no_ground_shadow ? "#define GROUND_SHADOW 0\n" : "",
-             r->have_tint ? "#define TINT 1\n" : "", temporal ? "#define TEMPORAL 1\n" : "");
-    const struct gpu_program *prog = variant(r, defines);
-    if (!prog)
-        return false;
-
-    /* cglm's SIMD code needs aligned matrices; the caller's need not be. */
-    mat4 proj, viewm, vp, inv;
-    memcpy(proj, view->proj, sizeof(proj));
-    memcpy(viewm, view->view, sizeof(viewm));
-    glm_mat4_mul(proj, viewm, vp);
-    glm_mat4_inv(vp, inv);
     const struct grid3 *g = &r->grid;
     float box_min[3], box_size[3];
     float voxel[3];
@@ -333,18 +393,89 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     gpu_uniform_ivec2(prog, "image_size", image_size);
     int zero[2] = {0, 0};
     gpu_uniform_ivec2(prog, "pixel_offset", zero);
+    /* Also the blend of a light map pair (LIGHTMAP_PAIR), which comes only with temporal. */
+    if (s->temporal)
+        gpu_uniform_float(prog, "temporal_f", s->temporal_f);
+    if (cells)
+        render_cells_bind(cells, prog, BIND_EYE_BUF_CELLS, g);
+    if (r->light && r->light->bind)
+        r->light->bind(r->light, prog);
+}
+
+/* The list of rays the second pass marches, large enough for a view of PIXELS, emptied. */
+static bool reset_rays(struct renderer *r, size_t pixels)
+{
+    size_t bytes = 16 + 8 * pixels;
+    if (r->rays.bytes < bytes) {
+        gpu_buffer_finish(&r->rays);
+        if (!gpu_buffer_init(&r->rays, bytes, NULL))
+            return false;
+    }
+    const uint32_t head[4] = {0, 1, 1, 0}; /* no work groups yet, one along y and z, no rays */
+    gpu_buffer_upload(&r->rays, 0, sizeof(head), head);
+    return true;
+}
+
+bool renderer_draw(struct renderer *r, const struct render_settings *s,
+                   const struct render_view *view, struct gpu_texture *out)
+{
+    if (!r->have_volume) {
+        log_error("nothing to draw: no volume was set");
+        return false;
+    }
+    if (!ensure_texture(out, view->width, view->height, GPU_RGBA32F))
+        return false;
+    const char *light_defines = r->light && r->light->defines ? r->light->defines : "";
+    bool opaque = false;
+    for (int i = 0; i < r->n_meshes; i++)
+        opaque |= r->meshes[i]->visible;
+    char defines[384];
+    /* Temporal interpolation needs the next volume; without it the pass is the plain one. */
+    bool temporal = s->temporal && r->have_next;
+    /* Effects that are off are compiled out (app/effects.h). */
+    const char *phase = !s->single_phase    ? ""
+                        : s->single_phase_ice ? "#define PHASE_MIX 0\n#define PHASE_ICE 1\n"
+                                              : "#define PHASE_MIX 0\n#define PHASE_ICE 0\n";
+    /* Empty-space skipping reads the cells of what the pass samples: with temporal the pair's.
+     * It takes two passes (raycast.comp, PASS 1 and 2); without it one (PASS 0). */
+    const struct render_cells *cells = NULL;
+    if (!s->no_skip)
+        cells = temporal ? renderer_pair_cells(r) : (r->cells.levels ? &r->cells : NULL);
+    const struct gpu_program *progs[2] = {NULL, NULL};
+    for (int pass = 0; pass < (cells ? 2 : 1); pass++) {
+        snprintf(defines, sizeof(defines), "%s%s%s%s%s%s%s%s#define PASS %d\n", light_defines,
+                 opaque ? "#define OPAQUE 1\n" : "", phase,
+                 s->no_ground_shadow ? "#define GROUND_SHADOW 0\n" : "",
+                 r->have_tint ? "#define TINT 1\n" : "", temporal ? "#define TEMPORAL 1\n" : "",
+                 cells ? "#define SKIP 1\n" : "", r->counting ? "#define COUNT 1\n" : "",
+                 cells ? pass + 1 : 0);
+        progs[pass] = variant(r, defines);
+        if (!progs[pass])
+            return false;
+    }
+
+    /* cglm's SIMD code needs aligned matrices; the caller's need not be. */
+    mat4 proj, viewm, vp, inv;
+    memcpy(proj, view->proj, sizeof(proj));
+    memcpy(viewm, view->view, sizeof(viewm));
+    glm_mat4_mul(proj, viewm, vp);
+    glm_mat4_inv(vp, inv);
+    for (int pass = 0; pass < (cells ? 2 : 1); pass++)
+        eye_uniforms(r, progs[pass], s, view, inv, cells);
     gpu_texture_bind(&r->beta, BIND_EYE_TEX_BETA);
     gpu_texture_bind(&r->phase, BIND_EYE_TEX_PHASE);
     if (r->have_tint)
         gpu_texture_bind(&r->tint, BIND_EYE_TEX_TINT);
     if (temporal)
         gpu_texture_bind(&r->beta_next, BIND_EYE_TEX_BETA_NEXT);
-    /* Also the blend of a light map pair (LIGHTMAP_PAIR), which comes only with temporal. */
-    if (s->temporal)
-        gpu_uniform_float(prog, "temporal_f", s->temporal_f);
     gpu_image_bind(out, BIND_EYE_IMG_OUT, true);
-    if (r->light && r->light->bind)
-        r->light->bind(r->light, prog);
+    if (r->counting)
+        gpu_buffer_bind(&r->counters, BIND_EYE_BUF_COUNTERS);
+    if (cells) {
+        if (!reset_rays(r, (size_t)view->width * view->height))
+            return false;
+        gpu_buffer_bind(&r->rays, BIND_EYE_BUF_RAYS);
+    }
 
     if (r->timing)
         gpu_timer_queue_begin(&r->timers);
@@ -354,17 +485,19 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
         gpu_texture_bind(&r->target.color, BIND_EYE_TEX_OPAQUE_COLOR);
         gpu_texture_bind(&r->target.value, BIND_EYE_TEX_OPAQUE_DISTANCE);
     }
-    if (!r->progress) {
-        gpu_uniform_int(prog, "row_offset", 0);
-        gpu_dispatch(prog, view->width, view->height, 1);
-    } else {
-        /* Bands of rows, each waited for, so that a long view says how far it is.  A band is
-         * whole work groups: every pixel is computed exactly as in one dispatch. */
-        const int band = 128;
-        for (int y = 0; y < view->height; y += band) {
-            int rows = view->height - y < band ? view->height - y : band;
-            gpu_uniform_int(prog, "row_offset", y);
-            gpu_dispatch(prog, view->width, rows, 1);
+    /* Bands of rows, each waited for, so that a long view says how far it is (a band is
+     * whole work groups: every pixel is computed exactly as in one dispatch); else one. */
+    const int band = r->progress ? 128 : view->height;
+    for (int y = 0; y < view->height; y += band) {
+        int rows = view->height - y < band ? view->height - y : band;
+        gpu_uniform_int(progs[0], "row_offset", y);
+        gpu_dispatch(progs[0], view->width, rows, 1);
+        if (cells) {
+            gpu_dispatch_indirect(progs[1], &r->rays, 0);
+            if (y + rows < view->height && !reset_rays(r, (size_t)view->width * view->height))
+                return false;
+        }
+        if (r->progress) {
             gpu_finish();
             r->progress_rows += (uint64_t)rows;
             progress_update(r->progress, r->progress_rows);
@@ -389,11 +522,77 @@ bool renderer_tonemap(struct renderer *r, const struct gpu_texture *in, float ex
     return true;
 }
 
+bool renderer_tonemap_read(struct renderer *r, const struct gpu_texture *in, float exposure,
+                           uint8_t *rgba, size_t *nonfinite)
+{
+    if (!ensure_texture(&r->packed, in->size[0], in->size[1], GPU_R32UI))
+        return false;
+    uint32_t zero = 0;
+    if (!r->nonfinite.id && !gpu_buffer_init(&r->nonfinite, sizeof(zero), &zero))
+        return false;
+    gpu_buffer_upload(&r->nonfinite, 0, sizeof(zero), &zero);
+    const struct gpu_program *p = &r->tonemap_packed;
+    gpu_uniform_ivec2(p, "image_size", in->size);
+    gpu_uniform_float(p, "exposure", exposure);
+    gpu_image_bind(in, BIND_TONEMAP_IMG_IN, false);
+    gpu_image_bind(&r->packed, BIND_TONEMAP_IMG_OUT, true);
+    gpu_buffer_bind(&r->nonfinite, BIND_TONEMAP_BUF_NONFINITE);
+    gpu_dispatch(p, in->size[0], in->size[1], 1);
+    /* r | g << 8 | b << 16 | a << 24 in a little-endian word: the bytes r, g, b, a. */
+    size_t n = (size_t)in->size[0] * in->size[1];
+    gpu_texture_read(&r->packed, rgba, n * 4);
+    const uint32_t one = 1;
+    if (*(const uint8_t *)&one == 0) { /* a big-endian host: the word's bytes the other way */
+        for (size_t i = 0; i < n; i++) {
+            uint8_t *p4 = rgba + 4 * i, t0 = p4[0], t1 = p4[1];
+            p4[0] = p4[3], p4[1] = p4[2], p4[2] = t1, p4[3] = t0;
+        }
+    }
+    if (nonfinite) {
+        uint32_t count = 0;
+        gpu_buffer_read(&r->nonfinite, 0, sizeof(count), &count);
+        *nonfinite = count;
+    }
+    return true;
+}
+
 bool renderer_read(const struct gpu_texture *tex, struct image *img)
 {
     if (!image_init(img, tex->size[0], tex->size[1]))
         return false;
     gpu_texture_read(tex, img->rgba, (size_t)img->width * img->height * 4 * sizeof(float));
+    return true;
+}
+
+bool renderer_set_counting(struct renderer *r, bool on)
+{
+    r->counting = false;
+    if (!on)
+        return true;
+    uint32_t zero[12] = {0};
+    if (!r->counters.id && !gpu_buffer_init(&r->counters, sizeof(zero), zero))
+        return false;
+    gpu_buffer_upload(&r->counters, 0, sizeof(zero), zero);
+    r->counting = true;
+    return true;
+}
+
+bool renderer_counts(struct renderer *r, struct render_counts *out)
+{
+    memset(out, 0, sizeof(*out));
+    if (!r->counters.id)
+        return false;
+    uint32_t w[12];
+    gpu_buffer_read(&r->counters, 0, sizeof(w), w);
+    uint64_t v[6];
+    for (int i = 0; i < 6; i++)
+        v[i] = (uint64_t)w[2 * i] | (uint64_t)w[2 * i + 1] << 32;
+    out->beta_samples = v[0];
+    out->light_reads = v[1];
+    out->cells_read = v[2];
+    out->steps_leapt = v[3];
+    out->rays = v[4];
+    out->rays_marched = v[5];
     return true;
 }
 

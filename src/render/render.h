@@ -13,6 +13,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "data/volume.h"
 #include "gpu/gpu.h"
@@ -36,6 +37,9 @@ struct render_settings {
      * blends beta = mix(beta_k, beta_k+1, temporal_f): TEMPORAL 1.  False: compiled out. */
     bool temporal;
     float temporal_f;      /* in [0, 1]; also the blend of a light map pair (LIGHTMAP_PAIR) */
+    /* Empty-space skipping off (SKIP 0): every step reads the volume, as before the macro
+     * cells; the pictures are the same (tests/gl/test_skip.c), only slower.  For comparisons. */
+    bool no_skip;
 };
 
 /* Steps one ray may take at most, whatever render.step asks: a bound on the work of a
@@ -54,6 +58,20 @@ struct render_view {
 struct render_stats {
     unsigned views;         /* views drawn */
     double upload_ms;       /* CPU+GPU time of the last volume upload */
+    uint64_t upload_bytes;  /* bytes of every volume uploaded (extinction, tints, next) */
+    unsigned uploads;       /* volumes uploaded */
+};
+
+/* What the views' rays did, summed over every view drawn since renderer_set_counting turned
+ * counting on: device-independent work (a GPU's time divides by these, not by pixels). */
+struct render_counts {
+    uint64_t beta_samples; /* trilinear extinction samples */
+    uint64_t light_reads;  /* light map lookups (a dense map: one filtered fetch each) */
+    uint64_t cells_read;   /* macro cells read by empty-space skipping */
+    uint64_t steps_leapt;  /* ray steps leapt without reading the volume */
+    uint64_t rays;         /* pixels cast */
+    uint64_t rays_marched; /* of them, those that met an occupied cell and were marched (with
+                              skipping; without, every ray is) */
 };
 
 /* Hooks for light maps: a light map binds its own textures/buffers and uniforms before the
@@ -70,8 +88,17 @@ struct renderer;
 struct renderer *renderer_create(void);
 void renderer_destroy(struct renderer *r);
 
+/* The largest extinction half-float storage holds, 1/m (the largest finite half float). */
+#define RENDER_HALF_MAX 65504.0f
+
+/* Stores the following volumes (renderer_set_volume, renderer_set_next_volume) in half floats
+ * (RG16F: half the memory, about three decimal digits; extinction beyond RENDER_HALF_MAX 1/m
+ * clamps to it, NaN and negative stay as they are and read as 0) or, HALF false (the default),
+ * in floats (RG32F). */
+void renderer_set_half(struct renderer *r, bool half);
+
 /* Uploads the extinction volume (replacing the last one; the texture is reused when the size
- * is unchanged).  The volume is not kept. */
+ * and storage are unchanged).  The volume is not kept. */
 bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol);
 /* The grid of the last volume set. */
 const struct grid3 *renderer_grid(const struct renderer *r);
@@ -101,6 +128,19 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
 bool renderer_tonemap(struct renderer *r, const struct gpu_texture *in, float exposure,
                       struct gpu_texture *out);
 
+/* Counts what the rays of every following view do (COUNT 1: one atomic add per ray and
+ * counter), from zero; false stops.  renderer_counts reads the sums back: it waits for the
+ * GPU, so call it for a report, not per frame.  False when counting was never on. */
+bool renderer_set_counting(struct renderer *r, bool on);
+bool renderer_counts(struct renderer *r, struct render_counts *out);
+
+/* Tone maps IN (RGBA32F) on the GPU as image_tonemap does on the CPU (to within one step of
+ * the last bit where pow differs) and reads the bytes back into RGBA (w x h x 4, the caller's),
+ * rows bottom to top; *NONFINITE (may be NULL) the pixels with a non-finite colour, as
+ * image_count_nonfinite counts them.  Waits for the GPU. */
+bool renderer_tonemap_read(struct renderer *r, const struct gpu_texture *in, float exposure,
+                           uint8_t *rgba, size_t *nonfinite);
+
 /* Reads an RGBA32F texture back into IMG (initialised here). */
 bool renderer_read(const struct gpu_texture *tex, struct image *img);
 
@@ -120,6 +160,62 @@ void renderer_set_timing(struct renderer *r, struct gpu_timings *log);
 /* Moves the view times the GPU has ready into their logs without waiting, or with WAIT all
  * of them (for a report at the end of a run).  Returns how many are still in flight. */
 int renderer_collect_timings(struct renderer *r, bool wait);
+
+/* ---- empty-space skipping -------------------------------------------------------------
+ * Beside each extinction texture the renderer keeps a pyramid of macro cells.  Level 0 holds,
+ * for each block of RENDER_CELL_VOXELS^3 voxels, the largest extinction (ice plus water; NaN
+ * and negative as 0) that a trilinear sample anywhere within half a voxel of the block can
+ * read: the block's voxels and one voxel around it.  Each further level holds the largest of
+ * 2 x 2 x 2 cells of the one below, up to one cell.  A cell holding 0 is empty: the eye pass
+ * leaps it (shaders/cells.glsl) and the light build reads no voxel in it, and both come out
+ * the same as without the leap. */
+
+#define RENDER_CELL_VOXELS 8
+#define RENDER_CELL_LEVELS 16
+
+struct render_cells {
+    struct gpu_buffer buf;                /* the header, then a float per cell, level 0 first */
+    int levels;                           /* 0: none built */
+    int dims[RENDER_CELL_LEVELS][4];      /* cells along x, y, z; the level's first index */
+    size_t count;                         /* cells of all levels */
+    int cell_voxels;                      /* voxels along a level-0 cell's edge */
+};
+
+struct render_cells_programs {
+    struct gpu_program build[2]; /* level 0 of one volume, of two (TEMPORAL) */
+    struct gpu_program reduce;
+};
+
+bool render_cells_programs_init(struct render_cells_programs *p);
+void render_cells_programs_finish(struct render_cells_programs *p);
+/* The levels' sizes for a volume of N voxels and cells of CELL_VOXELS (no GL; for tests). */
+void render_cells_layout(const int n[3], int cell_voxels, struct render_cells *c);
+/* Builds C (reusing its buffer when the size matches) from BETA, with NEXT (may be NULL, else
+ * of BETA's size) the larger of the two.  False (logged) when the buffer cannot be made. */
+bool render_cells_build(struct render_cells *c, const struct render_cells_programs *p,
+                        const struct gpu_texture *beta, const struct gpu_texture *next);
+void render_cells_finish(struct render_cells *c);
+/* Binds C's buffer at storage binding BINDING and sets PROG's uniform cell_size (a level-0
+ * cell in metres on GRID). */
+void render_cells_bind(const struct render_cells *c, const struct gpu_program *prog,
+                       unsigned binding, const struct grid3 *grid);
+/* Every cell's value, level 0 first (malloc'd, the caller frees; NULL logged).  Waits. */
+float *render_cells_read(const struct render_cells *c);
+
+/* The cells of the last volume set (levels 0 before one): valid until the next
+ * renderer_set_volume. */
+const struct render_cells *renderer_cells(const struct renderer *r);
+/* The cells of the pair of volumes (the larger of step k's and the next one's), made when
+ * first asked for after either changed; NULL without a next volume of the same size.  They
+ * serve the next volume's light build too: a cell empty in the pair is empty in both. */
+const struct render_cells *renderer_pair_cells(struct renderer *r);
+
+/* The rate of trilinear RG32F 3D texture fetches this device reaches, per second: a
+ * fetch-only pass (shaders/fetch_peak.comp) over a volume that stays in the texture cache, the
+ * best of three timed runs (GPU timer queries; wall time on a software driver).  What the eye
+ * pass's fetches are measured against (anvil bench --gpu).  False (logged) when the program or
+ * its textures cannot be made.  Needs the GL context. */
+bool render_fetch_peak(double *per_second);
 
 /* ---- opaque geometry -----------------------------------------------------------------
  * Meshes drawn in every view before the ray cast: each view's rays stop at their distance and

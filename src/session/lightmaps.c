@@ -47,11 +47,12 @@ static void bind_pair(const struct render_light *light, const struct gpu_program
  * (lightmaps_collect_timings). */
 static bool build(struct lightmaps *al, int which, const struct light_gpu_source *src,
                   const double sun[3], const struct light_settings *s, enum light_gpu_mode mode,
-                  bool one_phase, struct session_stats *st)
+                  bool half, bool one_phase, struct session_stats *st)
 {
     struct light_gpu *lg = which ? al->spare : al->gpu;
     bool built = false;
     light_gpu_set_timing(lg, al->timing);
+    light_gpu_set_half(lg, half);
     if (!light_gpu_update(lg, src, sun, s, mode, &built)) {
         log_error("lightmap.resolution [%d, %d, %d]: the light map could not be built (see "
                   "above); a smaller resolution needs less GPU memory",
@@ -74,7 +75,8 @@ static bool build(struct lightmaps *al, int which, const struct light_gpu_source
     if (known)
         snprintf(when, sizeof(when), "built in %.1f ms", ms);
     log_info("light map %dx%dx%d %s (%s%s%s%s)", s->resolution[0], s->resolution[1],
-             s->resolution[2], when, mode == LIGHT_GPU_DENSE ? "dense" : "compressed",
+             s->resolution[2], when,
+             mode != LIGHT_GPU_DENSE ? "compressed" : half ? "dense, half floats" : "dense",
              s->forward ? (s->peripheral ? ", forward and peripheral" : ", forward")
                         : ", shadow only",
              s->multiple ? (s->lateral ? ", diffuse light with lateral escape" : ", diffuse light")
@@ -103,23 +105,26 @@ static bool update_temporal(struct lightmaps *al, struct renderer *r,
         .grid = renderer_grid(r),
         .volume_id = al->step_id,
         .generation = TEMPORAL_GENERATION,
+        .cells = renderer_cells(r),
     };
     al->held[cur] = 0;
-    if (!build(al, cur, &src, p->sun, &p->light, p->mode, p->one_phase, st))
+    if (!build(al, cur, &src, p->sun, &p->light, p->mode, p->half, p->one_phase, st))
         return false;
     al->held[cur] = al->step_id;
     if (!pair) {
         renderer_set_light(r, light_gpu_render_light(maps[cur]));
         return true;
     }
+    /* The pair's cells are empty only where both steps are: they serve step k + 1 too. */
     struct light_gpu_source next = {
         .beta = renderer_next_texture(r),
         .grid = renderer_next_grid(r),
         .volume_id = al->next_id,
         .generation = TEMPORAL_GENERATION,
+        .cells = renderer_pair_cells(r),
     };
     al->held[1 - cur] = 0;
-    if (!build(al, 1 - cur, &next, p->sun, &p->light, p->mode, p->one_phase, st))
+    if (!build(al, 1 - cur, &next, p->sun, &p->light, p->mode, p->half, p->one_phase, st))
         return false;
     al->held[1 - cur] = al->next_id;
     al->pair_first = cur;
@@ -146,6 +151,7 @@ void lightmaps_params_from(const struct config *cfg, const struct effects *e, do
     effects_light_settings(cfg, e, &out->light);
     light_sun_direction(azimuth_deg, elevation_deg, out->sun);
     out->mode = cfg->lightmap.mode == LIGHTMAP_COMPRESSED ? LIGHT_GPU_COMPRESSED : LIGHT_GPU_DENSE;
+    out->half = cfg->render.precision == PRECISION_HALF;
 }
 
 bool lightmaps_update_params(struct lightmaps *al, const struct lightmaps_params *p,
@@ -162,9 +168,10 @@ bool lightmaps_update_params(struct lightmaps *al, const struct lightmaps_params
         .grid = renderer_grid(r),
         .volume_id = 1,
         .generation = al->generation,
+        .cells = renderer_cells(r),
     };
     al->held[0] = 0;
-    if (!build(al, 0, &src, p->sun, &p->light, p->mode, p->one_phase, st))
+    if (!build(al, 0, &src, p->sun, &p->light, p->mode, p->half, p->one_phase, st))
         return false;
     renderer_set_light(r, light_gpu_render_light(al->gpu));
     return true;

@@ -47,6 +47,7 @@ struct lightmaps_params {
     enum light_gpu_mode mode;
     bool shadows;                /* effects.shadows: without it there is no light map */
     bool one_phase;              /* effects.phase off (for the log) */
+    bool half;                   /* render.precision half: the dense map in half floats */
 };
 
 /* The parameters CFG's lightmap.* and E (NULL: decided without facts) ask for, with the sun at

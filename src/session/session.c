@@ -252,6 +252,8 @@ struct session *session_create(const struct config *cfg, const struct session_de
         /* Views are timed only when reported: on a software driver a timed view waits for
          * itself (gpu.h, "timers"). */
         renderer_set_timing(s->renderer, d->time_views ? &s->stats.view_times : NULL);
+        renderer_set_half(s->renderer, cfg->render.precision == PRECISION_HALF);
+        renderer_set_counting(s->renderer, d->count_rays);
         ok = renderer_set_optics(s->renderer, &cfg->optics.params) &&
              renderer_set_volume(s->renderer, &vol);
     }
@@ -1039,6 +1041,10 @@ void session_collect_timings(struct session *s, bool wait)
 {
     renderer_collect_timings(s->renderer, wait);
     lightmaps_collect_timings(&s->light, wait);
+    const struct render_stats *rs = renderer_stats(s->renderer);
+    s->stats.upload_bytes = (double)rs->upload_bytes;
+    if (wait && s->desc.count_rays && renderer_counts(s->renderer, &s->stats.counts))
+        s->stats.counted = true;
 }
 
 /* The light map's key besides the volume: the frame's sun, the effects' and the session's

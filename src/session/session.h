@@ -61,6 +61,8 @@ struct session_desc {
     double load_delay_ms;      /* tests: every time step of the series loads this much slower */
     bool replay_of_run;        /* the script is a recording of anvil run: the effects are
                                   decided as that run decided them (the sun could move) */
+    bool count_rays;           /* count what the views' rays do (renderer_set_counting; the
+                                  counts go to the stats at session_collect_timings(s, true)) */
 };
 
 /* Builds the session for CFG (copied) on the current GL context: the first volume, the

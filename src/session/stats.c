@@ -86,6 +86,21 @@ bool session_stats_json(const struct session_stats *st, int rank, const char *wa
             st->upload_ms_total);
     fprintf(f, "  \"frame_ms_max\": %.3f,\n  \"loop_ms\": %.3f,\n  \"first_frame_ms\": %.3f,\n",
             st->frame_ms_max, st->loop_ms, st->first_frame_ms);
+    fprintf(f, "  \"upload_bytes\": %.0f,\n", st->upload_bytes);
+    if (st->counted) {
+        /* Device-independent work of the views: per pixel drawn, and in all. */
+        const struct render_counts *c = &st->counts;
+        double rays = c->rays ? (double)c->rays : 1.0;
+        fprintf(f, "  \"rays\": %llu,\n  \"rays_marched\": %llu,\n",
+                (unsigned long long)c->rays, (unsigned long long)c->rays_marched);
+        fprintf(f, "  \"beta_samples\": %llu,\n  \"light_reads\": %llu,\n",
+                (unsigned long long)c->beta_samples, (unsigned long long)c->light_reads);
+        fprintf(f, "  \"cells_read\": %llu,\n  \"steps_leapt\": %llu,\n",
+                (unsigned long long)c->cells_read, (unsigned long long)c->steps_leapt);
+        fprintf(f, "  \"beta_samples_per_pixel\": %.3f,\n  \"light_reads_per_pixel\": %.3f,\n",
+                (double)c->beta_samples / rays, (double)c->light_reads / rays);
+        fprintf(f, "  \"steps_leapt_per_pixel\": %.3f,\n", (double)c->steps_leapt / rays);
+    }
     fprintf(f, "  \"volume_ms\": %.3f,\n  \"upload_ms\": %.3f,\n  \"total_ms\": %.3f\n}\n",
             st->volume_ms, st->upload_ms, st->total_ms);
     if (fclose(f) != 0 || !*text) {

@@ -9,6 +9,7 @@
 #include <stddef.h>
 
 #include "gpu/gpu.h"
+#include "render/render.h"
 
 struct session_stats {
     const char *command;
@@ -41,6 +42,10 @@ struct session_stats {
     double sync_ms;           /* a cluster's rank: time in the cluster's collectives (the frame
                                  broadcast, the step and failure agreements, the swap barrier;
                                  its wait for the slowest rank included) */
+    /* What the views' rays did (render_counts), when counted; and the volume bytes uploaded. */
+    bool counted;
+    struct render_counts counts;
+    double upload_bytes;
 };
 
 /* Counts a view drawn and a light map built; their times go to view_times and build_times. */

@@ -41,6 +41,24 @@ expect_exit 0 "bench --help" "$anvil" bench --help
 expect_exit 1 "bench: unknown scene" "$anvil" bench --scene nowhere
 expect_exit 2 "bench: exclusive options" "$anvil" bench --views-only --quality-only
 
+# CI-sized runs of the scale and GPU benchmarks: their tables, with what the rays did.
+"$anvil" bench --quick --scale-only -o "$tmp/s" >"$tmp/out" 2>"$tmp/err"
+rc=$?
+if [ "$rc" -eq 3 ]; then echo "skip: no GL context"; exit 77; fi
+check "scale bench exits 0" test "$rc" -eq 0
+check "scale table written" test -s "$tmp/s/scale-table.md"
+check "scale table: the empty box and the finer storm" \
+    test "$(grep -c '^| \(empty box\|storm 96x96x48\)' "$tmp/s/scale-table.md")" -eq 2
+check "scale table: the ratios" grep -q "The empty box's view ÷ the storm's" "$tmp/s/scale-table.md"
+# The empty box marches no ray and samples no voxel.
+check "scale table: the empty box reads nothing" \
+    grep -q '^| empty box 48x48x24 | 100 % | [0-9]* | [0-9]* | [0-9.]*x | 0 % | 0.0 |' "$tmp/s/scale-table.md"
+expect_exit 0 "gpu bench" "$anvil" bench --quick --gpu -o "$tmp/g"
+check "gpu table written" test -s "$tmp/g/gpu-table.md"
+check "gpu table: an HMD frame of two views and a CAVE frame of eight" \
+    bash -c "grep -q '^| HMD | 2 |' '$tmp/g/gpu-table.md' && grep -q '^| cave4 | 8 |' '$tmp/g/gpu-table.md'"
+check "gpu table names the device" grep -q "Device: " "$tmp/g/gpu-table.md"
+
 # A CI-sized quality run on the sphere: tables, CSV and both plots.
 "$anvil" bench --quick --quality-only --scene sphere -o "$tmp/b" --cache "$tmp/cache" \
     >"$tmp/out" 2>"$tmp/err"

@@ -43,6 +43,15 @@ for key in views light_map_builds view_ms build_ms gpu_bytes nonfinite_pixels; d
     check "stats has $key" grep -q "\"$key\"" "$tmp/stats.json"
 done
 check "stats: one view" grep -q '"views": 1,' "$tmp/stats.json"
+# What the rays did: every pixel counted once, a fraction of them marched (empty-space
+# skipping), a few extinction samples each, and the volume's bytes (48 x 48 x 24 x 8).
+check "stats: every ray counted" grep -q '"rays": 19200,' "$tmp/stats.json"
+check "stats: the volume's bytes uploaded" grep -q '"upload_bytes": 442368,' "$tmp/stats.json"
+marched=$(grep -o '"rays_marched": [0-9]*' "$tmp/stats.json" | grep -o '[0-9]*$')
+check "stats: some rays marched, not all ($marched)" test "${marched:-0}" -gt 0 -a "${marched:-0}" -lt 19200
+samples=$(grep -o '"beta_samples_per_pixel": [0-9.]*' "$tmp/stats.json" | grep -o '[0-9.]*$')
+check "stats: extinction samples per pixel ($samples)" \
+    awk -v v="${samples:-0}" 'BEGIN { exit !(v > 1 && v < 100) }'
 check "stats: no non-finite pixels" grep -q '"nonfinite_pixels": 0,' "$tmp/stats.json"
 expect_exit 0 "render PFM" "$anvil" render --quiet "$src/configs/default.cfg" $small \
     -o "$tmp/storm.pfm"

@@ -56,8 +56,9 @@ static double gpu_vs_cpu(const char **sets, int n, bool multiple, double *diffus
 
     struct light_gpu *lg = light_gpu_create();
     assert_non_null(lg);
-    struct light_gpu_source src = {renderer_volume_texture(renderer), renderer_grid(renderer),
-                                   1, 1};
+    /* With the volume's macro cells: samples in empty cells read no voxel. */
+    struct light_gpu_source src = {renderer_volume_texture(renderer), renderer_grid(renderer), 1,
+                                   1, renderer_cells(renderer)};
     bool built = false;
     assert_true(light_gpu_update(lg, &src, sun, &s, LIGHT_GPU_DENSE, &built));
     assert_true(built);
@@ -211,10 +212,12 @@ static void test_compressed_within_epsilon_of_dense(void **state)
 {
     struct config cfg;
     struct ext_volume vol = {0};
+    /* The beam alone (the compressed map keeps the diffuse light at half resolution:
+     * test_compressed_whole_map). */
     const char *sets[] = {"scene.size=[48,48,24]", "render.width=80", "render.height=60",
                           "lightmap.resolution=[48,48,48]", "lightmap.epsilon=0.02",
-                          "render.sky=[0,0,0]", "render.ground_on=false"};
-    test_config_from(&cfg, sets, 7);
+                          "render.sky=[0,0,0]", "render.ground_on=false", "effects.multiple=off"};
+    test_config_from(&cfg, sets, 8);
     test_upload_scene(renderer, &cfg, &vol);
     struct lightmaps al;
     struct session_stats st = {0};
@@ -245,6 +248,165 @@ static void test_compressed_within_epsilon_of_dense(void **state)
     image_finish(&dense);
     image_finish(&comp);
     lightmaps_finish(&al);
+    ext_volume_finish(&vol);
+}
+
+/* The GPU's compression (light_compress.comp) against the reference compressor run on the
+ * same dense map read back: the same columns, node for node (both in double, as
+ * light_compress_column and light_compress_column2), on the storm at two error bounds with
+ * its diffuse light and on the slab without. */
+static void test_gpu_compression_matches_cpu(void **state)
+{
+    const char *storm[] = {"scene.size=[48,48,24]", "lightmap.resolution=[40,36,48]"};
+    const char *slab[] = {"scene.kind=slab", "scene.size=[24,24,12]", "scene.extent=[10,10,2]",
+                          "scene.tau=6", "light.elevation=40", "lightmap.resolution=[32,32,40]"};
+    struct {
+        const char **sets;
+        int n;
+        double epsilon;
+        bool multiple;
+    } cases[] = {{storm, 2, 1.0 / 255.0, true}, {storm, 2, 0.02, true}, {slab, 6, 0.002, false}};
+    for (size_t c = 0; c < sizeof(cases) / sizeof(cases[0]); c++) {
+        struct config cfg;
+        struct ext_volume vol = {0};
+        test_config_from(&cfg, cases[c].sets, cases[c].n);
+        test_upload_scene(renderer, &cfg, &vol);
+        struct light_settings s;
+        settings_of(&cfg, &s);
+        s.epsilon = cases[c].epsilon;
+        s.multiple = cases[c].multiple;
+        double sun[3];
+        light_sun_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
+        struct light_gpu *lg = light_gpu_create();
+        assert_non_null(lg);
+        struct light_gpu_source src = {renderer_volume_texture(renderer),
+                                       renderer_grid(renderer), 1, 1, renderer_cells(renderer)};
+        struct light_map dense = {0};
+        struct light_compressed cpu = {0}, gpu = {0};
+        assert_true(light_gpu_update(lg, &src, sun, &s, LIGHT_GPU_DENSE, NULL));
+        assert_true(light_gpu_read(lg, &dense));
+        assert_true(light_compressed_build(&dense, s.epsilon, &cpu));
+        assert_true(light_gpu_update(lg, &src, sun, &s, LIGHT_GPU_COMPRESSED, NULL));
+        assert_true(light_gpu_read_compressed(lg, &gpu));
+        print_message("case %zu: %zu nodes on the GPU, %zu on the CPU, for %d columns\n", c,
+                      gpu.node_count, cpu.node_count, dense.grid.n[0] * dense.grid.n[1]);
+        assert_int_equal(gpu.node_count, cpu.node_count);
+        assert_true(cpu.node_count > (size_t)dense.grid.n[0] * dense.grid.n[1]); /* shadows */
+        assert_memory_equal(gpu.columns, cpu.columns,
+                            2 * sizeof(uint32_t) * dense.grid.n[0] * dense.grid.n[1]);
+        assert_memory_equal(gpu.nodes, cpu.nodes, 2 * sizeof(float) * cpu.node_count);
+        if (cases[c].multiple) {
+            print_message("  diffuse light: %zu nodes on the GPU, %zu on the CPU\n",
+                          gpu.diffuse_node_count, cpu.diffuse_node_count);
+            assert_non_null(gpu.diffuse_columns);
+            assert_int_equal(gpu.diffuse_node_count, cpu.diffuse_node_count);
+            assert_true(cpu.diffuse_node_count > (size_t)dense.grid.n[0] * dense.grid.n[1]);
+            assert_memory_equal(gpu.diffuse_columns, cpu.diffuse_columns,
+                                2 * sizeof(uint32_t) * dense.grid.n[0] * dense.grid.n[1]);
+            assert_memory_equal(gpu.diffuse_nodes, cpu.diffuse_nodes,
+                                3 * sizeof(float) * cpu.diffuse_node_count);
+            /* And the lookups within epsilon of the dense diffuse light's. */
+            double worst = 0.0;
+            for (int t = 0; t < 4000; t++) {
+                float tex[3] = {(float)((t * 37 % 1000) / 1000.0),
+                                (float)((t * 91 % 1000) / 1000.0),
+                                (float)((t * 53 % 1000) / 1000.0)};
+                float d[2], e[2];
+                light_map_sample_diffuse(&dense, tex, d);
+                light_compressed_sample_diffuse(&cpu, tex, e);
+                worst = fmax(worst, fmax(fabs(d[0] - e[0]), fabs(d[1] - e[1])));
+            }
+            print_message("  diffuse lookups: largest difference %.3g (epsilon %.3g)\n", worst,
+                          s.epsilon);
+            assert_true(worst <= s.epsilon * 1.001 + 1e-6);
+        } else {
+            assert_null(gpu.diffuse_columns);
+        }
+        /* The dense volume is gone: the compressed map is all the GPU keeps of the light. */
+        struct light_map none;
+        assert_false(light_gpu_read(lg, &none));
+        light_compressed_finish(&cpu);
+        light_compressed_finish(&gpu);
+        light_map_finish(&dense);
+        light_gpu_destroy(lg);
+        ext_volume_finish(&vol);
+    }
+}
+
+/* The whole compressed map, the beam's nodes and the diffuse light at half resolution in half
+ * floats, at epsilon = 1/255 on the default storm (on a 64 x 64 x 32 grid): at most a quarter
+ * of the dense map's bytes, and the picture within 1 % (RMS over RMS) of the dense map's. */
+static void test_compressed_whole_map(void **state)
+{
+    struct config cfg;
+    struct ext_volume vol = {0};
+    const char *sets[] = {"scene.size=[64,64,32]", "render.width=160", "render.height=120",
+                          "lightmap.epsilon=0.00392156862745098"};
+    test_config_from(&cfg, sets, 4);
+    test_upload_scene(renderer, &cfg, &vol);
+    struct lightmaps al;
+    struct session_stats dst = {0}, cst = {0};
+    struct image dense, comp;
+    assert_true(lightmaps_init(&al, &cfg));
+    render(&cfg, &al, &dst, NULL, &dense);
+    cfg.lightmap.mode = LIGHTMAP_COMPRESSED;
+    render(&cfg, &al, &cst, NULL, &comp);
+    double share = cst.light_bytes_compressed / cst.light_bytes_dense;
+    double diff = 0.0, sig = 0.0, worst = 0.0;
+    for (int i = 0; i < dense.width * dense.height * 4; i++) {
+        if (i % 4 == 3)
+            continue;
+        double d = (double)comp.rgba[i] - dense.rgba[i];
+        diff += d * d;
+        sig += (double)dense.rgba[i] * dense.rgba[i];
+        worst = fmax(worst, fabs(d) / fmax(fabs(dense.rgba[i]), 1e-3));
+    }
+    double err = sqrt(diff / sig);
+    print_message("compressed whole map: %.0f of %.0f bytes (%.1f %%), picture %.3f %% RMS off "
+                  "the dense map's (largest %.1f %%)\n",
+                  cst.light_bytes_compressed, cst.light_bytes_dense, 100.0 * share, 100.0 * err,
+                  100.0 * worst);
+    assert_true(cst.light_bytes_dense == dst.light_bytes_dense);
+    assert_true(share <= 0.25);
+    assert_true(err < 0.01);
+    image_finish(&dense);
+    image_finish(&comp);
+    lightmaps_finish(&al);
+    ext_volume_finish(&vol);
+}
+
+/* After a build the GPU holds the map and nothing of its making: the light (R32F), the
+ * diffuse light (RG32F) and the volume's lateral escape rates (RG32F, kept for the next sun);
+ * the slices and the column pass's scratch are given back.  Without multiple scattering only
+ * the light stays. */
+static void test_build_keeps_only_the_map(void **state)
+{
+    struct config cfg;
+    const char *sets[] = {"scene.size=[32,32,16]", "lightmap.resolution=[24,20,28]"};
+    test_config_from(&cfg, sets, 2);
+    struct ext_volume vol = {0};
+    test_upload_scene(renderer, &cfg, &vol);
+    struct light_settings s;
+    settings_of(&cfg, &s);
+    double sun[3];
+    light_sun_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
+    const size_t nodes = 24 * 20 * 28, voxels = 32 * 32 * 16;
+    for (int multiple = 1; multiple >= 0; multiple--) {
+        s.multiple = multiple;
+        size_t before = gpu_bytes_allocated();
+        struct light_gpu *lg = light_gpu_create();
+        assert_non_null(lg);
+        struct light_gpu_source src = {renderer_volume_texture(renderer),
+                                       renderer_grid(renderer), 1, 1, renderer_cells(renderer)};
+        assert_true(light_gpu_update(lg, &src, sun, &s, LIGHT_GPU_DENSE, NULL));
+        size_t kept = gpu_bytes_allocated() - before;
+        size_t want = multiple ? nodes * (4 + 8) + voxels * 8 : nodes * 4;
+        print_message("multiple %d: %zu bytes kept after the build (want %zu)\n", multiple, kept,
+                      want);
+        assert_int_equal(kept, want);
+        light_gpu_destroy(lg);
+        assert_int_equal(gpu_bytes_allocated(), before);
+    }
     ext_volume_finish(&vol);
 }
 
@@ -650,6 +812,9 @@ int main(void)
         cmocka_unit_test(test_gpu_matches_cpu_sphere),
         cmocka_unit_test(test_gpu_matches_cpu_slab),
         cmocka_unit_test(test_gpu_matches_cpu_storm),
+        cmocka_unit_test(test_build_keeps_only_the_map),
+        cmocka_unit_test(test_gpu_compression_matches_cpu),
+        cmocka_unit_test(test_compressed_whole_map),
         cmocka_unit_test(test_gpu_matches_cpu_diffuse),
         cmocka_unit_test(test_compressed_within_epsilon_of_dense),
         cmocka_unit_test(test_twelve_views_one_build),

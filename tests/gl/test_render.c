@@ -164,6 +164,60 @@ static void test_sun_along_axis_is_finite(void **state)
 
 /* A view drawn in bands of rows (with a progress to count them) is the view drawn at once, bit
  * for bit, and the rows are all counted. */
+/* The tone map on the GPU for files (renderer_tonemap_read) gives image_tonemap's bytes: on a
+ * ramp of radiance over six decades and at both exposures every value within one step of the
+ * CPU's and nearly all the same; NaN, infinities and negative values as the CPU takes them;
+ * the non-finite pixels counted as image_count_nonfinite counts them. */
+static void test_gpu_tonemap_matches_cpu(void **state)
+{
+    const int w = 256, h = 64;
+    struct image img;
+    assert_true(image_init(&img, w, h));
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            float *p = img.rgba + 4 * ((size_t)y * w + x);
+            float l = 1e-4f * powf(10.0f, 6.0f * (float)x / (float)(w - 1));
+            p[0] = l;
+            p[1] = l * (0.5f + (float)y / (float)h);
+            p[2] = l * 0.01f;
+            p[3] = 1.0f;
+        }
+    const float special[] = {NAN, INFINITY, -INFINITY, -1.0f, 0.0f, 3.4e38f};
+    for (int i = 0; i < 6; i++)
+        img.rgba[4 * i + 1] = special[i]; /* the first six pixels of the bottom row */
+    struct gpu_texture tex = {0};
+    int size[3] = {w, h, 1};
+    assert_true(gpu_texture_init(&tex, 2, size, GPU_RGBA32F, img.rgba));
+    uint8_t *gpu = malloc((size_t)w * h * 4);
+    assert_non_null(gpu);
+    const float exposures[] = {1.0f, 7.5f};
+    for (int e = 0; e < 2; e++) {
+        size_t nonfinite = 99;
+        assert_true(renderer_tonemap_read(renderer, &tex, exposures[e], gpu, &nonfinite));
+        assert_int_equal(nonfinite, image_count_nonfinite(&img));
+        assert_int_equal(nonfinite, 3);
+        int differ = 0, worst = 0;
+        for (size_t i = 0; i < (size_t)w * h; i++) {
+            for (int c = 0; c < 3; c++) {
+                int cpu = image_tonemap(img.rgba[4 * i + c], exposures[e]);
+                int d = abs(cpu - gpu[4 * i + c]);
+                worst = d > worst ? d : worst;
+                differ += d != 0;
+            }
+            assert_int_equal(gpu[4 * i + 3], 255);
+        }
+        for (int i = 0; i < 6; i++)
+            assert_int_equal(gpu[4 * i + 1], image_tonemap(special[i], exposures[e]));
+        print_message("exposure %g: %d of %d values differ from the CPU's, by at most %d\n",
+                      exposures[e], differ, w * h * 3, worst);
+        assert_true(worst <= 1);
+        assert_true(differ <= w * h * 3 / 100);
+    }
+    free(gpu);
+    gpu_texture_finish(&tex);
+    image_finish(&img);
+}
+
 static void test_bands_are_one_view(void **state)
 {
     struct config cfg;
@@ -195,6 +249,7 @@ int main(void)
         cmocka_unit_test(test_storm_is_finite_and_not_blank),
         cmocka_unit_test(test_sun_along_axis_is_finite),
         cmocka_unit_test(test_bands_are_one_view),
+        cmocka_unit_test(test_gpu_tonemap_matches_cpu),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     renderer_destroy(renderer);

@@ -93,8 +93,9 @@ static void gpu_light_map_with(const struct config *cfg, bool forward, bool peri
     light_sun_direction(cfg->light.azimuth_deg, cfg->light.elevation_deg, sun);
     struct light_gpu *lg = light_gpu_create();
     assert_non_null(lg);
-    struct light_gpu_source src = {renderer_volume_texture(renderer), renderer_grid(renderer),
-                                   1, 1};
+    /* With the volume's macro cells: samples in empty cells read no voxel. */
+    struct light_gpu_source src = {renderer_volume_texture(renderer), renderer_grid(renderer), 1,
+                                   1, renderer_cells(renderer)};
     assert_true(light_gpu_update(lg, &src, sun, &s, LIGHT_GPU_DENSE, NULL));
     assert_true(light_gpu_read(lg, map));
     size_t count = (size_t)map->grid.n[0] * map->grid.n[1] * map->grid.n[2];
@@ -463,16 +464,16 @@ static void test_extreme_asymmetry(void **state)
 
 /* ---- fp16 -------------------------------------------------------------------------------- */
 
-static void test_fp16_refused_for_extinction(void **state)
+static void test_fp16_storage(void **state)
 {
-    /* Extinction is stored as 32-bit float whatever its size: 1e6 / m (beyond half precision's
-     * 65504) round-trips exactly through the renderer's texture. */
+    /* By default extinction is stored as 32-bit float whatever its size: 1e6 / m (beyond half
+     * precision's 65504) round-trips exactly through the renderer's texture. */
     struct grid3 g = {.n = {2, 2, 2}, .origin = {0, 0, 0}, .spacing = {1, 1, 1}};
     struct ext_volume vol = {0};
     assert_true(ext_volume_init(&vol, &g));
     for (int i = 0; i < 8; i++) {
         vol.beta[2 * i] = 1e6f;
-        vol.beta[2 * i + 1] = 3e5f;
+        vol.beta[2 * i + 1] = i == 0 ? INFINITY : i == 1 ? NAN : i == 2 ? -5.0f : 3e-3f;
     }
     assert_true(renderer_set_volume(renderer, &vol));
     const struct gpu_texture *t = renderer_volume_texture(renderer);
@@ -480,8 +481,23 @@ static void test_fp16_refused_for_extinction(void **state)
     float back[16];
     gpu_texture_read(t, back, sizeof(back));
     for (int i = 0; i < 8; i++)
-        assert_true(back[2 * i] == 1e6f && back[2 * i + 1] == 3e5f);
-    /* What fp16 would do to it: not the value (infinity or the largest half). */
+        assert_true(back[2 * i] == 1e6f);
+    /* Half floats (render.precision = "half"): what lies beyond 65504 clamps to it, never to
+     * infinity; infinity too; NaN and negative stay what they were (they read as 0); the rest
+     * keeps three digits. */
+    renderer_set_half(renderer, true);
+    assert_true(renderer_set_volume(renderer, &vol));
+    t = renderer_volume_texture(renderer);
+    assert_int_equal(t->format, GPU_RG16F);
+    gpu_texture_read(t, back, sizeof(back));
+    for (int i = 0; i < 8; i++)
+        assert_true(back[2 * i] == RENDER_HALF_MAX);
+    assert_true(back[1] == RENDER_HALF_MAX);
+    assert_true(isnan(back[3]));
+    assert_true(back[5] == -5.0f);
+    for (int i = 3; i < 8; i++)
+        assert_float_equal(back[2 * i + 1], 3e-3f, 3e-3f * 1e-3f);
+    /* Without the clamp the GPU would have stored what is no value: infinity or less. */
     struct gpu_texture half = {0};
     int size[3] = {2, 2, 2};
     assert_true(gpu_texture_init(&half, 3, size, GPU_RG16F, vol.beta));
@@ -489,6 +505,37 @@ static void test_fp16_refused_for_extinction(void **state)
     gpu_texture_read(&half, h, sizeof(h));
     assert_true(h[0] != 1e6f && (isinf(h[0]) || h[0] <= 65504.0f));
     gpu_texture_finish(&half);
+    ext_volume_finish(&vol);
+
+    /* The clamped extinction in a picture: a slab of 1e5 / m (optical depth 1e6 through its
+     * 10 m) in half floats with a half-float light map is as black as in floats: finite, no
+     * light through it, the sky around it. */
+    struct config cfg;
+    const char *sets[] = {"scene.kind=slab",         "scene.size=[8,8,4]",
+                          "scene.extent=[0.1,0.1,0.01]", "scene.tau=1e6",
+                          "camera.position=[0.05,-0.15,0.06]",
+                          "camera.target=[0.05,0.05,0.005]", "render.width=32",
+                          "render.height=32", "render.precision=half", "render.sky=[1,1,1]"};
+    test_config_from(&cfg, sets, 10);
+    renderer_set_half(renderer, true);
+    test_upload_scene(renderer, &cfg, &vol);
+    assert_true(vol.beta[0] + vol.beta[1] > RENDER_HALF_MAX); /* it is clamped */
+    struct image img[2];
+    draw(&cfg, NULL, true, &img[0]);
+    renderer_set_half(renderer, false);
+    cfg.render.precision = PRECISION_FLOAT;
+    assert_true(renderer_set_volume(renderer, &vol));
+    draw(&cfg, NULL, true, &img[1]);
+    int blocked = 0;
+    for (int i = 0; i < 32 * 32; i++) {
+        for (int c = 0; c < 4; c++)
+            assert_true(isfinite(img[0].rgba[4 * i + c]));
+        assert_float_equal(img[0].rgba[4 * i + 3], img[1].rgba[4 * i + 3], 1e-6);
+        blocked += img[0].rgba[4 * i + 3] == 0.0f;
+    }
+    assert_true(blocked > 100); /* the slab is seen, and nothing passes it */
+    image_finish(&img[0]);
+    image_finish(&img[1]);
     ext_volume_finish(&vol);
 }
 
@@ -595,7 +642,7 @@ int main(void)
         cmocka_unit_test(test_axis_and_grazing_sun),
         cmocka_unit_test(test_camera_on_faces_edges_inside),
         cmocka_unit_test(test_extreme_asymmetry),
-        cmocka_unit_test(test_fp16_refused_for_extinction),
+        cmocka_unit_test(test_fp16_storage),
         cmocka_unit_test(test_bad_values_in_the_volume),
         cmocka_unit_test(test_extreme_aspect),
     };

@@ -1498,6 +1498,65 @@ static void test_compressed_within_epsilon(void **state)
     ext_volume_finish(&v);
 }
 
+/* Two functions compressed together (light_compress_column2, the diffuse light's M and N):
+ * with both the same, the nodes of light_compress_column; with one constant, the other's
+ * nodes; in general every sample of each within epsilon, and a node wherever either needs
+ * one. */
+static void test_compress_two_channels(void **state)
+{
+    float d[40], a[40], b[40], one[80], two[120];
+    for (int i = 0; i < 40; i++) {
+        d[i] = (float)i;
+        a[i] = (float)(0.5 + 0.4 * sin(0.3 * i) * exp(-0.05 * i));
+        b[i] = 0.3f;
+    }
+    const double eps[] = {0.0, 0.002, 0.05};
+    for (size_t e = 0; e < sizeof eps / sizeof eps[0]; e++) {
+        int m1 = light_compress_column(d, a, 40, eps[e], one);
+        int m2 = light_compress_column2(d, a, a, 40, eps[e], two);
+        assert_int_equal(m2, m1);
+        for (int i = 0; i < m1; i++) {
+            assert_true(two[3 * i] == one[2 * i]);
+            assert_true(two[3 * i + 1] == one[2 * i + 1] && two[3 * i + 2] == one[2 * i + 1]);
+        }
+        m2 = light_compress_column2(d, a, b, 40, eps[e], two);
+        assert_int_equal(m2, m1); /* the constant needs no node of its own */
+        for (int i = 0; i < m1; i++)
+            assert_true(two[3 * i + 2] == 0.3f);
+    }
+    /* A ramp in one, a kink in the other: the kink's node is kept for both. */
+    for (int i = 0; i < 40; i++) {
+        a[i] = 1.0f - 0.02f * (float)i;
+        b[i] = i < 20 ? 0.0f : 0.05f * (float)(i - 20);
+    }
+    assert_int_equal(light_compress_column(d, a, 40, 0.001, one), 2);
+    int m = light_compress_column2(d, a, b, 40, 0.001, two);
+    assert_int_equal(m, 3);
+    assert_true(two[3] == 19.0f || two[3] == 20.0f);
+    /* Within epsilon everywhere, on a noisy pair. */
+    for (int i = 0; i < 40; i++) {
+        a[i] = (float)(2.0 + sin(1.7 * i) + 0.1 * i);
+        b[i] = (float)(-1.0 + cos(0.9 * i));
+    }
+    m = light_compress_column2(d, a, b, 40, 0.01, two);
+    assert_true(m > 2 && m <= 40);
+    for (int i = 0; i < 40; i++) {
+        int s = 0;
+        while (s + 1 < m && two[3 * (s + 1)] <= d[i])
+            s++;
+        float va, vb;
+        if (s + 1 >= m || d[i] <= two[3 * s]) {
+            va = two[3 * s + 1];
+            vb = two[3 * s + 2];
+        } else {
+            float f = (d[i] - two[3 * s]) / (two[3 * (s + 1)] - two[3 * s]);
+            va = two[3 * s + 1] + f * (two[3 * (s + 1) + 1] - two[3 * s + 1]);
+            vb = two[3 * s + 2] + f * (two[3 * (s + 1) + 2] - two[3 * s + 2]);
+        }
+        assert_true(fabs(va - a[i]) <= 0.01 + 1e-6 && fabs(vb - b[i]) <= 0.01 + 1e-6);
+    }
+}
+
 static void test_compress_degenerate(void **state)
 {
     float out[64];
@@ -1763,6 +1822,7 @@ int main(void)
         cmocka_unit_test(test_diffuse_map_layer),
         cmocka_unit_test(test_compressed_within_epsilon),
         cmocka_unit_test(test_compress_degenerate),
+        cmocka_unit_test(test_compress_two_channels),
         cmocka_unit_test(test_compression_reduces),
         cmocka_unit_test(test_key_and_cache),
         cmocka_unit_test(test_storm_memory_figures),

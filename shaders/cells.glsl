@@ -1,0 +1,68 @@
+// Empty-space skipping: lookups in the macro-cell pyramid (render/cells.c, cells_build.comp).
+// The including program declares the storage block `macro_cells` (cell_dims, cell_header,
+// cell_max) at its own binding.  Level L's cells are 2^L level-0 cells of cell_header.y
+// voxels on a side; a cell holding 0 is one in which every trilinear sample of the volume,
+// taken anywhere within half a voxel of it, reads exactly 0.
+
+// The index in cell_max of the cell of level L holding C (cells, clamped to the level).
+int cell_index(ivec3 c, int level)
+{
+    ivec4 d = cell_dims[level];
+    c = clamp(c, ivec3(0), d.xyz - 1);
+    return d.w + c.x + d.x * (c.y + d.y * c.z);
+}
+
+// Whether the level-0 cell holding the voxel coordinate X (voxel units from the volume's
+// corner) is clear: then the trilinear sample at X reads 0.
+bool cell_clear_at_voxel(vec3 x)
+{
+    ivec3 c = ivec3(floor(x / float(cell_header.y)));
+    return cell_max[cell_index(c, 0)] <= 0.0;
+}
+
+// From T on, the ray ORIGIN + t DIR (INV_DIR: 1 / DIR, finite) crosses cells that hold
+// nothing up to the returned parameter (T itself when T's level-0 cell is occupied, at most
+// T_END); OCCUPIED_END is where the occupied level-0 cell it stopped at ends (the return value
+// when it stopped at T_END).  BOX_MIN is the volume's corner, CELL_SIZE a level-0 cell in
+// metres, NUDGE a distance far below half a voxel that steps a point off a cell's face.
+// The walk starts at the top of the pyramid, goes down into occupied cells and up again when
+// a leap leaves the parent cell; CELLS counts the cells it read.
+float cells_skip(vec3 origin, vec3 dir, vec3 inv_dir, float t, float t_end, vec3 box_min,
+                 vec3 cell_size, float nudge, out float occupied_end, inout uint cells)
+{
+    int top = cell_header.x - 1;
+    int level = top;
+    for (int it = 0; it < 1024 && t < t_end; it++) {
+        float nt = max(nudge, 4e-7 * abs(t));
+        vec3 cs = cell_size * float(1 << level);
+        vec3 p = origin + dir * (t + nt);
+        ivec3 c = ivec3(floor((p - box_min) / cs));
+        c = clamp(c, ivec3(0), cell_dims[level].xyz - 1);
+        float m = cell_max[cell_index(c, level)];
+        cells++;
+        vec3 lo = box_min + vec3(c) * cs;
+        vec3 ta = (lo - origin) * inv_dir, tb = (lo + cs - origin) * inv_dir;
+        vec3 tx = max(ta, tb);
+        float exit = min(tx.x, min(tx.y, tx.z));
+        if (m > 0.0) {
+            if (level == 0) {
+                occupied_end = max(exit, t + nt);
+                return t;
+            }
+            level--;
+            continue;
+        }
+        t = max(exit, t + nt);
+        // Up a level when the ray has left the parent cell too (its parent may be clear);
+        // inside the same parent the siblings are read at this level.
+        if (level < top) {
+            vec3 q = origin + dir * (t + max(nudge, 4e-7 * abs(t)));
+            ivec3 cn = ivec3(floor((q - box_min) / cs));
+            if (any(notEqual(cn >> 1, c >> 1)))
+                level++;
+        }
+    }
+    t = min(t, t_end);
+    occupied_end = t;
+    return t;
+}

@@ -1,0 +1,119 @@
+/* The macro-cell pyramid of empty-space skipping (render.h, "empty-space skipping"): level 0
+ * from the extinction texture (shaders/cells_build.comp), each further level the maxima of
+ * the one below (shaders/cells_reduce.comp), all in one storage buffer behind a header of the
+ * levels' sizes, so that the eye pass and the light build read it without uniform arrays. */
+#include "render/render.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/log.h"
+#include "shaders/bindings.h"
+
+/* The buffer's header: RENDER_CELL_LEVELS ivec4 (cells along x, y, z, the level's first
+ * index) and one ivec4 (levels, voxels per cell edge, 0, 0), as the shaders declare it. */
+#define HEADER_INTS (4 * RENDER_CELL_LEVELS + 4)
+
+bool render_cells_programs_init(struct render_cells_programs *p)
+{
+    memset(p, 0, sizeof(*p));
+    return gpu_program_init(&p->build[0], "cells_build.comp", "#define TEMPORAL 0\n") &&
+           gpu_program_init(&p->build[1], "cells_build.comp", "#define TEMPORAL 1\n") &&
+           gpu_program_init(&p->reduce, "cells_reduce.comp", NULL);
+}
+
+void render_cells_programs_finish(struct render_cells_programs *p)
+{
+    for (int i = 0; i < 2; i++)
+        gpu_program_finish(&p->build[i]);
+    gpu_program_finish(&p->reduce);
+}
+
+void render_cells_layout(const int n[3], int cell_voxels, struct render_cells *c)
+{
+    memset(c->dims, 0, sizeof(c->dims));
+    c->cell_voxels = cell_voxels;
+    size_t count = 0;
+    int d[3];
+    for (int a = 0; a < 3; a++)
+        d[a] = (n[a] + cell_voxels - 1) / cell_voxels;
+    int level = 0;
+    for (;;) {
+        for (int a = 0; a < 3; a++)
+            c->dims[level][a] = d[a];
+        c->dims[level][3] = (int)count;
+        count += (size_t)d[0] * d[1] * d[2];
+        level++;
+        if ((d[0] == 1 && d[1] == 1 && d[2] == 1) || level == RENDER_CELL_LEVELS)
+            break;
+        for (int a = 0; a < 3; a++)
+            d[a] = (d[a] + 1) / 2;
+    }
+    c->levels = level;
+    c->count = count;
+}
+
+bool render_cells_build(struct render_cells *c, const struct render_cells_programs *p,
+                        const struct gpu_texture *beta, const struct gpu_texture *next)
+{
+    struct render_cells layout = {0};
+    render_cells_layout(beta->size, RENDER_CELL_VOXELS, &layout);
+    size_t bytes = HEADER_INTS * sizeof(int) + layout.count * sizeof(float);
+    if (!c->buf.id || c->buf.bytes != bytes) {
+        gpu_buffer_finish(&c->buf);
+        if (!gpu_buffer_init(&c->buf, bytes, NULL)) {
+            c->levels = 0;
+            return false;
+        }
+    }
+    struct gpu_buffer buf = c->buf;
+    *c = layout;
+    c->buf = buf;
+    int header[HEADER_INTS] = {0};
+    memcpy(header, c->dims, sizeof(c->dims));
+    header[4 * RENDER_CELL_LEVELS] = c->levels;
+    header[4 * RENDER_CELL_LEVELS + 1] = c->cell_voxels;
+    gpu_buffer_upload(&c->buf, 0, sizeof(header), header);
+
+    const struct gpu_program *b = &p->build[next ? 1 : 0];
+    gpu_uniform_ivec3(b, "vol_n", beta->size);
+    gpu_texture_bind(beta, BIND_CELLS_TEX_BETA);
+    if (next)
+        gpu_texture_bind(next, BIND_CELLS_TEX_BETA_NEXT);
+    gpu_buffer_bind(&c->buf, BIND_CELLS_BUF_CELLS);
+    gpu_dispatch(b, c->dims[0][0], c->dims[0][1], c->dims[0][2]);
+    for (int level = 1; level < c->levels; level++) {
+        gpu_uniform_int(&p->reduce, "level", level);
+        gpu_dispatch(&p->reduce, c->dims[level][0], c->dims[level][1], c->dims[level][2]);
+    }
+    return true;
+}
+
+void render_cells_finish(struct render_cells *c)
+{
+    gpu_buffer_finish(&c->buf);
+    memset(c, 0, sizeof(*c));
+}
+
+void render_cells_bind(const struct render_cells *c, const struct gpu_program *prog,
+                       unsigned binding, const struct grid3 *grid)
+{
+    float size[3];
+    for (int a = 0; a < 3; a++)
+        size[a] = (float)(c->cell_voxels * grid->spacing[a]);
+    gpu_uniform_vec3(prog, "cell_size", size);
+    gpu_buffer_bind(&c->buf, binding);
+}
+
+float *render_cells_read(const struct render_cells *c)
+{
+    if (!c->buf.id)
+        return NULL;
+    float *out = malloc(c->count * sizeof(float));
+    if (!out) {
+        log_error("out of memory reading %zu macro cells", c->count);
+        return NULL;
+    }
+    gpu_buffer_read(&c->buf, HEADER_INTS * sizeof(int), c->count * sizeof(float), out);
+    return out;
+}

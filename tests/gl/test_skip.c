@@ -1,0 +1,342 @@
+/* Empty-space skipping on EGL/llvmpipe (render.h, "empty-space skipping"): the macro cells
+ * hold what a CPU computes from the same voxels, and leaping the empty ones leaves every
+ * picture as it was without them (render.skip = false, the eye pass of before), while the rays
+ * do measurably less: fewer extinction samples, steps leapt, rays never marched. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+
+#include "session/effects.h"
+#include "session/lightmaps.h"
+#include "session/scene.h"
+#include "common/log.h"
+#include "gpu/gpu.h"
+#include "render/render.h"
+
+static struct gpu_context *ctx;
+static struct renderer *renderer;
+
+/* What the GPU's cells must hold: per level-0 cell the largest ice + water extinction (NaN and
+ * negative as 0, infinity as 1e30) over the cell's voxels and one voxel around it, clamped to
+ * the volume; each further level the largest of its 2 x 2 x 2 children.  NEXT (may be NULL)
+ * is a second volume of the same grid whose values count too. */
+static float *cpu_cells(const struct ext_volume *vol, const struct ext_volume *next,
+                        struct render_cells *layout)
+{
+    const int *n = vol->grid.n;
+    render_cells_layout(n, RENDER_CELL_VOXELS, layout);
+    float *out = calloc(layout->count, sizeof(float));
+    assert_non_null(out);
+    const int b = RENDER_CELL_VOXELS;
+    const int *d0 = layout->dims[0];
+    for (int cz = 0; cz < d0[2]; cz++)
+        for (int cy = 0; cy < d0[1]; cy++)
+            for (int cx = 0; cx < d0[0]; cx++) {
+                int c[3] = {cx, cy, cz}, lo[3], hi[3];
+                for (int a = 0; a < 3; a++) {
+                    lo[a] = c[a] * b - 1 < 0 ? 0 : c[a] * b - 1;
+                    hi[a] = c[a] * b + b > n[a] - 1 ? n[a] - 1 : c[a] * b + b;
+                }
+                float m = 0.0f;
+                for (int z = lo[2]; z <= hi[2]; z++)
+                    for (int y = lo[1]; y <= hi[1]; y++)
+                        for (int x = lo[0]; x <= hi[0]; x++) {
+                            size_t v = (size_t)x + (size_t)n[0] * ((size_t)y + (size_t)n[1] * z);
+                            for (int k = 0; k < (next ? 2 : 1); k++) {
+                                const float *beta = k ? next->beta : vol->beta;
+                                float s = 0.0f;
+                                for (int ch = 0; ch < 2; ch++) {
+                                    float f = beta[2 * v + ch];
+                                    s += f > 0.0f ? fminf(f, 1e30f) : 0.0f;
+                                }
+                                m = fmaxf(m, s);
+                            }
+                        }
+                out[cx + d0[0] * (cy + d0[1] * cz)] = m;
+            }
+    for (int l = 1; l < layout->levels; l++) {
+        const int *d = layout->dims[l], *e = layout->dims[l - 1];
+        for (int cz = 0; cz < d[2]; cz++)
+            for (int cy = 0; cy < d[1]; cy++)
+                for (int cx = 0; cx < d[0]; cx++) {
+                    float m = 0.0f;
+                    for (int z = 2 * cz; z <= 2 * cz + 1 && z < e[2]; z++)
+                        for (int y = 2 * cy; y <= 2 * cy + 1 && y < e[1]; y++)
+                            for (int x = 2 * cx; x <= 2 * cx + 1 && x < e[0]; x++)
+                                m = fmaxf(m, out[e[3] + x + e[0] * (y + e[1] * z)]);
+                    out[d[3] + cx + d[0] * (cy + d[1] * cz)] = m;
+                }
+    }
+    return out;
+}
+
+/* Compares the GPU's cells CELLS with the CPU's for VOL (and NEXT); returns the share of
+ * level-0 cells that are empty. */
+static double check_cells(const struct render_cells *cells, const struct ext_volume *vol,
+                          const struct ext_volume *next)
+{
+    struct render_cells layout;
+    float *want = cpu_cells(vol, next, &layout);
+    assert_int_equal(cells->levels, layout.levels);
+    assert_int_equal(cells->count, layout.count);
+    assert_memory_equal(cells->dims, layout.dims, sizeof(layout.dims));
+    const int *top = layout.dims[layout.levels - 1];
+    assert_int_equal(top[0] * top[1] * top[2], 1); /* the pyramid ends in one cell */
+    float *got = render_cells_read(cells);
+    assert_non_null(got);
+    for (size_t i = 0; i < layout.count; i++) {
+        if (got[i] != want[i])
+            fail_msg("cell %zu: GPU %g, CPU %g", i, got[i], want[i]);
+    }
+    size_t n0 = (size_t)layout.dims[0][0] * layout.dims[0][1] * layout.dims[0][2], clear = 0;
+    for (size_t i = 0; i < n0; i++)
+        clear += want[i] == 0.0f;
+    free(got);
+    free(want);
+    return (double)clear / (double)n0;
+}
+
+/* The macro cells of a storm with bad values in it (NaN, infinity, negative), and of a single
+ * voxel on a cell's face, whose footprint reaches into the neighbouring cell. */
+static void test_cells_match_cpu(void **state)
+{
+    struct config cfg;
+    const char *sets[] = {"scene.size=[44,37,21]"};
+    test_config_from(&cfg, sets, 1);
+    struct ext_volume vol = {0};
+    assert_true(scene_build_volume(&cfg, &vol));
+    size_t count = (size_t)vol.grid.n[0] * vol.grid.n[1] * vol.grid.n[2];
+    vol.beta[2 * (count / 3)] = NAN;
+    vol.beta[2 * (count / 2) + 1] = INFINITY;
+    vol.beta[2 * (count / 5)] = -1.0f;
+    assert_true(renderer_set_volume(renderer, &vol));
+    double clear = check_cells(renderer_cells(renderer), &vol, NULL);
+    print_message("storm 44x37x21: %.0f %% of the cells empty\n", 100.0 * clear);
+    assert_true(clear > 0.3 && clear < 0.95); /* a test of both kinds of cell */
+    ext_volume_finish(&vol);
+
+    const char *one[] = {"scene.kind=voxel", "scene.size=[17,17,17]", "scene.extent=[17,17,17]"};
+    test_config_from(&cfg, one, 3);
+    assert_true(scene_build_volume(&cfg, &vol));
+    assert_true(renderer_set_volume(renderer, &vol));
+    /* Voxel (8, 8, 8) is the first of cell 1 along each axis: trilinear samples in cell 0
+     * within a voxel of it read it, so cell 0 must hold it too, and cell 2 must not. */
+    const struct render_cells *c = renderer_cells(renderer);
+    check_cells(c, &vol, NULL);
+    float *got = render_cells_read(c);
+    const int *d = c->dims[0];
+    assert_true(got[0 + d[0] * (0 + d[1] * 0)] > 0.0f);
+    assert_true(got[1 + d[0] * (1 + d[1] * 1)] > 0.0f);
+    assert_true(got[2 + d[0] * (2 + d[1] * 2)] == 0.0f);
+    free(got);
+    ext_volume_finish(&vol);
+}
+
+/* The config's scene drawn with its own light map, with empty-space skipping and without;
+ * *WITH and *WITHOUT what the rays did.  Returns the largest relative difference of any
+ * channel. */
+static double skip_against_plain(const char **sets, int n, struct render_counts *with,
+                                 struct render_counts *without)
+{
+    struct config cfg;
+    test_config_from(&cfg, sets, n);
+    struct ext_volume vol = {0};
+    test_upload_scene(renderer, &cfg, &vol);
+    struct lightmaps light;
+    assert_true(lightmaps_init(&light, &cfg));
+    struct effects e;
+    struct effects_facts f;
+    effects_facts_init(&f);
+    double sun[3];
+    light_sun_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
+    assert_true(effects_measure_volume(&vol, sun, &cfg.optics.params, &f));
+    effects_decide(&cfg, &f, &e);
+    lightmaps_set_effects(&light, &e);
+    assert_true(lightmaps_update(&light, &cfg, renderer, NULL));
+    struct render_view view;
+    scene_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
+    struct render_settings s;
+    scene_render_settings(&cfg, &s);
+    effects_apply_render(&e, &s);
+    struct image img[2] = {{0}};
+    for (int k = 0; k < 2; k++) {
+        s.no_skip = k == 1;
+        struct gpu_texture out = {0};
+        assert_true(renderer_set_counting(renderer, true));
+        assert_true(renderer_draw(renderer, &s, &view, &out));
+        assert_true(renderer_counts(renderer, k ? without : with));
+        assert_true(renderer_set_counting(renderer, false));
+        assert_true(renderer_read(&out, &img[k]));
+        gpu_texture_finish(&out);
+    }
+    double worst = 0.0;
+    size_t values = (size_t)img[0].width * img[0].height * 4;
+    for (size_t i = 0; i < values; i++) {
+        double a = img[0].rgba[i], b = img[1].rgba[i];
+        assert_true(isfinite(a));
+        double scale = fmax(fabs(a), fabs(b));
+        double rel = scale > 0.0 ? fabs(a - b) / scale : 0.0;
+        worst = fmax(worst, rel);
+    }
+    image_finish(&img[0]);
+    image_finish(&img[1]);
+    lightmaps_finish(&light);
+    ext_volume_finish(&vol);
+    /* Every ray counted once, with skipping or without; the plain pass marches them all. */
+    assert_int_equal(with->rays, (uint64_t)cfg.render.width * cfg.render.height);
+    assert_int_equal(without->rays, with->rays);
+    assert_int_equal(without->rays_marched, without->rays);
+    assert_int_equal(without->steps_leapt, 0);
+    return worst;
+}
+
+/* Pictures within 1e-4 relative of the plain eye pass (on llvmpipe: bit for bit), on scenes
+ * that take each path of the march: the storm (equal steps), a wide flat storm under a low sun
+ * (its sheared light map makes the thick steps go in parts), a camera inside the storm, the
+ * single voxel, a compressed light map, and fewer samples every time. */
+static void test_skipping_keeps_pictures(void **state)
+{
+    static const char *storm[] = {"scene.size=[48,48,24]", "render.width=96", "render.height=72"};
+    static const char *flat[] = {"scene.size=[64,64,16]",     "scene.extent=[200,200,16]",
+                                 "light.elevation=20",        "camera.position=[-20,-30,12]",
+                                 "camera.target=[100,100,4]", "render.width=96",
+                                 "render.height=72"};
+    static const char *inside[] = {"scene.size=[48,48,24]", "camera.position=[8,10,12]",
+                                   "camera.target=[30,30,6]", "render.width=80",
+                                   "render.height=60"};
+    static const char *voxel[] = {"scene.kind=voxel",
+                                  "scene.size=[41,41,41]",
+                                  "scene.extent=[9,9,9]",
+                                  "camera.position=[-1,-3,9]",
+                                  "camera.target=[4.5,4.5,4.5]",
+                                  "camera.fov=30",
+                                  "render.width=64",
+                                  "render.height=64",
+                                  "effects.shadows=on"};
+    static const char *compressed[] = {"scene.size=[48,48,24]", "render.width=96",
+                                       "render.height=72", "lightmap.mode=compressed"};
+    /* Seen from inside the storm's box every ray meets an occupied cell; from outside most
+     * rays are done in the first pass and most samples are leapt. */
+    struct {
+        const char *name;
+        const char **sets;
+        int n;
+        bool inside;
+    } cases[] = {{"storm", storm, 3, false},
+                 {"flat storm, low sun", flat, 7, false},
+                 {"inside", inside, 5, true},
+                 {"one voxel", voxel, 9, false},
+                 {"compressed", compressed, 4, false}};
+    for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+        struct render_counts with, without;
+        double d = skip_against_plain(cases[i].sets, cases[i].n, &with, &without);
+        print_message("%-20s relative difference %.3g; beta samples %llu -> %llu, %llu steps "
+                      "leapt, %llu of %llu rays marched\n",
+                      cases[i].name, d, (unsigned long long)without.beta_samples,
+                      (unsigned long long)with.beta_samples, (unsigned long long)with.steps_leapt,
+                      (unsigned long long)with.rays_marched, (unsigned long long)with.rays);
+        assert_true(d <= 1e-4);
+        assert_true(with.steps_leapt > 0);
+        assert_true(with.beta_samples < without.beta_samples);
+        if (!cases[i].inside) {
+            assert_true(with.rays_marched < with.rays);
+            assert_true(with.beta_samples < without.beta_samples / 2);
+        }
+        /* What is marched reads the light map where the plain pass does: in cloud. */
+        assert_int_equal(with.light_reads, without.light_reads);
+    }
+}
+
+/* An empty box: no ray is marched, no voxel read, and the picture is the background. */
+static void test_empty_box_reads_nothing(void **state)
+{
+    const char *sets[] = {"scene.kind=empty", "scene.size=[32,32,16]", "render.width=64",
+                          "render.height=48", "effects.shadows=on"};
+    struct render_counts with, without;
+    double d = skip_against_plain(sets, 5, &with, &without);
+    assert_true(d == 0.0);
+    assert_int_equal(with.rays_marched, 0);
+    assert_int_equal(with.beta_samples, 0);
+    assert_int_equal(with.light_reads, 0);
+    assert_true(without.beta_samples > 10 * without.rays); /* the plain pass marched */
+}
+
+/* effects.temporal: the pair's cells hold the larger of both steps, and the blended picture
+ * is the plain one. */
+static void test_temporal_pair(void **state)
+{
+    struct config cfg;
+    const char *sets[] = {"scene.size=[40,40,20]", "render.width=80", "render.height=60"};
+    test_config_from(&cfg, sets, 3);
+    struct ext_volume a = {0}, b = {0};
+    assert_true(scene_build_volume(&cfg, &a));
+    assert_true(config_set(&cfg, "scene.time=0.95"));
+    assert_true(scene_build_volume(&cfg, &b));
+    assert_true(renderer_set_volume(renderer, &a));
+    assert_true(renderer_set_next_volume(renderer, &b));
+    const struct render_cells *pair = renderer_pair_cells(renderer);
+    assert_non_null(pair);
+    check_cells(pair, &a, &b);
+    /* The pair holds more than step k alone (the storm grew). */
+    struct render_cells layout;
+    float *one = cpu_cells(&a, NULL, &layout), *both = cpu_cells(&a, &b, &layout);
+    size_t more = 0;
+    for (size_t i = 0; i < layout.count; i++)
+        more += both[i] > 0.0f && one[i] == 0.0f;
+    assert_true(more > 0);
+    free(one);
+    free(both);
+
+    renderer_set_light(renderer, NULL);
+    struct render_view view;
+    scene_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
+    struct render_settings s;
+    scene_render_settings(&cfg, &s);
+    s.temporal = true;
+    s.temporal_f = 0.4f;
+    struct image img[2] = {{0}};
+    for (int k = 0; k < 2; k++) {
+        s.no_skip = k == 1;
+        struct gpu_texture out = {0};
+        assert_true(renderer_draw(renderer, &s, &view, &out));
+        assert_true(renderer_read(&out, &img[k]));
+        gpu_texture_finish(&out);
+    }
+    size_t values = (size_t)img[0].width * img[0].height * 4;
+    for (size_t i = 0; i < values; i++)
+        assert_float_equal(img[0].rgba[i], img[1].rgba[i], 1e-4 * fabs(img[1].rgba[i]));
+    image_finish(&img[0]);
+    image_finish(&img[1]);
+    assert_true(renderer_set_next_volume(renderer, NULL));
+    assert_null(renderer_pair_cells(renderer));
+    ext_volume_finish(&a);
+    ext_volume_finish(&b);
+}
+
+static int setup(void **state)
+{
+    ctx = test_gl_context_or_skip();
+    log_set_level(LOG_WARN);
+    renderer = renderer_create();
+    return renderer ? 0 : -1;
+}
+
+static int teardown(void **state)
+{
+    renderer_destroy(renderer);
+    gpu_context_destroy(ctx);
+    return 0;
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_cells_match_cpu),
+        cmocka_unit_test(test_skipping_keeps_pictures),
+        cmocka_unit_test(test_empty_box_reads_nothing),
+        cmocka_unit_test(test_temporal_pair),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
