@@ -1263,3 +1263,270 @@ done:
         field_volume_finish(out);
     return ok;
 }
+
+/* ---- one point ------------------------------------------------------------------------- */
+
+#define POINT_SNAP_M 1e-3 /* a height this close to a mass level takes its value */
+
+/* Reads V over the block of NXB x NYB points from (X0, Y0) on LEVELS levels into BUF (levels
+ * slowest, then rows). */
+static bool read_block(const struct wrf *w, int step, int varid, const char *name, int x0,
+                       int y0, int nxb, int nyb, int levels, float *buf)
+{
+    const struct wrf_file *f = &w->files[w->steps[step].file];
+    size_t start[4] = {(size_t)w->steps[step].index, 0, (size_t)y0, (size_t)x0};
+    size_t count[4] = {1, (size_t)levels, (size_t)nyb, (size_t)nxb};
+    int st = nc_get_vara_float(f->ncid, varid, start, count, buf);
+    if (st != NC_NOERR) {
+        log_error("%s: variable %s, time %d: cannot read: %s", f->path, name,
+                  w->steps[step].index, nc_strerror(st));
+        return false;
+    }
+    return true;
+}
+
+/* The value at height Z of a column whose mass levels are at ZM (NZ, increasing) with values
+ * V[k * STRIDE]: the rule of wrf_resample_column between its ground and top. */
+static double column_value(const double *zm, int nz, const float *v, size_t stride, double z)
+{
+    if (z <= zm[0] + POINT_SNAP_M)
+        return v[0];
+    if (z >= zm[nz - 1] - POINT_SNAP_M)
+        return v[(size_t)(nz - 1) * stride];
+    int k = 0;
+    while (k + 1 < nz && zm[k + 1] <= z)
+        k++;
+    if (fabs(z - zm[k]) <= POINT_SNAP_M)
+        return v[(size_t)k * stride];
+    if (fabs(zm[k + 1] - z) <= POINT_SNAP_M)
+        return v[(size_t)(k + 1) * stride];
+    double t = (z - zm[k]) / (zm[k + 1] - zm[k]);
+    return (1.0 - t) * v[(size_t)k * stride] + t * v[(size_t)(k + 1) * stride];
+}
+
+/* The lower column and the weight of the next along one axis of N columns DX apart, for X
+ * metres (column i centred at (i + 0.5) DX); a position within 1e-6 columns of a column is
+ * that column. */
+static void axis_weight(double x, double dx, int n, int *i0, int *count, double *t)
+{
+    double f = x / dx - 0.5;
+    if (fabs(f - round(f)) < 1e-6)
+        f = round(f);
+    int i = (int)floor(f);
+    if (n < 2) {
+        *i0 = 0;
+        *count = 1;
+        *t = 0.0;
+        return;
+    }
+    i = i < 0 ? 0 : i > n - 2 ? n - 2 : i;
+    double w = f - i;
+    *i0 = i;
+    *count = 2;
+    *t = w < 0.0 ? 0.0 : w > 1.0 ? 1.0 : w;
+}
+
+/* The bilinear weights of a block's columns (NXB x NYB, x fastest). */
+static void block_weights(int nxb, int nyb, double tx, double ty, double wt[4])
+{
+    for (int b = 0; b < nyb; b++)
+        for (int a = 0; a < nxb; a++)
+            wt[a + nxb * b] = (nxb == 1 ? 1.0 : a ? tx : 1.0 - tx) *
+                              (nyb == 1 ? 1.0 : b ? ty : 1.0 - ty);
+}
+
+/* A 2-D variable NAME (with or without a leading Time) at the block's columns, bilinear;
+ * false when the file lacks it or it cannot be read. */
+static bool point_2d(const struct wrf *w, int step, const char *name, int x0, int y0, int nxb,
+                     int nyb, const double wt[4], double *out)
+{
+    const struct wrf_file *f = &w->files[w->steps[step].file];
+    int varid, ndims;
+    if (nc_inq_varid(f->ncid, name, &varid) != NC_NOERR ||
+        nc_inq_varndims(f->ncid, varid, &ndims) != NC_NOERR || (ndims != 2 && ndims != 3))
+        return false;
+    size_t start[3] = {(size_t)w->steps[step].index, (size_t)y0, (size_t)x0};
+    size_t count[3] = {1, (size_t)nyb, (size_t)nxb};
+    float v[4];
+    if (nc_get_vara_float(f->ncid, varid, ndims == 3 ? start : start + 1,
+                          ndims == 3 ? count : count + 1, v) != NC_NOERR)
+        return false;
+    double sum = 0.0;
+    for (int c = 0; c < nxb * nyb; c++) {
+        if (!isfinite(v[c]))
+            return false;
+        sum += wt[c] * v[c];
+    }
+    *out = sum;
+    return true;
+}
+
+enum wrf_point_result wrf_read_point(struct wrf *w, int step, const double p[3],
+                                     struct wrf_point *out)
+{
+    memset(out, 0, sizeof(*out));
+    out->temperature_k = NAN;
+    if (step < 0 || step >= w->step_count) {
+        log_error("time step %d out of range: the data has %d (0 to %d)", step, w->step_count,
+                  w->step_count - 1);
+        return WRF_POINT_ERROR;
+    }
+    const struct wrf_meta *m = &w->meta;
+    double tol = 1e-6;
+    if (!(p[0] >= -tol * m->dx && p[0] <= (m->nx + tol) * m->dx && p[1] >= -tol * m->dy &&
+          p[1] <= (m->ny + tol) * m->dy) ||
+        !isfinite(p[2]))
+        return WRF_POINT_OUTSIDE;
+    int x0, y0, nxb, nyb;
+    double tx, ty, wt[4];
+    axis_weight(p[0], m->dx, m->nx, &x0, &nxb, &tx);
+    axis_weight(p[1], m->dy, m->ny, &y0, &nyb, &ty);
+    block_weights(nxb, nyb, tx, ty, wt);
+    int nz = m->nz, nzs = w->nzs, cols = nxb * nyb;
+    const struct wrf_file *f = &w->files[w->steps[step].file];
+    /* Scratch: two blocks of (nxb + 1) x (nyb + 1) points on the staggered levels, and the
+     * columns' mass level heights. */
+    size_t block = (size_t)nzs * (size_t)(nxb + 1) * (size_t)(nyb + 1);
+    float *a = malloc(block * sizeof(float)), *b = malloc(block * sizeof(float));
+    float *col = malloc((size_t)nz * (size_t)cols * sizeof(float));
+    double *zm = malloc((size_t)nz * (size_t)cols * sizeof(double));
+    float *zw = malloc((size_t)nzs * (size_t)cols * sizeof(float));
+    enum wrf_point_result result = WRF_POINT_ERROR;
+    if (!a || !b || !col || !zm || !zw) {
+        log_error("out of memory reading a point");
+        goto done;
+    }
+    struct wrf_var_stats st;
+    data_nc_lock();
+    /* Heights: (PH + PHB) / g on staggered levels, as wrf_read_step turns them into floats. */
+    if (!read_block(w, step, f->varid[WRF_PH], "PH", x0, y0, nxb, nyb, nzs, a) ||
+        !read_block(w, step, f->varid[WRF_PHB], "PHB", x0, y0, nxb, nyb, nzs, b))
+        goto unlock;
+    for (size_t i = 0; i < (size_t)nzs * cols; i++) {
+        zw[i] = (float)(((double)a[i] + (double)b[i]) / WRF_G);
+        if (!isfinite(zw[i])) {
+            log_error("%s: variables PH, PHB, time %d: a height near the point is not finite",
+                      f->path, w->steps[step].index);
+            goto unlock;
+        }
+    }
+    for (int c = 0; c < cols; c++)
+        for (int k = 0; k < nz; k++)
+            zm[(size_t)c * nz + k] = 0.5 * ((double)zw[(size_t)k * cols + c] +
+                                            (double)zw[(size_t)(k + 1) * cols + c]);
+    for (int c = 0; c < cols; c++) {
+        out->ground_m += wt[c] * zw[c];
+        out->top_m += wt[c] * zw[(size_t)nz * cols + c];
+    }
+    if (p[2] < out->ground_m - POINT_SNAP_M) {
+        result = WRF_POINT_BELOW;
+        goto unlock;
+    }
+    if (p[2] > out->top_m + POINT_SNAP_M) {
+        result = WRF_POINT_ABOVE;
+        goto unlock;
+    }
+    /* A value at the point from BUF on the mass levels (nz x cols). */
+#define AT_POINT(buf, dst)                                                                     \
+    do {                                                                                       \
+        double sum_ = 0.0;                                                                     \
+        for (int c_ = 0; c_ < cols; c_++)                                                      \
+            sum_ += wt[c_] * column_value(zm + (size_t)c_ * nz, nz, (buf) + c_, (size_t)cols,  \
+                                          p[2]);                                               \
+        (dst) = sum_;                                                                          \
+    } while (0)
+    for (int v = 0; v <= WRF_QVAPOR; v++) {
+        if (f->varid[v] < 0)
+            continue;
+        if (!read_block(w, step, f->varid[v], var_names[v], x0, y0, nxb, nyb, nz, a))
+            goto unlock;
+        sanitize(w, step, (enum wrf_var)v, a, (size_t)nz * cols, 0.0f, &st);
+        double value;
+        AT_POINT(a, value);
+        if (v < SPECIES_COUNT) {
+            out->has_species[v] = true;
+            out->q[v] = value;
+        } else {
+            out->has_qvapor = true;
+            out->qvapor = value;
+        }
+    }
+    /* Pressure and temperature on the mass levels, as wrf_read_step makes them. */
+    if (!read_block(w, step, f->varid[WRF_P], "P", x0, y0, nxb, nyb, nz, a) ||
+        !read_block(w, step, f->varid[WRF_PB], "PB", x0, y0, nxb, nyb, nz, b))
+        goto unlock;
+    sanitize(w, step, WRF_P, a, (size_t)nz * cols, NAN, &st);
+    sanitize(w, step, WRF_PB, b, (size_t)nz * cols, NAN, &st);
+    for (size_t i = 0; i < (size_t)nz * cols; i++)
+        a[i] += b[i];
+    AT_POINT(a, out->pressure_pa);
+    if (!read_block(w, step, f->varid[WRF_T], "T", x0, y0, nxb, nyb, nz, b))
+        goto unlock;
+    sanitize(w, step, WRF_T, b, (size_t)nz * cols, NAN, &st);
+    for (size_t i = 0; i < (size_t)nz * cols; i++) {
+        double t = optics_wrf_temperature(a[i], (double)b[i] + WRF_T0);
+        col[i] = t > 0.0 ? (float)t : NAN;
+        b[i] = (float)((double)b[i] + WRF_T0);
+    }
+    AT_POINT(b, out->theta_k);
+    AT_POINT(col, out->temperature_k);
+    /* The wind: U over its west_east_stag faces, V over south_north_stag, W over its levels. */
+    out->has_wind = f->varid[WRF_U] >= 0 && f->varid[WRF_V] >= 0;
+    if (out->has_wind) {
+        if (!read_block(w, step, f->varid[WRF_U], "U", x0, y0, nxb + 1, nyb, nz, a))
+            goto unlock;
+        sanitize(w, step, WRF_U, a, (size_t)nz * (nxb + 1) * nyb, 0.0f, &st);
+        for (int k = 0; k < nz; k++)
+            for (int r = 0; r < nyb; r++)
+                for (int q = 0; q < nxb; q++) {
+                    const float *u = a + ((size_t)k * nyb + r) * (nxb + 1) + q;
+                    col[(size_t)k * cols + r * nxb + q] = 0.5f * (u[0] + u[1]);
+                }
+        double u;
+        AT_POINT(col, u);
+        if (!read_block(w, step, f->varid[WRF_V], "V", x0, y0, nxb, nyb + 1, nz, a))
+            goto unlock;
+        sanitize(w, step, WRF_V, a, (size_t)nz * nxb * (nyb + 1), 0.0f, &st);
+        for (int k = 0; k < nz; k++)
+            for (int r = 0; r < nyb; r++)
+                for (int q = 0; q < nxb; q++) {
+                    const float *v = a + ((size_t)k * (nyb + 1) + r) * nxb + q;
+                    col[(size_t)k * cols + r * nxb + q] = 0.5f * (v[0] + v[nxb]);
+                }
+        double v;
+        AT_POINT(col, v);
+        double ca, sa;
+        if (point_2d(w, step, "COSALPHA", x0, y0, nxb, nyb, wt, &ca) &&
+            point_2d(w, step, "SINALPHA", x0, y0, nxb, nyb, wt, &sa)) {
+            /* Grid-relative to earth-relative (the WRF users' forum, "Converting model
+             * grid-relative wind to earth-relative wind"). */
+            out->u = u * ca - v * sa;
+            out->v = v * ca + u * sa;
+            out->earth_relative = true;
+        } else {
+            out->u = u;
+            out->v = v;
+            out->earth_relative = m->map_proj == 3 || m->map_proj == 6;
+        }
+        out->has_w = f->varid[WRF_W] >= 0;
+        if (out->has_w) {
+            if (!read_block(w, step, f->varid[WRF_W], "W", x0, y0, nxb, nyb, nzs, a))
+                goto unlock;
+            sanitize(w, step, WRF_W, a, (size_t)nzs * cols, 0.0f, &st);
+            for (size_t i = 0; i < (size_t)nz * cols; i++)
+                col[i] = 0.5f * (a[i] + a[i + cols]);
+            AT_POINT(col, out->w);
+        }
+    }
+#undef AT_POINT
+    result = WRF_POINT_OK;
+unlock:
+    data_nc_unlock();
+done:
+    free(a);
+    free(b);
+    free(col);
+    free(zm);
+    free(zw);
+    return result;
+}

@@ -1,0 +1,389 @@
+/* The probe (docs/analysis.md): anvil probe on the Katrina sample at a grid point returns the
+ * file's values there, read here with netcdf-c (mass ratios on a model level and between two,
+ * the temperature against T = (theta' + 300) (p / p0)^(R/cp), pressure, wind), the wind turned
+ * to east and north with COSALPHA and SINALPHA on a Lambert grid; the first visible point
+ * along a ray through a known ramp; trilinear sampling; wind directions; the histogram behind
+ * the transfer function editor against counts made here. */
+#include "testutil.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <netcdf.h>
+
+#include "common/log.h"
+#include "config/config.h"
+#include "data/probe.h"
+#include "data/wrf.h"
+#include "session/player.h"
+
+#define CHECK(x) assert_int_equal((x), NC_NOERR)
+#define P0 100000.0
+#define R_CP (287.0 / 1004.5) /* R_d / c_p of WRF's module_model_constants.F: 2/7 */
+
+static const char *katrina(void)
+{
+    return test_shared_data("wrf/katrina_2005_mercator_wsm3.nc");
+}
+
+/* One value of a 4-D variable (Time, level, south_north, west_east). */
+static float at4(int nc, const char *name, int t, int k, int j, int i)
+{
+    int v;
+    CHECK(nc_inq_varid(nc, name, &v));
+    size_t start[4] = {(size_t)t, (size_t)k, (size_t)j, (size_t)i}, one[4] = {1, 1, 1, 1};
+    float x;
+    CHECK(nc_get_vara_float(nc, v, start, one, &x));
+    return x;
+}
+
+/* One value of a 2-D variable (south_north, west_east), with or without a leading Time (the
+ * first then). */
+static float at2(int nc, const char *name, int j, int i)
+{
+    int v, ndims;
+    CHECK(nc_inq_varid(nc, name, &v));
+    CHECK(nc_inq_varndims(nc, v, &ndims));
+    size_t start[3] = {0, (size_t)j, (size_t)i}, one[3] = {1, 1, 1};
+    float x;
+    CHECK(nc_get_vara_float(nc, v, ndims == 3 ? start : start + 1, one, &x));
+    return x;
+}
+
+/* The number after "KEY": in TEXT; NAN for null; fails when absent. */
+static double json_number(const char *text, const char *key)
+{
+    char pat[96];
+    snprintf(pat, sizeof(pat), "\"%s\": ", key);
+    const char *p = strstr(text, pat);
+    if (!p)
+        fail_msg("no \"%s\" in %s", key, text);
+    p += strlen(pat);
+    if (strncmp(p, "null", 4) == 0)
+        return NAN;
+    return strtod(p, NULL);
+}
+
+/* anvil probe ARGS --json: its output (static buffer); fails unless it exits 0. */
+static const char *probe_json(const char *args)
+{
+    const char *bin = getenv("ANVIL_BIN");
+    if (!bin)
+        skip();
+    static char out[8192];
+    char cmd[2048];
+    snprintf(cmd, sizeof(cmd), "'%s' --quiet probe %s --json", bin, args);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    size_t n = fread(out, 1, sizeof(out) - 1, p);
+    out[n] = '\0';
+    int rc = pclose(p);
+    if (rc != 0)
+        fail_msg("%s exited %d: %s", cmd, rc, out);
+    return out;
+}
+
+/* The mass levels' heights of column (I, J) at time T as the reader makes them: (PH + PHB) / g
+ * on staggered levels rounded to float, then the mean of each level's two faces. */
+static void mass_heights(int nc, int t, int i, int j, int nz, double *zm)
+{
+    float zw[64];
+    for (int k = 0; k <= nz; k++)
+        zw[k] = (float)(((double)at4(nc, "PH", t, k, j, i) + (double)at4(nc, "PHB", t, k, j, i)) /
+                        9.81);
+    for (int k = 0; k < nz; k++)
+        zm[k] = 0.5 * ((double)zw[k] + (double)zw[k + 1]);
+}
+
+static double rel(double a, double b)
+{
+    return fabs(a - b) / fmax(fabs(b), 1e-30);
+}
+
+static void test_katrina_grid_point(void **state)
+{
+    int nc;
+    CHECK(nc_open(katrina(), NC_NOWRITE, &nc));
+    int d;
+    size_t nx, ny, nz;
+    CHECK(nc_inq_dimid(nc, "west_east", &d));
+    CHECK(nc_inq_dimlen(nc, d, &nx));
+    CHECK(nc_inq_dimid(nc, "south_north", &d));
+    CHECK(nc_inq_dimlen(nc, d, &ny));
+    CHECK(nc_inq_dimid(nc, "bottom_top", &d));
+    CHECK(nc_inq_dimlen(nc, d, &nz));
+    assert_true(nz < 63);
+    const int t = 1;
+    /* The cloudiest point of step 1 away from the edges and the top level. */
+    int bi = 0, bj = 0, bk = 0;
+    float best = -1.0f;
+    for (int k = 0; k + 1 < (int)nz; k++)
+        for (int j = 2; j + 2 < (int)ny; j++)
+            for (int i = 2; i + 2 < (int)nx; i++) {
+                float q = at4(nc, "QCLOUD", t, k, j, i);
+                if (q > best) {
+                    best = q, bi = i, bj = j, bk = k;
+                }
+            }
+    assert_true(best > 1e-5f);
+    int v;
+    float lat = at2(nc, "XLAT", bj, bi), lon = at2(nc, "XLONG", bj, bi);
+    double zm[64];
+    mass_heights(nc, t, bi, bj, (int)nz, zm);
+
+    /* On the model level: the file's values, to float rounding. */
+    char args[1024];
+    snprintf(args, sizeof(args), "'%s/configs/katrina.cfg' --at %.17g,%.17g,%.17g --step %d",
+             ANVIL_SOURCE_DIR, (double)lat, (double)lon, zm[bk], t);
+    const char *js = probe_json(args);
+    assert_true(strstr(js, "\"valid\": true") != NULL);
+    assert_true(strstr(js, "\"temperature_source\": \"data\"") != NULL);
+    double qc = at4(nc, "QCLOUD", t, bk, bj, bi), qr = at4(nc, "QRAIN", t, bk, bj, bi);
+    assert_true(rel(json_number(js, "cloud"), qc * 1e3) < 1e-6);
+    if (qr > 0.0)
+        assert_true(rel(json_number(js, "rain"), qr * 1e3) < 1e-6);
+    else
+        assert_true(json_number(js, "rain") == 0.0);
+    assert_true(isnan(json_number(js, "ice"))); /* WSM3 writes no ice: null */
+    assert_true(rel(json_number(js, "condensate_g_per_kg"), (qc + (qr > 0 ? qr : 0)) * 1e3) <
+                1e-6);
+    double p = (double)at4(nc, "P", t, bk, bj, bi) + (double)at4(nc, "PB", t, bk, bj, bi);
+    double theta = (double)at4(nc, "T", t, bk, bj, bi) + 300.0;
+    double temp = theta * pow(p / P0, R_CP);
+    assert_true(fabs(json_number(js, "temperature_c") - (temp - 273.15)) < 1e-3);
+    assert_true(rel(json_number(js, "pressure_hpa"), p / 100.0) < 1e-6);
+    /* The wind at the mass point: U, V averaged over their faces (Mercator: east, north). */
+    CHECK(nc_inq_varid(nc, "U", &v));
+    size_t su[4] = {(size_t)t, (size_t)bk, (size_t)bj, (size_t)bi}, cu[4] = {1, 1, 1, 2};
+    float uf[2], vf[2];
+    CHECK(nc_get_vara_float(nc, v, su, cu, uf));
+    CHECK(nc_inq_varid(nc, "V", &v));
+    size_t cv[4] = {1, 1, 2, 1};
+    CHECK(nc_get_vara_float(nc, v, su, cv, vf));
+    double u = 0.5 * (uf[0] + uf[1]), vv = 0.5 * (vf[0] + vf[1]);
+    assert_true(fabs(json_number(js, "u_m_s") - u) < 1e-4);
+    assert_true(fabs(json_number(js, "v_m_s") - vv) < 1e-4);
+    assert_true(fabs(json_number(js, "speed_m_s") - hypot(u, vv)) < 1e-4);
+    double from = fmod(atan2(-u, -vv) * 180.0 / M_PI + 360.0, 360.0);
+    assert_true(fabs(json_number(js, "from_deg") - from) < 1e-3);
+    double w = 0.5 * ((double)at4(nc, "W", t, bk, bj, bi) + (double)at4(nc, "W", t, bk + 1, bj, bi));
+    assert_true(fabs(json_number(js, "w_m_s") - w) < 1e-5);
+    assert_true(fabs(json_number(js, "latitude_deg") - lat) < 1e-6);
+    assert_true(fabs(json_number(js, "height_m") - zm[bk]) < 1e-6);
+    /* A cloudy point: the volume there is not clear. */
+    assert_true(json_number(js, "total") > 0.0);
+    double light = json_number(js, "light");
+    assert_true(light >= 0.0 && light <= 1.0);
+
+    /* 70 % of the way up to the next level: linear in height between the two. */
+    double z = zm[bk] + 0.7 * (zm[bk + 1] - zm[bk]);
+    snprintf(args, sizeof(args), "'%s/configs/katrina.cfg' --at %.17g,%.17g,%.17g --step %d",
+             ANVIL_SOURCE_DIR, (double)lat, (double)lon, z, t);
+    js = probe_json(args);
+    double qc1 = at4(nc, "QCLOUD", t, bk + 1, bj, bi);
+    assert_true(rel(json_number(js, "cloud"), (0.3 * qc + 0.7 * qc1) * 1e3) < 1e-6);
+    double p1 = (double)at4(nc, "P", t, bk + 1, bj, bi) + (double)at4(nc, "PB", t, bk + 1, bj, bi);
+    double theta1 = (double)at4(nc, "T", t, bk + 1, bj, bi) + 300.0;
+    double temp1 = theta1 * pow(p1 / P0, R_CP);
+    assert_true(fabs(json_number(js, "temperature_c") - (0.3 * temp + 0.7 * temp1 - 273.15)) <
+                1e-3);
+    CHECK(nc_close(nc));
+}
+
+/* A rotated grid: U, V turned east and north with COSALPHA and SINALPHA. */
+static void test_lambert_wind_turned(void **state)
+{
+    const char *path = test_shared_data("wrf/lambert_thompson_cropped.nc");
+    int nc;
+    CHECK(nc_open(path, NC_NOWRITE, &nc));
+    /* The column inside the grid where it is turned most. */
+    int i = 1, j = 1;
+    const int k = 3;
+    for (int jj = 1; jj < 7; jj++)
+        for (int ii = 1; ii < 9; ii++)
+            if (fabsf(at2(nc, "SINALPHA", jj, ii)) > fabsf(at2(nc, "SINALPHA", j, i)))
+                i = ii, j = jj;
+    float lat = at2(nc, "XLAT", j, i), lon = at2(nc, "XLONG", j, i);
+    float ca = at2(nc, "COSALPHA", j, i), sa = at2(nc, "SINALPHA", j, i);
+    assert_true(fabsf(sa) > 1e-3f); /* a grid that is turned here */
+    size_t d;
+    int dim;
+    CHECK(nc_inq_dimid(nc, "bottom_top", &dim));
+    CHECK(nc_inq_dimlen(nc, dim, &d));
+    double zm[64];
+    mass_heights(nc, 0, i, j, (int)d, zm);
+    double u = 0.5 * ((double)at4(nc, "U", 0, k, j, i) + (double)at4(nc, "U", 0, k, j, i + 1));
+    double vg = 0.5 * ((double)at4(nc, "V", 0, k, j, i) + (double)at4(nc, "V", 0, k, j + 1, i));
+    CHECK(nc_close(nc));
+    char args[1024];
+    snprintf(args, sizeof(args), "'%s' --at %.17g,%.17g,%.17g", path, (double)lat, (double)lon,
+             zm[k]);
+    const char *js = probe_json(args);
+    assert_true(strstr(js, "\"earth_relative\": true") != NULL);
+    assert_true(fabs(json_number(js, "u_m_s") - (u * ca - vg * sa)) < 1e-4);
+    assert_true(fabs(json_number(js, "v_m_s") - (vg * ca + u * sa)) < 1e-4);
+    assert_true(fabs(json_number(js, "speed_m_s") - hypot(u, vg)) < 1e-4);
+}
+
+static void test_wind_direction(void **state)
+{
+    double speed, from;
+    probe_wind(10.0, 0.0, &speed, &from); /* blowing east: from the west */
+    assert_true(speed == 10.0 && fabs(from - 270.0) < 1e-12);
+    probe_wind(0.0, 5.0, &speed, &from); /* blowing north: a southerly */
+    assert_true(fabs(from - 180.0) < 1e-12);
+    probe_wind(0.0, -5.0, &speed, &from);
+    assert_true(fabs(from) < 1e-12);
+    probe_wind(-3.0, 0.0, &speed, &from);
+    assert_true(fabs(from - 90.0) < 1e-12);
+    probe_wind(1.0, 1.0, &speed, &from); /* toward the north-east: from the south-west */
+    assert_true(fabs(from - 225.0) < 1e-12 && fabs(speed - sqrt(2.0)) < 1e-12);
+    probe_wind(0.0, 0.0, &speed, &from);
+    assert_true(speed == 0.0 && from == 0.0);
+}
+
+/* 8 x 4 x 4 voxels of 100 m; water extinction B0 from voxel i = 5 on.  Between voxel centres
+ * 4 (450 m) and 5 (550 m) it ramps linearly, so B0 / 4 is crossed at 475 m. */
+static void test_first_visible(void **state)
+{
+    struct grid3 g = {.n = {8, 4, 4}, .spacing = {100, 100, 100}, .origin = {0, 0, 0}};
+    struct ext_volume v;
+    assert_true(ext_volume_init(&v, &g));
+    const float b0 = 0.02f;
+    for (int k = 0; k < 4; k++)
+        for (int j = 0; j < 4; j++)
+            for (int i = 5; i < 8; i++)
+                v.beta[2 * grid3_index(&g, i, j, k) + 1] = b0;
+    double t;
+    const double o[3] = {-250.0, 200.0, 200.0}, d[3] = {1.0, 0.0, 0.0};
+    assert_true(probe_first_visible(&v, o, d, 1e4, b0 / 4.0, &t));
+    assert_true(fabs(t - 725.0) < 0.01); /* 250 m to the box, then 475 m in */
+    /* Too far for T_MAX; a threshold never reached; a ray that misses the box. */
+    assert_false(probe_first_visible(&v, o, d, 700.0, b0 / 4.0, &t));
+    assert_false(probe_first_visible(&v, o, d, 1e4, 2.0 * b0, &t));
+    const double up[3] = {0.0, 0.0, 1.0}, beside[3] = {-250.0, 900.0, 200.0};
+    assert_false(probe_first_visible(&v, beside, d, 1e4, b0 / 4.0, &t));
+    /* From inside the cloud: at once. */
+    const double inside[3] = {700.0, 200.0, 10.0};
+    assert_true(probe_first_visible(&v, inside, up, 1e4, b0 / 4.0, &t) && t == 0.0);
+    /* The sample there: trilinear between centres, clamped at the edges, zero outside. */
+    double b[2];
+    probe_sample_beta(&v, (const double[3]){475.0, 200.0, 200.0}, b);
+    assert_true(b[0] == 0.0 && fabs(b[1] - b0 / 4.0) < 1e-9);
+    probe_sample_beta(&v, (const double[3]){799.0, 1.0, 399.0}, b);
+    assert_true(fabs(b[1] - b0) < 1e-9);
+    probe_sample_beta(&v, (const double[3]){801.0, 1.0, 1.0}, b);
+    assert_true(b[1] == 0.0);
+    ext_volume_finish(&v);
+}
+
+/* A field volume read at voxel centres gives the voxels' values, between them the mean. */
+static void test_sample_fields(void **state)
+{
+    struct field_volume fv = {.grid = {.n = {3, 2, 2}, .spacing = {10, 10, 10}}};
+    size_t n = grid3_count(&fv.grid);
+    fv.q[SPECIES_RAIN] = calloc(n, sizeof(float));
+    for (size_t i = 0; i < n; i++)
+        fv.q[SPECIES_RAIN][i] = (float)(1e-4 * (double)i);
+    struct probe_sample s;
+    assert_true(probe_sample_fields(&fv, (const double[3]){15.0, 5.0, 15.0}, &s));
+    assert_true(s.has_species[SPECIES_RAIN] && !s.has_species[SPECIES_CLOUD]);
+    assert_true(fabs(s.q[SPECIES_RAIN] - fv.q[SPECIES_RAIN][grid3_index(&fv.grid, 1, 0, 1)]) <
+                1e-12);
+    assert_true(probe_sample_fields(&fv, (const double[3]){10.0, 5.0, 5.0}, &s));
+    double mean = 0.5 * (fv.q[SPECIES_RAIN][0] + fv.q[SPECIES_RAIN][1]);
+    assert_true(fabs(s.q[SPECIES_RAIN] - mean) < 1e-12);
+    assert_true(s.temperature_from == PROBE_STANDARD && s.pressure_from == PROBE_STANDARD);
+    assert_false(probe_sample_fields(&fv, (const double[3]){31.0, 5.0, 5.0}, &s));
+    field_volume_finish(&fv);
+}
+
+/* The counts of a histogram made here, by the rule the header gives. */
+static void count_here(const float *v, size_t n, double lo, double hi, uint32_t *count,
+                       uint64_t *below, uint64_t *above)
+{
+    memset(count, 0, sizeof(uint32_t) * TRANSFER_HISTOGRAM_BINS);
+    *below = *above = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (v[i] < lo)
+            (*below)++;
+        else if (v[i] > hi)
+            (*above)++;
+        else {
+            int b = (int)floor((v[i] - lo) / (hi - lo) * TRANSFER_HISTOGRAM_BINS);
+            count[b >= TRANSFER_HISTOGRAM_BINS ? TRANSFER_HISTOGRAM_BINS - 1 : b]++;
+        }
+    }
+}
+
+/* The histogram the player makes with a step's volume (the editor's bars) counts the field of
+ * that step: QVAPOR by default, the temperature when the look's transfer function is of it. */
+static void test_histogram_counts(void **state)
+{
+    static struct config cfg;
+    char path[1024];
+    snprintf(path, sizeof(path), "%s/configs/katrina.cfg", ANVIL_SOURCE_DIR);
+    const char *sets[] = {"data.step=2"};
+    test_config_file(&cfg, path, sets, 1);
+    for (int pass = 0; pass < 2; pass++) {
+        if (pass == 1) {
+            cfg.look.has_transfer = true;
+            cfg.look.show_transfer = false; /* counted even while the clouds show */
+            transfer_defaults(&cfg.look.transfer, TRANSFER_FIELD_TEMPERATURE);
+        }
+        log_set_level(LOG_ERROR);
+        struct player *p = player_create(&cfg, &(struct player_desc){.still = true});
+        log_set_level(LOG_INFO);
+        assert_non_null(p);
+        struct ext_volume vol;
+        assert_true(player_take_first(p, &vol));
+        assert_non_null(vol.histogram);
+        const struct transfer_histogram *h = vol.histogram;
+        /* The same step's field, read here, counted here. */
+        const char *files[] = {cfg.data.files[0]};
+        struct wrf *w = wrf_open(files, 1);
+        assert_non_null(w);
+        struct wrf_desc d;
+        wrf_desc_defaults(&d);
+        d.qvapor = true;
+        d.temperature = pass == 1;
+        struct field_volume fv;
+        log_set_level(LOG_ERROR);
+        assert_true(wrf_read_step(w, 2, &d, &fv, NULL));
+        log_set_level(LOG_INFO);
+        const float *field = pass == 0 ? fv.qvapor : fv.temperature;
+        double lo = pass == 0 ? 0.0 : 200.0, hi = pass == 0 ? 0.012 : 310.0;
+        assert_int_equal(h->field, pass == 0 ? TRANSFER_FIELD_QVAPOR : TRANSFER_FIELD_TEMPERATURE);
+        assert_true(h->lo == lo && h->hi == hi);
+        uint32_t count[TRANSFER_HISTOGRAM_BINS];
+        uint64_t below, above;
+        size_t n = grid3_count(&fv.grid);
+        count_here(field, n, lo, hi, count, &below, &above);
+        assert_memory_equal(h->count, count, sizeof(count));
+        assert_true(h->below == below && h->above == above && h->total == n);
+        /* Not all in one bin: a histogram with a shape. */
+        int used = 0;
+        for (int b = 0; b < TRANSFER_HISTOGRAM_BINS; b++)
+            used += count[b] > 0;
+        assert_true(used >= 8);
+        field_volume_finish(&fv);
+        wrf_close(w);
+        ext_volume_finish(&vol);
+        player_destroy(p);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_katrina_grid_point),
+        cmocka_unit_test(test_lambert_wind_turned),
+        cmocka_unit_test(test_wind_direction),
+        cmocka_unit_test(test_first_visible),
+        cmocka_unit_test(test_sample_fields),
+        cmocka_unit_test(test_histogram_counts),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
