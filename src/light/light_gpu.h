@@ -69,6 +69,14 @@ bool light_gpu_last_build_ms(struct light_gpu *lg, double *ms);
  * the dense diffuse volume added when the last build had multiple scattering. */
 void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed);
 
+/* The last built map at world point P as the eye pass reads it, trilinear between nodes
+ * (light_map_sample): the beam into *BEAM and, when the build had multiple scattering, the
+ * diffuse M and N into DIFFUSE with *HAVE_DIFFUSE.  Dense mode reads the 2 x 2 x 2 nodes around
+ * P back from the GPU (waiting for the build); compressed mode evaluates the columns the build
+ * keeps on the CPU.  False when no map has been built. */
+bool light_gpu_sample(const struct light_gpu *lg, const double p[3], float *beam,
+                      float diffuse[2], bool *have_diffuse);
+
 /* Reads the dense light volume (and the diffuse one, with multiple scattering) back into MAP
  * (initialised here, finish with light_map_finish): the same layout as the CPU reference.  Dense mode only: compressed mode
  * frees the dense volume once its columns are compressed. */

@@ -63,9 +63,10 @@ const uint8_t *readout_pixels(struct readout *r, const struct readout_model *m,
         int y = 40;
         for (int i = 0; i < m->count && i < READOUT_ROWS && y + ROW_H <= H; i++, y += ROW_H) {
             const struct readout_row *row = &m->rows[i];
+            /* A row without a label is a line of text across the panel. */
             menu_font_draw(r->small, r->pixels, W, H, MARGIN, y, row->label, label_ink);
-            menu_font_draw(r->small, r->pixels, W, H, VALUE_X, y, row->value,
-                           row->dim ? dim : ink);
+            menu_font_draw(r->small, r->pixels, W, H, row->label[0] ? VALUE_X : MARGIN, y,
+                           row->value, row->dim ? dim : ink);
         }
         r->drawn = *m;
         r->have_drawn = true;

@@ -15,7 +15,7 @@
 #define READOUT_ROWS 18
 
 struct readout_row {
-    char label[24];
+    char label[24]; /* "": the value is a line of text across the panel */
     char value[160];
     bool dim; /* shown greyed out (a value the data lacks, a fallback) */
 };

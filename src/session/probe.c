@@ -141,7 +141,7 @@ bool probe_read(struct probe *p, int step, const double world[3], struct probe_v
         return true; /* an extinction file or a test scene: extinction and light only */
     if (p->kind == KIND_WRF) {
         struct wrf_point wp;
-        switch (wrf_read_point(data_source_wrf(p->src), step, out->data, &wp)) {
+        switch (wrf_read_point(data_source_wrf(p->src), step, &p->desc.wrf, out->data, &wp)) {
         case WRF_POINT_OK:
             out->fields = true;
             probe_sample_from_wrf(&wp, out->data[2], &out->s);
@@ -233,7 +233,22 @@ void probe_values_readout(const struct probe_values *v, struct readout_model *m)
         date_text(v->date, when, sizeof(when));
     snprintf(m->title, sizeof(m->title), "Probe%s%s", when[0] ? "  " : "", when);
     if (!v->valid) {
-        ROW(m, "no point", true, "%s", v->why[0] ? v->why : "-");
+        /* The reason, cut into lines at spaces. */
+        const char *why = v->why[0] ? v->why : "no point";
+        while (*why && m->count < READOUT_ROWS) {
+            size_t n = strlen(why);
+            if (n > 44) {
+                n = 44;
+                while (n > 0 && why[n] != ' ')
+                    n--;
+                if (n == 0)
+                    n = 44;
+            }
+            ROW(m, "", true, "%.*s", (int)n, why);
+            why += n;
+            while (*why == ' ')
+                why++;
+        }
         return;
     }
     char where[64];
@@ -254,13 +269,13 @@ void probe_values_readout(const struct probe_values *v, struct readout_model *m)
     } else {
         for (int f = 0; f < SPECIES_COUNT; f++) {
             if (v->s.has_species[f])
-                ROW(m, species_name((enum species)f), false, "%.4g g/kg", v->s.q[f] * 1e3);
+                ROW(m, species_name((enum species)f), false, "%.4f g/kg", v->s.q[f] * 1e3);
             else
                 ROW(m, species_name((enum species)f), true, "not in the data");
         }
-        ROW(m, "condensate", false, "%.4g g/kg", probe_sample_condensate(&v->s) * 1e3);
+        ROW(m, "condensate", false, "%.4f g/kg", probe_sample_condensate(&v->s) * 1e3);
         if (v->s.has_qvapor)
-            ROW(m, "vapour", false, "%.4g g/kg", v->s.qvapor * 1e3);
+            ROW(m, "vapour", false, "%.2f g/kg", v->s.qvapor * 1e3);
         bool std_t = v->s.temperature_from == PROBE_STANDARD;
         ROW(m, "temperature", std_t, "%.1f C%s", v->s.temperature_k - 273.15,
             std_t ? " (standard atmosphere)" : "");
@@ -279,7 +294,7 @@ void probe_values_readout(const struct probe_values *v, struct readout_model *m)
         }
     }
     double beta = v->beta[0] + v->beta[1];
-    ROW(m, "extinction", false, "%.4g /km (ice %.3g, water %.3g)", beta * 1e3, v->beta[0] * 1e3,
+    ROW(m, "extinction", false, "%.3g /km (ice %.3g, water %.3g)", beta * 1e3, v->beta[0] * 1e3,
         v->beta[1] * 1e3);
     if (v->have_light)
         ROW(m, "sunlight", false, "%.3f of the sun's (light map)", v->light);

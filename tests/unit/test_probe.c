@@ -85,16 +85,56 @@ static const char *probe_json(const char *args)
     return out;
 }
 
-/* The mass levels' heights of column (I, J) at time T as the reader makes them: (PH + PHB) / g
- * on staggered levels rounded to float, then the mean of each level's two faces. */
-static void mass_heights(int nc, int t, int i, int j, int nz, double *zm)
+/* Column (I, J) at time T as the reader sees it: the staggered heights (PH + PHB) / g rounded
+ * to float, the mass levels' heights (the mean of their faces). */
+struct column {
+    int nz;
+    double zw[64], zm[64];
+};
+
+static void column_of(int nc, int t, int i, int j, int nz, struct column *c)
 {
-    float zw[64];
+    c->nz = nz;
     for (int k = 0; k <= nz; k++)
-        zw[k] = (float)(((double)at4(nc, "PH", t, k, j, i) + (double)at4(nc, "PHB", t, k, j, i)) /
-                        9.81);
+        c->zw[k] = (float)(((double)at4(nc, "PH", t, k, j, i) +
+                            (double)at4(nc, "PHB", t, k, j, i)) /
+                           9.81);
     for (int k = 0; k < nz; k++)
-        zm[k] = 0.5 * ((double)zw[k] + (double)zw[k + 1]);
+        c->zm[k] = 0.5 * (c->zw[k] + c->zw[k + 1]);
+}
+
+/* The vertical mapping of docs/data.md at height Z of values V on the column's mass levels:
+ * linear in height between the two levels around Z, the first level's value below it, the
+ * last one's above it. */
+static double mapped(const struct column *c, const double *v, double z)
+{
+    if (z <= c->zm[0])
+        return v[0];
+    if (z >= c->zm[c->nz - 1])
+        return v[c->nz - 1];
+    int k = 0;
+    while (c->zm[k + 1] <= z)
+        k++;
+    double t = (z - c->zm[k]) / (c->zm[k + 1] - c->zm[k]);
+    return (1.0 - t) * v[k] + t * v[k + 1];
+}
+
+/* The height grid's top: the highest model top of the first time over all columns. */
+static double auto_top(int nc, int nx, int ny, int nz)
+{
+    double top = 0.0;
+    for (int j = 0; j < ny; j++)
+        for (int i = 0; i < nx; i++)
+            top = fmax(top, ((double)at4(nc, "PH", 0, nz, j, i) + (double)at4(nc, "PHB", 0, nz, j, i)) /
+                                9.81);
+    return top;
+}
+
+/* A variable on the mass levels of column (I, J) at time T. */
+static void levels_of(int nc, const char *name, int t, int i, int j, int nz, double *v)
+{
+    for (int k = 0; k < nz; k++)
+        v[k] = at4(nc, name, t, k, j, i);
 }
 
 static double rel(double a, double b)
@@ -116,79 +156,83 @@ static void test_katrina_grid_point(void **state)
     CHECK(nc_inq_dimlen(nc, d, &nz));
     assert_true(nz < 63);
     const int t = 1;
-    /* The cloudiest point of step 1 away from the edges and the top level. */
+    /* The regular height grid the reader makes: as many levels as the model, to its top. */
+    double dz = auto_top(nc, (int)nx, (int)ny, (int)nz) / (double)nz;
+    /* The cloudiest point of the height grid at step 1, away from the edges and the top. */
     int bi = 0, bj = 0, bk = 0;
-    float best = -1.0f;
-    for (int k = 0; k + 1 < (int)nz; k++)
-        for (int j = 2; j + 2 < (int)ny; j++)
-            for (int i = 2; i + 2 < (int)nx; i++) {
-                float q = at4(nc, "QCLOUD", t, k, j, i);
-                if (q > best) {
+    double best = -1.0;
+    struct column c;
+    double qc[64];
+    for (int j = 2; j + 2 < (int)ny; j++)
+        for (int i = 2; i + 2 < (int)nx; i++) {
+            column_of(nc, t, i, j, (int)nz, &c);
+            levels_of(nc, "QCLOUD", t, i, j, (int)nz, qc);
+            for (int k = 0; k + 1 < (int)nz; k++) {
+                double z = (k + 0.5) * dz;
+                double q = z > c.zw[0] ? mapped(&c, qc, z) : 0.0;
+                if (q > best)
                     best = q, bi = i, bj = j, bk = k;
-                }
             }
-    assert_true(best > 1e-5f);
-    int v;
+        }
+    assert_true(best > 1e-5);
     float lat = at2(nc, "XLAT", bj, bi), lon = at2(nc, "XLONG", bj, bi);
-    double zm[64];
-    mass_heights(nc, t, bi, bj, (int)nz, zm);
+    column_of(nc, t, bi, bj, (int)nz, &c);
+    double qr[64], p[64], temp[64], u[64], v[64], w[64];
+    levels_of(nc, "QCLOUD", t, bi, bj, (int)nz, qc);
+    levels_of(nc, "QRAIN", t, bi, bj, (int)nz, qr);
+    for (int k = 0; k < (int)nz; k++) {
+        p[k] = (double)at4(nc, "P", t, k, bj, bi) + (double)at4(nc, "PB", t, k, bj, bi);
+        /* T = (theta' + 300) (p / p0)^(R/cp) */
+        temp[k] = ((double)at4(nc, "T", t, k, bj, bi) + 300.0) * pow(p[k] / P0, R_CP);
+        u[k] = 0.5 * ((double)at4(nc, "U", t, k, bj, bi) + (double)at4(nc, "U", t, k, bj, bi + 1));
+        v[k] = 0.5 * ((double)at4(nc, "V", t, k, bj, bi) + (double)at4(nc, "V", t, k, bj + 1, bi));
+        w[k] = 0.5 * ((double)at4(nc, "W", t, k, bj, bi) + (double)at4(nc, "W", t, k + 1, bj, bi));
+    }
 
-    /* On the model level: the file's values, to float rounding. */
+    /* At a voxel centre of the height grid: the file's values after the vertical mapping, to
+     * float rounding (the volume holds floats). */
+    double z = (bk + 0.5) * dz;
     char args[1024];
     snprintf(args, sizeof(args), "'%s/configs/katrina.cfg' --at %.17g,%.17g,%.17g --step %d",
-             ANVIL_SOURCE_DIR, (double)lat, (double)lon, zm[bk], t);
+             ANVIL_SOURCE_DIR, (double)lat, (double)lon, z, t);
     const char *js = probe_json(args);
     assert_true(strstr(js, "\"valid\": true") != NULL);
     assert_true(strstr(js, "\"temperature_source\": \"data\"") != NULL);
-    double qc = at4(nc, "QCLOUD", t, bk, bj, bi), qr = at4(nc, "QRAIN", t, bk, bj, bi);
-    assert_true(rel(json_number(js, "cloud"), qc * 1e3) < 1e-6);
-    if (qr > 0.0)
-        assert_true(rel(json_number(js, "rain"), qr * 1e3) < 1e-6);
-    else
-        assert_true(json_number(js, "rain") == 0.0);
+    double cloud = mapped(&c, qc, z), rain = mapped(&c, qr, z);
+    assert_true(rel(json_number(js, "cloud"), cloud * 1e3) < 1e-6);
+    assert_true(rel(json_number(js, "rain"), rain * 1e3) < 1e-6 || (rain < 1e-12 && json_number(js, "rain") < 1e-9));
     assert_true(isnan(json_number(js, "ice"))); /* WSM3 writes no ice: null */
-    assert_true(rel(json_number(js, "condensate_g_per_kg"), (qc + (qr > 0 ? qr : 0)) * 1e3) <
-                1e-6);
-    double p = (double)at4(nc, "P", t, bk, bj, bi) + (double)at4(nc, "PB", t, bk, bj, bi);
-    double theta = (double)at4(nc, "T", t, bk, bj, bi) + 300.0;
-    double temp = theta * pow(p / P0, R_CP);
-    assert_true(fabs(json_number(js, "temperature_c") - (temp - 273.15)) < 1e-3);
-    assert_true(rel(json_number(js, "pressure_hpa"), p / 100.0) < 1e-6);
-    /* The wind at the mass point: U, V averaged over their faces (Mercator: east, north). */
-    CHECK(nc_inq_varid(nc, "U", &v));
-    size_t su[4] = {(size_t)t, (size_t)bk, (size_t)bj, (size_t)bi}, cu[4] = {1, 1, 1, 2};
-    float uf[2], vf[2];
-    CHECK(nc_get_vara_float(nc, v, su, cu, uf));
-    CHECK(nc_inq_varid(nc, "V", &v));
-    size_t cv[4] = {1, 1, 2, 1};
-    CHECK(nc_get_vara_float(nc, v, su, cv, vf));
-    double u = 0.5 * (uf[0] + uf[1]), vv = 0.5 * (vf[0] + vf[1]);
-    assert_true(fabs(json_number(js, "u_m_s") - u) < 1e-4);
-    assert_true(fabs(json_number(js, "v_m_s") - vv) < 1e-4);
-    assert_true(fabs(json_number(js, "speed_m_s") - hypot(u, vv)) < 1e-4);
-    double from = fmod(atan2(-u, -vv) * 180.0 / M_PI + 360.0, 360.0);
+    assert_true(rel(json_number(js, "condensate_g_per_kg"), (cloud + rain) * 1e3) < 1e-6);
+    assert_true(fabs(json_number(js, "temperature_c") - (mapped(&c, temp, z) - 273.15)) < 1e-4);
+    assert_true(rel(json_number(js, "pressure_hpa"), mapped(&c, p, z) / 100.0) < 1e-6);
+    /* Mercator: the grid's x and y are east and north. */
+    double ue = mapped(&c, u, z), ve = mapped(&c, v, z);
+    assert_true(strstr(js, "\"earth_relative\": true") != NULL);
+    assert_true(fabs(json_number(js, "u_m_s") - ue) < 1e-4);
+    assert_true(fabs(json_number(js, "v_m_s") - ve) < 1e-4);
+    assert_true(fabs(json_number(js, "speed_m_s") - hypot(ue, ve)) < 1e-4);
+    double from = fmod(atan2(-ue, -ve) * 180.0 / M_PI + 360.0, 360.0);
     assert_true(fabs(json_number(js, "from_deg") - from) < 1e-3);
-    double w = 0.5 * ((double)at4(nc, "W", t, bk, bj, bi) + (double)at4(nc, "W", t, bk + 1, bj, bi));
-    assert_true(fabs(json_number(js, "w_m_s") - w) < 1e-5);
+    assert_true(fabs(json_number(js, "w_m_s") - mapped(&c, w, z)) < 1e-5);
     assert_true(fabs(json_number(js, "latitude_deg") - lat) < 1e-6);
-    assert_true(fabs(json_number(js, "height_m") - zm[bk]) < 1e-6);
-    /* A cloudy point: the volume there is not clear. */
-    assert_true(json_number(js, "total") > 0.0);
+    assert_true(fabs(json_number(js, "height_m") - z) < 1e-6);
+    assert_true(fabs(json_number(js, "ground_m") - c.zw[0]) < 1e-3);
+    /* A cloudy point: the volume drawn there is not clear, and it is in the shade of something
+     * or lit: a light map's value in [0, 1]. */
+    assert_true(json_number(js, "total") > 1e-5);
     double light = json_number(js, "light");
     assert_true(light >= 0.0 && light <= 1.0);
 
-    /* 70 % of the way up to the next level: linear in height between the two. */
-    double z = zm[bk] + 0.7 * (zm[bk + 1] - zm[bk]);
+    /* 30 % of the way up to the next voxel centre: linear between the two, as the eye pass
+     * samples. */
+    double z1 = z + 0.3 * dz;
     snprintf(args, sizeof(args), "'%s/configs/katrina.cfg' --at %.17g,%.17g,%.17g --step %d",
-             ANVIL_SOURCE_DIR, (double)lat, (double)lon, z, t);
+             ANVIL_SOURCE_DIR, (double)lat, (double)lon, z1, t);
     js = probe_json(args);
-    double qc1 = at4(nc, "QCLOUD", t, bk + 1, bj, bi);
-    assert_true(rel(json_number(js, "cloud"), (0.3 * qc + 0.7 * qc1) * 1e3) < 1e-6);
-    double p1 = (double)at4(nc, "P", t, bk + 1, bj, bi) + (double)at4(nc, "PB", t, bk + 1, bj, bi);
-    double theta1 = (double)at4(nc, "T", t, bk + 1, bj, bi) + 300.0;
-    double temp1 = theta1 * pow(p1 / P0, R_CP);
-    assert_true(fabs(json_number(js, "temperature_c") - (0.3 * temp + 0.7 * temp1 - 273.15)) <
-                1e-3);
+    double cloud1 = mapped(&c, qc, z + dz);
+    assert_true(rel(json_number(js, "cloud"), (0.7 * cloud + 0.3 * cloud1) * 1e3) < 1e-6);
+    double t1 = 0.7 * mapped(&c, temp, z) + 0.3 * mapped(&c, temp, z + dz);
+    assert_true(fabs(json_number(js, "temperature_c") - (t1 - 273.15)) < 1e-4);
     CHECK(nc_close(nc));
 }
 
@@ -198,33 +242,94 @@ static void test_lambert_wind_turned(void **state)
     const char *path = test_shared_data("wrf/lambert_thompson_cropped.nc");
     int nc;
     CHECK(nc_open(path, NC_NOWRITE, &nc));
+    size_t nz, nx, ny;
+    int dim;
+    CHECK(nc_inq_dimid(nc, "bottom_top", &dim));
+    CHECK(nc_inq_dimlen(nc, dim, &nz));
+    CHECK(nc_inq_dimid(nc, "west_east", &dim));
+    CHECK(nc_inq_dimlen(nc, dim, &nx));
+    CHECK(nc_inq_dimid(nc, "south_north", &dim));
+    CHECK(nc_inq_dimlen(nc, dim, &ny));
     /* The column inside the grid where it is turned most. */
     int i = 1, j = 1;
-    const int k = 3;
-    for (int jj = 1; jj < 7; jj++)
-        for (int ii = 1; ii < 9; ii++)
+    for (int jj = 1; jj + 1 < (int)ny; jj++)
+        for (int ii = 1; ii + 1 < (int)nx; ii++)
             if (fabsf(at2(nc, "SINALPHA", jj, ii)) > fabsf(at2(nc, "SINALPHA", j, i)))
                 i = ii, j = jj;
     float lat = at2(nc, "XLAT", j, i), lon = at2(nc, "XLONG", j, i);
     float ca = at2(nc, "COSALPHA", j, i), sa = at2(nc, "SINALPHA", j, i);
-    assert_true(fabsf(sa) > 1e-3f); /* a grid that is turned here */
-    size_t d;
-    int dim;
-    CHECK(nc_inq_dimid(nc, "bottom_top", &dim));
-    CHECK(nc_inq_dimlen(nc, dim, &d));
-    double zm[64];
-    mass_heights(nc, 0, i, j, (int)d, zm);
-    double u = 0.5 * ((double)at4(nc, "U", 0, k, j, i) + (double)at4(nc, "U", 0, k, j, i + 1));
-    double vg = 0.5 * ((double)at4(nc, "V", 0, k, j, i) + (double)at4(nc, "V", 0, k, j + 1, i));
+    assert_true(fabsf(sa) > 1e-2f); /* a grid that is turned here */
+    struct column c;
+    column_of(nc, 0, i, j, (int)nz, &c);
+    double dz = auto_top(nc, (int)nx, (int)ny, (int)nz) / (double)nz;
+    int k = 0;
+    while ((k + 0.5) * dz < c.zw[0] + 500.0)
+        k++; /* well above the (Tibetan) ground */
+    double z = (k + 0.5) * dz, u[64], v[64];
+    for (int l = 0; l < (int)nz; l++) {
+        u[l] = 0.5 * ((double)at4(nc, "U", 0, l, j, i) + (double)at4(nc, "U", 0, l, j, i + 1));
+        v[l] = 0.5 * ((double)at4(nc, "V", 0, l, j, i) + (double)at4(nc, "V", 0, l, j + 1, i));
+    }
+    double ug = mapped(&c, u, z), vg = mapped(&c, v, z);
     CHECK(nc_close(nc));
     char args[1024];
-    snprintf(args, sizeof(args), "'%s' --at %.17g,%.17g,%.17g", path, (double)lat, (double)lon,
-             zm[k]);
+    snprintf(args, sizeof(args), "'%s' --at %.17g,%.17g,%.17g", path, (double)lat, (double)lon, z);
     const char *js = probe_json(args);
     assert_true(strstr(js, "\"earth_relative\": true") != NULL);
-    assert_true(fabs(json_number(js, "u_m_s") - (u * ca - vg * sa)) < 1e-4);
-    assert_true(fabs(json_number(js, "v_m_s") - (vg * ca + u * sa)) < 1e-4);
-    assert_true(fabs(json_number(js, "speed_m_s") - hypot(u, vg)) < 1e-4);
+    assert_true(fabs(json_number(js, "u_m_s") - (ug * ca - vg * sa)) < 1e-4);
+    assert_true(fabs(json_number(js, "v_m_s") - (vg * ca + ug * sa)) < 1e-4);
+    assert_true(fabs(json_number(js, "speed_m_s") - hypot(ug, vg)) < 1e-4);
+    /* The turn is large enough here that the unturned wind would fail. */
+    assert_true(fabs(ug * ca - vg * sa - ug) > 1e-3 || fabs(vg * ca + ug * sa - vg) > 1e-3);
+}
+
+/* A point read from the file's columns equals the field volume wrf_read_step makes, sampled
+ * there (the volume the picture is made from), whole or cropped and strided. */
+static void test_point_is_the_volume(void **state)
+{
+    const char *files[] = {katrina()};
+    struct wrf *w = wrf_open(files, 1);
+    assert_non_null(w);
+    for (int pass = 0; pass < 2; pass++) {
+        struct wrf_desc d;
+        wrf_desc_defaults(&d);
+        d.temperature = true;
+        if (pass == 1) {
+            d.stride[0] = d.stride[1] = 2;
+            d.crop[0] = 3, d.crop[1] = 40, d.crop[2] = 5, d.crop[3] = 44;
+            d.levels = 20;
+        }
+        struct field_volume fv;
+        log_set_level(LOG_ERROR);
+        assert_true(wrf_read_step(w, 1, &d, &fv, NULL));
+        log_set_level(LOG_INFO);
+        const struct grid3 *g = &fv.grid;
+        unsigned seed = 7;
+        int compared = 0;
+        for (int n = 0; n < 400; n++) {
+            double p[3];
+            for (int a = 0; a < 3; a++) {
+                seed = seed * 1103515245u + 12345u;
+                p[a] = g->origin[a] + g->n[a] * g->spacing[a] * ((seed >> 8) & 0xffff) / 65536.0;
+            }
+            struct wrf_point wp;
+            enum wrf_point_result r = wrf_read_point(w, 1, &d, p, &wp);
+            assert_true(r == WRF_POINT_OK || r == WRF_POINT_BELOW || r == WRF_POINT_ABOVE);
+            if (r != WRF_POINT_OK)
+                continue;
+            struct probe_sample s;
+            assert_true(probe_sample_fields(&fv, p, &s));
+            for (int f = 0; f < SPECIES_COUNT; f++) {
+                assert_int_equal(wp.has_species[f], s.has_species[f]);
+                assert_true(fabs(wp.q[f] - s.q[f]) <= 1e-6 * fabs(s.q[f]) + 1e-12);
+            }
+            assert_true(fabs(wp.temperature_k - s.temperature_k) < 1e-3);
+            compared++;
+        }
+        assert_true(compared > 200);
+        field_volume_finish(&fv);
+    }
+    wrf_close(w);
 }
 
 static void test_wind_direction(void **state)
@@ -380,6 +485,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_katrina_grid_point),
         cmocka_unit_test(test_lambert_wind_turned),
+        cmocka_unit_test(test_point_is_the_volume),
         cmocka_unit_test(test_wind_direction),
         cmocka_unit_test(test_first_visible),
         cmocka_unit_test(test_sample_fields),
