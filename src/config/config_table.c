@@ -613,6 +613,13 @@ static bool apply_transfer_file(const struct config_field *s, const struct value
         report(&r->where, path, "path longer than %d characters", CONFIG_PATH_MAX - 1);
         return false;
     }
+    FILE *f = fopen(full, "r");
+    if (!f) {
+        report(&r->where, path, "cannot read the transfer function \"%s\": %s", full,
+               strerror(errno));
+        return false;
+    }
+    fclose(f);
     struct transfer_function tf;
     if (!transfer_file_load(full, &tf))
         return false; /* said once, at the transfer function file's line */

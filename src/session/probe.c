@@ -101,6 +101,21 @@ const struct geo_map *probe_geo(const struct probe *p)
     return &p->geo;
 }
 
+/* "outside the data (its columns lie at ...)" for a WRF scene, else about the frame point. */
+static void outside_text(const struct probe *p, const double world[2], char *why, size_t size)
+{
+    const struct wrf *w = p->src ? data_source_wrf(p->src) : NULL;
+    const struct wrf_meta *m = w ? wrf_get_meta(w) : NULL;
+    if (m && isfinite(m->lat_min))
+        snprintf(why, size, "outside the data (its columns lie at %.2f to %.2f N, %.2f to %.2f E)",
+                 m->lat_min, m->lat_max, m->lon_min, m->lon_max);
+    else if (world)
+        snprintf(why, size, "outside the data (x %.1f km, y %.1f km)", world[0] / 1000.0,
+                 world[1] / 1000.0);
+    else
+        snprintf(why, size, "outside the data");
+}
+
 bool probe_world_at(const struct probe *p, double lat, double lon, double height_m,
                     double world[3], char *why, size_t why_size)
 {
@@ -111,8 +126,7 @@ bool probe_world_at(const struct probe *p, double lat, double lon, double height
         return false;
     }
     if (!geo_map_to_frame(&p->geo, lat, lon, &world[0], &world[1])) {
-        snprintf(why, why_size, "%.4f N, %.4f E cannot be placed on the data's grid (far "
-                 "outside it)", lat, lon);
+        outside_text(p, NULL, why, why_size); /* too far out for the grid's inverse */
         return false;
     }
     world[2] = height_m * p->k;
@@ -146,25 +160,17 @@ bool probe_read(struct probe *p, int step, const double world[3], struct probe_v
             out->fields = true;
             probe_sample_from_wrf(&wp, out->data[2], &out->s);
             return true;
-        case WRF_POINT_OUTSIDE: {
-            const struct wrf_meta *m = wrf_get_meta(data_source_wrf(p->src));
-            if (isfinite(m->lat_min))
-                snprintf(out->why, sizeof(out->why),
-                         "outside the data (its columns lie at %.2f to %.2f N, %.2f to %.2f E)",
-                         m->lat_min, m->lat_max, m->lon_min, m->lon_max);
-            else
-                outside(out, "outside the data (x %.1f km, y %.1f km)", world[0] / 1000.0,
-                        world[1] / 1000.0);
+        case WRF_POINT_OUTSIDE:
+            outside_text(p, world, out->why, sizeof(out->why));
             out->valid = false;
             return true;
-        }
         case WRF_POINT_BELOW:
             outside(out, "below the ground (%.0f m above sea level there; the point: %.0f m)",
                     wp.ground_m, out->data[2]);
             return true;
         case WRF_POINT_ABOVE:
-            outside(out, "above the model top (%.0f m there; the point: %.0f m)", wp.top_m,
-                    out->data[2]);
+            outside(out, "above the top of the data (%.0f m above sea level there; the point: "
+                    "%.0f m)", wp.top_m, out->data[2]);
             return true;
         case WRF_POINT_ERROR:
             return false;
@@ -180,8 +186,8 @@ bool probe_read(struct probe *p, int step, const double world[3], struct probe_v
         p->fields_step = p->storm ? 0 : step;
     }
     if (!probe_sample_fields(&p->fields, out->data, &out->s)) {
-        outside(out, "outside the data (x %.1f km, y %.1f km)", world[0] / 1000.0,
-                world[1] / 1000.0);
+        outside_text(p, world, out->why, sizeof(out->why));
+        out->valid = false;
         return true;
     }
     out->fields = true;

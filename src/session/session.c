@@ -90,7 +90,6 @@ struct session {
         int mode;
         bool wand;
     } probe_key;
-    bool diffuse_decided; /* effects.multiple as decided at the start (the menu may turn it) */
 
     /* The menu and its sources (desc.menu); or a copy of another's (session_show_menu_state). */
     struct menu *menu;
@@ -298,7 +297,6 @@ struct session *session_create(const struct config *cfg, const struct session_de
         goto error;
     }
     s->settings.diffuse = s->effects.on[EFFECT_MULTIPLE];
-    s->diffuse_decided = s->settings.diffuse;
     s->renderer = renderer_create();
     bool ok = s->renderer != NULL;
     if (ok) {
@@ -554,10 +552,17 @@ void session_look_text(const struct session *s, char *buf, size_t size)
         fprintf(f, "lightmap = { resolution = [%d, %d, %d]; epsilon = %.17e; };\n",
                 set->light_resolution[0], set->light_resolution[1], set->light_resolution[2],
                 set->epsilon);
-    if (set->diffuse != s->diffuse_decided)
-        fprintf(f, "effects = { multiple = \"%s\"; lateral = \"%s\"; };\n",
-                s->effects.on[EFFECT_MULTIPLE] ? "on" : "off",
-                s->effects.on[EFFECT_LATERAL] ? "on" : "off");
+    /* The effects as this session decided them (and the menu turned them), so that a batch
+     * render simulates what it did whatever its own facts would decide; not the temporal
+     * blend (a still picture has none) nor the lens warp (the display's). */
+    static const enum effect pinned[] = {EFFECT_SHADOWS,  EFFECT_FORWARD, EFFECT_PERIPHERAL,
+                                         EFFECT_MULTIPLE, EFFECT_LATERAL, EFFECT_PHASE,
+                                         EFFECT_GROUND_SHADOW, EFFECT_DETAIL};
+    fprintf(f, "effects = {");
+    for (size_t i = 0; i < sizeof(pinned) / sizeof(pinned[0]); i++)
+        fprintf(f, " %s = \"%s\";", effects_name(pinned[i]),
+                s->effects.on[pinned[i]] ? "on" : "off");
+    fprintf(f, " };\n");
     const struct look *look = &set->look;
     fprintf(f, "look = {\n    species = {\n");
     for (int sp = 0; sp < SPECIES_COUNT; sp++) {
