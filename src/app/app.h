@@ -46,5 +46,6 @@ bool app_load_display_config(const char *path, char *const *sets, int n_sets,
 int cmd_render(int argc, char **argv);
 int cmd_run(int argc, char **argv);
 int cmd_trackers(int argc, char **argv);
+int cmd_probe(int argc, char **argv);
 
 #endif

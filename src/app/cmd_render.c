@@ -561,6 +561,8 @@ static int command(int argc, char **argv, bool run)
                            /* Rank 0's menu and script are the cluster's (the others show
                             * the menu rank 0 sends). */
                            .menu = (run || o.input || o.menu) && cluster_rank() == 0,
+                           /* Every rank reads the probe's values at the point rank 0 picks. */
+                           .probe = run || o.input || o.menu,
                            .show_menu = show_menu,
                            .replay_of_run = replay.from_run,
                            .script = cluster_rank() == 0 ? o.input : NULL,

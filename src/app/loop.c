@@ -391,12 +391,23 @@ static void screenshot(struct display *d, struct session *s)
         log_warn("screenshot: not written (see above)");
 }
 
-/* C: the view as a block to paste, and a bookmark file that renders it again. */
+/* C and the menu's Save view: the view as a block to paste, and a bookmark file that renders
+ * what the session shows again (the view, the sun, the time step, the look, the quality the
+ * menu changed). */
 static void bookmark(struct session *s, const struct loop_desc *ld)
 {
-    char view[1024], sun[256], name[64], text[PATH_MAX + 2048];
+    enum { LOOK_MAX = 16384 };
+    char view[1024], sun[256], name[64];
+    char *look = malloc(LOOK_MAX), *text = malloc(LOOK_MAX + 4096);
+    if (!look || !text) {
+        free(look);
+        free(text);
+        log_warn("bookmark: out of memory: not written");
+        return;
+    }
     session_view_text(s, view, sizeof(view));
     session_sun_text(s, sun, sizeof(sun));
+    session_look_text(s, look, LOOK_MAX);
     bool tracker = session_uses_tracker(s);
     printf("%s%s", view, tracker ? "" : sun);
     fflush(stdout);
@@ -405,15 +416,37 @@ static void bookmark(struct session *s, const struct loop_desc *ld)
     if (include && !realpath(include, full))
         snprintf(full, sizeof(full), "%s", include);
     free_name("bookmark", ".cfg", name, sizeof(name));
-    int n = snprintf(text, sizeof(text), "# anvil bookmark: %s\n%s%s%s%s%s",
-                     tracker ? "the navigation of a display (anvil render SCENE --display THIS)"
-                             : "a view of a scene (anvil render THIS -o view.png)",
-                     full[0] ? "@include \"" : "", full, full[0] ? "\"\n" : "", view,
-                     tracker ? "" : sun);
-    if (n < 0 || (size_t)n >= sizeof(text))
-        log_warn("bookmark: not saved (the view does not fit in %zu bytes)", sizeof(text));
-    else if (file_write_atomic(name, text, strlen(text)))
+    /* A tracked display's bookmark is a display file: the look belongs to the scene, so it is
+     * left there as comments to copy. */
+    snprintf(text, LOOK_MAX + 4096, "# anvil bookmark: %s\n%s%s%s%s%s",
+             tracker ? "the navigation of a display (anvil render SCENE --display THIS)"
+                     : "a view of a scene (anvil render THIS -o view.png)",
+             full[0] ? "@include \"" : "", full, full[0] ? "\"\n" : "", view, tracker ? "" : sun);
+    if (!tracker) {
+        strncat(text, look, LOOK_MAX + 4096 - strlen(text) - 1);
+    } else {
+        strncat(text, "# the scene's look and time, for its scene file:\n",
+                LOOK_MAX + 4096 - strlen(text) - 1);
+        for (char *line = look; *line;) {
+            char *end = strchr(line, '\n');
+            size_t n = end ? (size_t)(end - line + 1) : strlen(line);
+            size_t at = strlen(text);
+            if (at + n + 3 >= (size_t)LOOK_MAX + 4096)
+                break;
+            snprintf(text + at, LOOK_MAX + 4096 - at, "# %.*s", (int)n, line);
+            line += n;
+        }
+    }
+    char status[128];
+    if (file_write_atomic(name, text, strlen(text))) {
         log_info("bookmark: %s", name);
+        snprintf(status, sizeof(status), "saved %s", name);
+    } else {
+        snprintf(status, sizeof(status), "not saved: %s", log_last_error());
+    }
+    session_set_status(s, status);
+    free(look);
+    free(text);
 }
 
 int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
@@ -472,7 +505,7 @@ int loop_run(struct display *d, struct session *s, const struct loop_desc *ld)
             session_stats(s)->first_frame_ms = time_now_ms() - start;
             session_stats(s)->first_sync_ms = session_stats(s)->sync_ms;
         }
-        if (l.root && ld->run) {
+        if (l.root) { /* a run's keys, or a script's (its "Save view" too) */
             unsigned requests = session_take_requests(s);
             if (requests & SESSION_REQUEST_SCREENSHOT)
                 screenshot(d, s);

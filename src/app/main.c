@@ -22,6 +22,7 @@ static const struct command commands[] = {
     {"render", cmd_render, "render views headless (EGL) to PNG or PFM files"},
     {"run", cmd_run, "open a window: orbit, zoom, move the sun"},
     {"trackers", cmd_trackers, "a display's tracked head and wand, live, in room coordinates"},
+    {"probe", cmd_probe, "the values at one point: mass ratios, temperature, wind, light"},
     {"info", cmd_info, "describe WRF, Isabel or extinction files"},
     {"synth", cmd_synth, "write the procedural storm as a WRF-convention NetCDF time series"},
     {"convert", cmd_convert, "precompute ice and water extinction volumes into a NetCDF file"},

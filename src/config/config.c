@@ -36,6 +36,7 @@ static const char *const effect_mode_names[] = {"auto", "on", "off", NULL};
 static const char *const phase_names[] = {"water", "ice", NULL};
 static const char *const coast_res_names[] = {"crude", "low", "intermediate", NULL};
 static const char *const overlay_when_names[] = {"run", "always", "never", NULL};
+static const char *const probe_mode_names[] = {"first_visible", "distance", NULL};
 
 /* clang-format off */
 #define OFF(member) offsetof(struct config, member)
@@ -218,6 +219,34 @@ static const struct config_field settings[] = {
          "units"),
     BOOL("overlay.north", overlay.north, 1, "a north arrow"),
     BOOL("overlay.box", overlay.box, 1, "the domain's box, with km ticks along its floor"),
+
+    {.path = "look.species.*.enabled", .type = T_BOOL, .n = 1, .offset = OFF(optics.enabled),
+     .stride = sizeof(bool), .max = 1, .flags = F_SPECIES, .def = {1},
+     .help = "show this species (the same setting as species.<name>.enabled)"},
+    {.path = "look.species.*.scale", .type = T_DOUBLE, .n = 1, .offset = OFF(optics.scale),
+     .stride = sizeof(double), .min = 0, .max = 1e6, .flags = F_SPECIES, .def = {1.0},
+     .help = "multiplies this species' extinction (the same setting as species.<name>.scale)"},
+    {.path = "look.species.*.tint", .type = T_DOUBLE, .n = 3, .offset = OFF(look.tint),
+     .stride = sizeof(double[3]), .min = 0, .max = 1, .flags = F_SPECIES, .def = {1, 1, 1},
+     .help = "the colour this species' scattered light takes, linear RGB (white: none)"},
+    {.path = "look.transfer", .type = T_TRANSFER, .n = 1, .offset = OFF(look.transfer),
+     .flags = F_GIVEN, .given = OFF(look.has_transfer),
+     .help = "a transfer function for one field (docs/menu.md: its file's name, or the "
+             "file's transfer group written in place; \"none\": none); shown instead of the "
+             "clouds unless look.show_transfer is false"},
+    BOOL("look.show_transfer", look.show_transfer, 1,
+         "show look.transfer (false: keep it for the menu, show the clouds)"),
+
+    BOOL("probe.on", probe.on, 0,
+         "start with the probe on (anvil run, scripted renders: the values at the wand or "
+         "pointer, docs/analysis.md)"),
+    ENUM("probe.mode", probe.mode, probe_mode_names, 0,
+         "where along the wand's or pointer's ray the probe reads: the first point whose "
+         "extinction passes probe.threshold, or probe.distance along it"),
+    DBL("probe.threshold", probe.threshold, 0, 1, F_MIN_OPEN, 1e-4,
+        "extinction that counts as visible for probe.mode = \"first_visible\", 1/m"),
+    DBL("probe.distance", probe.distance_km, 0, 1e5, 0, 50.0,
+        "how far along the ray probe.mode = \"distance\" reads, world km"),
 
     BOOL("map.terrain", map.terrain, 1,
          "ground mesh from the data's HGT, LANDMASK, LU_INDEX (else the flat ground plane)"),

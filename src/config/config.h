@@ -17,6 +17,7 @@
 #include <stdio.h>
 
 #include "optics/optics.h"
+#include "optics/transfer.h"
 
 #define CONFIG_PATH_MAX 1024
 #define CONFIG_MAX_FILES 64
@@ -169,6 +170,25 @@ struct config_overlay {
     bool box;               /* overlay.box: the domain's box with km ticks */
 };
 
+/* How the volume looks (docs/analysis.md, "Look blocks"): what the menu's Fields and Transfer
+ * pages change, so that a scene file renders what a menu session showed.  The species'
+ * enabled and scale are config_optics' (look.species.<name>.enabled and .scale are the same
+ * settings as species.<name>.enabled and .scale). */
+struct config_look {
+    double tint[SPECIES_COUNT][3]; /* look.species.<name>.tint: linear RGB in [0, 1] */
+    bool has_transfer;             /* look.transfer was given */
+    struct transfer_function transfer; /* look.transfer: a file name or a group in place */
+    bool show_transfer;            /* look.show_transfer: the function replaces the clouds */
+};
+
+/* The probe (docs/analysis.md): how it starts; the menu changes it while running. */
+struct config_probe {
+    bool on;            /* probe.on */
+    int mode;           /* probe.mode: "first_visible" | "distance" (enum probe_mode) */
+    double threshold;   /* probe.threshold: extinction that counts as visible, 1/m */
+    double distance_km; /* probe.distance: along the wand or pointer, world km */
+};
+
 struct config_effects {
     enum effect_mode mode[EFFECT_COUNT]; /* effects.<name>: "auto" | "on" | "off" */
 };
@@ -187,6 +207,8 @@ struct config {
     struct config_map map;
     struct config_detail detail;
     struct config_overlay overlay;
+    struct config_look look;
+    struct config_probe probe;
 };
 
 /* Fills every setting with its default: the built-in procedural storm seen from the south-west

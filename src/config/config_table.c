@@ -24,6 +24,8 @@
 
 #include "common/log.h"
 #include "config/config.h"
+#include "config/transfer_file.h"
+#include "config/transfer_group.h"
 #include "optics/optics.h"
 
 #define INCLUDE_DEPTH_MAX 16
@@ -123,6 +125,7 @@ static size_t element_size(const struct config_field *s)
     case T_PATH:
     case T_FILES:
     case T_GROUPS:
+    case T_TRANSFER:
         break;
     }
     return 0;
@@ -165,6 +168,7 @@ static void store(const struct config_field *s, int sp, int k, double v, void *b
     case T_PATH:
     case T_FILES:
     case T_GROUPS:
+    case T_TRANSFER:
         assert(!"not a number");
     }
 }
@@ -187,6 +191,7 @@ static double fetch(const struct config_field *s, int sp, int k, const void *bas
     case T_PATH:
     case T_FILES:
     case T_GROUPS:
+    case T_TRANSFER:
         break;
     }
     return 0;
@@ -211,6 +216,9 @@ void config_table_defaults(const struct config_table *t, void *base)
         case T_STRING:
         case T_PATH:
             snprintf(member(base, s->offset), s->size, "%s", s->def_text ? s->def_text : "");
+            break;
+        case T_TRANSFER:
+            transfer_defaults(member(base, s->offset), TRANSFER_FIELD_QVAPOR);
             break;
         case T_GROUPS:
             assert(s->def_count >= s->min && s->def_count <= s->max);
@@ -281,6 +289,10 @@ static void expectation(const struct config_field *s, bool plural, char *buf, si
         break;
     case T_GROUPS:
         snprintf(buf, size, "a list ( { ... }, { ... } ) of %ss", s->elems->elem_name);
+        break;
+    case T_TRANSFER:
+        snprintf(buf, size, "a transfer function: a file name, or its group { field = ...; "
+                            "range = [...]; ... } written in place");
         break;
     }
 }
@@ -405,6 +417,7 @@ static bool check_number(const struct config_field *s, const struct raw *r, doub
     case T_PATH:
     case T_FILES:
     case T_GROUPS:
+    case T_TRANSFER:
         assert(!"not a number");
     }
     *out = v;
@@ -580,6 +593,40 @@ static bool apply_string(const struct config_field *s, const struct value *val, 
     return true;
 }
 
+/* A transfer function named by its file: resolved as a path, then read whole (its own
+ * messages name that file and line). */
+static bool apply_transfer_file(const struct config_field *s, const struct value *val,
+                                const char *path, void *base)
+{
+    const struct raw *r = &val->one;
+    char got[NAME_MAX_LEN + 8], expect[160];
+    if (val->is_list || r->kind != RAW_STRING || !r->s[0]) {
+        expectation(s, false, expect, sizeof(expect));
+        describe_value(val, got, sizeof(got));
+        report(&r->where, path, "expected %s, got %s", expect, got);
+        return false;
+    }
+    char dir[CONFIG_PATH_MAX] = "", full[CONFIG_PATH_MAX];
+    if (r->where.file)
+        dir_of(r->where.file, dir, sizeof(dir));
+    if (!join_path(dir, r->s, full, sizeof(full))) {
+        report(&r->where, path, "path longer than %d characters", CONFIG_PATH_MAX - 1);
+        return false;
+    }
+    FILE *f = fopen(full, "r");
+    if (!f) {
+        report(&r->where, path, "cannot read the transfer function \"%s\": %s", full,
+               strerror(errno));
+        return false;
+    }
+    fclose(f);
+    struct transfer_function tf;
+    if (!transfer_file_load(full, &tf))
+        return false; /* said once, at the transfer function file's line */
+    memcpy(member(base, s->offset), &tf, sizeof(tf));
+    return true;
+}
+
 /* whole_vectors wording: what is wrong with the vector VAL, said of the vector at W. */
 static void report_vector(const struct config_field *s, const struct value *val,
                           const struct where *w, const char *path)
@@ -602,6 +649,16 @@ static bool apply(const struct config_table *t, const struct config_field *s, in
     case T_STRING:
     case T_PATH:
         ok = apply_string(s, val, path, base);
+        break;
+    case T_TRANSFER:
+        if (!val->is_list && val->one.kind == RAW_STRING && strcmp(val->one.s, "none") == 0) {
+            /* "none": no transfer function (the default). */
+            transfer_defaults(member(base, s->offset), TRANSFER_FIELD_QVAPOR);
+            if (s->flags & F_GIVEN)
+                *(bool *)member(base, s->given) = false;
+            return true;
+        }
+        ok = apply_transfer_file(s, val, path, base);
         break;
     case T_GROUPS:
         assert(!"lists of groups are read by walk_list and set by element");
@@ -829,7 +886,8 @@ static void raw_from_text(const struct config_field *s, char *text, struct raw *
 {
     memset(r, 0, sizeof(*r));
     text = trim(text);
-    if (s->type == T_ENUM || s->type == T_FILES || s->type == T_STRING || s->type == T_PATH) {
+    if (s->type == T_ENUM || s->type == T_FILES || s->type == T_STRING || s->type == T_PATH ||
+        s->type == T_TRANSFER) {
         r->kind = RAW_STRING;
         r->s = strip_quotes(text);
         return;
@@ -1397,6 +1455,31 @@ static bool walk_list(const struct reader *rd, const config_setting_t *list,
     return true;
 }
 
+static void locate_line(void *user, int line, const char **file, int *file_line)
+{
+    const struct reader *rd = user;
+    struct where w = locate(rd->src, rd->ch, line);
+    *file = w.file;
+    *file_line = w.line;
+}
+
+/* A transfer function written in place (look.transfer = { ... };), read as its file would
+ * be, its messages at the scene file's lines. */
+static bool walk_transfer(const struct reader *rd, const config_setting_t *g,
+                          const struct config_field *s, void *base, const char *path)
+{
+    struct raw r;
+    raw_from_setting(rd, g, &r);
+    struct transfer_where w = {
+        .file = r.where.file, .prefix = path, .locate = locate_line, .user = (void *)rd};
+    struct transfer_function tf;
+    if (!transfer_group_read(g, &w, &tf))
+        return false;
+    memcpy(member(base, s->offset), &tf, sizeof(tf));
+    mark_given(s, base);
+    return true;
+}
+
 /* Applies the settings of GROUP, whose path in T is REL ("" for the root); PREFIX names the
  * list element T fills ("" outside lists) in messages. */
 static bool walk_group(const struct reader *rd, const config_setting_t *group,
@@ -1419,6 +1502,11 @@ static bool walk_group(const struct reader *rd, const config_setting_t *group,
         if (find_setting(t, path, &s, &sp)) {
             if (s->type == T_GROUPS) {
                 if (!walk_list(rd, child, s, base, full))
+                    return false;
+                continue;
+            }
+            if (s->type == T_TRANSFER && config_setting_is_group(child)) {
+                if (!walk_transfer(rd, child, s, base, full))
                     return false;
                 continue;
             }
@@ -1735,6 +1823,9 @@ static void format_value(const struct config_field *s, int sp, const void *base,
     case T_GROUPS:
         format_groups(s, base, buf, size);
         return;
+    case T_TRANSFER:
+        snprintf(buf, size, "\"none\"");
+        return;
     default:
         break;
     }
@@ -1773,6 +1864,7 @@ static void write_rows(const struct config_table *t, const void *defaults, const
         [T_PATH] = "path",
         [T_FILES] = "list of strings",
         [T_GROUPS] = "list of groups",
+        [T_TRANSFER] = "path or group",
     };
     for (int i = 0; i < t->count; i++) {
         const struct config_field *s = &t->fields[i];
@@ -1793,6 +1885,8 @@ static void write_rows(const struct config_table *t, const void *defaults, const
             snprintf(range, sizeof(range), "up to %zu characters", s->size - 1);
         else if (s->type == T_GROUPS)
             snprintf(range, sizeof(range), "%g to %g %ss", s->min, s->max, s->elems->elem_name);
+        else if (s->type == T_TRANSFER)
+            snprintf(range, sizeof(range), "a transfer function (docs/menu.md)");
         else
             format_range(s, range, sizeof(range));
         for (int sp = 0; sp < instances(s); sp++) {

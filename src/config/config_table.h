@@ -30,6 +30,9 @@ enum config_type {
                  COUNT_OFFSET */
     T_GROUPS, /* a list ( { ... }, ... ) of MIN to MAX groups, each filled through the table
                  ELEMS into an array at OFFSET, their count in an int at COUNT_OFFSET */
+    T_TRANSFER, /* a transfer function (struct transfer_function at OFFSET): the name of a
+                   transfer function file (config/transfer_file.h), resolved as T_PATH, or its
+                   group written in place; from --set a file name */
 };
 
 enum {

@@ -8,11 +8,13 @@
 #include <libconfig.h>
 
 #include "common/log.h"
+#include "config/transfer_group.h"
 
-static void fail(const char *path, const config_setting_t *s, const char *setting,
+static void fail(const struct transfer_where *w, const config_setting_t *s, const char *setting,
                  const char *fmt, ...) __attribute__((format(printf, 4, 5)));
 
-static void fail(const char *path, const config_setting_t *s, const char *setting,
+/* One message "FILE:LINE: PREFIX.SETTING: ...", the line mapped through W's locate. */
+static void fail(const struct transfer_where *w, const config_setting_t *s, const char *setting,
                  const char *fmt, ...)
 {
     char msg[256];
@@ -21,10 +23,13 @@ static void fail(const char *path, const config_setting_t *s, const char *settin
     vsnprintf(msg, sizeof(msg), fmt, ap);
     va_end(ap);
     int line = s ? config_setting_source_line(s) : 0;
+    const char *file = w->file;
+    if (w->locate && line > 0)
+        w->locate(w->user, line, &file, &line);
     if (line > 0)
-        log_error("%s:%d: %s: %s", path, line, setting, msg);
+        log_error("%s:%d: %s%s: %s", file, line, w->prefix, setting, msg);
     else
-        log_error("%s: %s: %s", path, setting, msg);
+        log_error("%s: %s%s: %s", file, w->prefix, setting, msg);
 }
 
 static bool number(const config_setting_t *s, double *out)
@@ -41,21 +46,21 @@ static bool number(const config_setting_t *s, double *out)
     return true;
 }
 
-static bool read_channel(const char *path, const config_setting_t *group, int c,
-                         struct transfer_function *tf)
+static bool read_channel(const struct transfer_where *w, const config_setting_t *group,
+                         int c, struct transfer_function *tf)
 {
     const char *name = transfer_channel_name((enum transfer_channel)c);
     char where[64];
-    snprintf(where, sizeof(where), "transfer.%s", name);
+    snprintf(where, sizeof(where), ".%s", name);
     const config_setting_t *list = config_setting_get_member(group, name);
     if (!list) {
-        fail(path, group, where, "missing (a list of [x, value] points)");
+        fail(w, group, where, "missing (a list of [x, value] points)");
         return false;
     }
     int n = config_setting_length(list);
     if (!(config_setting_is_list(list) || config_setting_is_array(list)) || n < 1 ||
         n > TRANSFER_MAX_POINTS) {
-        fail(path, list, where, "expected a list of 1 to %d [x, value] points",
+        fail(w, list, where, "expected a list of 1 to %d [x, value] points",
              TRANSFER_MAX_POINTS);
         return false;
     }
@@ -67,15 +72,15 @@ static bool read_channel(const char *path, const config_setting_t *group, int c,
         if (!config_setting_is_array(p) || config_setting_length(p) != 2 ||
             !number(config_setting_get_elem(p, 0), &xv[0]) ||
             !number(config_setting_get_elem(p, 1), &xv[1])) {
-            fail(path, p, at, "expected [x, value], two numbers");
+            fail(w, p, at, "expected [x, value], two numbers");
             return false;
         }
         if (!(xv[0] >= 0.0 && xv[0] <= 1.0 && xv[1] >= 0.0 && xv[1] <= 1.0)) {
-            fail(path, p, at, "expected x and value in [0, 1], got [%g, %g]", xv[0], xv[1]);
+            fail(w, p, at, "expected x and value in [0, 1], got [%g, %g]", xv[0], xv[1]);
             return false;
         }
         if (i > 0 && (float)xv[0] < tf->points[c][i - 1].x) {
-            fail(path, p, at, "expected x >= %g (points in ascending x), got %g",
+            fail(w, p, at, "expected x >= %g (points in ascending x), got %g",
                  tf->points[c][i - 1].x, xv[0]);
             return false;
         }
@@ -85,13 +90,14 @@ static bool read_channel(const char *path, const config_setting_t *group, int c,
     return true;
 }
 
-static bool read_group(const char *path, const config_setting_t *g, struct transfer_function *tf)
+static bool read_group(const struct transfer_where *w, const config_setting_t *g,
+                       struct transfer_function *tf)
 {
     const config_setting_t *s = config_setting_get_member(g, "name");
     if (s) {
         const char *name = config_setting_get_string(s);
         if (!name || strlen(name) >= TRANSFER_NAME_MAX) {
-            fail(path, s, "transfer.name", "expected a string of at most %d characters",
+            fail(w, s, ".name", "expected a string of at most %d characters",
                  TRANSFER_NAME_MAX - 1);
             return false;
         }
@@ -100,7 +106,7 @@ static bool read_group(const char *path, const config_setting_t *g, struct trans
     s = config_setting_get_member(g, "field");
     const char *field = s ? config_setting_get_string(s) : NULL;
     if (!field || !transfer_field_from_name(field, &tf->field)) {
-        fail(path, s ? s : g, "transfer.field",
+        fail(w, s ? s : g, ".field",
              "expected \"qvapor\", \"condensate\", \"temperature\" or \"wind\"");
         return false;
     }
@@ -109,21 +115,42 @@ static bool read_group(const char *path, const config_setting_t *g, struct trans
     if (!s || !config_setting_is_array(s) || config_setting_length(s) != 2 ||
         !number(config_setting_get_elem(s, 0), &r[0]) ||
         !number(config_setting_get_elem(s, 1), &r[1]) || !(r[0] < r[1])) {
-        fail(path, s ? s : g, "transfer.range", "expected [lo, hi], two numbers with lo < hi");
+        fail(w, s ? s : g, ".range", "expected [lo, hi], two numbers with lo < hi");
         return false;
     }
     tf->lo = r[0];
     tf->hi = r[1];
     s = config_setting_get_member(g, "density");
     if (!s || !number(s, &tf->density) || !(tf->density >= 0.0)) {
-        fail(path, s ? s : g, "transfer.density", "expected a number >= 0 (1/m)");
+        fail(w, s ? s : g, ".density", "expected a number >= 0 (1/m)");
         return false;
     }
     for (int c = 0; c < TRANSFER_CHANNELS; c++) {
-        if (!read_channel(path, g, c, tf))
+        if (!read_channel(w, g, c, tf))
             return false;
     }
     return true;
+}
+
+bool transfer_group_read(const config_setting_t *g, const struct transfer_where *w,
+                         struct transfer_function *out)
+{
+    struct transfer_function *tf = calloc(1, sizeof(*tf));
+    if (!tf) {
+        log_error("%s: out of memory", w->file);
+        return false;
+    }
+    transfer_defaults(tf, TRANSFER_FIELD_QVAPOR);
+    bool ok = read_group(w, g, tf);
+    char why[160];
+    if (ok && !transfer_valid(tf, why, sizeof(why))) {
+        fail(w, g, "", "%s", why);
+        ok = false;
+    }
+    if (ok)
+        *out = *tf;
+    free(tf);
+    return ok;
 }
 
 bool transfer_file_load(const char *path, struct transfer_function *out)
@@ -154,7 +181,8 @@ bool transfer_file_load(const char *path, struct transfer_function *out)
         goto done;
     }
     transfer_defaults(tf, TRANSFER_FIELD_QVAPOR);
-    if (!read_group(path, g, tf))
+    struct transfer_where where = {.file = path, .prefix = "transfer"};
+    if (!read_group(&where, g, tf))
         goto done;
     char why[160];
     if (!transfer_valid(tf, why, sizeof(why))) {
@@ -168,6 +196,29 @@ done:
     config_destroy(&cf);
     free(text);
     return ok;
+}
+
+void transfer_file_write_group(FILE *f, const char *name, const struct transfer_function *tf,
+                               const char *indent)
+{
+    fprintf(f, "%s%s = {\n", indent, name);
+    fprintf(f, "%s    name = \"", indent);
+    for (const char *p = tf->name; *p; p++) {
+        if (*p == '"' || *p == '\\')
+            fputc('\\', f);
+        fputc(*p, f);
+    }
+    fprintf(f, "\";\n%s    field = \"%s\";\n", indent, transfer_field_name(tf->field));
+    fprintf(f, "%s    range = [%.17e, %.17e];\n", indent, tf->lo, tf->hi);
+    fprintf(f, "%s    density = %.17e;\n", indent, tf->density);
+    for (int c = 0; c < TRANSFER_CHANNELS; c++) {
+        fprintf(f, "%s    %s = (", indent, transfer_channel_name((enum transfer_channel)c));
+        for (int i = 0; i < tf->count[c]; i++)
+            fprintf(f, "%s[%.9e, %.9e]", i ? ", " : "", (double)tf->points[c][i].x,
+                    (double)tf->points[c][i].v);
+        fprintf(f, ");\n");
+    }
+    fprintf(f, "%s};\n", indent);
 }
 
 bool transfer_file_save(const char *path, const struct transfer_function *tf)
@@ -184,24 +235,8 @@ bool transfer_file_save(const char *path, const struct transfer_function *tf)
         log_error("%s: out of memory", path);
         return false;
     }
-    fprintf(f, "# anvil transfer function (docs/menu.md)\ntransfer = {\n");
-    fprintf(f, "    name = \"");
-    for (const char *p = tf->name; *p; p++) {
-        if (*p == '"' || *p == '\\')
-            fputc('\\', f);
-        fputc(*p, f);
-    }
-    fprintf(f, "\";\n    field = \"%s\";\n", transfer_field_name(tf->field));
-    fprintf(f, "    range = [%.17e, %.17e];\n", tf->lo, tf->hi);
-    fprintf(f, "    density = %.17e;\n", tf->density);
-    for (int c = 0; c < TRANSFER_CHANNELS; c++) {
-        fprintf(f, "    %s = (", transfer_channel_name((enum transfer_channel)c));
-        for (int i = 0; i < tf->count[c]; i++)
-            fprintf(f, "%s[%.9e, %.9e]", i ? ", " : "", (double)tf->points[c][i].x,
-                    (double)tf->points[c][i].v);
-        fprintf(f, ");\n");
-    }
-    fprintf(f, "};\n");
+    fprintf(f, "# anvil transfer function (docs/menu.md)\n");
+    transfer_file_write_group(f, "transfer", tf, "");
     if (fclose(f) != 0) {
         free(buf);
         log_error("%s: out of memory", path);

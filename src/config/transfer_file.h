@@ -17,6 +17,7 @@
 #define ANVIL_CONFIG_TRANSFER_FILE_H
 
 #include <stdbool.h>
+#include <stdio.h>
 
 #include "optics/transfer.h"
 
@@ -26,5 +27,10 @@ bool transfer_file_load(const char *path, struct transfer_function *tf);
 
 /* Writes TF to PATH atomically.  Returns false (logged) on failure; the old file is kept. */
 bool transfer_file_save(const char *path, const struct transfer_function *tf);
+
+/* Writes TF as the group "INDENT NAME = { ... };" of a file (what save writes under NAME
+ * "transfer"), every line after INDENT; numbers that read back to the same bits. */
+void transfer_file_write_group(FILE *f, const char *name, const struct transfer_function *tf,
+                               const char *indent);
 
 #endif

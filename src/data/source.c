@@ -154,3 +154,17 @@ bool data_source_load(struct data_source *s, int step, struct ext_volume *out, d
         *convert_ms = time_now_ms() - t1;
     return ok;
 }
+
+bool data_file_is_netcdf(const char *path)
+{
+    unsigned char head[8] = {0};
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return false;
+    size_t n = fread(head, 1, sizeof(head), f);
+    fclose(f);
+    static const unsigned char hdf5[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+    return (n >= 4 && head[0] == 'C' && head[1] == 'D' && head[2] == 'F' &&
+            (head[3] == 1 || head[3] == 2 || head[3] == 5)) ||
+           (n == 8 && memcmp(head, hdf5, 8) == 0);
+}

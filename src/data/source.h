@@ -53,6 +53,11 @@ bool data_source_load_fields(struct data_source *s, int step, struct field_volum
 bool data_source_load_fields_extra(struct data_source *s, int step, bool temperature, bool wind,
                                    struct field_volume *out);
 
+/* Whether PATH begins as a NetCDF file does (classic, 64-bit offset, CDF-5 or HDF5), read
+ * from its first bytes: a data file rather than a config.  False for a file that cannot be
+ * read. */
+bool data_file_is_netcdf(const char *path);
+
 /* The WRF reader behind S, or NULL for other formats (for metadata: lat/lon, terrain). */
 struct wrf *data_source_wrf(struct data_source *s);
 

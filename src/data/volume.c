@@ -26,6 +26,7 @@ void ext_volume_finish(struct ext_volume *v)
         return;
     free(v->beta);
     free(v->tint);
+    free(v->histogram);
     memset(v, 0, sizeof(*v));
 }
 

@@ -17,6 +17,7 @@
 #include <stdint.h>
 
 #include "optics/optics.h"
+#include "optics/transfer.h"
 
 struct grid3 {
     int n[3];          /* voxels along x, y, z */
@@ -61,6 +62,8 @@ struct ext_volume {
     float *beta;
     uint8_t *tint; /* NULL (white), or RGBA8 per voxel: the colour the scattered light takes
                       (the beta-weighted species tints, or a transfer function's colour) */
+    struct transfer_histogram *histogram; /* NULL, or owned: the values of the look's transfer
+                                             field of the step it was made from */
 };
 
 /* Frees the arrays and zeroes the struct; NULL and zeroed structs are fine. */

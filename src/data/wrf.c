@@ -1390,3 +1390,305 @@ done:
         field_volume_finish(out);
     return ok;
 }
+
+/* ---- one point ------------------------------------------------------------------------- */
+
+/* Reads V at NXB x NYB columns SX, SY apart from (X0, Y0) on LEVELS levels into BUF (levels
+ * slowest, then rows). */
+static bool read_cols(const struct wrf *w, int step, int varid, const char *name, int x0, int y0,
+                      int nxb, int nyb, int sx, int sy, int levels, float *buf)
+{
+    const struct wrf_file *f = &w->files[w->steps[step].file];
+    size_t start[4] = {(size_t)w->steps[step].index, 0, (size_t)y0, (size_t)x0};
+    size_t count[4] = {1, (size_t)levels, (size_t)nyb, (size_t)nxb};
+    ptrdiff_t stride[4] = {1, 1, sy, sx};
+    int st = nc_get_vars_float(f->ncid, varid, start, count, stride, buf);
+    if (st != NC_NOERR) {
+        log_error("%s: variable %s, time %d: cannot read: %s", f->path, name,
+                  w->steps[step].index, nc_strerror(st));
+        return false;
+    }
+    return true;
+}
+
+/* The lower voxel and the weight of the next along one axis of N voxel centres (edge voxels
+ * clamped, as the eye pass samples); a position within 1e-6 voxels of a centre is that
+ * centre. */
+static void axis_weight(double f, int n, int *i0, int *count, double *t)
+{
+    if (fabs(f - round(f)) < 1e-6)
+        f = round(f);
+    if (n < 2 || f <= 0.0) {
+        *i0 = 0;
+        *count = n < 2 ? 1 : 2;
+        *t = 0.0;
+        return;
+    }
+    if (f >= n - 1) {
+        *i0 = n - 2;
+        *count = 2;
+        *t = 1.0;
+        return;
+    }
+    *i0 = (int)floor(f);
+    *count = 2;
+    *t = f - *i0;
+}
+
+/* A 2-D variable NAME (with or without a leading Time) at the block's columns, bilinear with
+ * the weights WT; false when the file lacks it or it cannot be read. */
+static bool point_2d(const struct wrf *w, int step, const char *name, int x0, int y0, int nxb,
+                     int nyb, int sx, int sy, const double wt[4], double *out)
+{
+    const struct wrf_file *f = &w->files[w->steps[step].file];
+    int varid, ndims;
+    if (nc_inq_varid(f->ncid, name, &varid) != NC_NOERR ||
+        nc_inq_varndims(f->ncid, varid, &ndims) != NC_NOERR || (ndims != 2 && ndims != 3))
+        return false;
+    size_t start[3] = {(size_t)w->steps[step].index, (size_t)y0, (size_t)x0};
+    size_t count[3] = {1, (size_t)nyb, (size_t)nxb};
+    ptrdiff_t stride[3] = {1, sy, sx};
+    float v[4];
+    if (nc_get_vars_float(f->ncid, varid, ndims == 3 ? start : start + 1,
+                          ndims == 3 ? count : count + 1, ndims == 3 ? stride : stride + 1,
+                          v) != NC_NOERR)
+        return false;
+    double sum = 0.0;
+    for (int c = 0; c < nxb * nyb; c++) {
+        if (!isfinite(v[c]))
+            return false;
+        sum += wt[c] * v[c];
+    }
+    *out = sum;
+    return true;
+}
+
+/* What wrf_read_point works with: the block of columns, their heights, the two output levels
+ * around the point and the weights. */
+struct point_block {
+    int x0, y0, nxb, nyb, sx, sy, cols;
+    int nz, nzs;
+    double wt[4];      /* the columns' bilinear weights */
+    float *zw;         /* staggered heights, nzs x cols */
+    double *zm;        /* each column's mass level heights, cols x nz */
+    double z0, dz;     /* the output levels: the first one's bottom and their spacing */
+    int nk;            /* 1 or 2 output levels */
+    double tk;         /* weight of the second */
+    double zk[2];      /* their heights */
+    float *one;        /* scratch: one column on the mass levels */
+};
+
+/* The value at the point of BUF (nz x cols on the mass levels), as the field volume holds it:
+ * each column resampled to the two output levels (OUTSIDE below the ground and above the top;
+ * FILL_STD: such values, and NaN, replaced by the standard atmosphere's temperature (1) or
+ * pressure (2)), then bilinear across the columns and linear between the levels. */
+static double point_value(const struct point_block *b, const float *buf, float outside,
+                          int fill_std)
+{
+    double sum = 0.0;
+    for (int c = 0; c < b->cols; c++) {
+        for (int k = 0; k < b->nz; k++)
+            b->one[k] = buf[(size_t)k * b->cols + c];
+        float out[2];
+        wrf_resample_column(b->zm + (size_t)c * b->nz, b->one, b->nz, b->zw[c],
+                            b->zw[(size_t)b->nz * b->cols + c], b->z0, b->dz, b->nk, outside, out,
+                            NULL);
+        for (int k = 0; k < b->nk; k++) {
+            if (fill_std && !isfinite(out[k])) {
+                double t, p;
+                wrf_std_atmosphere(b->zk[k], &t, &p);
+                out[k] = (float)(fill_std == 1 ? t : p);
+            }
+            double wk = b->nk == 1 ? 1.0 : k ? b->tk : 1.0 - b->tk;
+            sum += b->wt[c] * wk * out[k];
+        }
+    }
+    return sum;
+}
+
+enum wrf_point_result wrf_read_point(struct wrf *w, int step, const struct wrf_desc *d,
+                                     const double p[3], struct wrf_point *out)
+{
+    memset(out, 0, sizeof(*out));
+    out->temperature_k = NAN;
+    if (step < 0 || step >= w->step_count) {
+        log_error("time step %d out of range: the data has %d (0 to %d)", step, w->step_count,
+                  w->step_count - 1);
+        return WRF_POINT_ERROR;
+    }
+    struct selection s;
+    if (!make_selection(w, d, &s))
+        return WRF_POINT_ERROR;
+    const struct wrf_meta *m = &w->meta;
+    /* The grid wrf_read_step makes (its origin and spacing). */
+    double bottom = d->bottom_m, top = d->top_m > 0 ? d->top_m : w->auto_top;
+    double dzf = (top - bottom) / s.levels;
+    double sp[3] = {m->dx * s.sx, m->dy * s.sy, dzf * s.sz};
+    double org[3] = {(s.x0 + 0.5) * m->dx - 0.5 * sp[0], (s.y0 + 0.5) * m->dy - 0.5 * sp[1],
+                     bottom + (s.z0 + 0.5) * dzf - 0.5 * sp[2]};
+    const int n[3] = {s.nx, s.ny, s.nz};
+    double f[3];
+    for (int a = 0; a < 3; a++) {
+        double rel = (p[a] - org[a]) / sp[a];
+        if (!(rel >= -1e-9 && rel <= n[a] + 1e-9)) {
+            if (a < 2)
+                return WRF_POINT_OUTSIDE;
+            out->ground_m = org[2]; /* the height grid's bottom and top */
+            out->top_m = org[2] + n[2] * sp[2];
+            return rel < 0 ? WRF_POINT_BELOW : WRF_POINT_ABOVE;
+        }
+        f[a] = rel - 0.5;
+    }
+    struct point_block b = {.sx = s.sx, .sy = s.sy, .nz = m->nz, .nzs = w->nzs};
+    int ia, ja, ka;
+    double tx, ty;
+    axis_weight(f[0], s.nx, &ia, &b.nxb, &tx);
+    axis_weight(f[1], s.ny, &ja, &b.nyb, &ty);
+    axis_weight(f[2], s.nz, &ka, &b.nk, &b.tk);
+    b.x0 = s.x0 + ia * s.sx;
+    b.y0 = s.y0 + ja * s.sy;
+    b.cols = b.nxb * b.nyb;
+    for (int r = 0; r < b.nyb; r++)
+        for (int q = 0; q < b.nxb; q++)
+            b.wt[q + b.nxb * r] = (b.nxb == 1 ? 1.0 : q ? tx : 1.0 - tx) *
+                                  (b.nyb == 1 ? 1.0 : r ? ty : 1.0 - ty);
+    b.dz = sp[2];
+    b.z0 = org[2] + ka * sp[2];
+    for (int k = 0; k < b.nk; k++)
+        b.zk[k] = b.z0 + (k + 0.5) * b.dz;
+    const struct wrf_file *file = &w->files[w->steps[step].file];
+    int nz = b.nz, nzs = b.nzs, cols = b.cols;
+    /* Scratch: two blocks of (nxb + 1) x (nyb + 1) columns on the staggered levels. */
+    size_t block = (size_t)nzs * (size_t)(b.nxb + 1) * (size_t)(b.nyb + 1);
+    float *a = malloc(block * sizeof(float)), *bb = malloc(block * sizeof(float));
+    float *col = malloc((size_t)nz * (size_t)cols * sizeof(float));
+    b.zm = malloc((size_t)nz * (size_t)cols * sizeof(double));
+    b.zw = malloc((size_t)nzs * (size_t)cols * sizeof(float));
+    b.one = malloc((size_t)nzs * sizeof(float));
+    enum wrf_point_result result = WRF_POINT_ERROR;
+    if (!a || !bb || !col || !b.zm || !b.zw || !b.one) {
+        log_error("out of memory reading a point");
+        goto done;
+    }
+    struct wrf_var_stats st;
+#define READ(var, name, ox, oy, nx_, ny_, levels, buf)                                          \
+    read_cols(w, step, file->varid[var], name, b.x0 + (ox), b.y0 + (oy), nx_, ny_, b.sx, b.sy, \
+              levels, buf)
+    data_nc_lock();
+    /* Heights: (PH + PHB) / g on staggered levels, rounded to float as wrf_read_step does. */
+    if (!READ(WRF_PH, "PH", 0, 0, b.nxb, b.nyb, nzs, a) ||
+        !READ(WRF_PHB, "PHB", 0, 0, b.nxb, b.nyb, nzs, bb))
+        goto unlock;
+    for (size_t i = 0; i < (size_t)nzs * cols; i++) {
+        b.zw[i] = (float)(((double)a[i] + (double)bb[i]) / WRF_G);
+        if (!isfinite(b.zw[i])) {
+            log_error("%s: variables PH, PHB, time %d: a height near the point is not finite",
+                      file->path, w->steps[step].index);
+            goto unlock;
+        }
+    }
+    for (int c = 0; c < cols; c++)
+        for (int k = 0; k < nz; k++)
+            b.zm[(size_t)c * nz + k] = 0.5 * ((double)b.zw[(size_t)k * cols + c] +
+                                              (double)b.zw[(size_t)(k + 1) * cols + c]);
+    for (int c = 0; c < cols; c++) {
+        out->ground_m += b.wt[c] * b.zw[c];
+        out->top_m += b.wt[c] * b.zw[(size_t)nz * cols + c];
+    }
+    if (p[2] < out->ground_m) {
+        result = WRF_POINT_BELOW;
+        goto unlock;
+    }
+    if (p[2] > out->top_m) {
+        result = WRF_POINT_ABOVE;
+        goto unlock;
+    }
+    for (int v = 0; v <= WRF_QVAPOR; v++) {
+        if (file->varid[v] < 0)
+            continue;
+        if (!READ(v, var_names[v], 0, 0, b.nxb, b.nyb, nz, a))
+            goto unlock;
+        sanitize(w, step, (enum wrf_var)v, a, (size_t)nz * cols, 0.0f, &st);
+        double value = point_value(&b, a, 0.0f, 0);
+        if (v < SPECIES_COUNT) {
+            out->has_species[v] = true;
+            out->q[v] = value;
+        } else {
+            out->has_qvapor = true;
+            out->qvapor = value;
+        }
+    }
+    /* Pressure and temperature on the mass levels, as wrf_read_step makes them. */
+    if (!READ(WRF_P, "P", 0, 0, b.nxb, b.nyb, nz, a) ||
+        !READ(WRF_PB, "PB", 0, 0, b.nxb, b.nyb, nz, bb))
+        goto unlock;
+    sanitize(w, step, WRF_P, a, (size_t)nz * cols, NAN, &st);
+    sanitize(w, step, WRF_PB, bb, (size_t)nz * cols, NAN, &st);
+    for (size_t i = 0; i < (size_t)nz * cols; i++)
+        a[i] += bb[i];
+    out->pressure_pa = point_value(&b, a, NAN, 2);
+    if (!READ(WRF_T, "T", 0, 0, b.nxb, b.nyb, nz, bb))
+        goto unlock;
+    sanitize(w, step, WRF_T, bb, (size_t)nz * cols, NAN, &st);
+    for (size_t i = 0; i < (size_t)nz * cols; i++) {
+        double t = optics_wrf_temperature(a[i], (double)bb[i] + WRF_T0);
+        col[i] = t > 0.0 ? (float)t : NAN;
+        bb[i] = (float)((double)bb[i] + WRF_T0);
+    }
+    out->theta_k = point_value(&b, bb, NAN, 0);
+    out->temperature_k = point_value(&b, col, NAN, 1);
+    /* The wind: U over its west_east_stag faces, V over south_north_stag, W over its levels. */
+    out->has_wind = file->varid[WRF_U] >= 0 && file->varid[WRF_V] >= 0;
+    if (out->has_wind) {
+        if (!READ(WRF_U, "U", 0, 0, b.nxb, b.nyb, nz, a) ||
+            !READ(WRF_U, "U", 1, 0, b.nxb, b.nyb, nz, bb))
+            goto unlock;
+        sanitize(w, step, WRF_U, a, (size_t)nz * cols, 0.0f, &st);
+        sanitize(w, step, WRF_U, bb, (size_t)nz * cols, 0.0f, &st);
+        for (size_t i = 0; i < (size_t)nz * cols; i++)
+            col[i] = 0.5f * (a[i] + bb[i]);
+        double u = point_value(&b, col, 0.0f, 0);
+        if (!READ(WRF_V, "V", 0, 0, b.nxb, b.nyb, nz, a) ||
+            !READ(WRF_V, "V", 0, 1, b.nxb, b.nyb, nz, bb))
+            goto unlock;
+        sanitize(w, step, WRF_V, a, (size_t)nz * cols, 0.0f, &st);
+        sanitize(w, step, WRF_V, bb, (size_t)nz * cols, 0.0f, &st);
+        for (size_t i = 0; i < (size_t)nz * cols; i++)
+            col[i] = 0.5f * (a[i] + bb[i]);
+        double v = point_value(&b, col, 0.0f, 0);
+        double ca, sa;
+        if (point_2d(w, step, "COSALPHA", b.x0, b.y0, b.nxb, b.nyb, b.sx, b.sy, b.wt, &ca) &&
+            point_2d(w, step, "SINALPHA", b.x0, b.y0, b.nxb, b.nyb, b.sx, b.sy, b.wt, &sa)) {
+            /* Grid-relative to earth-relative (the WRF users' forum, "Converting model
+             * grid-relative wind to earth-relative wind"). */
+            out->u = u * ca - v * sa;
+            out->v = v * ca + u * sa;
+            out->earth_relative = true;
+        } else {
+            out->u = u;
+            out->v = v;
+            out->earth_relative = m->map_proj == 3 || m->map_proj == 6;
+        }
+        out->has_w = file->varid[WRF_W] >= 0;
+        if (out->has_w) {
+            if (!READ(WRF_W, "W", 0, 0, b.nxb, b.nyb, nzs, a))
+                goto unlock;
+            sanitize(w, step, WRF_W, a, (size_t)nzs * cols, 0.0f, &st);
+            for (size_t i = 0; i < (size_t)nz * cols; i++)
+                col[i] = 0.5f * (a[i] + a[i + cols]);
+            out->w = point_value(&b, col, 0.0f, 0);
+        }
+    }
+#undef READ
+    result = WRF_POINT_OK;
+unlock:
+    data_nc_unlock();
+done:
+    free(a);
+    free(bb);
+    free(col);
+    free(b.zm);
+    free(b.zw);
+    free(b.one);
+    return result;
+}

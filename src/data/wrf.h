@@ -145,6 +145,46 @@ size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d);
 bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct field_volume *out,
                    struct wrf_stats *stats);
 
+/* What the file holds at one point of a step (the probe, docs/analysis.md). */
+struct wrf_point {
+    bool has_species[SPECIES_COUNT];
+    double q[SPECIES_COUNT];  /* mass ratios, kg/kg (0 for a species the file lacks) */
+    bool has_qvapor;
+    double qvapor;            /* kg/kg */
+    double pressure_pa;       /* P + PB */
+    double theta_k;           /* T + WRF_T0 */
+    double temperature_k;     /* theta (p / p0)^(R_d / c_p), or NAN where P, PB or T are bad */
+    bool has_wind;            /* U and V in the file */
+    bool has_w;
+    double u, v, w;           /* m/s: U and V averaged over their two faces to the mass points,
+                                 W over its two levels; U, V earth-relative when
+                                 earth_relative (else along the grid's x and y) */
+    bool earth_relative;      /* COSALPHA and SINALPHA turned U, V east and north, or the
+                                 projection (Mercator, lat-lon) needs no turn */
+    double ground_m, top_m;   /* the model's ground (lowest staggered level) and top there */
+};
+
+enum wrf_point_result {
+    WRF_POINT_OK,
+    WRF_POINT_OUTSIDE, /* X, Y beyond the volume's box */
+    WRF_POINT_BELOW,   /* below the model's ground there (out->ground_m says where it is) */
+    WRF_POINT_ABOVE,   /* above the model top there (out->top_m) */
+    WRF_POINT_ERROR,   /* the file could not be read (logged) */
+};
+
+/* STEP's values at P as the field volume wrf_read_step(D) makes holds them there: P is X, Y
+ * metres in the data frame (mass column (i, j) centred at ((i + 0.5) DX, (j + 0.5) DY)) and Z
+ * metres above sea level; the values are trilinear between that volume's voxel centres,
+ * clamped to its edge voxels (as the eye pass samples the extinction made from it), each
+ * voxel's value resampled from the model's levels as wrf_read_step does it
+ * (wrf_resample_column).  Only the 2 x 2 columns around P are read, with the selection's
+ * stride: cheap enough for every frame the probe moves.  A point below the model's ground or
+ * above its top there (bilinear across the columns) is refused (out->ground_m, out->top_m say
+ * where they are), and so is one outside the volume's box.  Bad values are replaced as
+ * wrf_read_step replaces them, without a warning; pressure is resampled like the rest. */
+enum wrf_point_result wrf_read_point(struct wrf *w, int step, const struct wrf_desc *d,
+                                     const double p[3], struct wrf_point *out);
+
 /* Resamples one column given on NZ mass levels at heights Z (increasing) with values V onto
  * N output levels centred at z0 + (k + 0.5) dz: linear in height between the two enclosing
  * levels; from the ground Z_GROUND up to the first level the first level's value (clamp); from

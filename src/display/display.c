@@ -357,6 +357,7 @@ static const struct {
     {GLFW_KEY_C, INPUT_KEY_BOOKMARK, false, "C"},
     {GLFW_KEY_N, INPUT_KEY_PATH_KEY, false, "N"},
     {GLFW_KEY_G, INPUT_KEY_PATH_PLAY, false, "G"},
+    {GLFW_KEY_V, INPUT_KEY_PROBE, false, "V"},
     {GLFW_KEY_SPACE, INPUT_KEY_PLAY, false, "Space"},
     {GLFW_KEY_COMMA, INPUT_KEY_STEP_BACK, true, ","},
     {GLFW_KEY_PERIOD, INPUT_KEY_STEP_FORWARD, true, "."},

@@ -153,6 +153,15 @@ void gpu_texture_read(const struct gpu_texture *tex, void *out, size_t out_bytes
     glGetTextureImage(tex->id, 0, fi.format, fi.type, (GLsizei)out_bytes, out);
 }
 
+void gpu_texture_read_region(const struct gpu_texture *tex, const int offset[3],
+                             const int size[3], void *out, size_t out_bytes)
+{
+    struct format_info fi = format_info(tex->format);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glGetTextureSubImage(tex->id, 0, offset[0], offset[1], offset[2], size[0], size[1], size[2],
+                         fi.format, fi.type, (GLsizei)out_bytes, out);
+}
+
 void gpu_texture_finish(struct gpu_texture *tex)
 {
     if (!tex || !tex->id)

@@ -113,6 +113,10 @@ void gpu_texture_upload(struct gpu_texture *tex, const void *data);
 void gpu_texture_upload_layers(struct gpu_texture *tex, int z0, int count, const void *data);
 /* Reads the whole level 0 back into OUT (bytes as for init, float or uint8). */
 void gpu_texture_read(const struct gpu_texture *tex, void *out, size_t out_bytes);
+/* Reads the box of SIZE texels from OFFSET of level 0 (3D: x, y, z; 2D: z = 0, size[2] = 1)
+ * into OUT, tightly packed as for init.  Waits for the GPU work that writes the texture. */
+void gpu_texture_read_region(const struct gpu_texture *tex, const int offset[3],
+                             const int size[3], void *out, size_t out_bytes);
 void gpu_texture_finish(struct gpu_texture *tex);
 /* Copies TEX's level 0 into the 2D texture named DST (a texture this part did not make, such
  * as an OpenXR swapchain image), which must be as large and of a format of the same size

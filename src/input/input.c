@@ -43,6 +43,7 @@ static const struct {
     {"bookmark", INPUT_KEY_BOOKMARK},
     {"path-key", INPUT_KEY_PATH_KEY},
     {"path-play", INPUT_KEY_PATH_PLAY},
+    {"probe", INPUT_KEY_PROBE},
 };
 
 void input_queue_clear(struct input_queue *q)

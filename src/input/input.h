@@ -69,6 +69,7 @@ enum input_key {
     INPUT_KEY_BOOKMARK,     /* c: the camera as a scene file block, saved as a bookmark */
     INPUT_KEY_PATH_KEY,     /* n: the current view becomes the camera path's next key */
     INPUT_KEY_PATH_PLAY,    /* g: fly the camera path (again: stop) */
+    INPUT_KEY_PROBE,        /* v: the probe on or off (the values at the wand or pointer) */
     INPUT_KEY_COUNT
 };
 

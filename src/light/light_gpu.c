@@ -356,6 +356,66 @@ static bool read_back(const struct light_gpu *lg, struct light_map *map, bool wi
     return true;
 }
 
+/* The 2 x 2 x 2 nodes around TEX of the texture T (COMPONENTS floats a node), trilinear as
+ * light_map_sample is, into OUT. */
+static void sample_block(const struct gpu_texture *t, const int n[3], const float tex[3],
+                         int components, float *out)
+{
+    int i[3];
+    float w[3], v[8 * 2];
+    for (int a = 0; a < 3; a++)
+        i[a] = light_tex_node(tex[a], n[a], &w[a]);
+    gpu_texture_read_region(t, i, (const int[3]){2, 2, 2}, v,
+                            sizeof(float) * 8 * (size_t)components);
+    for (int c = 0; c < components; c++) {
+        float e[2][2];
+        for (int dk = 0; dk < 2; dk++)
+            for (int dj = 0; dj < 2; dj++) {
+                float a0 = v[components * (0 + 2 * (dj + 2 * dk)) + c];
+                float a1 = v[components * (1 + 2 * (dj + 2 * dk)) + c];
+                e[dk][dj] = a0 + w[0] * (a1 - a0);
+            }
+        float c0 = e[0][0] + w[1] * (e[0][1] - e[0][0]);
+        float c1 = e[1][0] + w[1] * (e[1][1] - e[1][0]);
+        out[c] = c0 + w[2] * (c1 - c0);
+    }
+}
+
+bool light_gpu_sample(const struct light_gpu *lg, const double p[3], float *beam,
+                      float diffuse[2], bool *have_diffuse)
+{
+    *have_diffuse = false;
+    diffuse[0] = diffuse[1] = 0.0f;
+    if (!lg->cache.valid)
+        return false;
+    double td[3];
+    light_grid_world_to_tex(&lg->grid, p, td);
+    const float tex[3] = {(float)td[0], (float)td[1], (float)td[2]};
+    if (lg->built_mode == LIGHT_GPU_COMPRESSED && lg->compressed_bytes) {
+        /* The compressed map is small by design: read back whole, evaluated as the eye pass
+         * does (the light's columns, and the diffuse light's). */
+        struct light_compressed c;
+        if (!light_gpu_read_compressed(lg, &c))
+            return false;
+        *beam = light_compressed_sample(&c, tex);
+        if (c.diffuse_columns) {
+            light_compressed_sample_diffuse(&c, tex, diffuse);
+            *have_diffuse = true;
+        }
+        light_compressed_finish(&c);
+        return true;
+    }
+    if (lg->light.id)
+        sample_block(&lg->light, lg->grid.n, tex, 1, beam);
+    else
+        return false;
+    if (lg->built_multiple && lg->diffuse.id) {
+        sample_block(&lg->diffuse, lg->grid.n, tex, 2, diffuse);
+        *have_diffuse = true;
+    }
+    return true;
+}
+
 bool light_gpu_read(const struct light_gpu *lg, struct light_map *map)
 {
     return read_back(lg, map, true);

@@ -84,6 +84,13 @@ void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compress
 /* Reads the compressed map (compressed mode) back into OUT (initialised here, finish with
  * light_compressed_finish): the layout of the CPU reference's light_compressed_build. */
 bool light_gpu_read_compressed(const struct light_gpu *lg, struct light_compressed *out);
+/* The last built map at world point P as the eye pass reads it, trilinear between nodes
+ * (light_map_sample): the beam into *BEAM and, when the build had multiple scattering, the
+ * diffuse M and N into DIFFUSE with *HAVE_DIFFUSE.  Dense mode reads the 2 x 2 x 2 nodes around
+ * P back from the GPU (waiting for the build); compressed mode evaluates the columns the build
+ * keeps on the CPU.  False when no map has been built. */
+bool light_gpu_sample(const struct light_gpu *lg, const double p[3], float *beam,
+                      float diffuse[2], bool *have_diffuse);
 
 /* Reads the dense light volume (and the diffuse one, with multiple scattering) back into MAP
  * (initialised here, finish with light_map_finish): the same layout as the CPU reference.  Dense mode only: compressed mode

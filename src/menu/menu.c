@@ -28,6 +28,7 @@ enum id {
     ID_TF_MODE, ID_TF_FIELD, ID_CHANNEL, ID_CANVAS, ID_DELETE, ID_SLOT, ID_SAVE, ID_LOAD,
     ID_AZIMUTH, ID_ELEVATION,
     ID_RAY_STEP, ID_RESOLUTION, ID_EPSILON, ID_DIFFUSE,
+    ID_SAVE_VIEW, ID_PROBE_ON, ID_PROBE_MODE, ID_PROBE_THRESHOLD, ID_PROBE_DISTANCE,
 };
 
 struct widget {
@@ -43,7 +44,7 @@ struct widget {
 
 struct menu {
     struct menu_desc desc;
-    struct menu_font *font;
+    struct menu_font *font, *small;
     struct menu_model model;
     int w, h;
     uint8_t *pixels;
@@ -73,10 +74,10 @@ struct menu {
     unsigned changes;
 };
 
-static const char *const page_names[MENU_PAGE_COUNT] = {"time", "fields", "transfer", "light",
-                                                        "quality"};
-static const char *const page_titles[MENU_PAGE_COUNT] = {"Time", "Fields", "Transfer", "Light",
-                                                         "Quality"};
+static const char *const page_names[MENU_PAGE_COUNT] = {"time",  "fields",  "transfer",
+                                                        "light", "quality", "probe"};
+static const char *const page_titles[MENU_PAGE_COUNT] = {"Time",  "Fields",  "Transfer",
+                                                         "Light", "Quality", "Probe"};
 
 const char *menu_page_name(enum menu_page p)
 {
@@ -146,6 +147,10 @@ static double slider_value(const struct menu *m, const struct widget *wd)
         return md->light_resolution;
     case ID_EPSILON:
         return md->epsilon;
+    case ID_PROBE_THRESHOLD: /* a decade scale */
+        return log10(md->probe_threshold > 0.0 ? md->probe_threshold : 1e-4);
+    case ID_PROBE_DISTANCE:
+        return md->probe_distance_m / 1000.0;
     default:
         return 0.0;
     }
@@ -200,6 +205,12 @@ static void slider_label(const struct menu *m, const struct widget *wd, char *bu
     case ID_EPSILON:
         snprintf(buf, n, "Light map error bound: %.3f", v);
         break;
+    case ID_PROBE_THRESHOLD:
+        snprintf(buf, n, "Visible where extinction > %.2g /km", pow(10.0, v) * 1000.0);
+        break;
+    case ID_PROBE_DISTANCE:
+        snprintf(buf, n, "Distance along the ray: %.0f km", v);
+        break;
     default:
         snprintf(buf, n, "%s", wd->label);
         break;
@@ -239,6 +250,8 @@ static void layout(struct menu *m)
         struct widget *wd = add(m, W_TOGGLE, ID_LOOP, 0, "time.loop", 16, y, 200, 36, "Loop");
         if (wd)
             wd->selected = md->loop;
+        /* The view, the time and the look as a scene file (the C key's bookmark). */
+        add(m, W_BUTTON, ID_SAVE_VIEW, 0, "time.save", m->w - 16 - 180, y, 180, 36, "Save view");
         break;
     }
     case MENU_PAGE_FIELDS:
@@ -286,7 +299,7 @@ static void layout(struct menu *m)
                 slider(m, ID_TINT, c, tints[c], y, 0.0, 1.0, "");
         } else {
             struct widget *wd = add(m, W_TOGGLE, ID_TF_MODE, 0, "transfer.mode", 16, y, hw, 30,
-                                    "Transfer mode");
+                                    "Show function");
             if (wd)
                 wd->selected = md->transfer_on;
             snprintf(label, sizeof(label), "Field: %s",
@@ -308,8 +321,8 @@ static void layout(struct menu *m)
             if (wd)
                 wd->disabled = m->point < 0 || md->transfer.count[m->channel] <= 1;
             y += 38;
-            add(m, W_CANVAS, ID_CANVAS, 0, "transfer.canvas", 16, y, m->w - 32, 150, "");
-            y += 158;
+            add(m, W_CANVAS, ID_CANVAS, 0, "transfer.canvas", 16, y, m->w - 32, 170, "");
+            y += 194; /* the axis' labels below it */
             int sw = 40;
             for (int s = 0; s < MENU_SLOTS; s++) {
                 char name[NAME_LEN], text[8];
@@ -348,6 +361,28 @@ static void layout(struct menu *m)
             }
         }
         break;
+    case MENU_PAGE_PROBE: {
+        struct widget *wd = add(m, W_TOGGLE, ID_PROBE_ON, 0, "probe.on", 16, y, m->w - 32, 36,
+                                "Probe: the values at the wand (key V)");
+        if (wd)
+            wd->selected = md->probe_on;
+        y += 44;
+        snprintf(label, sizeof(label), "Reads: %s",
+                 md->probe_mode == MENU_PROBE_AT_DISTANCE ? "a set distance along the ray"
+                                                          : "the first visible point");
+        add(m, W_BUTTON, ID_PROBE_MODE, 0, "probe.mode", 16, y, m->w - 32, 36, label);
+        y += 52;
+        wd = slider(m, ID_PROBE_THRESHOLD, 0, "probe.threshold", y, -6.0, -1.0, "");
+        if (wd)
+            wd->disabled = md->probe_mode != MENU_PROBE_FIRST_VISIBLE;
+        y += 56;
+        wd = slider(m, ID_PROBE_DISTANCE, 0, "probe.distance", y, 0.0,
+                    md->probe_distance_max_m > 0.0 ? md->probe_distance_max_m / 1000.0 : 500.0,
+                    "");
+        if (wd)
+            wd->disabled = md->probe_mode != MENU_PROBE_AT_DISTANCE;
+        break;
+    }
     case MENU_PAGE_COUNT:
         break;
     }
@@ -411,12 +446,69 @@ static void canvas_xy(const int r[4], float x, float v, float *px, float *py)
     *py = (float)(r[1] + r[3]) - 6.0f - v * (float)(r[3] - 12);
 }
 
+/* A value of FIELD in the unit the editor labels it with (g/kg, C, m/s). */
+static double shown_value(enum transfer_field f, double v)
+{
+    return f == TRANSFER_FIELD_TEMPERATURE ? v - 273.15 : f == TRANSFER_FIELD_WIND ? v : v * 1e3;
+}
+
+static const char *shown_unit(enum transfer_field f)
+{
+    return f == TRANSFER_FIELD_TEMPERATURE ? "C" : f == TRANSFER_FIELD_WIND ? "m/s" : "g/kg";
+}
+
+static const char *field_title(enum transfer_field f)
+{
+    switch (f) {
+    case TRANSFER_FIELD_QVAPOR:
+        return "water vapour";
+    case TRANSFER_FIELD_CONDENSATE:
+        return "condensate";
+    case TRANSFER_FIELD_TEMPERATURE:
+        return "temperature";
+    default:
+        return "wind speed";
+    }
+}
+
+/* 1, 2 or 5 times a power of ten: about SPAN / 5. */
+static double tick_step(double span)
+{
+    double raw = span / 5.0, p = pow(10.0, floor(log10(raw))), f = raw / p;
+    return (f < 1.5 ? 1.0 : f < 3.5 ? 2.0 : f < 7.5 ? 5.0 : 10.0) * p;
+}
+
+/* The bars of the field's histogram over the canvas' width, their heights the square root of
+ * the count (a sparse bin still shows beside a full one). */
+static void draw_histogram(struct menu *m, const int r[4], const struct transfer_histogram *h)
+{
+    static const uint8_t bar[3] = {44, 56, 74};
+    double top = sqrt((double)transfer_histogram_max(h));
+    if (!(top > 0.0))
+        return;
+    float x0 = (float)r[0] + 6.0f, w = (float)(r[2] - 12), base = (float)(r[1] + r[3]) - 12.0f;
+    float full = base - ((float)r[1] + 6.0f);
+    for (int b = 0; b < TRANSFER_HISTOGRAM_BINS; b++) {
+        if (!h->count[b])
+            continue;
+        int a = (int)(x0 + w * (float)b / TRANSFER_HISTOGRAM_BINS);
+        int e = (int)(x0 + w * (float)(b + 1) / TRANSFER_HISTOGRAM_BINS);
+        int hgt = (int)ceilf(full * (float)(sqrt((double)h->count[b]) / top));
+        fill(m, a, (int)base - hgt, e - a > 1 ? e - a - 1 : 1, hgt, bar);
+    }
+}
+
 static void draw_canvas(struct menu *m, const struct widget *wd)
 {
     const int *r = wd->rect;
     fill(m, r[0], r[1], r[2], r[3], c_canvas);
     frame(m, r, c_border);
-    const struct transfer_function *tf = &m->model.transfer;
+    const struct menu_model *md = &m->model;
+    const struct transfer_function *tf = &md->transfer;
+    const struct transfer_histogram *h = &md->histogram;
+    bool bars = md->histogram_valid && h->field == tf->field && h->lo == tf->lo && h->hi == tf->hi;
+    if (bars)
+        draw_histogram(m, r, h);
     /* The colour map along the bottom: what the function gives, over an opaque strip. */
     for (int i = 0; i < r[2] - 2; i++) {
         float x = (float)i / (float)(r[2] - 3);
@@ -451,12 +543,41 @@ static void draw_canvas(struct menu *m, const struct widget *wd)
         if (sel)
             fill(m, (int)px - 3, (int)py - 3, 7, 7, channel_rgb[m->channel]);
     }
-    /* The field's values at the two ends of the x axis. */
-    char lo[32], hi[32];
-    transfer_format_value(tf->field, tf->lo, lo, sizeof(lo));
-    transfer_format_value(tf->field, tf->hi, hi, sizeof(hi));
-    text(m, r[0] + 4, r[1] + 2, lo, c_dim);
-    text(m, r[0] + r[2] - 4 - menu_font_width(m->font, hi), r[1] + 2, hi, c_dim);
+    /* What the axes are: the field and its unit, the channel's value; the point chosen.  Each
+     * label on a box of the canvas' own colour, over the curves. */
+    char text[96];
+    snprintf(text, sizeof(text), "%s, %s%s", field_title(tf->field), shown_unit(tf->field),
+             bars ? " (bars: voxels)" : "");
+    int th = menu_font_ascent(m->small) + 6;
+    fill(m, r[0] + 2, r[1] + 2, menu_font_width(m->small, text) + 12, th, c_canvas);
+    menu_font_draw(m->small, m->pixels, m->w, m->h, r[0] + 8, r[1] + 4, text, c_text);
+    if (m->point >= 0 && m->point < tf->count[m->channel]) {
+        const struct transfer_point *p = &tf->points[m->channel][m->point];
+        double v = shown_value(tf->field, tf->lo + p->x * (tf->hi - tf->lo));
+        snprintf(text, sizeof(text), "%s %.2f at %.3g %s",
+                 transfer_channel_name((enum transfer_channel)m->channel), p->v, v,
+                 shown_unit(tf->field));
+    } else {
+        snprintf(text, sizeof(text), "%s: 0 to 1",
+                 transfer_channel_name((enum transfer_channel)m->channel));
+    }
+    int tw = menu_font_width(m->small, text);
+    fill(m, r[0] + r[2] - 14 - tw, r[1] + 2, tw + 12, th, c_canvas);
+    menu_font_draw(m->small, m->pixels, m->w, m->h, r[0] + r[2] - 8 - tw, r[1] + 4, text, c_text);
+    /* Ticks with values under the canvas, in the field's unit. */
+    double lo = shown_value(tf->field, tf->lo), hi = shown_value(tf->field, tf->hi);
+    double step = tick_step(hi - lo);
+    for (double t = ceil(lo / step - 1e-9) * step; t <= hi + 1e-9 * step; t += step) {
+        float x = (float)((t - lo) / (hi - lo)), px, py;
+        canvas_xy(r, x, 0.0f, &px, &py);
+        fill(m, (int)px, r[1] + r[3], 1, 4, c_border);
+        char label[32];
+        snprintf(label, sizeof(label), "%g", fabs(t) < 1e-9 * step ? 0.0 : t);
+        int lw = menu_font_width(m->small, label);
+        int lx = (int)px - lw / 2;
+        lx = lx < r[0] ? r[0] : lx + lw > r[0] + r[2] ? r[0] + r[2] - lw : lx;
+        menu_font_draw(m->small, m->pixels, m->w, m->h, lx, r[1] + r[3] + 4, label, c_text);
+    }
 }
 
 static void redraw(struct menu *m)
@@ -524,11 +645,13 @@ struct menu *menu_create(const struct menu_desc *desc, const struct menu_model *
     }
     if (desc)
         m->desc = *desc;
-    m->w = m->desc.width > 0 ? m->desc.width : 512;
-    m->h = m->desc.height > 0 ? m->desc.height : 400;
-    m->font = menu_font_create(m->desc.font_path ? m->desc.font_path : MENU_FONT_PATH, 20.0f);
+    m->w = m->desc.width > 0 ? m->desc.width : 576;
+    m->h = m->desc.height > 0 ? m->desc.height : 440;
+    const char *font = m->desc.font_path ? m->desc.font_path : MENU_FONT_PATH;
+    m->font = menu_font_create(font, 20.0f);
+    m->small = m->font ? menu_font_create(font, 15.0f) : NULL;
     m->pixels = calloc((size_t)m->w * (size_t)m->h, 4);
-    if (!m->font || !m->pixels) {
+    if (!m->font || !m->small || !m->pixels) {
         if (!m->pixels)
             log_error("menu: out of memory");
         menu_destroy(m);
@@ -552,6 +675,7 @@ void menu_destroy(struct menu *m)
     if (!m)
         return;
     menu_font_destroy(m->font);
+    menu_font_destroy(m->small);
     free(m->pixels);
     free(m);
 }
@@ -830,6 +954,14 @@ static void commit_slider(struct menu *m, const struct widget *wd, double v)
         md->epsilon = v;
         m->changes |= MENU_CHANGE_QUALITY;
         break;
+    case ID_PROBE_THRESHOLD:
+        md->probe_threshold = pow(10.0, v);
+        m->changes |= MENU_CHANGE_PROBE;
+        break;
+    case ID_PROBE_DISTANCE:
+        md->probe_distance_m = v * 1000.0;
+        m->changes |= MENU_CHANGE_PROBE;
+        break;
     default:
         break;
     }
@@ -906,6 +1038,7 @@ static void activate(struct menu *m, const struct widget *wd)
         transfer_defaults(&md->transfer, f);
         memcpy(md->transfer.name, name, sizeof(name));
         m->point = -1;
+        md->transfer_on = true; /* an edit shows the function at once */
         m->changes |= MENU_CHANGE_TRANSFER;
         break;
     }
@@ -916,6 +1049,7 @@ static void activate(struct menu *m, const struct widget *wd)
     case ID_DELETE:
         if (transfer_delete_point(&md->transfer, (enum transfer_channel)m->channel, m->point)) {
             m->point = -1;
+            md->transfer_on = true;
             m->changes |= MENU_CHANGE_TRANSFER;
         }
         break;
@@ -928,6 +1062,18 @@ static void activate(struct menu *m, const struct widget *wd)
     case ID_LOAD:
         m->changes |= MENU_ACTION_LOAD;
         m->point = -1;
+        break;
+    case ID_SAVE_VIEW:
+        m->changes |= MENU_ACTION_SAVE_VIEW;
+        break;
+    case ID_PROBE_ON:
+        md->probe_on = !md->probe_on;
+        m->changes |= MENU_CHANGE_PROBE;
+        break;
+    case ID_PROBE_MODE:
+        md->probe_mode = md->probe_mode == MENU_PROBE_AT_DISTANCE ? MENU_PROBE_FIRST_VISIBLE
+                                                                  : MENU_PROBE_AT_DISTANCE;
+        m->changes |= MENU_CHANGE_PROBE;
         break;
     default:
         break;
@@ -967,8 +1113,10 @@ static void trigger_down(struct menu *m)
             float x, v;
             canvas_value(wd, m->px, m->py, &x, &v);
             best = transfer_add_point(tf, c, x, v);
-            if (best >= 0)
+            if (best >= 0) {
+                m->model.transfer_on = true; /* an edit shows the function at once */
                 m->changes |= MENU_CHANGE_TRANSFER;
+            }
         }
         m->point = best;
         m->dragging = best >= 0;
@@ -1010,8 +1158,10 @@ static void trigger_up(struct menu *m)
         m->dragging = false;
         if (wd->kind == W_SLIDER && m->drag != slider_value(m, wd))
             commit_slider(m, wd, m->drag);
-        else if (wd->kind == W_CANVAS && m->moved)
+        else if (wd->kind == W_CANVAS && m->moved) {
+            m->model.transfer_on = true;
             m->changes |= MENU_CHANGE_TRANSFER;
+        }
     } else if (hovered(m) == i && (wd->kind == W_BUTTON || wd->kind == W_TOGGLE)) {
         activate(m, wd);
     }
@@ -1039,6 +1189,10 @@ static void key(struct menu *m, enum input_key k)
         break;
     case INPUT_KEY_PAGE_PREV:
         menu_set_page(m, (enum menu_page)((m->page + MENU_PAGE_COUNT - 1) % MENU_PAGE_COUNT));
+        break;
+    case INPUT_KEY_PROBE:
+        m->model.probe_on = !m->model.probe_on;
+        m->changes |= MENU_CHANGE_PROBE;
         break;
     default: /* navigation, the sun, quitting: not the menu's */
         return;

@@ -1,6 +1,6 @@
 /*
  * menu: the in-world menu (Dye 2007 §4.5, Pompeii's menus) as a state machine fed by input
- * events.  A panel with five pages — Time, Fields, Transfer, Light, Quality — placed in the
+ * events.  A panel with six pages — Time, Fields, Transfer, Light, Quality, Probe — placed in the
  * scene, hit by the wand's ray and chosen with the trigger.  The menu edits a plain model
  * (struct menu_model) that the application owns the meaning of: it reports what changed as
  * flags and the application applies it (new time step, volume, sun, quality).
@@ -30,7 +30,10 @@
 #define MENU_SLOTS 4
 
 enum menu_page { MENU_PAGE_TIME, MENU_PAGE_FIELDS, MENU_PAGE_TRANSFER, MENU_PAGE_LIGHT,
-                 MENU_PAGE_QUALITY, MENU_PAGE_COUNT };
+                 MENU_PAGE_QUALITY, MENU_PAGE_PROBE, MENU_PAGE_COUNT };
+
+/* How the probe picks its point (session/probe.h's enum probe_mode). */
+enum { MENU_PROBE_FIRST_VISIBLE, MENU_PROBE_AT_DISTANCE };
 
 /* What the menu shows and edits. */
 struct menu_model {
@@ -46,8 +49,12 @@ struct menu_model {
     /* Transfer */
     double species_scale[SPECIES_COUNT]; /* multiplies the species' extinction, [0, 4] */
     float species_tint[SPECIES_COUNT][3];
-    bool transfer_on;                    /* classic transfer-function mode */
+    bool transfer_on;                    /* the function is shown (replaces the clouds); any
+                                            edit of the function turns it on */
     struct transfer_function transfer;
+    bool histogram_valid;                /* the field's histogram for the step on screen */
+    struct transfer_histogram histogram; /* drawn behind the curves when it is of transfer's
+                                            field and range */
     int slot;                            /* saved transfer function slot, 0 .. MENU_SLOTS-1 */
     /* Light */
     double sun_azimuth, sun_elevation;   /* degrees */
@@ -57,6 +64,11 @@ struct menu_model {
     double epsilon;                      /* compression error bound */
     bool diffuse_on;                     /* multiple scattering (effects.multiple) */
     bool diffuse_possible;               /* false without a light map (effects.shadows off) */
+    /* Probe */
+    bool probe_on;
+    int probe_mode;                      /* MENU_PROBE_* */
+    double probe_threshold;              /* extinction that counts as visible, 1/m */
+    double probe_distance_m, probe_distance_max_m; /* along the ray, world metres */
 };
 
 /* Change flags (menu_take_changes). */
@@ -71,11 +83,13 @@ enum {
     MENU_ACTION_LOAD = 1u << 7,     /* load slot model.slot into model.transfer */
     MENU_ACTION_RESET_VIEW = 1u << 8,
     MENU_CHANGE_VISIBLE = 1u << 9,  /* shown or hidden */
+    MENU_CHANGE_PROBE = 1u << 10,   /* on/off, mode, threshold, distance */
+    MENU_ACTION_SAVE_VIEW = 1u << 11, /* "Save view": the view and look as a scene file */
 };
 
 struct menu_desc {
     const char *font_path; /* NULL: MENU_FONT_PATH */
-    int width, height;     /* panel image pixels; 0: 512 x 400 */
+    int width, height;     /* panel image pixels; 0: 576 x 440 */
     /* Date and time of a step for the time slider's label ("" when unknown); may be NULL. */
     const char *(*step_date)(void *user, int step);
     void *user;

@@ -219,3 +219,41 @@ bool transfer_equal(const struct transfer_function *a, const struct transfer_fun
     }
     return true;
 }
+
+void transfer_histogram_init(struct transfer_histogram *h, enum transfer_field field, double lo,
+                             double hi)
+{
+    memset(h, 0, sizeof(*h));
+    h->field = field;
+    h->lo = lo;
+    h->hi = hi;
+}
+
+void transfer_histogram_add(struct transfer_histogram *h, double x)
+{
+    h->total++;
+    if (!isfinite(x)) {
+        h->nonfinite++;
+        return;
+    }
+    if (x < h->lo) {
+        h->below++;
+        return;
+    }
+    if (x > h->hi) {
+        h->above++;
+        return;
+    }
+    double f = floor((x - h->lo) / (h->hi - h->lo) * TRANSFER_HISTOGRAM_BINS);
+    int i = f >= TRANSFER_HISTOGRAM_BINS ? TRANSFER_HISTOGRAM_BINS - 1 : f < 0.0 ? 0 : (int)f;
+    if (h->count[i] < UINT32_MAX)
+        h->count[i]++;
+}
+
+uint32_t transfer_histogram_max(const struct transfer_histogram *h)
+{
+    uint32_t m = 0;
+    for (int i = 0; i < TRANSFER_HISTOGRAM_BINS; i++)
+        m = h->count[i] > m ? h->count[i] : m;
+    return m;
+}

@@ -10,8 +10,11 @@
 #define ANVIL_OPTICS_TRANSFER_H
 
 #include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
 
 #define TRANSFER_MAX_POINTS 32
+#define TRANSFER_HISTOGRAM_BINS 64
 #define TRANSFER_NAME_MAX 64
 
 enum transfer_channel { TRANSFER_RED, TRANSFER_GREEN, TRANSFER_BLUE, TRANSFER_ALPHA,
@@ -75,5 +78,23 @@ bool transfer_delete_point(struct transfer_function *tf, enum transfer_channel c
 bool transfer_valid(const struct transfer_function *tf, char *why, int why_size);
 
 bool transfer_equal(const struct transfer_function *a, const struct transfer_function *b);
+
+/* How a field's values fall over a transfer function's range (the editor's histogram): bin i
+ * counts the values x with floor((x - lo) / (hi - lo) * TRANSFER_HISTOGRAM_BINS) = i, the value
+ * hi in the last bin; values below lo, above hi, and NaN are counted apart. */
+struct transfer_histogram {
+    enum transfer_field field; /* what was counted */
+    double lo, hi;
+    uint32_t count[TRANSFER_HISTOGRAM_BINS];
+    uint64_t below, above, nonfinite, total;
+};
+
+/* Empties H for FIELD over [LO, HI] (lo < hi). */
+void transfer_histogram_init(struct transfer_histogram *h, enum transfer_field field, double lo,
+                             double hi);
+/* Counts the value X into H. */
+void transfer_histogram_add(struct transfer_histogram *h, double x);
+/* The largest bin count. */
+uint32_t transfer_histogram_max(const struct transfer_histogram *h);
 
 #endif

@@ -8,7 +8,7 @@
 #include "common/log.h"
 
 #define MAGIC 0x464e5641u /* "AVNF" */
-#define VERSION 1u
+#define VERSION 2u
 
 struct writer {
     uint8_t *p;
@@ -127,7 +127,8 @@ static void get_f32s(struct reader *r, float *v, int n)
     F32(step_fraction);                                                                        \
     F64(sun_azimuth_deg);                                                                      \
     F64(sun_elevation_deg);                                                                    \
-    U32(settings_revision)
+    U32(settings_revision);                                                                    \
+    F64S(probe_point, 3)
 
 size_t frame_state_write(const struct frame_state *f, uint8_t buf[FRAME_STATE_BYTES])
 {
@@ -136,7 +137,8 @@ size_t frame_state_write(const struct frame_state *f, uint8_t buf[FRAME_STATE_BY
     put_u32(&w, MAGIC);
     put_u32(&w, VERSION);
     put_u32(&w, (uint32_t)f->time_step);
-    put_u32(&w, (f->wand_valid ? 1u : 0u) | (f->playing ? 2u : 0u) | (f->menu_visible ? 4u : 0u));
+    put_u32(&w, (f->wand_valid ? 1u : 0u) | (f->playing ? 2u : 0u) | (f->menu_visible ? 4u : 0u) |
+                    (f->probe_valid ? 8u : 0u));
 #define W_U64(m) put_u64(&w, f->m)
 #define W_U32(m) put_u32(&w, f->m)
 #define W_F64(m) put_f64(&w, f->m)
@@ -164,13 +166,14 @@ bool frame_state_read(const uint8_t *buf, size_t len, struct frame_state *out)
     memset(&f, 0, sizeof(f));
     f.time_step = (int32_t)get_u32(&r);
     uint32_t flags = get_u32(&r);
-    if (flags & ~7u) {
+    if (flags & ~15u) {
         log_error("frame state: unknown flags %08x", flags);
         return false;
     }
     f.wand_valid = flags & 1u;
     f.playing = flags & 2u;
     f.menu_visible = flags & 4u;
+    f.probe_valid = flags & 8u;
 #define R_U64(m) f.m = get_u64(&r)
 #define R_U32(m) f.m = get_u32(&r)
 #define R_F64(m) f.m = get_f64(&r)

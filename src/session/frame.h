@@ -2,7 +2,8 @@
  * session/frame: the frame state.  One fixed-size, plain-data struct holding everything a
  * frame's picture depends on that can change between frames: the head and wand poses, the
  * navigation transform and the orbit camera, the time cursor and the playback fraction, the
- * sun, whether the menu shows, and the revision of the look and quality settings.  Input
+ * sun, whether the menu shows, the revision of the look and quality settings, and the point
+ * the probe reads.  Input
  * produces one per frame (session_update), drawing consumes it (session_apply, session_draw);
  * it travels as bytes (what a cluster broadcasts, what a recording stores).  No GL.
  */
@@ -33,6 +34,8 @@ struct frame_state {
     double sun_azimuth_deg, sun_elevation_deg;
     bool menu_visible;
     uint32_t settings_revision;     /* of the look and quality settings (session_settings) */
+    bool probe_valid;               /* the probe reads the point below (docs/analysis.md) */
+    double probe_point[3];          /* world metres: picked on rank 0 along the wand's ray */
 };
 
 /* Writes F into BUF (at least FRAME_STATE_BYTES): little-endian, with a magic number and a

@@ -215,3 +215,27 @@ void lightmaps_finish(struct lightmaps *al)
     al->gpu = NULL;
     al->spare = NULL;
 }
+
+/* The map that serves the step on screen (NULL without one). */
+static const struct light_gpu *serving(const struct lightmaps *al)
+{
+    if (al->temporal && al->step_id != 0 && al->spare && al->held[1] == al->step_id)
+        return al->spare;
+    return al->gpu;
+}
+
+unsigned lightmaps_builds(const struct lightmaps *al)
+{
+    const struct light_gpu *lg = serving(al);
+    return lg ? light_gpu_builds(lg) : 0;
+}
+
+bool lightmaps_sample(const struct lightmaps *al, const double p[3], float *beam,
+                      float diffuse[2], bool *have_diffuse, unsigned *builds)
+{
+    const struct light_gpu *lg = serving(al);
+    if (builds)
+        *builds = lg ? light_gpu_builds(lg) : 0;
+    *have_diffuse = false;
+    return lg && light_gpu_sample(lg, p, beam, diffuse, have_diffuse);
+}

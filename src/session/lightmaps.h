@@ -77,4 +77,11 @@ void lightmaps_set_timing(struct lightmaps *al, struct gpu_timings *log);
 int lightmaps_collect_timings(struct lightmaps *al, bool wait);
 void lightmaps_finish(struct lightmaps *al);
 
+/* Builds so far of the map that serves the step on screen (0 without one). */
+unsigned lightmaps_builds(const struct lightmaps *al);
+/* The light map of the step on screen at world point P (light_gpu_sample): false without one.
+ * *BUILDS (may be NULL) counts that map's builds, so a caller can tell a rebuilt map. */
+bool lightmaps_sample(const struct lightmaps *al, const double p[3], float *beam,
+                      float diffuse[2], bool *have_diffuse, unsigned *builds);
+
 #endif

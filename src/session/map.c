@@ -274,6 +274,23 @@ static void build_graticule(const struct config *cfg, struct scene_map *m)
     log_info("map: graticule every %g degrees, %d labels", step, m->info.labels);
 }
 
+/* The map.use_origin placement and the offset, after the grid's (if any). */
+static void scene_geo_finish_init(const struct config *cfg, struct geo_map *geo)
+{
+    if (geo->kind == GEO_NONE && cfg->map.use_origin)
+        geo_map_init_local(geo, cfg->map.origin_deg[0], cfg->map.origin_deg[1]);
+    geo->offset[0] = cfg->map.offset_km[0] * 1000.0;
+    geo->offset[1] = cfg->map.offset_km[1] * 1000.0;
+}
+
+void scene_geo_init(const struct config *cfg, const struct wrf_meta *meta, struct geo_map *out)
+{
+    memset(out, 0, sizeof(*out));
+    if (meta && meta->xlat && meta->xlong)
+        geo_map_init_grid(out, meta->xlat, meta->xlong, meta->nx, meta->ny, meta->dx, meta->dy);
+    scene_geo_finish_init(cfg, out);
+}
+
 struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r,
                                    const struct wrf_meta *meta)
 {
@@ -290,10 +307,7 @@ struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r,
         else
             load_wrf_meta(cfg, g, m);
     }
-    if (m->geo.kind == GEO_NONE && cfg->map.use_origin)
-        geo_map_init_local(&m->geo, cfg->map.origin_deg[0], cfg->map.origin_deg[1]);
-    m->geo.offset[0] = cfg->map.offset_km[0] * 1000.0;
-    m->geo.offset[1] = cfg->map.offset_km[1] * 1000.0;
+    scene_geo_finish_init(cfg, &m->geo);
 
     double w = g->n[0] * g->spacing[0], h = g->n[1] * g->spacing[1];
     double margin = cfg->map.margin_km * 1000.0;

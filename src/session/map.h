@@ -41,6 +41,10 @@ struct scene_map_info {
     double step_deg;       /* graticule spacing */
 };
 void scene_map_get_info(const struct scene_map *m, struct scene_map_info *out);
+/* The lat/lon placement a map of CFG makes, without the map: from META's XLAT/XLONG (NULL:
+ * none), else map.origin with map.use_origin, with map.offset.  No GL.  Finish OUT with
+ * geo_map_finish. */
+void scene_geo_init(const struct config *cfg, const struct wrf_meta *meta, struct geo_map *out);
 /* The lat/lon placement (kind GEO_NONE when not placed); valid until scene_map_destroy. */
 const struct geo_map *scene_map_geo(const struct scene_map *m);
 

@@ -102,9 +102,59 @@ void look_from_config(const struct config *cfg, struct look *look)
     for (int f = 0; f < SPECIES_COUNT; f++) {
         look->select.enabled[f] = cfg->optics.enabled[f];
         look->select.scale[f] = cfg->optics.scale[f];
+        for (int c = 0; c < 3; c++)
+            look->tint.rgb[f][c] = (float)cfg->look.tint[f][c];
     }
-    species_tint_defaults(&look->tint);
-    transfer_defaults(&look->transfer, TRANSFER_FIELD_QVAPOR);
+    if (cfg->look.has_transfer) {
+        look->transfer = cfg->look.transfer;
+        look->transfer_on = cfg->look.show_transfer;
+    } else {
+        transfer_defaults(&look->transfer, TRANSFER_FIELD_QVAPOR);
+    }
+}
+
+/* The value of FIELD at voxel IDX of FV, at height Z (what transfer_scalar holds there). */
+static double scalar_at(const struct field_volume *fv, enum transfer_field field, size_t idx,
+                        double vapour, double temp)
+{
+    switch (field) {
+    case TRANSFER_FIELD_QVAPOR:
+        return fv->qvapor ? fv->qvapor[idx] : (float)vapour;
+    case TRANSFER_FIELD_TEMPERATURE:
+        return fv->temperature ? fv->temperature[idx] : (float)temp;
+    case TRANSFER_FIELD_WIND:
+        return fv->wind ? fv->wind[idx] : 0.0f;
+    default: {
+        double sum = 0.0;
+        for (int f = 0; f < SPECIES_COUNT; f++) {
+            float q = fv->q[f] ? fv->q[f][idx] : 0.0f;
+            if (isfinite(q) && q > 0.0f)
+                sum += q;
+        }
+        return (float)sum;
+    }
+    }
+}
+
+/* The histogram of TF's field over its range on FV (owned by the caller), or NULL when out of
+ * memory. */
+static struct transfer_histogram *histogram_of(const struct field_volume *fv,
+                                               const struct transfer_function *tf)
+{
+    struct transfer_histogram *h = malloc(sizeof(*h));
+    if (!h)
+        return NULL;
+    transfer_histogram_init(h, tf->field, tf->lo, tf->hi);
+    const struct grid3 *g = &fv->grid;
+    size_t idx = 0;
+    for (int k = 0; k < g->n[2]; k++) {
+        double z = g->origin[2] + (k + 0.5) * g->spacing[2];
+        double vapour = 0.010 * exp(-z / 2500.0), temp, pressure;
+        wrf_std_atmosphere(z, &temp, &pressure);
+        for (size_t ij = 0; ij < (size_t)g->n[0] * (size_t)g->n[1]; ij++, idx++)
+            transfer_histogram_add(h, scalar_at(fv, tf->field, idx, vapour, temp));
+    }
+    return h;
 }
 
 /* The scalar field a transfer function shows, on FV's grid (caller frees). */
@@ -186,6 +236,8 @@ static bool convert(struct player *p, struct field_volume *fv, const struct look
     }
     if (ok && ld->height_k > 0.0)
         ext_volume_stretch_height(out, ld->height_k);
+    if (ok)
+        out->histogram = histogram_of(fv, &look->transfer); /* NULL: out of memory, no bars */
     return ok;
 }
 
@@ -220,10 +272,11 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
         ok = synth_storm_fields(&ld->synth, &fv);
         break;
     case PLAYER_FIELDS: {
+        /* The transfer function's field is read when it is chosen, shown or not: the editor's
+         * histogram shows it. */
         enum transfer_field tff = look->transfer.field;
-        ok = data_source_load_fields_extra(
-            p->src, step, look->transfer_on && tff == TRANSFER_FIELD_TEMPERATURE,
-            look->transfer_on && tff == TRANSFER_FIELD_WIND, &fv);
+        ok = data_source_load_fields_extra(p->src, step, tff == TRANSFER_FIELD_TEMPERATURE,
+                                           tff == TRANSFER_FIELD_WIND, &fv);
         break;
     }
     }
@@ -273,11 +326,20 @@ static bool load_desc(const struct config *cfg, struct player_load *ld)
 static bool make_first(struct player *p, int step)
 {
     const struct player_load *ld = &p->ld;
-    if (!p->src)
+    double load_ms = 0.0, convert_ms = 0.0;
+    if (ld->kind == PLAYER_TEST_SCENE)
         return scene_build_synth(&ld->synth, &ld->optics, &ld->select, &ld->detail,
                                  ld->height_k, &p->first);
-    double load_ms = 0.0, convert_ms = 0.0;
-    if (!data_source_load(p->src, step, &p->first, &load_ms, &convert_ms))
+    /* Fields through the look (the config's: its tints, its transfer function), the way the
+     * series makes every later step; extinction files as they are. */
+    if (ld->kind == PLAYER_STORM) {
+        if (!load(p, step, &p->first, &load_ms, &convert_ms))
+            return false;
+        return true;
+    }
+    if (!(ld->kind == PLAYER_FIELDS ? load(p, step, &p->first, &load_ms, &convert_ms)
+                                    : data_source_load(p->src, step, &p->first, &load_ms,
+                                                       &convert_ms)))
         return false;
     log_info("time step %d (%s) read in %.0f ms, converted in %.0f ms", step,
              data_source_step_date(p->src, step), load_ms, convert_ms);

@@ -20,6 +20,7 @@
 #include "session/map.h"
 #include "session/menu_view.h"
 #include "session/overlay_view.h"
+#include "session/probe_view.h"
 #include "session/scene.h"
 
 #define SOURCES_MAX 2
@@ -68,6 +69,27 @@ struct session {
     /* The information overlay (overlay.when), and what it showed last. */
     struct overlay_view *overlay;
     struct overlay_model overlay_model;
+
+    /* The probe (desc.probe): its reader of the data, the extinction of the step on screen on
+     * the CPU (rank 0 marches it for the point), the point rank 0 picked last, and what the
+     * panel showed, with what it was read for. */
+    struct probe *probe;
+    struct probe_view *probe_view;
+    struct ext_volume probe_volume;
+    uint64_t probe_volume_id;
+    bool probe_picked;
+    double probe_pick[3];
+    struct probe_values probe_values;
+    bool probe_read_ok;
+    struct ext_volume first_histogram; /* the first step's histogram until the menu has it */
+    struct {
+        bool valid;
+        double point[3];
+        uint64_t volume;
+        unsigned builds;
+        int mode;
+        bool wand;
+    } probe_key;
 
     /* The menu and its sources (desc.menu); or a copy of another's (session_show_menu_state). */
     struct menu *menu;
@@ -126,6 +148,42 @@ static void model_from_session(struct session *s, struct menu_model *m)
     m->epsilon = s->settings.epsilon;
     m->diffuse_possible = s->effects.on[EFFECT_SHADOWS];
     m->diffuse_on = m->diffuse_possible && s->settings.diffuse;
+    const struct probe_settings *ps = &s->settings.probe;
+    m->probe_on = ps->on;
+    m->probe_mode = ps->mode == PROBE_AT_DISTANCE ? MENU_PROBE_AT_DISTANCE
+                                                  : MENU_PROBE_FIRST_VISIBLE;
+    m->probe_threshold = ps->threshold;
+    m->probe_distance_m = ps->distance_m;
+    double diag = 0.0;
+    for (int a = 0; a < 3; a++)
+        diag += pow(g->n[a] * g->spacing[a], 2.0);
+    m->probe_distance_max_m = fmax(2.0 * sqrt(diag), ps->distance_m);
+}
+
+/* The extinction of V kept on the CPU for the probe (the step on screen). */
+static bool keep_probe_volume(struct session *s, const struct ext_volume *v)
+{
+    size_t n = grid3_count(&v->grid);
+    if (!s->probe_volume.beta || grid3_count(&s->probe_volume.grid) != n) {
+        ext_volume_finish(&s->probe_volume);
+        if (!ext_volume_init(&s->probe_volume, &v->grid))
+            return false;
+    }
+    s->probe_volume.grid = v->grid;
+    memcpy(s->probe_volume.beta, v->beta, 2 * n * sizeof(float));
+    s->probe_volume_id++;
+    return true;
+}
+
+/* The histogram of the volume just shown into the menu's transfer editor. */
+static void show_histogram(struct session *s, const struct ext_volume *v)
+{
+    if (!s->menu || !v->histogram)
+        return;
+    struct menu_model *m = menu_model(s->menu);
+    m->histogram = *v->histogram;
+    m->histogram_valid = true;
+    menu_model_changed(s->menu);
 }
 
 /* The facts, gathered once: the first volume, the display, what can change while running. */
@@ -224,6 +282,7 @@ struct session *session_create(const struct config *cfg, const struct session_de
     memcpy(s->settings.light_resolution, cfg->lightmap.resolution,
            sizeof(s->settings.light_resolution));
     s->settings.epsilon = cfg->lightmap.epsilon;
+    probe_settings_from_config(cfg, &s->settings.probe);
 
     /* The data, opened once: the first step now, the rest behind a cache when time can play. */
     double t = time_now_ms();
@@ -257,6 +316,15 @@ struct session *session_create(const struct config *cfg, const struct session_de
         ok = renderer_set_optics(s->renderer, &cfg->optics.params) &&
              renderer_set_volume(s->renderer, &vol);
     }
+    if (ok && d->probe) {
+        s->probe = probe_create(cfg);
+        if (!s->probe)
+            *rc = 1;
+        ok = s->probe && keep_probe_volume(s, &vol);
+    }
+    /* The first step's histogram for the menu, made below. */
+    s->first_histogram.histogram = vol.histogram;
+    vol.histogram = NULL;
     ext_volume_finish(&vol);
     if (!ok)
         goto error;
@@ -285,10 +353,14 @@ struct session *session_create(const struct config *cfg, const struct session_de
         if (!s->overlay)
             goto error;
     }
+    if (d->probe && !(s->probe_view = probe_view_create(s->renderer)))
+        goto error;
     if (d->menu && !create_menu(s)) {
         *rc = 1;
         goto error;
     }
+    show_histogram(s, &s->first_histogram);
+    ext_volume_finish(&s->first_histogram);
     *rc = 0;
     return s;
 
@@ -305,6 +377,10 @@ void session_destroy(struct session *s)
     free(s->remote_pixels);
     menu_view_destroy(s->menu_view, s->renderer); /* its meshes leave the renderer */
     overlay_view_destroy(s->overlay, s->renderer);
+    probe_view_destroy(s->probe_view, s->renderer);
+    probe_destroy(s->probe);
+    ext_volume_finish(&s->probe_volume);
+    ext_volume_finish(&s->first_histogram);
     menu_destroy(s->menu);
     for (int i = 0; i < s->n_sources; i++)
         input_source_destroy(s->sources[i]);
@@ -466,6 +542,71 @@ void session_view_text(const struct session *s, char *buf, size_t size)
                  c->up[1], c->up[2], c->fov_deg);
 }
 
+void session_look_text(const struct session *s, char *buf, size_t size)
+{
+    char *text = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&text, &len);
+    if (!f) {
+        snprintf(buf, size, "# (out of memory: the look is not written)\n");
+        return;
+    }
+    const struct session_settings *set = &s->settings;
+    const struct config *cfg = &s->cfg;
+    if (cfg->scene.kind == SCENE_DATA)
+        fprintf(f, "data = { step = %d; };\n", s->playback.step);
+    if (set->step_m != cfg->render.step_m)
+        fprintf(f, "render = { step = %.17e; };\n", set->step_m);
+    if (memcmp(set->light_resolution, cfg->lightmap.resolution, sizeof(set->light_resolution)) ||
+        set->epsilon != cfg->lightmap.epsilon)
+        fprintf(f, "lightmap = { resolution = [%d, %d, %d]; epsilon = %.17e; };\n",
+                set->light_resolution[0], set->light_resolution[1], set->light_resolution[2],
+                set->epsilon);
+    /* The effects as this session decided them (and the menu turned them), so that a batch
+     * render simulates what it did whatever its own facts would decide; not the temporal
+     * blend (a still picture has none) nor the lens warp (the display's). */
+    static const enum effect pinned[] = {EFFECT_SHADOWS,  EFFECT_FORWARD, EFFECT_PERIPHERAL,
+                                         EFFECT_MULTIPLE, EFFECT_LATERAL, EFFECT_PHASE,
+                                         EFFECT_GROUND_SHADOW, EFFECT_DETAIL};
+    fprintf(f, "effects = {");
+    for (size_t i = 0; i < sizeof(pinned) / sizeof(pinned[0]); i++)
+        fprintf(f, " %s = \"%s\";", effects_name(pinned[i]),
+                s->effects.on[pinned[i]] ? "on" : "off");
+    fprintf(f, " };\n");
+    const struct look *look = &set->look;
+    fprintf(f, "look = {\n    species = {\n");
+    for (int sp = 0; sp < SPECIES_COUNT; sp++) {
+        const float *t = look->tint.rgb[sp];
+        fprintf(f, "        %s = { enabled = %s; scale = %.17e; tint = [%.9e, %.9e, %.9e]; };\n",
+                species_name((enum species)sp), look->select.enabled[sp] ? "true" : "false",
+                look->select.scale[sp], (double)t[0], (double)t[1], (double)t[2]);
+    }
+    fprintf(f, "    };\n");
+    struct transfer_function plain;
+    transfer_defaults(&plain, TRANSFER_FIELD_QVAPOR);
+    if (look->transfer_on || !transfer_equal(&look->transfer, &plain)) {
+        transfer_file_write_group(f, "transfer", &look->transfer, "    ");
+        fprintf(f, "    show_transfer = %s;\n", look->transfer_on ? "true" : "false");
+    } else {
+        fprintf(f, "    transfer = \"none\";\n");
+    }
+    fprintf(f, "};\n");
+    if (set->probe.on)
+        fprintf(f, "probe = { on = true; mode = \"%s\"; threshold = %.17e; distance = %.17e; };\n",
+                set->probe.mode == PROBE_AT_DISTANCE ? "distance" : "first_visible",
+                set->probe.threshold, set->probe.distance_m / 1000.0);
+    if (fclose(f) != 0 || !text) {
+        free(text);
+        snprintf(buf, size, "# (out of memory: the look is not written)\n");
+        return;
+    }
+    if (len >= size)
+        snprintf(buf, size, "# (the look is longer than %zu bytes: not written)\n", size);
+    else
+        memcpy(buf, text, len + 1);
+    free(text);
+}
+
 void session_sun_text(const struct session *s, char *buf, size_t size)
 {
     snprintf(buf, size, "light = { azimuth = %.6f; elevation = %.6f; };\n", s->sun_az,
@@ -560,8 +701,11 @@ static void apply_changes(struct session *s, unsigned ch)
             struct transfer_function tf = m->transfer;
             bool ok = transfer_file_load(path, &tf);
             if (ok) {
+                /* A function loaded is shown at once, as an edited one is. */
                 m->transfer = tf;
+                m->transfer_on = true;
                 set.look.transfer = tf;
+                set.look.transfer_on = true;
             }
             snprintf(status, sizeof(status), ok ? "loaded %s" : "kept the current one: %s",
                      ok ? path : log_last_error());
@@ -569,12 +713,21 @@ static void apply_changes(struct session *s, unsigned ch)
         menu_set_status(s->menu, status);
         menu_model_changed(s->menu);
     }
+    if (ch & MENU_CHANGE_PROBE) {
+        set.probe.on = m->probe_on;
+        set.probe.mode = m->probe_mode == MENU_PROBE_AT_DISTANCE ? PROBE_AT_DISTANCE
+                                                                 : PROBE_FIRST_VISIBLE;
+        set.probe.threshold = m->probe_threshold;
+        set.probe.distance_m = m->probe_distance_m;
+    }
     if (memcmp(&set, &s->settings, sizeof(set)) != 0) {
         set.revision++;
         session_set_settings(s, &set);
     }
     if (ch & MENU_ACTION_RESET_VIEW)
         session_reset_view(s);
+    if (ch & MENU_ACTION_SAVE_VIEW)
+        s->requests |= SESSION_REQUEST_BOOKMARK;
 }
 
 /* ---- navigation ----------------------------------------------------------------------- */
@@ -776,6 +929,46 @@ static void place_menu(struct session *s, const struct display_camera *cam, int 
     menu_set_pose(s->menu, c, r, u, w);
 }
 
+/* The probe's point along the wand's or pointer's ray (rank 0): the first point of the step
+ * on screen whose extinction passes the threshold, or the point the set distance along it.
+ * While the ray is on the menu the last point stays (the panel can be read meanwhile). */
+static void pick_probe(struct session *s)
+{
+    const struct probe_settings *ps = &s->settings.probe;
+    if (!s->probe || !ps->on) {
+        s->probe_picked = false;
+        return;
+    }
+    if (!s->have_wand || (s->menu && menu_captures(s->menu)))
+        return;
+    mat4 to_world, from_world;
+    menu_matrices(s, &s->nav, to_world, from_world);
+    vec4 p = {s->wand_pos[0], s->wand_pos[1], s->wand_pos[2], 1.0f}, pw;
+    vec4 d = {s->wand_dir[0], s->wand_dir[1], s->wand_dir[2], 0.0f}, dw;
+    glm_mat4_mulv(to_world, p, pw);
+    glm_mat4_mulv(to_world, d, dw);
+    double o[3], dir[3], len = 0.0;
+    for (int i = 0; i < 3; i++) {
+        o[i] = pw[i];
+        dir[i] = dw[i];
+        len += dir[i] * dir[i];
+    }
+    len = sqrt(len);
+    if (!(len > 0.0)) {
+        s->probe_picked = false;
+        return;
+    }
+    double t = ps->distance_m;
+    for (int i = 0; i < 3; i++)
+        dir[i] /= len;
+    if (ps->mode == PROBE_AT_DISTANCE)
+        s->probe_picked = true;
+    else
+        s->probe_picked = probe_first_visible(&s->probe_volume, o, dir, 1e12, ps->threshold, &t);
+    for (int i = 0; s->probe_picked && i < 3; i++)
+        s->probe_pick[i] = o[i] + t * dir[i];
+}
+
 static bool ready(void *user, int step)
 {
     return player_ready(user, step);
@@ -901,6 +1094,13 @@ bool session_update(struct session *s, const struct input_queue *window_events, 
         changes = menu_take_changes(s->menu);
         apply_changes(s, changes);
     }
+    bool picked_before = s->probe_picked;
+    double pick_before[3];
+    memcpy(pick_before, s->probe_pick, sizeof(pick_before));
+    pick_probe(s);
+    bool probe_moved = picked_before != s->probe_picked ||
+                       (s->probe_picked && memcmp(pick_before, s->probe_pick,
+                                                  sizeof(pick_before)) != 0);
 
     /* Playback: the cursor advances only onto loaded steps (a scripted render waits). */
     bool wait = !s->desc.interactive;
@@ -955,12 +1155,15 @@ bool session_update(struct session *s, const struct input_queue *window_events, 
     out->sun_elevation_deg = s->sun_el;
     out->menu_visible = s->menu && menu_visible(s->menu);
     out->settings_revision = s->settings.revision;
+    out->probe_valid = s->probe && s->settings.probe.on && s->probe_picked;
+    if (out->probe_valid)
+        memcpy(out->probe_point, s->probe_pick, sizeof(out->probe_point));
 
     unsigned after = 0;
     if (s->menu)
         menu_pixels(s->menu, &(int){0}, &(int){0}, &after);
     *redraw = head_moved || events || changes || after != before || s->playback.playing ||
-              was_playing || flying ||
+              was_playing || flying || probe_moved ||
               s->playback.step != old_step ||
               memcmp(&nav_before, &s->nav, sizeof(nav_before)) != 0 ||
               memcmp(&cam_before, &s->camera, sizeof(cam_before)) != 0;
@@ -973,6 +1176,9 @@ static bool upload(struct session *s, const struct ext_volume *v)
 {
     if (!renderer_set_volume(s->renderer, v))
         return false;
+    if (s->probe && !keep_probe_volume(s, v))
+        return false;
+    show_histogram(s, v);
     s->light.generation++;
     s->stats.volume_uploads++;
     s->stats.upload_ms_total += renderer_stats(s->renderer)->upload_ms;
@@ -1117,6 +1323,17 @@ static void overlay_model_of(struct session *s, const struct frame_state *f,
     m->north_deg = x * x + y * y > 1e-12 ? (float)(atan2(x, y) * 180.0 / M_PI) : 0.0f;
 }
 
+const struct probe_values *session_probe(const struct session *s)
+{
+    return s->probe ? &s->probe_values : NULL;
+}
+
+void session_set_status(struct session *s, const char *text)
+{
+    if (s->menu)
+        menu_set_status(s->menu, text);
+}
+
 const struct overlay_model *session_overlay(const struct session *s)
 {
     return s->overlay ? &s->overlay_model : NULL;
@@ -1129,6 +1346,76 @@ bool session_overlay_point(const struct session *s, float x, double world[3])
         return false;
     overlay_view_point(s->overlay, (float)px + 0.5f, (float)py + 0.5f, world);
     return true;
+}
+
+/* The values at the frame's probe point, read again only when the point, the step's volume
+ * or its light map changed (every rank reads its own data: the point alone travels). */
+static void read_probe(struct session *s, const struct frame_state *f)
+{
+    const struct probe_settings *ps = &s->settings.probe;
+    unsigned builds = lightmaps_builds(&s->light);
+    if (s->probe_key.valid == f->probe_valid && s->probe_key.volume == s->probe_volume_id &&
+        s->probe_key.builds == builds && s->probe_key.mode == ps->mode &&
+        s->probe_key.wand == f->wand_valid && s->probe_read_ok &&
+        (!f->probe_valid || memcmp(s->probe_key.point, f->probe_point, sizeof(f->probe_point)) == 0))
+        return;
+    s->probe_key.valid = f->probe_valid;
+    s->probe_key.volume = s->probe_volume_id;
+    s->probe_key.builds = builds;
+    s->probe_key.mode = ps->mode;
+    s->probe_key.wand = f->wand_valid;
+    memcpy(s->probe_key.point, f->probe_point, sizeof(f->probe_point));
+    s->probe_read_ok = true;
+    struct probe_values *v = &s->probe_values;
+    if (!f->probe_valid) {
+        memset(v, 0, sizeof(*v));
+        if (!f->wand_valid)
+            snprintf(v->why, sizeof(v->why), "point the wand or the mouse at the storm");
+        else if (ps->mode == PROBE_FIRST_VISIBLE)
+            snprintf(v->why, sizeof(v->why), "no extinction above %.2g /km along the ray",
+                     ps->threshold * 1e3);
+        else
+            snprintf(v->why, sizeof(v->why), "no point along the ray");
+    } else if (!probe_read(s->probe, s->shown, f->probe_point, v)) {
+        memset(v, 0, sizeof(*v));
+        snprintf(v->why, sizeof(v->why), "the data could not be read (see the log)");
+    } else {
+        probe_sample_beta(&s->probe_volume, f->probe_point, v->beta);
+        float beam, diffuse[2];
+        bool have_diffuse;
+        if (lightmaps_sample(&s->light, f->probe_point, &beam, diffuse, &have_diffuse, NULL)) {
+            v->have_light = true;
+            v->light = beam;
+            v->have_diffuse = have_diffuse;
+            v->diffuse = diffuse[0];
+        }
+    }
+    v->step = s->shown;
+    snprintf(v->date, sizeof(v->date), "%s", player_step_date(s->player, s->shown));
+}
+
+static bool draw_probe(struct session *s, const struct frame_state *f, const float to_world[16])
+{
+    if (!s->settings.probe.on) {
+        probe_view_hide(s->probe_view);
+        return true;
+    }
+    read_probe(s, f);
+    struct readout_model m;
+    probe_values_readout(&s->probe_values, &m);
+    const double *point = f->probe_valid ? f->probe_point : NULL;
+    double size = 0.0;
+    if (point && s->tracker) {
+        size = 0.03 / f->nav.scale; /* 3 cm in the room */
+    } else if (point) {
+        double d2 = 0.0;
+        for (int i = 0; i < 3; i++)
+            d2 += (point[i] - f->camera.eye[i]) * (point[i] - f->camera.eye[i]);
+        size = 0.03 * sqrt(d2);
+    }
+    return probe_view_update(s->probe_view, &m, point, size, s->tracker ? NULL : &f->camera,
+                             s->view_size[0], s->view_size[1], s->display.head.position,
+                             to_world, (float)s->cfg.render.exposure);
 }
 
 bool session_draw(struct session *s, struct display *d, const struct frame_state *f)
@@ -1156,6 +1443,8 @@ bool session_draw(struct session *s, struct display *d, const struct frame_state
                                  tw, exposure))
             return false;
     }
+    if (s->probe_view && !draw_probe(s, f, tw))
+        return false;
     if (!display_draw(d, s->renderer, &s->drawn))
         return false;
     for (int i = 0; i < display_view_count(d); i++) {
@@ -1342,6 +1631,7 @@ static const struct {
                          "bookmark"},
     {INPUT_KEY_PATH_KEY, "the current view becomes the camera path's next key (3 s on)"},
     {INPUT_KEY_PATH_PLAY, "fly the camera path from its start (again: stop)"},
+    {INPUT_KEY_PROBE, "the probe on / off: the values where the pointer meets the clouds"},
     {INPUT_KEY_QUIT, "quit"},
 };
 

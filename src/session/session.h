@@ -36,6 +36,7 @@
 #include "render/render.h"
 #include "session/frame.h"
 #include "session/player.h"
+#include "session/probe.h"
 #include "session/stats.h"
 
 struct menu;
@@ -63,6 +64,9 @@ struct session_desc {
                                   decided as that run decided them (the sun could move) */
     bool count_rays;           /* count what the views' rays do (renderer_set_counting; the
                                   counts go to the stats at session_collect_timings(s, true)) */
+    bool probe;                /* the probe can be used (run, a script, --menu; every rank of
+                                  a cluster): a second reader of the data and the extinction
+                                  of the step on screen kept on the CPU */
 };
 
 /* Builds the session for CFG (copied) on the current GL context: the first volume, the
@@ -103,6 +107,7 @@ struct session_settings {
     int light_resolution[3]; /* lightmap.resolution */
     double epsilon;          /* lightmap.epsilon */
     bool diffuse;            /* effects.multiple (and lateral escape with it) */
+    struct probe_settings probe;
     uint32_t revision;
 };
 
@@ -133,6 +138,14 @@ unsigned session_take_requests(struct session *s);
  * display file's navigation block; the sun as a scene file's light block. */
 void session_view_text(const struct session *s, char *buf, size_t size);
 void session_sun_text(const struct session *s, char *buf, size_t size);
+/* What a scene file needs besides the camera and the sun to render what the session shows:
+ * the time step (data.step), the look (look.species.*, look.transfer written in place,
+ * look.show_transfer), the quality the menu changed (render.step, lightmap.resolution,
+ * lightmap.epsilon) and the effects as the session decided them (all but temporal and
+ * distortion), the probe when it is on.  SIZE of 16 KiB holds any look. */
+void session_look_text(const struct session *s, char *buf, size_t size);
+/* The menu's status line (a saved bookmark); no-op without a menu. */
+void session_set_status(struct session *s, const char *text);
 bool session_uses_tracker(const struct session *s);
 /* The scene's time steps; whether steps are blended (effects.temporal). */
 int session_step_count(const struct session *s);
@@ -190,6 +203,10 @@ struct session_stats *session_stats(struct session *s);
 struct menu *session_menu(struct session *s); /* NULL without a menu */
 const struct config *session_config(const struct session *s);
 int session_step_shown(const struct session *s);
+
+/* What the probe showed in the last session_draw (NULL without a probe): the values, their
+ * rows on the panel. */
+const struct probe_values *session_probe(const struct session *s);
 
 /* What the information overlay showed in the last session_draw, or NULL without one. */
 struct overlay_model;

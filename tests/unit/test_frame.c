@@ -37,6 +37,9 @@ static void sample(struct frame_state *f)
     f->sun_elevation_deg = 35.5;
     f->menu_visible = true;
     f->settings_revision = 42;
+    f->probe_valid = true;
+    const double probe[3] = {12345.5, -678.25, 4321.125};
+    memcpy(f->probe_point, probe, sizeof(probe));
 }
 
 static void assert_same(const struct frame_state *a, const struct frame_state *b)
@@ -57,6 +60,8 @@ static void assert_same(const struct frame_state *a, const struct frame_state *b
     assert_memory_equal(&a->sun_elevation_deg, &b->sun_elevation_deg, sizeof(double));
     assert_int_equal(a->menu_visible, b->menu_visible);
     assert_int_equal(a->settings_revision, b->settings_revision);
+    assert_int_equal(a->probe_valid, b->probe_valid);
+    assert_memory_equal(a->probe_point, b->probe_point, sizeof(a->probe_point));
 }
 
 static void test_round_trip(void **state)
@@ -68,13 +73,13 @@ static void test_round_trip(void **state)
     assert_true(frame_state_read(buf, sizeof(buf), &g));
     assert_same(&f, &g);
     /* Flags off survive too. */
-    f.wand_valid = f.playing = f.menu_visible = false;
+    f.wand_valid = f.playing = f.menu_visible = f.probe_valid = false;
     frame_state_write(&f, buf);
     assert_true(frame_state_read(buf, sizeof(buf), &g));
     assert_same(&f, &g);
 }
 
-/* The layout does not depend on the platform: magic "AVNF", version 1, then the time step,
+/* The layout does not depend on the platform: magic "AVNF", version 2, then the time step,
  * the flags and the frame number, all little-endian. */
 static void test_layout(void **state)
 {
@@ -82,7 +87,7 @@ static void test_layout(void **state)
     sample(&f);
     uint8_t buf[FRAME_STATE_BYTES];
     frame_state_write(&f, buf);
-    const uint8_t head[] = {'A', 'V', 'N', 'F', 1, 0, 0, 0, 7, 0, 0, 0, 7, 0, 0, 0,
+    const uint8_t head[] = {'A', 'V', 'N', 'F', 2, 0, 0, 0, 7, 0, 0, 0, 15, 0, 0, 0,
                             8, 7, 6, 5, 4, 3, 2, 1};
     assert_memory_equal(buf, head, sizeof(head));
     double t;
@@ -112,7 +117,7 @@ static void test_refuses_bad_bytes(void **state)
     buf[0] ^= 1;
     expect_refused(buf, sizeof(buf), "a wrong magic number");
     memcpy(buf, good, sizeof(buf));
-    buf[4] = 2;
+    buf[4] = 1;
     expect_refused(buf, sizeof(buf), "another version");
     memcpy(buf, good, sizeof(buf));
     buf[12] |= 0x80;
@@ -145,6 +150,10 @@ static void test_refuses_bad_bytes(void **state)
     bad.nav.scale = 0.0;
     frame_state_write(&bad, buf);
     expect_refused(buf, sizeof(buf), "a navigation scale of 0");
+    bad = f;
+    bad.probe_point[2] = NAN;
+    frame_state_write(&bad, buf);
+    expect_refused(buf, sizeof(buf), "a probe point that is not finite");
 
     /* Every single flipped bit of the header is caught or read back as written. */
     for (int byte = 0; byte < 16; byte++) {
@@ -155,9 +164,9 @@ static void test_refuses_bad_bytes(void **state)
             log_set_level(LOG_NONE);
             bool ok = frame_state_read(buf, sizeof(buf), &g);
             log_set_level(LOG_INFO);
-            /* Accepted only where any value is one: the time step, the three flags. */
+            /* Accepted only where any value is one: the time step, the four flags. */
             if (ok)
-                assert_true((byte >= 8 && byte < 12) || (byte == 12 && bit < 3));
+                assert_true((byte >= 8 && byte < 12) || (byte == 12 && bit < 4));
         }
     }
 }

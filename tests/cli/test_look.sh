@@ -1,0 +1,108 @@
+#!/bin/bash
+# Look blocks (docs/analysis.md): a menu session scripted through --input changes the look (a
+# species' tint and scale, the time step; then a transfer function, which shows at once) and
+# presses Save view; the bookmark it writes renders the same image, bit for bit, in a batch
+# render.  A look block of a wrong type is refused with file:line.  Arguments: the anvil
+# binary, the source folder, the data folder.
+. "$(dirname "$0")/lib.sh"
+katrina="$data/wrf/katrina_2005_mercator_wsm3.nc"
+if [ ! -r "$katrina" ]; then echo "no Katrina sample: skipping"; exit 77; fi
+require_gl
+small="--set render.width=160 --set render.height=120 --set lightmap.resolution=[32,32,32]"
+cfg="$src/configs/katrina.cfg"
+
+# The cloud tinted and thickened, one step on, saved from the Time page.
+cat >"$tmp/species.txt" <<'SCRIPT'
+0 key menu
+0 aim tab.transfer
+1 button trigger down
+2 button trigger up
+3 aim transfer.pick.cloud
+4 button trigger down
+5 button trigger up
+6 aim transfer.tint.blue 0.4 0.5
+7 button trigger down
+8 button trigger up
+9 aim transfer.scale 0.5 0.5
+10 button trigger down
+11 aim transfer.scale 0.6 0.5
+12 button trigger up
+13 key forward
+14 aim tab.time
+15 button trigger down
+16 button trigger up
+17 aim time.save
+18 button trigger down
+19 button trigger up
+20 key menu
+SCRIPT
+# A transfer function of the condensate: a point added, nothing else ticked.
+cat >"$tmp/transfer.txt" <<'SCRIPT'
+0 key menu
+0 aim tab.transfer
+1 button trigger down
+2 button trigger up
+3 aim transfer.function
+4 button trigger down
+5 button trigger up
+6 aim transfer.field
+7 button trigger down
+8 button trigger up
+9 aim transfer.canvas 0.7 0.8
+10 button trigger down
+11 button trigger up
+12 aim tab.time
+13 button trigger down
+14 button trigger up
+15 aim time.save
+16 button trigger down
+17 button trigger up
+18 key menu
+SCRIPT
+printf '0 key menu\n1 key menu\n' >"$tmp/plain.txt"
+(cd "$tmp" && "$anvil" render --quiet "$cfg" $small --input plain.txt -o plain.pfm)
+n=0
+for look in species transfer; do
+    n=$((n + 1))
+    (cd "$tmp" && "$anvil" render --quiet "$cfg" $small --input "$look.txt" \
+        -o "$look-session.pfm" >"$look.out")
+    check "$look: the scripted session exits 0" test $? -eq 0
+    check "$look: Save view wrote bookmark-$n.cfg" test -f "$tmp/bookmark-$n.cfg"
+    check "$look: the bookmark holds a look block" grep -q "^look = {" "$tmp/bookmark-$n.cfg"
+    (cd "$tmp" && "$anvil" render --quiet "bookmark-$n.cfg" $small -o "$look-batch.pfm")
+    check "$look: the bookmark renders" test -s "$tmp/$look-batch.pfm"
+    check "$look: the same image as the session that saved it" \
+        cmp -s "$tmp/$look-session.pfm" "$tmp/$look-batch.pfm"
+    check "$look: not the plain picture" bash -c "! cmp -s '$tmp/plain.pfm' '$tmp/$look-batch.pfm'"
+done
+check "species: the tint and the step saved" bash -c \
+    "grep -q 'data = { step = 1; };' '$tmp/bookmark-1.cfg' && grep -q 'cloud = { enabled = true; scale = 2.4' '$tmp/bookmark-1.cfg'"
+check "transfer: the function in place, shown" bash -c \
+    "grep -q 'field = \"condensate\";' '$tmp/bookmark-2.cfg' && grep -q 'show_transfer = true;' '$tmp/bookmark-2.cfg'"
+check "Save view printed the camera block too" grep -q "camera = {" "$tmp/species.out"
+
+# The same transfer function named by its file renders alike (the group moved to tf.cfg).
+sed -n '/^    transfer = {/,/^    };/p' "$tmp/bookmark-2.cfg" | sed 's/^    //' >"$tmp/tf.cfg"
+sed '/^    transfer = {/,/^    };/c\    transfer = "tf.cfg";' "$tmp/bookmark-2.cfg" >"$tmp/byfile.cfg"
+check "the bookmark now names tf.cfg" grep -q 'transfer = "tf.cfg";' "$tmp/byfile.cfg"
+(cd "$tmp" && "$anvil" render --quiet byfile.cfg $small -o byfile.pfm)
+check "look.transfer from a file renders as in place" cmp -s "$tmp/byfile.pfm" "$tmp/transfer-batch.pfm"
+
+# Wrong types: one message with file:line, exit 1.
+printf 'look = {\n    species = {\n        cloud = { tint = "red"; };\n    };\n};\n' >"$tmp/tint.cfg"
+expect_exit 1 "a tint that is a word" "$anvil" render "$tmp/tint.cfg" -o "$tmp/x.png"
+check "  names file:line and the setting" \
+    stderr_has 'tint.cfg:3: look.species.cloud.tint: expected an array of 3 numbers in \[0, 1\], got "red"'
+printf 'look = {\n  transfer = 5;\n};\n' >"$tmp/five.cfg"
+expect_exit 1 "a transfer function that is a number" "$anvil" render "$tmp/five.cfg" -o "$tmp/x.png"
+check "  names file:line" stderr_has "five.cfg:2: look.transfer: expected a transfer function"
+printf 'look = {\n  transfer = {\n    field = "qvapor";\n    range = [0.0, 0.01];\n    density = 0.002;\n    red = ([0.0, 2.0]);\n  };\n};\n' \
+    >"$tmp/point.cfg"
+expect_exit 1 "an inline function with a bad point" "$anvil" render "$tmp/point.cfg" -o "$tmp/x.png"
+check "  names the scene file's line" stderr_has "point.cfg:6: look.transfer.red\[0\]: expected x and value in \[0, 1\]"
+printf 'look = { transfer = "absent.cfg"; };\n' >"$tmp/missing.cfg"
+expect_exit 1 "a function file that is not there" "$anvil" render "$tmp/missing.cfg" -o "$tmp/x.png"
+check "  names the scene file and the missing one" \
+    stderr_has 'missing.cfg:1: look.transfer: cannot read the transfer function'
+check "  once" test "$(grep -c error "$tmp/err")" -eq 1
+finish
