@@ -307,7 +307,7 @@ bool dtrack_parse(const char *data, size_t len, struct dtrack_frame *out, char *
             } else if (kind[2] == '\0') {
                 ok = read_double(&l, "time stamp", &out->time_s);
             } else {
-                long long sec, usec, latency;
+                long long sec = 0, usec = 0, latency = 0;
                 ok = read_long(&l, "time stamp seconds", 0, 0xffffffffLL, &sec) &&
                      read_long(&l, "time stamp microseconds", 0, 999999, &usec);
                 skip_spaces(&l);
