@@ -31,7 +31,7 @@ enum scene_kind {
     SCENE_DATA,   /* from data.* (WRF, Isabel bricks, extinction files) */
 };
 
-enum data_format { DATA_WRF, DATA_ISABEL, DATA_EXTINCTION };
+enum data_format { DATA_WRF, DATA_ISABEL, DATA_EXTINCTION, DATA_CM1, DATA_CF };
 
 /* How the light map is stored; whether there is one at all is effects.shadows. */
 enum lightmap_mode { LIGHTMAP_DENSE, LIGHTMAP_COMPRESSED };
