@@ -100,10 +100,10 @@ static bool find_axes(int ncid, const char *path, struct hgrid_layout *l, bool q
         degrees[k] = deg;
     }
     static const char *const what[3] = {
-        "an x coordinate (axis = \"X\", projection_x_coordinate or longitude)",
-        "a y coordinate (axis = \"Y\", projection_y_coordinate or latitude)",
-        "a vertical coordinate (axis = \"Z\", a positive attribute, or standard_name height "
-        "or altitude)"};
+        "x coordinate (axis = \"X\", projection_x_coordinate or longitude)",
+        "y coordinate (axis = \"Y\", projection_y_coordinate or latitude)",
+        "vertical coordinate (axis = \"Z\", a positive attribute, or standard_name height or "
+        "altitude)"};
     for (int a = 0; a < 3; a++)
         if (l->axis_var[a] < 0) {
             if (!quiet)

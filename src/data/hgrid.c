@@ -1053,8 +1053,8 @@ bool hgrid_read_step(struct hgrid *h, int step, const struct hgrid_desc *d,
     }
     size_t bytes = hgrid_step_bytes(h, d);
     if (d->memory_mb > 0 && (double)bytes > d->memory_mb * 1048576.0) {
-        log_error("%s: one time step of %d x %d x %d points needs %.0f MiB, above the budget "
-                  "data.memory = %.0f MiB",
+        log_error("%s: one time step of %d x %d x %d points needs %.3g MiB, above the budget "
+                  "data.memory = %.3g MiB: use a smaller grid or raise data.memory",
                   h->files[0].path, m->nx, m->ny, m->nz, (double)bytes / 1048576.0,
                   d->memory_mb);
         return false;
