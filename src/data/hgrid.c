@@ -786,6 +786,9 @@ struct hgrid *hgrid_open(enum hgrid_kind kind, hgrid_identify_fn identify,
         if (dated)
             hgrid_format_date(st->seconds + h->files[0].epoch, st->date);
     }
+    double first = h->step_count > 0 && dated ? h->steps[0].seconds : 0.0;
+    for (int s = 0; s < h->step_count; s++)
+        h->steps[s].seconds -= first; /* dated series count from their first step */
     return h;
 
 error_oom:

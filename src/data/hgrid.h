@@ -114,8 +114,8 @@ const struct hgrid_meta *hgrid_get_meta(const struct hgrid *h);
 int hgrid_step_count(const struct hgrid *h);
 /* "YYYY-MM-DD_hh:mm:ss" when the time units name a date, else ""; valid until hgrid_close. */
 const char *hgrid_step_date(const struct hgrid *h, int step);
-/* Seconds since the time origin of the first file (its "since" date, or the model's start;
- * the step's index without a time variable). */
+/* Seconds since the first step for dated series ("since" a date: CF), since the model's start
+ * otherwise (CM1's time), the step's index without a time variable. */
 double hgrid_step_seconds(const struct hgrid *h, int step);
 const char *hgrid_step_path(const struct hgrid *h, int step);
 
