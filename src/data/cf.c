@@ -93,8 +93,15 @@ static bool find_axes(int ncid, const char *path, struct hgrid_layout *l, bool q
             }
             continue;
         }
-        if (l->axis_var[k] >= 0)
-            continue;
+        if (l->axis_var[k] >= 0) {
+            /* Of several vertical coordinates (a 2 m or 10 m level beside the levels) the one
+             * with the most levels. */
+            size_t have, len;
+            nc_inq_dimlen(ncid, l->axis_dim[k], &have);
+            nc_inq_dimlen(ncid, dim, &len);
+            if (k != AXIS_Z || len <= have)
+                continue;
+        }
         l->axis_var[k] = id;
         l->axis_dim[k] = dim;
         degrees[k] = deg;
@@ -118,6 +125,11 @@ static bool find_axes(int ncid, const char *path, struct hgrid_layout *l, bool q
         return false;
     }
     l->latlon = degrees[0];
+    if (l->time_dim < 0) { /* no time coordinate: the record dimension counts the steps */
+        int unlim;
+        if (nc_inq_unlimdim(ncid, &unlim) == NC_NOERR && unlim >= 0)
+            l->time_dim = unlim;
+    }
     char positive[16], units[64], bounds[NC_MAX_NAME + 1];
     if (text_att(ncid, l->axis_var[2], "positive", positive, sizeof(positive))) {
         if (!strcmp(positive, "down")) {
@@ -175,6 +187,19 @@ static bool identify(int ncid, const char *path, struct hgrid_layout *l)
                 nc_inq_varname(ncid, id, name);
                 log_warn("%s: variable %s: a second %s (%s is read)", path, name, sn,
                          l->field[v].name);
+                break;
+            }
+            /* A field on other dimensions (a 2 m temperature, a column total) is not one of
+             * the levels': passed over. */
+            int nd, dims[NC_MAX_VAR_DIMS];
+            nc_inq_varndims(ncid, id, &nd);
+            nc_inq_vardimid(ncid, id, dims);
+            if (nd < 3 || nd > 4 || dims[nd - 3] != l->axis_dim[2] ||
+                dims[nd - 2] != l->axis_dim[1] || dims[nd - 1] != l->axis_dim[0]) {
+                char name[NC_MAX_NAME + 1] = "?";
+                nc_inq_varname(ncid, id, name);
+                log_debug("%s: variable %s (%s) is not on the height levels: not read", path,
+                          name, sn);
                 break;
             }
             if (!hgrid_take_field(ncid, path, id, (enum hgrid_var)v, -1, v <= HGRID_VAPOR, l))

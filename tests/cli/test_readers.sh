@@ -86,14 +86,16 @@ fi
 cdl() { # UNITS_OF_RAIN HEIGHTS
     cat <<EOF
 netcdf bad {
-dimensions: x = 3 ; y = 2 ; z = 3 ;
+dimensions: x = 3 ; y = 2 ; z = 3 ; h2 = 1 ;
 variables:
   double x(x) ; x:units = "km" ; x:axis = "X" ;
   double y(y) ; y:units = "km" ; y:axis = "Y" ;
+  double h2(h2) ; h2:units = "m" ; h2:axis = "Z" ;
   double z(z) ; z:units = "m" ; z:positive = "up" ;
+  float t2m(y, x) ; t2m:standard_name = "air_temperature" ; t2m:units = "K" ;
   float qr(z, y, x) ; qr:standard_name = "mass_fraction_of_rain_in_air" ; qr:units = "$1" ;
 data:
-  x = 0, 1, 2 ; y = 0, 1 ; z = $2 ;
+  x = 0, 1, 2 ; y = 0, 1 ; z = $2 ; h2 = 2 ; t2m = 300, 300, 300, 300, 300, 300 ;
   qr = 0, 0, 1e-3, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 ;
 }
 EOF
@@ -104,6 +106,8 @@ if command -v ncgen >/dev/null; then
     cdl "kg kg-1" "100, 300, 200" | ncgen -o "$tmp/mono.nc"
     expect_exit 0 "a small CF file" "$anvil" info "$tmp/good.nc"
     check "missing species named" stdout_has "absent (read as zero): cloud ice snow graupel"
+    check "the levels, not the 2 m height; t2m passed over" stdout_has "variables   rain=qr$"
+    check "3 levels from 0 to 600 m" stdout_has "levels      0 to 600 m (even, m)"
     check "g/kg converted" stdout_has "qr  *0 \.\. 1e-06 "
     expect_exit 1 "a wrong unit" "$anvil" info "$tmp/units.nc"
     check "variable and unit named" stderr_has "units.nc: variable qr: units \"furlongs\" are not a unit of rain"
