@@ -160,5 +160,12 @@ expect_exit 0 "render Isabel placed without a map block" "$anvil" render --set s
     --set data.isabel_size=[8,6,4] --set data.isabel_extent=[2000.0,2000.0,19.8] \
     --set map.graticule=true $small -o "$tmp/i.png"
 check "graticule on the Isabel box" stderr_has "map: graticule every 5 degrees"
+expect_exit 0 "probe an Isabel point by lat/lon, TC as temperature" "$anvil" probe \
+    --set scene.kind=data --set data.format=isabel --set "data.files=[\"$tmp/isabel\"]" \
+    --set data.isabel_size=[8,6,4] --set data.isabel_extent=[2000.0,2000.0,19.8] \
+    --at 30,-75,2475 --quiet
+check "placed" stdout_has "30.000 N, 75.000 W"
+check "TC read" stdout_has "temperature    20.0 C"
+check "QVAPOR read" stdout_has "vapour         0.00 g/kg"
 
 finish
