@@ -363,6 +363,12 @@ static bool horizontal_axis(struct hgrid *h, struct hg_file *f, int a, bool firs
     char units[64];
     get_text_att(f->ncid, l->axis_var[a], "units", units, sizeof(units));
     double scale = 1.0, d = NAN;
+    bool flip = ok && n > 1 && v[n - 1] < v[0]; /* latitudes from the north, say */
+    for (size_t i = 0; flip && i < n / 2; i++) {
+        double t = v[i];
+        v[i] = v[n - 1 - i];
+        v[n - 1 - i] = t;
+    }
     if (!ok) {
         log_error("%s: coordinate %s: unreadable or not finite", f->path, name);
     } else if (!l->latlon && !hgrid_parse_length(units, &scale)) {
@@ -370,8 +376,7 @@ static bool horizontal_axis(struct hgrid *h, struct hg_file *f, int a, bool firs
                   units);
         ok = false;
     } else if (!regular(v, n, &d)) {
-        log_error("%s: coordinate %s: not evenly spaced and increasing (%g, %g, ...): expected a "
-                  "regular grid",
+        log_error("%s: coordinate %s: not evenly spaced (%g, %g, ...): expected a regular grid",
                   f->path, name, v[0], n > 1 ? v[1] : v[0]);
         ok = false;
     } else if (n < 2) {
@@ -397,6 +402,7 @@ static bool horizontal_axis(struct hgrid *h, struct hg_file *f, int a, bool firs
         metres = d * scale;
     }
     if (first) {
+        m->flip[a] = flip;
         if (a == 0) {
             m->nx = (int)n;
             m->x0 = v[0] * scale;
@@ -412,7 +418,7 @@ static bool horizontal_axis(struct hgrid *h, struct hg_file *f, int a, bool firs
             m->dy = metres;
         }
         snprintf(m->axis_names[a], sizeof(m->axis_names[a]), "%s", name);
-    } else if ((a == 0 ? m->nx : m->ny) != (int)n ||
+    } else if ((a == 0 ? m->nx : m->ny) != (int)n || m->flip[a] != flip ||
                fabs((a == 0 ? m->dx : m->dy) - metres) > 1e-6 * metres) {
         log_error("%s: coordinate %s: %zu points %g m apart, but %s has %d points %g m apart",
                   f->path, name, n, metres, h->files[0].path, a == 0 ? m->nx : m->ny,
@@ -1006,13 +1012,14 @@ static void to_mass_levels(const struct hgrid_meta *m, const float *raw, int sta
         size_t kk = m->reversed ? nz - 1 - k : k;
         for (size_t j = 0; j < ny; j++)
             for (size_t i = 0; i < nx; i++) {
-                size_t a = i + rx * (j + ry * kk), b = a;
+                size_t ii = m->flip[0] ? nx - 1 - i : i, jj = m->flip[1] ? ny - 1 - j : j;
+                size_t a = ii + rx * (jj + ry * kk), b = a;
                 if (stagger == 0)
-                    b = a + 1;
+                    b = a + 1; /* faces ii and ii + 1 in the file's order */
                 else if (stagger == 1)
                     b = a + rx;
                 else if (stagger == 2)
-                    b = a + rx * ry; /* faces kk and kk + 1 in the file's order */
+                    b = a + rx * ry;
                 float x = raw[a], y = raw[b];
                 x = isnan(x) ? bad : x;
                 y = isnan(y) ? bad : y;

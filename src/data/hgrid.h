@@ -54,13 +54,16 @@ struct hgrid_meta {
     enum hgrid_kind kind;
     int nx, ny, nz;    /* mass points along x, y and the file's levels */
     double dx, dy;     /* m */
-    double x0, y0;     /* the file's coordinate of the first mass point, m (lat/lon: 0) */
+    double x0, y0;     /* the file's coordinate of the westmost (southmost) mass point, m
+                          (lat/lon: 0) */
     double bottom_m, top_m; /* the lowest and highest cell face of the levels */
     double *z;              /* the nz mass-level heights, increasing, m */
     bool stretched;         /* the levels are not evenly spaced */
     bool reversed;          /* the file stores them from the top down */
+    bool flip[2];           /* the file stores x (y) decreasing: from the east (north) */
     bool latlon;            /* x, y were longitude, latitude (degrees, regular) */
-    double lon0, lat0, dlon, dlat; /* latlon: first mass point and spacing, degrees */
+    double lon0, lat0, dlon, dlat; /* latlon: the south-west mass point and the spacing,
+                                      degrees */
     struct hgrid_field field[HGRID_VAR_COUNT];
     char axis_names[3][64]; /* the coordinate variables of x, y, z */
     char x_units[64], z_units[64];

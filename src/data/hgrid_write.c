@@ -206,7 +206,8 @@ static bool define(struct hgrid_writer *w, const struct field_volume *v)
     bool top_down = cf && w->desc.top_down;
     bool ok = true;
     for (int a = 0; a < 3 && ok; a++) {
-        ok = put_axis(w, ax[a], a, g->n[a], false, a == 2 && top_down);
+        ok = put_axis(w, ax[a], a, g->n[a], false,
+                      (a == 2 && top_down) || (a == 1 && cf && w->desc.north_first));
         if (ok && axf[a] >= 0)
             ok = put_axis(w, axf[a], a, g->n[a] + 1, true, false);
     }
@@ -236,8 +237,9 @@ static void fill(const struct hgrid_writer *w, const struct field_volume *v, int
     n[2] = (size_t)g->n[2] + (!cf && k == W_W);
     for (size_t kk = 0; kk < n[2]; kk++) {
         size_t lev = top_down ? n[2] - 1 - kk : kk;
-        for (size_t j = 0; j < n[1]; j++)
+        for (size_t jw = 0; jw < n[1]; jw++)
             for (size_t i = 0; i < n[0]; i++) {
+                size_t j = cf && w->desc.north_first ? n[1] - 1 - jw : jw;
                 double x = g->origin[0] + (i + (k == W_U && !cf ? 0.0 : 0.5)) * g->spacing[0];
                 double y = g->origin[1] + (j + (k == W_V && !cf ? 0.0 : 0.5)) * g->spacing[1];
                 double z = g->origin[2] + (lev + (k == W_W && !cf ? 0.0 : 0.5)) * g->spacing[2];
@@ -259,7 +261,7 @@ static void fill(const struct hgrid_writer *w, const struct field_volume *v, int
                     wrf_synth_wind(g, x - g->origin[0], y - g->origin[1], z, &u, &vv, &ww);
                     val = k == W_U ? u : k == W_V ? vv : ww;
                 }
-                w->buf[i + n[0] * (j + n[1] * kk)] = (float)val;
+                w->buf[i + n[0] * (jw + n[1] * kk)] = (float)val;
             }
     }
 }

@@ -31,6 +31,7 @@ struct hgrid_write_desc {
     bool positive_down;  /* CF: the vertical coordinate is minus the height, positive = down */
     bool top_down;       /* CF: levels stored from the top down */
     bool latlon;         /* CF: x, y as longitude, latitude (degrees, regular) */
+    bool north_first;    /* CF: y stored decreasing (rows from the north) */
     double cen_lat, cen_lon; /* CF latlon: the domain centre, degrees */
     unsigned omit;       /* CF and CM1: bit f set leaves species f out of the file */
 };

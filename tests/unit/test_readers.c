@@ -397,6 +397,25 @@ static void test_cf_latlon(void **state)
     assert_float_equal(lon, m->lon0, 1e-4);
     assert_float_equal(m->lat0 + 0.5 * (m->ny - 1) * m->dlat, 30.0, 1e-3);
     geo_map_finish(&g);
+
+    /* Rows stored from the north (as many lat/lon files are): the same volume. */
+    struct hgrid_write_desc dn = d;
+    dn.north_first = true;
+    const char *pn = write_hgrid("ll-north.cf.nc", &dn, 1, 0.0);
+    struct data_source *sn = open_source(DATA_SOURCE_CF, &pn);
+    assert_non_null(sn);
+    const struct hgrid_meta *mn = hgrid_get_meta(data_source_hgrid(sn));
+    assert_true(mn->flip[1] && !mn->flip[0]);
+    assert_float_equal(mn->lat0, m->lat0, 1e-9);
+    struct field_volume fa, fb;
+    assert_true(data_source_load_fields(s, 0, &fa));
+    assert_true(data_source_load_fields(sn, 0, &fb));
+    size_t n = grid3_count(&fa.grid);
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        assert_memory_equal(fa.q[f], fb.q[f], n * sizeof(float));
+    field_volume_finish(&fa);
+    field_volume_finish(&fb);
+    data_source_close(sn);
     data_source_close(s);
 }
 
