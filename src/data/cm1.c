@@ -40,8 +40,16 @@ static bool identify(int ncid, const char *path, struct hgrid_layout *l)
         if (a == 2 && l->axis_dim[a] < 0)
             l->axis_dim[a] = coord_dim(ncid, "z", &l->axis_var[a]);
         if (l->axis_dim[a] < 0) {
-            log_error("%s: not CM1 output: no coordinate %s%s (1-D)", path, axes[a],
-                      a == 2 ? " or z" : "");
+            int nd = 0;
+            if (a == 2 && var(ncid, "zh") >= 0)
+                nc_inq_varndims(ncid, var(ncid, "zh"), &nd);
+            if (nd > 1)
+                log_error("%s: zh has %d dimensions: heights that follow the terrain are not "
+                          "read (a 1-D height coordinate is needed)",
+                          path, nd);
+            else
+                log_error("%s: not CM1 output: no coordinate %s%s (1-D)", path, axes[a],
+                          a == 2 ? " or z" : "");
             return false;
         }
         l->stag_dim[a] = coord_dim(ncid, faces[a], NULL);

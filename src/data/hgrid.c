@@ -1133,7 +1133,8 @@ bool hgrid_read_step(struct hgrid *h, int step, const struct hgrid_desc *d,
                     wrf_std_atmosphere(m->z[i / plane], &tt, &pp);
                     ml[0][i] = (float)tt;
                 } else if (tv == HGRID_THETA) {
-                    /* Poisson's equation: T = theta (p / p00)^(Rd / cp) */
+                    /* Poisson's equation, T = theta (p / p00)^(Rd / cp) (AMS Glossary of
+                     * Meteorology, "potential temperature") */
                     ml[0][i] = (float)(ml[0][i] * pow(ml[1][i] / HG_P00, HG_RD / HG_CP));
                 }
             }

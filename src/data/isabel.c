@@ -285,6 +285,16 @@ bool isabel_read_step(const struct isabel_desc *d, int step, struct field_volume
         out->grid.origin[a] = 0.0;
     }
     size_t count = grid3_count(&out->grid);
+    /* What the step allocates, judged before reading: the species, vapour, temperature, and
+     * for the wind its three components (one kept as the speed). */
+    int arrays = SPECIES_COUNT + d->qvapor + d->temperature + 3 * d->wind;
+    double bytes = (double)count * sizeof(float) * arrays;
+    if (d->memory_mb > 0 && bytes > d->memory_mb * 1048576.0) {
+        log_error("%s: a step of %d x %d x %d points needs %.0f MiB, above the budget "
+                  "data.memory = %.0f MiB: check data.isabel_size or raise data.memory",
+                  d->dir ? d->dir : ".", n[0], n[1], n[2], bytes / 1048576.0, d->memory_mb);
+        return false;
+    }
     int found = 0;
     char path[4096];
     for (int f = 0; f < SPECIES_COUNT; f++) {

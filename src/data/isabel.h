@@ -36,6 +36,7 @@ struct isabel_desc {
     bool qvapor;        /* also read QVAPOR */
     bool temperature;   /* also read TC into field_volume.temperature (K) */
     bool wind;          /* also read U, V, W into field_volume.wind (speed, m/s) */
+    double memory_mb;   /* refuse a step whose arrays need more (data.memory); 0 = no limit */
 };
 
 /* The published box of the Isabel grid's points, degrees. */
@@ -70,7 +71,7 @@ void isabel_brick_path(const struct isabel_desc *d, const char *field, int step,
                        size_t size);
 
 /* Reads STEP (0-based) into OUT (initialised here; finish it with field_volume_finish): species
- * whose brick is missing stay NULL.  A brick whose size is not n0 n1 n2 4 bytes, an unreadable
+ * whose brick is missing stay NULL.  A step above D's memory budget is refused first.  A brick whose size is not n0 n1 n2 4 bytes, an unreadable
  * brick, or no brick at all → false after one log_error naming the file.  STATS may be NULL;
  * bad values are also reported with log_warn. */
 bool isabel_read_step(const struct isabel_desc *d, int step, struct field_volume *out,

@@ -234,6 +234,7 @@ void scene_source_desc(const struct config *cfg, const char **file_ptrs,
     for (int i = 0; i < 6; i++)
         out->wrf.crop[i] = cd->crop[i];
     out->wrf.memory_mb = cd->memory_mb;
+    out->isabel.memory_mb = cd->memory_mb;
     for (int a = 0; a < 3; a++) {
         out->isabel.n[a] = cd->isabel_size[a];
         out->isabel.extent_m[a] = cd->isabel_extent_km[a] * 1000.0;

@@ -152,6 +152,12 @@ for b in QCLOUD QRAIN QICE QSNOW QGRAUP QVAPOR CLOUD PRECIP P TC U V W; do
     check "brick $b" stdout_has "    $b "
 done
 check "TC range" stdout_has "TC  *5 \.\. 20 "
+check "the second step's bricks" stdout_has "1 f02  all 13 bricks"
+head -c 100 "$tmp/isabel/TCf01.bin" >"$tmp/isabel/TCf03.bin"
+cp "$tmp/isabel/QCLOUDf01.bin" "$tmp/isabel/QCLOUDf03.bin"
+expect_exit 1 "a later brick of the wrong size" "$anvil" info --isabel-size 8x6x4 "$tmp/isabel"
+check "named" stderr_has "TCf03.bin: 100 bytes, expected 768"
+rm "$tmp/isabel/TCf03.bin" "$tmp/isabel/QCLOUDf03.bin"
 expect_exit 1 "an Isabel folder of the wrong size" "$anvil" info "$tmp/isabel"
 check "names data.isabel_size" stderr_has "data.isabel_size"
 

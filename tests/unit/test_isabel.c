@@ -160,6 +160,18 @@ static void test_every_brick(void **state)
     assert_float_equal(fv.wind[7], 0.0, 1e-9);  /* land */
     field_volume_finish(&fv);
 
+    /* The budget: refused before reading, naming data.memory. */
+    struct isabel_desc tight = d;
+    tight.memory_mb = 1e-4;
+    unsigned errors = log_error_count();
+    assert_false(isabel_read_step(&tight, 0, &fv, NULL));
+    assert_int_equal(log_error_count(), errors + 1);
+    assert_non_null(strstr(log_last_error(), "data.memory"));
+    assert_null(fv.q[0]);
+    tight.memory_mb = 1.0;
+    assert_true(isabel_read_step(&tight, 0, &fv, NULL));
+    field_volume_finish(&fv);
+
     /* Without the flags only the species are read. */
     struct isabel_desc plain = d;
     plain.qvapor = plain.temperature = plain.wind = false;
