@@ -109,8 +109,7 @@ static bool find_axes(int ncid, const char *path, struct hgrid_layout *l, bool q
     static const char *const what[3] = {
         "x coordinate (axis = \"X\", projection_x_coordinate or longitude)",
         "y coordinate (axis = \"Y\", projection_y_coordinate or latitude)",
-        "vertical coordinate (axis = \"Z\", a positive attribute, or standard_name height or "
-        "altitude)"};
+        "vertical coordinate (axis = \"Z\", a positive attribute, or standard_name height)"};
     for (int a = 0; a < 3; a++)
         if (l->axis_var[a] < 0) {
             if (!quiet)
