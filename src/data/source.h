@@ -32,8 +32,8 @@ struct data_source_desc {
     struct wrf_desc wrf;          /* WRF reading (call wrf_desc_defaults); its memory_mb is
                                      every format's budget */
     struct isabel_desc isabel;    /* Isabel sizes (dir is taken from files[0]) */
-    struct optics_params optics;  /* mass ratio -> extinction (WRF, Isabel) */
-    struct species_select select; /* per-species toggles and scales (WRF, Isabel) */
+    struct optics_params optics;  /* mass ratio -> extinction (all but extinction files) */
+    struct species_select select; /* per-species toggles and scales (the same) */
     struct detail_desc detail;    /* procedural detail (zero: off) */
     double height_scale;          /* height exaggeration (ext_volume_stretch_height); 0 = 1 */
 };

@@ -20,7 +20,7 @@ struct probe {
     const char *files[CONFIG_MAX_FILES];
     struct config_data data; /* the file names the source's desc points into */
     struct data_source_desc desc;
-    struct data_source *src;  /* WRF, Isabel */
+    struct data_source *src;  /* WRF, CM1, CF, Isabel */
     bool storm;               /* the procedural storm: its fields made once */
     struct synth_desc synth;
     struct field_volume fields; /* KIND_FIELDS: the step FIELDS_STEP, or none yet */
