@@ -1,5 +1,7 @@
 #include "app/cmd_data.h"
 
+#include <glob.h>
+#include <stdint.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,7 +14,13 @@
 #include "session/effects.h"
 #include "common/log.h"
 #include "common/progress.h"
+#include <sys/stat.h>
+
+#include "data/cf.h"
+#include "data/cm1.h"
 #include "data/extfile.h"
+#include "data/hgrid_write.h"
+#include "data/isabel.h"
 #include "data/synth.h"
 #include "data/wrf.h"
 #include "data/wrf_write.h"
@@ -30,6 +38,9 @@ static void print_range(const char *name, const struct wrf_var_stats *s)
                s->fill, s->negative, s->absurd);
     printf("\n");
 }
+
+static bool parse_triple_int(const char *s, int out[3]);
+static bool parse_triple_double(const char *s, double out[3]);
 
 /* What info may hold of one file (and one step): the default of data.memory. */
 #define INFO_MEMORY_MB 4096.0
@@ -134,27 +145,206 @@ static int info_wrf(char **paths, int count, double memory_mb)
     return rc;
 }
 
+static int info_hgrid(enum hgrid_kind kind, char **paths, int count, double memory_mb)
+{
+    struct hgrid *h = (kind == HGRID_CM1 ? cm1_open : cf_open)((const char *const *)paths,
+                                                              count, memory_mb);
+    if (!h)
+        return EXIT_BAD_INPUT;
+    const struct hgrid_meta *m = hgrid_get_meta(h);
+    for (int i = 0; i < count; i++)
+        printf("%s%s", i ? ", " : "", paths[i]);
+    printf(": %s\n", kind == HGRID_CM1 ? "CM1 output" : "CF NetCDF on height levels");
+    printf("  grid        %d x %d columns x %d levels (%s x %s x %s), dx %.6g m, dy %.6g m\n",
+           m->nx, m->ny, m->nz, m->axis_names[0], m->axis_names[1], m->axis_names[2], m->dx,
+           m->dy);
+    if (m->latlon)
+        printf("  lat/lon     %.3f to %.3f N, %.3f to %.3f E (regular)\n", m->lat0,
+               m->lat0 + (m->ny - 1) * m->dlat, m->lon0, m->lon0 + (m->nx - 1) * m->dlon);
+    else
+        printf("  origin      first column at x %.6g km, y %.6g km in the file (placed at the "
+               "volume's west and south edge)\n",
+               m->x0 / 1e3, m->y0 / 1e3);
+    printf("  levels      %.6g to %.6g m (%s%s, %s), resampled onto %d even levels of %.4g m\n",
+           m->bottom_m, m->top_m, m->stretched ? "stretched" : "even",
+           m->reversed ? ", stored top down" : "", m->z_units, m->nz,
+           (m->top_m - m->bottom_m) / m->nz);
+    printf("  variables  ");
+    for (int v = 0; v < HGRID_VAR_COUNT; v++)
+        if (m->field[v].varid >= 0)
+            printf(" %s=%s", hgrid_var_label((enum hgrid_var)v), m->field[v].name);
+    printf("\n  species     absent (read as zero):");
+    int absent = 0;
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        if (m->field[f].varid < 0) {
+            printf(" %s", species_name((enum species)f));
+            absent++;
+        }
+    printf("%s\n", absent ? "" : " none");
+    printf("  time steps  %d\n", hgrid_step_count(h));
+    struct hgrid_desc d = {.memory_mb = memory_mb, .qvapor = true, .temperature = true,
+                           .wind = true};
+    int rc = EXIT_OK;
+    for (int s = 0; s < hgrid_step_count(h); s++) {
+        struct field_volume v;
+        struct hgrid_stats st;
+        if (!hgrid_read_step(h, s, &d, &v, &st)) {
+            rc = EXIT_BAD_INPUT;
+            break;
+        }
+        if (s == 0)
+            printf("  extent      %.4g x %.4g x %.4g km\n", v.grid.n[0] * v.grid.spacing[0] / 1e3,
+                   v.grid.n[1] * v.grid.spacing[1] / 1e3,
+                   (v.grid.origin[2] + v.grid.n[2] * v.grid.spacing[2]) / 1e3);
+        printf("  %3d t = %.6g s %s (%s)\n", s, hgrid_step_seconds(h, s), hgrid_step_date(h, s),
+               hgrid_step_path(h, s));
+        for (int k = 0; k < HGRID_VAR_COUNT; k++)
+            print_range(m->field[k].varid >= 0 ? m->field[k].name : "", &st.var[k]);
+        field_volume_finish(&v);
+    }
+    hgrid_close(h);
+    return rc;
+}
+
+static bool is_directory(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+static int info_isabel(const char *dir, const int size[3], const double extent_km[3])
+{
+    struct isabel_desc d = {.dir = dir};
+    for (int a = 0; a < 3; a++) {
+        d.n[a] = size[a];
+        d.extent_m[a] = extent_km[a] * 1000.0;
+    }
+    int steps = isabel_step_count(&d);
+    if (steps == 0)
+        return EXIT_BAD_INPUT;
+    int n[3] = {size[0] ? size[0] : 500, size[1] ? size[1] : 500, size[2] ? size[2] : 100};
+    double e[3] = {extent_km[0] > 0 ? extent_km[0] : 2000.0,
+                   extent_km[1] > 0 ? extent_km[1] : 2000.0,
+                   extent_km[2] > 0 ? extent_km[2] : 20.0};
+    printf("%s: Isabel bricks (IEEE Visualization 2004 contest)\n", dir);
+    printf("  grid        %d x %d x %d points (--isabel-size, data.isabel_size)\n", n[0], n[1],
+           n[2]);
+    printf("  extent      %.4g x %.4g x %.4g km (--isabel-extent, data.isabel_extent)\n", e[0],
+           e[1], e[2]);
+    printf("  lat/lon     %.1f to %.1f N, %.1f to %.1f E (the contest's published box)\n",
+           ISABEL_LAT_SOUTH, ISABEL_LAT_NORTH, ISABEL_LON_WEST, ISABEL_LON_EAST);
+    printf("  time steps  %d\n", steps);
+    int rc = EXIT_OK;
+    /* The ranges of the first step's bricks; later steps are only checked for which bricks
+     * they have and their sizes (48 steps of 13 bricks are 62 GB to read). */
+    {
+        const int s = 0;
+        printf("  %3d f%02d\n", s, s + 1);
+        char absent[256] = "";
+        for (int f = 0; f < ISABEL_FIELD_COUNT; f++) {
+            struct isabel_brick_stats st;
+            if (!isabel_brick_stats(&d, isabel_fields[f], s, &st)) {
+                rc = EXIT_BAD_INPUT;
+                break;
+            }
+            if (!st.present) {
+                snprintf(absent + strlen(absent), sizeof(absent) - strlen(absent), " %s",
+                         isabel_fields[f]);
+                continue;
+            }
+            printf("    %-7s %12.5g .. %-12.5g", isabel_fields[f], st.min, st.max);
+            if (st.land)
+                printf("  land or bad: %zu", st.land);
+            printf("\n");
+        }
+        if (absent[0])
+            printf("    absent:%s\n", absent);
+    }
+    for (int s = 1; s < steps && rc == EXIT_OK; s++) {
+        char present[256] = "";
+        int count = 0;
+        for (int f = 0; f < ISABEL_FIELD_COUNT; f++) {
+            char path[4096];
+            isabel_brick_path(&d, isabel_fields[f], s, path, sizeof(path));
+            struct stat sb;
+            if (stat(path, &sb) != 0)
+                continue;
+            if ((uint64_t)sb.st_size != (uint64_t)n[0] * n[1] * n[2] * 4) {
+                log_error("%s: %lld bytes, expected %llu (%d x %d x %d big-endian floats: check "
+                          "data.isabel_size)",
+                          path, (long long)sb.st_size,
+                          (unsigned long long)n[0] * n[1] * n[2] * 4, n[0], n[1], n[2]);
+                rc = EXIT_BAD_INPUT;
+                break;
+            }
+            snprintf(present + strlen(present), sizeof(present) - strlen(present), " %s",
+                     isabel_fields[f]);
+            count++;
+        }
+        if (rc == EXIT_OK && s == 1)
+            printf("  later steps: the bricks each has (ranges: the first step's)\n");
+        if (rc == EXIT_OK)
+            printf("  %3d f%02d %s\n", s, s + 1,
+                   count == ISABEL_FIELD_COUNT ? " all 13 bricks" : present);
+    }
+    return rc;
+}
+
 int cmd_info(int argc, char **argv)
 {
     double memory_mb = INFO_MEMORY_MB;
-    int first = 1;
-    if (argc >= 3 && !strcmp(argv[1], "--memory")) {
-        if (!app_option_double("info", "--memory", argv[2], 1.0, 1048576.0, &memory_mb))
-            return EXIT_BAD_INPUT;
-        first = 3;
+    int first = 1, isabel_size[3] = {0, 0, 0};
+    double isabel_extent[3] = {0, 0, 0};
+    while (argc >= first + 2) {
+        const char *o = argv[first], *v = argv[first + 1];
+        if (!strcmp(o, "--memory")) {
+            if (!app_option_double("info", "--memory", v, 1.0, 1048576.0, &memory_mb))
+                return EXIT_BAD_INPUT;
+        } else if (!strcmp(o, "--isabel-size")) {
+            if (!parse_triple_int(v, isabel_size) || isabel_size[0] > 4096 ||
+                isabel_size[1] > 4096 || isabel_size[2] > 4096) {
+                log_error("info: --isabel-size %s: expected NXxNYxNZ, each 1 to 4096", v);
+                return EXIT_USAGE;
+            }
+        } else if (!strcmp(o, "--isabel-extent")) {
+            if (!parse_triple_double(v, isabel_extent)) {
+                log_error("info: --isabel-extent %s: expected XxYxZ in km", v);
+                return EXIT_USAGE;
+            }
+        } else {
+            break;
+        }
+        first += 2;
     }
     if (argc <= first || !strcmp(argv[first], "--help") || !strcmp(argv[first], "-h")) {
         FILE *out = argc <= first ? stderr : stdout;
         fprintf(out, "usage: anvil info [--memory MIB] FILE...\n"
-                     "  Describes WRF output (one series: several files are ordered by Times)\n"
-                     "  or an extinction file: dimensions, species present and absent, time\n"
-                     "  steps and dates, extent, lat/lon box, value ranges, bad-value counts.\n"
-                     "  --memory: what opening the files and reading one step may take (default\n"
-                     "  4096 MiB, as data.memory).\n");
+                     "       anvil info [--isabel-size NXxNYxNZ] [--isabel-extent XxYxZ] FOLDER\n"
+                     "  Describes WRF output (one series: several files are ordered by Times),\n"
+                     "  CM1 output, CF NetCDF on height levels (ordered by time), an extinction\n"
+                     "  file or a folder of Isabel bricks: dimensions, species present and\n"
+                     "  absent, time steps and dates, extent, lat/lon box, value ranges,\n"
+                     "  bad-value counts.  --memory: what opening the files and reading one step\n"
+                     "  may take (default 4096 MiB, as data.memory).  --isabel-size and\n"
+                     "  --isabel-extent (km) as data.isabel_size and data.isabel_extent.\n");
         return argc <= first ? EXIT_USAGE : EXIT_OK;
     }
+    if (argc == first + 1 && is_directory(argv[first]))
+        return info_isabel(argv[first], isabel_size, isabel_extent);
     if (argc == first + 1 && extfile_probe(argv[first]))
         return info_extinction(argv[first], memory_mb);
+    /* The kind from the first file (a pattern's first match). */
+    char probe_path[4096];
+    snprintf(probe_path, sizeof(probe_path), "%s", argv[first]);
+    glob_t g;
+    if (strpbrk(argv[first], "*?[") && glob(argv[first], 0, NULL, &g) == 0) {
+        snprintf(probe_path, sizeof(probe_path), "%s", g.gl_pathv[0]);
+        globfree(&g);
+    }
+    if (cm1_probe(probe_path))
+        return info_hgrid(HGRID_CM1, argv + first, argc - first, memory_mb);
+    if (cf_probe(probe_path))
+        return info_hgrid(HGRID_CF, argv + first, argc - first, memory_mb);
     return info_wrf(argv + first, argc - first, memory_mb);
 }
 
@@ -176,12 +366,14 @@ static bool parse_triple_double(const char *s, double out[3])
 
 static void synth_usage(FILE *out)
 {
-    fprintf(out, "usage: anvil synth -o OUT.nc [--size NXxNYxNZ] [--steps N] [--extent XxYxZ]\n"
-                 "                   [--seed N] [--start YYYY-MM-DD_hh:mm:ss] [--interval MIN]\n"
+    fprintf(out, "usage: anvil synth -o OUT.nc [--format wrf|cm1|cf] [--size NXxNYxNZ]\n"
+                 "                   [--steps N] [--extent XxYxZ] [--seed N]\n"
+                 "                   [--start YYYY-MM-DD_hh:mm:ss] [--interval MIN]\n"
                  "                   [--center LAT,LON]\n"
-                 "  Writes the procedural storm as WRF-convention NetCDF, evolving over the\n"
-                 "  steps.  Defaults: --size 128x128x64 --steps 1 --extent 60x60x16 (km)\n"
-                 "  --seed 1 --start 2000-01-01_00:00:00 --interval 10 --center 25,-89.\n");
+                 "  Writes the procedural storm as WRF-convention NetCDF (or CM1's convention,\n"
+                 "  or CF on height levels), evolving over the steps.  Defaults: --format wrf\n"
+                 "  --size 128x128x64 --steps 1 --extent 60x60x16 (km) --seed 1\n"
+                 "  --start 2000-01-01_00:00:00 --interval 10 --center 25,-89.\n");
 }
 
 /* Adds SECONDS to a WRF date (no time zones, proleptic Gregorian). */
@@ -211,12 +403,43 @@ static void date_add(const char *start, double seconds, char out[32])
              (int)(rem / 3600) % 100, (int)(rem / 60 % 60), (int)(rem % 60));
 }
 
+/* The storm in CM1's or CF's convention. */
+static int synth_hgrid(enum hgrid_kind kind, const char *out, struct synth_desc *sd, int steps,
+                       const char *start, double interval_min, double lat, double lon)
+{
+    struct hgrid_write_desc wd = {.kind = kind, .start = start, .cen_lat = lat, .cen_lon = lon};
+    struct hgrid_writer *w = NULL;
+    for (int s = 0; s < steps; s++) {
+        sd->time = steps > 1 ? (double)s / (steps - 1) : 0.0;
+        struct field_volume fv;
+        if (!synth_storm_fields(sd, &fv)) {
+            hgrid_writer_destroy(w);
+            return EXIT_BAD_INPUT;
+        }
+        if (!w)
+            w = hgrid_writer_create(out, &fv.grid, &wd);
+        bool ok = w && hgrid_writer_add(w, &fv, s * interval_min * 60.0);
+        field_volume_finish(&fv);
+        if (!ok) {
+            hgrid_writer_destroy(w);
+            return EXIT_FAILED;
+        }
+        log_info("synth: step %d/%d written", s + 1, steps);
+    }
+    if (!hgrid_writer_finish(w))
+        return EXIT_FAILED;
+    log_info("synth: %s: %d x %d x %d, %d steps (%s convention)", out, sd->n[0], sd->n[1],
+             sd->n[2], steps, kind == HGRID_CM1 ? "CM1" : "CF");
+    return EXIT_OK;
+}
+
 int cmd_synth(int argc, char **argv)
 {
     const char *out = NULL, *start = "2000-01-01_00:00:00";
     int size[3] = {128, 128, 64}, steps = 1;
     double extent_km[3] = {60.0, 60.0, 16.0}, interval_min = 10.0, lat = 25.0, lon = -89.0;
     unsigned seed = 1;
+    int format = 0; /* 0 WRF, 1 + enum hgrid_kind */
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -233,6 +456,17 @@ int cmd_synth(int argc, char **argv)
         char tail;
         if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
             out = v;
+        } else if (!strcmp(a, "--format")) {
+            if (!strcmp(v, "wrf"))
+                format = 0;
+            else if (!strcmp(v, "cm1"))
+                format = 1 + HGRID_CM1;
+            else if (!strcmp(v, "cf"))
+                format = 1 + HGRID_CF;
+            else {
+                log_error("synth: --format %s: expected wrf, cm1 or cf", v);
+                return EXIT_USAGE;
+            }
         } else if (!strcmp(a, "--size")) {
             if (!parse_triple_int(v, size)) {
                 log_error("synth: --size %s: expected NXxNYxNZ, e.g. 500x500x100", v);
@@ -298,6 +532,9 @@ int cmd_synth(int argc, char **argv)
             return EXIT_BAD_INPUT;
         }
     }
+    if (format)
+        return synth_hgrid((enum hgrid_kind)(format - 1), out, &sd, steps, start, interval_min,
+                           lat, lon);
     struct wrf_write_desc wd = {.cen_lat = lat, .cen_lon = lon};
     struct wrf_writer *w = NULL;
     double t0 = time_now_ms();

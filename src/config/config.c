@@ -28,7 +28,8 @@ static_assert(sizeof(enum coast_resolution) == sizeof(int), "enum size");
 static const char *const scene_kind_names[] = {
     "storm", "slab", "sphere", "empty", "voxel", "data", NULL,
 };
-static const char *const data_format_names[] = {"wrf", "isabel", "extinction", NULL};
+static const char *const data_format_names[] = {"wrf", "isabel", "extinction", "cm1", "cf",
+                                                NULL};
 static const char *const lightmap_mode_names[] = {"dense", "compressed", NULL};
 static const char *const precision_names[] = {"float", "half", NULL}; /* render_precision */
 static const char *const lightmap_grid_names[] = {"auto", "upright", NULL}; /* light_grid_kind */
@@ -83,7 +84,8 @@ static const struct config_field settings[] = {
         "divided by it so every column keeps its optical depth"),
 
     ENUM("data.format", data.format, data_format_names, DATA_WRF,
-         "kind of the input files: WRF NetCDF output, Isabel raw bricks or extinction volumes"),
+         "kind of the input files: WRF NetCDF output, Isabel raw bricks, extinction volumes, "
+         "CM1 NetCDF output or CF NetCDF on height levels"),
     {.path = "data.files", .type = T_FILES, .n = 1, .offset = OFF(data.files),
      .count_offset = OFF(data.file_count), .max = CONFIG_MAX_FILES,
      .help = "input files, relative to the config file that names them; a glob pattern "

@@ -28,10 +28,10 @@ enum scene_kind {
     SCENE_SPHERE, /* homogeneous ball; tau measured along a diameter */
     SCENE_EMPTY,  /* nothing */
     SCENE_VOXEL,  /* one voxel at the centre; tau measured vertically through it */
-    SCENE_DATA,   /* from data.* (WRF, Isabel bricks, extinction files) */
+    SCENE_DATA,   /* from data.* (WRF, CM1, CF, Isabel bricks, extinction files) */
 };
 
-enum data_format { DATA_WRF, DATA_ISABEL, DATA_EXTINCTION };
+enum data_format { DATA_WRF, DATA_ISABEL, DATA_EXTINCTION, DATA_CM1, DATA_CF };
 
 /* How the light map is stored; whether there is one at all is effects.shadows. */
 enum lightmap_mode { LIGHTMAP_DENSE, LIGHTMAP_COMPRESSED };

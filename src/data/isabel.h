@@ -4,9 +4,18 @@
  * (from 01) + ".bin" (QCLOUDf01.bin, QRAINf01.bin, ...), big-endian float32, x fastest then y
  * then z (lowest level first).  Dimensions and physical extent are not in the files: they come
  * from the caller (data.isabel_size, data.isabel_extent).  Land points (1.0e35) and other bad
- * values (NaN, Inf, negative, above 1 kg/kg) become zero and are counted.  Air density is not
- * in the bricks (their P is a perturbation): rho_air stays NULL, so the standard atmosphere is
- * used.  The bricks are read as they are (no gzip: unpack the .gz files first).
+ * values (NaN, Inf, negative, above 1 kg/kg) become zero and are counted.  Besides the five
+ * species, QVAPOR (vapour), TC (temperature, degrees Celsius) and U, V, W (wind, m/s) are read
+ * when asked for; CLOUD, PRECIP (sums of species already read) and P (a pressure perturbation)
+ * are described by isabel_brick_stats for `anvil info`.  Air density is not in the bricks
+ * (their P is a perturbation of an unpublished base state): rho_air stays NULL, so the
+ * standard atmosphere is used.  The bricks are read as they are (no gzip: unpack the .gz
+ * files first).
+ *
+ * The contest published where the data lie (IEEE Visualization 2004 Contest, "Data Set",
+ * http://vis.computer.org/vis2004contest/data.html): longitude 83 W to 62 W, latitude 23.7 N
+ * to 41.7 N, height 0.035 km to 19.835 km, on 500 x 500 x 100 points.  isabel_geo places the
+ * grid there, so no map block is needed.
  *
  * No GL, no config, no NetCDF.
  */
@@ -24,6 +33,27 @@ struct isabel_desc {
     const char *dir;    /* folder holding the bricks */
     int n[3];           /* voxels; 0 = 500 x 500 x 100 */
     double extent_m[3]; /* box size, m; 0 = 2000 km x 2000 km x 20 km */
+    bool qvapor;        /* also read QVAPOR */
+    bool temperature;   /* also read TC into field_volume.temperature (K) */
+    bool wind;          /* also read U, V, W into field_volume.wind (speed, m/s) */
+    double memory_mb;   /* refuse a step whose arrays need more (data.memory); 0 = no limit */
+};
+
+/* The published box of the Isabel grid's points, degrees. */
+#define ISABEL_LAT_SOUTH 23.7
+#define ISABEL_LAT_NORTH 41.7
+#define ISABEL_LON_WEST (-83.0)
+#define ISABEL_LON_EAST (-62.0)
+
+/* Every field the contest distributed, the five species first (enum species order). */
+#define ISABEL_FIELD_COUNT 13
+extern const char *const isabel_fields[ISABEL_FIELD_COUNT];
+
+/* The range of one brick (for anvil info). */
+struct isabel_brick_stats {
+    bool present;
+    double min, max; /* of the good values */
+    size_t land;     /* land (1.0e35) and other bad values (NaN, Inf) */
 };
 
 struct isabel_stats {
@@ -41,10 +71,22 @@ void isabel_brick_path(const struct isabel_desc *d, const char *field, int step,
                        size_t size);
 
 /* Reads STEP (0-based) into OUT (initialised here; finish it with field_volume_finish): species
- * whose brick is missing stay NULL.  A brick whose size is not n0 n1 n2 4 bytes, an unreadable
+ * whose brick is missing stay NULL.  A step above D's memory budget is refused first.  A brick whose size is not n0 n1 n2 4 bytes, an unreadable
  * brick, or no brick at all → false after one log_error naming the file.  STATS may be NULL;
  * bad values are also reported with log_warn. */
 bool isabel_read_step(const struct isabel_desc *d, int step, struct field_volume *out,
                       struct isabel_stats *stats);
+
+/* Reads the brick of FIELD for STEP and describes its values into OUT (present false when the
+ * brick is not there).  False after one log_error when it is there but unreadable or of the
+ * wrong size. */
+bool isabel_brick_stats(const struct isabel_desc *d, const char *field, int step,
+                        struct isabel_brick_stats *out);
+
+struct geo_map;
+/* Places the grid on the published lat/lon box: column (i, j) at longitude
+ * ISABEL_LON_WEST + i (ISABEL_LON_EAST - ISABEL_LON_WEST) / (nx - 1), likewise for latitude.
+ * False (logged) when out of memory. */
+bool isabel_geo(const struct isabel_desc *d, struct geo_map *out);
 
 #endif

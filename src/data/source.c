@@ -5,14 +5,31 @@
 #include <string.h>
 
 #include "common/log.h"
+#include "data/cf.h"
+#include "data/cm1.h"
 #include "data/extfile.h"
+#include "data/geo.h"
 
 struct data_source {
     struct data_source_desc desc;
     struct wrf *wrf;
     struct extfile *ext;
+    struct hgrid *hg;
     int isabel_steps;
 };
+
+/* Missing species read as zero: said once, at open. */
+static void absent_species_note(const struct hgrid *h)
+{
+    const struct hgrid_meta *m = hgrid_get_meta(h);
+    char list[128] = "";
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        if (m->field[f].varid < 0)
+            snprintf(list + strlen(list), sizeof(list) - strlen(list), "%s%s",
+                     list[0] ? ", " : "", species_name((enum species)f));
+    if (list[0])
+        log_info("%s: no %s in the file: read as zero", hgrid_step_path(h, 0), list);
+}
 
 struct data_source *data_source_open(const struct data_source_desc *d)
 {
@@ -38,6 +55,14 @@ struct data_source *data_source_open(const struct data_source_desc *d)
         if (s->isabel_steps == 0)
             goto error;
         break;
+    case DATA_SOURCE_CM1:
+    case DATA_SOURCE_CF:
+        s->hg = (d->format == DATA_SOURCE_CM1 ? cm1_open : cf_open)(d->files, d->file_count,
+                                                                    d->wrf.memory_mb);
+        if (!s->hg)
+            goto error;
+        absent_species_note(s->hg);
+        break;
     case DATA_SOURCE_EXTINCTION:
         if (d->file_count > 1)
             log_warn("%s: an extinction file holds the whole series: the other %d files are "
@@ -61,6 +86,7 @@ void data_source_close(struct data_source *s)
         return;
     wrf_close(s->wrf);
     extfile_close(s->ext);
+    hgrid_close(s->hg);
     free(s);
 }
 
@@ -70,6 +96,8 @@ int data_source_step_count(const struct data_source *s)
         return wrf_step_count(s->wrf);
     if (s->ext)
         return extfile_step_count(s->ext);
+    if (s->hg)
+        return hgrid_step_count(s->hg);
     return s->isabel_steps;
 }
 
@@ -79,6 +107,8 @@ const char *data_source_step_date(const struct data_source *s, int step)
         return wrf_step_date(s->wrf, step);
     if (s->ext)
         return extfile_step_date(s->ext, step);
+    if (s->hg)
+        return hgrid_step_date(s->hg, step);
     return "";
 }
 
@@ -87,10 +117,46 @@ struct wrf *data_source_wrf(struct data_source *s)
     return s->wrf;
 }
 
-bool data_source_load_fields(struct data_source *s, int step, struct field_volume *out)
+struct hgrid *data_source_hgrid(struct data_source *s)
+{
+    return s->hg;
+}
+
+bool data_source_geo(struct data_source *s, struct geo_map *out)
+{
+    memset(out, 0, sizeof(*out));
+    if (s->wrf) {
+        const struct wrf_meta *m = wrf_get_meta(s->wrf);
+        return m->xlat && m->xlong &&
+               geo_map_init_grid(out, m->xlat, m->xlong, m->nx, m->ny, m->dx, m->dy);
+    }
+    if (s->desc.format == DATA_SOURCE_ISABEL)
+        return isabel_geo(&s->desc.isabel, out);
+    float *lat, *lon;
+    if (s->hg && hgrid_latlon(s->hg, &lat, &lon)) {
+        const struct hgrid_meta *m = hgrid_get_meta(s->hg);
+        bool ok = m->nx >= 2 && m->ny >= 2 &&
+                  geo_map_init_grid(out, lat, lon, m->nx, m->ny, m->dx, m->dy);
+        free(lat);
+        free(lon);
+        return ok;
+    }
+    return false;
+}
+
+static bool load_fields(struct data_source *s, int step, bool temperature, bool wind,
+                        struct field_volume *out)
 {
     if (s->wrf)
         return wrf_read_step(s->wrf, step, &s->desc.wrf, out, NULL);
+    if (s->hg) {
+        struct hgrid_desc hd = {.memory_mb = s->desc.wrf.memory_mb,
+                                .qvapor = s->desc.wrf.qvapor,
+                                .temperature = temperature || s->desc.wrf.temperature,
+                                .wind = wind || s->desc.wrf.wind,
+                                .no_density = s->desc.wrf.no_density};
+        return hgrid_read_step(s->hg, step, &hd, out, NULL);
+    }
     if (s->ext) {
         memset(out, 0, sizeof(*out));
         log_error("%s: an extinction file has no mass ratios", s->desc.files[0]);
@@ -102,14 +168,23 @@ bool data_source_load_fields(struct data_source *s, int step, struct field_volum
                   s->isabel_steps - 1);
         return false;
     }
-    return isabel_read_step(&s->desc.isabel, step, out, NULL);
+    struct isabel_desc id = s->desc.isabel;
+    id.qvapor = id.qvapor || s->desc.wrf.qvapor;
+    id.temperature = id.temperature || temperature;
+    id.wind = id.wind || wind;
+    return isabel_read_step(&id, step, out, NULL);
+}
+
+bool data_source_load_fields(struct data_source *s, int step, struct field_volume *out)
+{
+    return load_fields(s, step, false, false, out);
 }
 
 bool data_source_load_fields_extra(struct data_source *s, int step, bool temperature, bool wind,
                                    struct field_volume *out)
 {
     if (!s->wrf)
-        return data_source_load_fields(s, step, out);
+        return load_fields(s, step, temperature, wind, out);
     struct wrf_desc d = s->desc.wrf;
     d.temperature = d.temperature || temperature;
     d.wind = d.wind || wind;

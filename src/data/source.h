@@ -1,6 +1,6 @@
 /*
- * data/source: one interface over the three on-disk formats (WRF NetCDF, Isabel bricks,
- * extinction files) that yields a time step as an extinction volume, with the time spent
+ * data/source: one interface over the on-disk formats (WRF NetCDF, Isabel bricks, extinction
+ * files, CM1 NetCDF, CF NetCDF on height levels) that yields a time step as an extinction volume, with the time spent
  * reading and converting.  The time series cache (data/series.h) and the commands load steps
  * through it.  No GL, no config: the caller fills struct data_source_desc (app/cmd_data.h has
  * the mapping from struct config).
@@ -11,21 +11,29 @@
 #include <stdbool.h>
 
 #include "data/detail.h"
+#include "data/hgrid.h"
 #include "data/isabel.h"
 #include "data/volume.h"
 #include "data/wrf.h"
 
-enum data_source_format { DATA_SOURCE_WRF, DATA_SOURCE_ISABEL, DATA_SOURCE_EXTINCTION };
+enum data_source_format {
+    DATA_SOURCE_WRF,
+    DATA_SOURCE_ISABEL,
+    DATA_SOURCE_EXTINCTION,
+    DATA_SOURCE_CM1, /* data/cm1.h */
+    DATA_SOURCE_CF,  /* data/cf.h */
+};
 
 struct data_source_desc {
     enum data_source_format format;
-    const char *const *files; /* WRF: files or glob patterns; Isabel: the folder (files[0]);
-                                 extinction: one file (files[0]) */
+    const char *const *files; /* WRF, CM1, CF: files or glob patterns; Isabel: the folder
+                                 (files[0]); extinction: one file (files[0]) */
     int file_count;
-    struct wrf_desc wrf;          /* WRF reading (call wrf_desc_defaults) */
+    struct wrf_desc wrf;          /* WRF reading (call wrf_desc_defaults); its memory_mb is
+                                     every format's budget */
     struct isabel_desc isabel;    /* Isabel sizes (dir is taken from files[0]) */
-    struct optics_params optics;  /* mass ratio -> extinction (WRF, Isabel) */
-    struct species_select select; /* per-species toggles and scales (WRF, Isabel) */
+    struct optics_params optics;  /* mass ratio -> extinction (all but extinction files) */
+    struct species_select select; /* per-species toggles and scales (the same) */
     struct detail_desc detail;    /* procedural detail (zero: off) */
     double height_scale;          /* height exaggeration (ext_volume_stretch_height); 0 = 1 */
 };
@@ -46,10 +54,12 @@ const char *data_source_step_date(const struct data_source *s, int step); /* "" 
 bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,
                       double *convert_ms);
 
-/* Loads STEP's mass ratios (WRF and Isabel only; false and logged for extinction files). */
+/* Loads STEP's mass ratios (false and logged for extinction files). */
 bool data_source_load_fields(struct data_source *s, int step, struct field_volume *out);
-/* The same, also computing WRF's absolute temperature and wind speed when asked (other formats
- * leave them NULL).  Safe to call with the flags changing from call to call. */
+/* The same, also with the absolute temperature and wind speed when asked and the files hold
+ * what they come from (WRF: P, PB, T, U, V, W; CM1: th and prs, u, v, w; CF: air_temperature,
+ * the wind components; Isabel: TC, U, V, W); else those stay NULL.  Safe to call with the
+ * flags changing from call to call. */
 bool data_source_load_fields_extra(struct data_source *s, int step, bool temperature, bool wind,
                                    struct field_volume *out);
 
@@ -60,5 +70,13 @@ bool data_file_is_netcdf(const char *path);
 
 /* The WRF reader behind S, or NULL for other formats (for metadata: lat/lon, terrain). */
 struct wrf *data_source_wrf(struct data_source *s);
+/* The CM1 or CF reader behind S, or NULL for other formats. */
+struct hgrid *data_source_hgrid(struct data_source *s);
+
+struct geo_map;
+/* Where S's grid lies on the earth when the data say it without a map block: WRF's XLAT and
+ * XLONG, Isabel's published box, a CF file on longitude and latitude.  False (OUT zeroed) when
+ * they do not. */
+bool data_source_geo(struct data_source *s, struct geo_map *out);
 
 #endif

@@ -145,6 +145,18 @@ static void load_wrf_meta(const struct config *cfg, const struct grid3 *box, str
     data_source_close(src);
 }
 
+/* The georeference other formats carry (data_source_geo), the files opened for it. */
+static void load_source_geo(const struct config *cfg, struct geo_map *geo)
+{
+    const char *files[CONFIG_MAX_FILES];
+    struct data_source_desc desc;
+    scene_source_desc(cfg, files, &desc);
+    struct data_source *src = data_source_open(&desc);
+    if (src)
+        data_source_geo(src, geo);
+    data_source_close(src);
+}
+
 static void build_coastlines(const struct config *cfg, struct scene_map *m)
 {
     static const char res[] = {'c', 'l', 'i'};
@@ -283,6 +295,13 @@ static void scene_geo_finish_init(const struct config *cfg, struct geo_map *geo)
     geo->offset[1] = cfg->map.offset_km[1] * 1000.0;
 }
 
+void scene_geo_init_source(const struct config *cfg, struct data_source *src,
+                           struct geo_map *out)
+{
+    data_source_geo(src, out);
+    scene_geo_finish_init(cfg, out);
+}
+
 void scene_geo_init(const struct config *cfg, const struct wrf_meta *meta, struct geo_map *out)
 {
     memset(out, 0, sizeof(*out));
@@ -306,6 +325,9 @@ struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r,
             use_wrf_meta(cfg, meta, g, m);
         else
             load_wrf_meta(cfg, g, m);
+    } else if (cfg->scene.kind == SCENE_DATA &&
+               (cfg->data.format == DATA_ISABEL || cfg->data.format == DATA_CF)) {
+        load_source_geo(cfg, &m->geo); /* Isabel's published box, a CF lat/lon grid */
     }
     scene_geo_finish_init(cfg, &m->geo);
 

@@ -41,6 +41,11 @@ struct scene_map_info {
     double step_deg;       /* graticule spacing */
 };
 void scene_map_get_info(const struct scene_map *m, struct scene_map_info *out);
+/* The placement from an open data source SRC: its own georeference (data_source_geo: WRF's XLAT/XLONG,
+ * Isabel's published box, a CF lat/lon grid), then map.use_origin and the offset. */
+struct data_source;
+void scene_geo_init_source(const struct config *cfg, struct data_source *src,
+                           struct geo_map *out);
 /* The lat/lon placement a map of CFG makes, without the map: from META's XLAT/XLONG (NULL:
  * none), else map.origin with map.use_origin, with map.offset.  No GL.  Finish OUT with
  * geo_map_finish. */

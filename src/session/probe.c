@@ -20,7 +20,7 @@ struct probe {
     const char *files[CONFIG_MAX_FILES];
     struct config_data data; /* the file names the source's desc points into */
     struct data_source_desc desc;
-    struct data_source *src;  /* WRF, Isabel */
+    struct data_source *src;  /* WRF, CM1, CF, Isabel */
     bool storm;               /* the procedural storm: its fields made once */
     struct synth_desc synth;
     struct field_volume fields; /* KIND_FIELDS: the step FIELDS_STEP, or none yet */
@@ -66,6 +66,7 @@ struct probe *probe_create(const struct config *cfg)
             p->files[i] = p->data.files[i];
         p->desc.files = p->files;
         p->desc.detail.on = false; /* the model's values, not the procedural detail */
+        p->desc.wrf.qvapor = true; /* vapour where the files have it */
         p->src = data_source_open(&p->desc);
         if (!p->src)
             goto error;
@@ -73,7 +74,10 @@ struct probe *probe_create(const struct config *cfg)
         p->kind = w ? KIND_WRF : KIND_FIELDS;
         meta = w ? wrf_get_meta(w) : NULL;
     }
-    scene_geo_init(cfg, meta, &p->geo);
+    if (p->src && !meta)
+        scene_geo_init_source(cfg, p->src, &p->geo);
+    else
+        scene_geo_init(cfg, meta, &p->geo);
     return p;
 
 error:
@@ -180,7 +184,8 @@ bool probe_read(struct probe *p, int step, const double world[3], struct probe_v
         field_volume_finish(&p->fields);
         p->fields_step = -1;
         bool ok = p->storm ? synth_storm_fields(&p->synth, &p->fields)
-                           : data_source_load_fields(p->src, step, &p->fields);
+                           : data_source_load_fields_extra(p->src, step, true, true,
+                                                           &p->fields);
         if (!ok)
             return false;
         p->fields_step = p->storm ? 0 : step;

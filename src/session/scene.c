@@ -219,6 +219,8 @@ void scene_source_desc(const struct config *cfg, const char **file_ptrs,
     memset(out, 0, sizeof(*out));
     out->format = cd->format == DATA_ISABEL       ? DATA_SOURCE_ISABEL
                   : cd->format == DATA_EXTINCTION ? DATA_SOURCE_EXTINCTION
+                  : cd->format == DATA_CM1        ? DATA_SOURCE_CM1
+                  : cd->format == DATA_CF         ? DATA_SOURCE_CF
                                                   : DATA_SOURCE_WRF;
     for (int i = 0; i < cd->file_count; i++)
         file_ptrs[i] = cd->files[i];
@@ -232,6 +234,7 @@ void scene_source_desc(const struct config *cfg, const char **file_ptrs,
     for (int i = 0; i < 6; i++)
         out->wrf.crop[i] = cd->crop[i];
     out->wrf.memory_mb = cd->memory_mb;
+    out->isabel.memory_mb = cd->memory_mb;
     for (int a = 0; a < 3; a++) {
         out->isabel.n[a] = cd->isabel_size[a];
         out->isabel.extent_m[a] = cd->isabel_extent_km[a] * 1000.0;

@@ -12,7 +12,7 @@ shift $(($# < 2 ? $# : 2))
 src=$(cd "$(dirname "$0")/../.." && pwd)
 work=${ANVIL_FUZZ_WORK:-$(mktemp -d)}
 names=("$@")
-[ ${#names[@]} -eq 0 ] && names=(config display_config script transfer wrf extfile coast dtrack vrpn)
+[ ${#names[@]} -eq 0 ] && names=(config display_config script transfer wrf extfile coast dtrack vrpn cm1 cf)
 failed=0
 for name in "${names[@]}"; do
     seeds=("$src/tests/fuzz/corpus/$name")

@@ -9,7 +9,10 @@
 #include <sys/stat.h>
 
 #include "common/log.h"
+#include "data/geo.h"
 #include "data/isabel.h"
+#include "data/source.h"
+#include "data/wrf_write.h"
 
 #define NX 6
 #define NY 5
@@ -112,12 +115,151 @@ static void test_errors(void **state)
     assert_false(isabel_read_step(&none, 0, &fv, NULL));
 }
 
+/* Every brick: the five species, QVAPOR, TC (Celsius) into temperature, U, V, W into wind
+ * speed; CLOUD, PRECIP and P described for info. */
+static void test_every_brick(void **state)
+{
+    const char *dir = make_dir("every");
+    float v[N];
+    for (int f = 0; f < ISABEL_FIELD_COUNT; f++) {
+        for (int i = 0; i < N; i++)
+            v[i] = (float)(f + 1) * 1e-4f + 1e-6f * (float)i;
+        if (!strcmp(isabel_fields[f], "TC"))
+            for (int i = 0; i < N; i++)
+                v[i] = 25.0f - 0.5f * (float)(i / (NX * NY)); /* falls with height */
+        if (!strcmp(isabel_fields[f], "U") || !strcmp(isabel_fields[f], "V") ||
+            !strcmp(isabel_fields[f], "W"))
+            for (int i = 0; i < N; i++)
+                v[i] = isabel_fields[f][0] == 'U' ? 3.0f : isabel_fields[f][0] == 'V' ? -4.0f
+                                                                                      : 12.0f;
+        if (!strcmp(isabel_fields[f], "P"))
+            for (int i = 0; i < N; i++)
+                v[i] = -500.0f + (float)i;
+        v[7] = ISABEL_LAND;
+        write_brick(dir, isabel_fields[f], 1, v, N);
+    }
+    struct isabel_desc d = {.dir = dir, .n = {NX, NY, NZ}, .extent_m = {60e3, 50e3, 2e3},
+                            .qvapor = true, .temperature = true, .wind = true};
+    struct field_volume fv;
+    assert_true(isabel_read_step(&d, 0, &fv, NULL));
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        assert_non_null(fv.q[f]);
+        assert_float_equal(fv.q[f][3], (f + 1) * 1e-4 + 3e-6, 1e-9);
+    }
+    assert_non_null(fv.qvapor);
+    assert_float_equal(fv.qvapor[3], 6e-4 + 3e-6, 1e-9);
+    assert_non_null(fv.temperature);
+    assert_float_equal(fv.temperature[grid3_index(&fv.grid, 1, 1, 2)], 25.0 - 1.0 + 273.15,
+                       1e-4);
+    /* A land point's temperature is the standard atmosphere's at its height. */
+    double t, p;
+    wrf_std_atmosphere(0.5 * fv.grid.spacing[2], &t, &p);
+    assert_float_equal(fv.temperature[7], t, 1e-3);
+    assert_non_null(fv.wind);
+    assert_float_equal(fv.wind[3], 13.0, 1e-5); /* |(3, -4, 12)| */
+    assert_float_equal(fv.wind[7], 0.0, 1e-9);  /* land */
+    field_volume_finish(&fv);
+
+    /* The budget: refused before reading, naming data.memory. */
+    struct isabel_desc tight = d;
+    tight.memory_mb = 1e-4;
+    unsigned errors = log_error_count();
+    assert_false(isabel_read_step(&tight, 0, &fv, NULL));
+    assert_int_equal(log_error_count(), errors + 1);
+    assert_non_null(strstr(log_last_error(), "data.memory"));
+    assert_null(fv.q[0]);
+    tight.memory_mb = 1.0;
+    assert_true(isabel_read_step(&tight, 0, &fv, NULL));
+    field_volume_finish(&fv);
+
+    /* Without the flags only the species are read. */
+    struct isabel_desc plain = d;
+    plain.qvapor = plain.temperature = plain.wind = false;
+    assert_true(isabel_read_step(&plain, 0, &fv, NULL));
+    assert_null(fv.qvapor);
+    assert_null(fv.temperature);
+    assert_null(fv.wind);
+    field_volume_finish(&fv);
+
+    /* info's description of each brick. */
+    for (int f = 0; f < ISABEL_FIELD_COUNT; f++) {
+        struct isabel_brick_stats st;
+        assert_true(isabel_brick_stats(&d, isabel_fields[f], 0, &st));
+        assert_true(st.present);
+        assert_int_equal(st.land, 1);
+    }
+    struct isabel_brick_stats st;
+    assert_true(isabel_brick_stats(&d, "P", 0, &st));
+    assert_float_equal(st.min, -500.0, 1e-9);
+    assert_float_equal(st.max, -500.0 + N - 1, 1e-9);
+    assert_true(isabel_brick_stats(&d, "QCLOUD", 1, &st));
+    assert_false(st.present);
+
+    /* Through the data source: temperature and wind when the look asks for them. */
+    const char *files[1] = {dir};
+    struct data_source_desc sd;
+    memset(&sd, 0, sizeof(sd));
+    sd.format = DATA_SOURCE_ISABEL;
+    sd.files = files;
+    sd.file_count = 1;
+    sd.isabel = plain;
+    wrf_desc_defaults(&sd.wrf);
+    struct data_source *src = data_source_open(&sd);
+    assert_non_null(src);
+    assert_true(data_source_load_fields_extra(src, 0, true, true, &fv));
+    assert_non_null(fv.temperature);
+    assert_non_null(fv.wind);
+    field_volume_finish(&fv);
+    assert_true(data_source_load_fields(src, 0, &fv));
+    assert_null(fv.temperature);
+    field_volume_finish(&fv);
+
+    /* The georeference: the published box, with no map block. */
+    struct geo_map g;
+    assert_true(data_source_geo(src, &g));
+    assert_int_equal(g.kind, GEO_GRID);
+    double lat, lon;
+    assert_true(geo_map_to_latlon(&g, 0.5 * 60e3 / NX, 0.5 * 50e3 / NY, &lat,
+                                  &lon));
+    assert_float_equal(lat, ISABEL_LAT_SOUTH, 1e-4);
+    assert_float_equal(lon, ISABEL_LON_WEST, 1e-4);
+    assert_true(geo_map_to_latlon(&g, 60e3 - 0.5 * 60e3 / NX, 50e3 - 0.5 * 50e3 / NY, &lat,
+                                  &lon));
+    assert_float_equal(lat, ISABEL_LAT_NORTH, 1e-4);
+    assert_float_equal(lon, ISABEL_LON_EAST, 1e-4);
+    geo_map_finish(&g);
+    data_source_close(src);
+}
+
+/* The full-size grid: the published box at the corners' columns, and the centre. */
+static void test_geo_default(void **state)
+{
+    struct isabel_desc d = {.dir = "."};
+    struct geo_map g;
+    assert_true(isabel_geo(&d, &g));
+    assert_int_equal(g.nx, 500);
+    double lat, lon;
+    assert_true(geo_map_to_latlon(&g, 2000e3 / 500 * 0.5, 2000e3 / 500 * 0.5, &lat, &lon));
+    assert_float_equal(lat, 23.7, 1e-4);
+    assert_float_equal(lon, -83.0, 1e-4);
+    assert_true(geo_map_to_latlon(&g, 1000e3, 1000e3, &lat, &lon));
+    assert_float_equal(lat, 0.5 * (23.7 + 41.7), 0.02);
+    assert_float_equal(lon, 0.5 * (-83.0 - 62.0), 0.03);
+    double x, y;
+    assert_true(geo_map_to_frame(&g, 41.7, -62.0, &x, &y));
+    assert_float_equal(x, 2000e3 - 2e3, 1.0);
+    assert_float_equal(y, 2000e3 - 2e3, 1.0);
+    geo_map_finish(&g);
+}
+
 int main(void)
 {
     log_set_level(LOG_ERROR);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_read),
         cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_every_brick),
+        cmocka_unit_test(test_geo_default),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

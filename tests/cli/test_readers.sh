@@ -1,0 +1,177 @@
+#!/bin/bash
+# CM1, CF and Isabel from the command line: synthetic files through `info` (grid, times,
+# variables) and `render` (non-blank, the same picture as the WRF synth file of the same
+# storm); wrong units and non-monotone heights are one message and exit 1; a folder of Isabel
+# bricks through `info` and `render`, placed on the contest's lat/lon box with no map block.
+# Arguments: ANVIL_BINARY SOURCE_DIR SHARED_DATA_DIR.  Exits 77 when no GL context exists.
+. "$(dirname "$0")/lib.sh"
+small="--set render.width=96 --set render.height=72 --set lightmap.resolution=[32,32,32]"
+size="--size 24x20x16 --extent 60x50x16"
+
+# Mean of a PFM and the largest difference between two, relative to the first's largest value.
+pfm() {
+    python3 - "$@" <<'EOF'
+import struct, sys
+def read(p):
+    b = open(p, 'rb').read()
+    head, rest = b.split(b'\n', 3)[:3], b.split(b'\n', 3)[3]
+    w, h = map(int, head[1].split())
+    e = '<' if float(head[2]) < 0 else '>'
+    return struct.unpack(e + '%df' % (w * h * 3), rest[:w * h * 12])
+a = read(sys.argv[1])
+if len(sys.argv) == 2:
+    print('%.6g' % (sum(a) / len(a)))
+else:
+    b = read(sys.argv[2])
+    print('%.6g' % (max(abs(x - y) for x, y in zip(a, b)) / max(a)))
+EOF
+}
+
+expect_exit 0 "synth --format cm1" "$anvil" synth --format cm1 $size --steps 2 -o "$tmp/c.nc"
+expect_exit 0 "synth --format cf" "$anvil" synth --format cf $size --steps 2 \
+    --start 2005-08-28_12:00:00 -o "$tmp/f.nc"
+expect_exit 0 "synth (WRF)" "$anvil" synth $size --steps 2 -o "$tmp/w.nc"
+expect_exit 2 "synth --format grib" "$anvil" synth --format grib -o "$tmp/x.nc"
+
+expect_exit 0 "info on CM1 output" "$anvil" info "$tmp/c.nc"
+check "CM1 output" stdout_has ": CM1 output"
+check "grid 24 x 20 x 16" stdout_has "24 x 20 columns x 16 levels (xh x yh x zh), dx 2500 m, dy 2500 m"
+check "levels" stdout_has "levels      0 to 16000 m (even, km)"
+check "variables" stdout_has "cloud=qc rain=qr ice=qi snow=qs graupel=qg vapour=qv theta=th pressure=prs u=u v=v w=w"
+check "2 steps" stdout_has "time steps  2"
+check "second step at 600 s" stdout_has "1 t = 600 s"
+check "theta range" stdout_has "    th  "
+
+expect_exit 0 "info on CF" "$anvil" info "$tmp/f.nc"
+check "CF" stdout_has ": CF NetCDF on height levels"
+check "dates" stdout_has "1 t = 600 s 2005-08-28_12:10:00"
+check "CF variables" stdout_has "temperature=ta pressure=pa u=ua v=va w=wa"
+
+# Two CF files given late first: ordered by time; two CM1 files of the same times refused.
+"$anvil" synth --format cf $size --steps 1 --start 2005-08-28_11:50:00 -o "$tmp/f0.nc" 2>/dev/null
+expect_exit 0 "info on two CF files" "$anvil" info "$tmp/f.nc" "$tmp/f0.nc"
+check "3 steps" stdout_has "time steps  3"
+check "the earlier file first" stdout_has "0 t = 0 s 2005-08-28_11:50:00 (.*f0.nc)"
+"$anvil" synth --format cm1 $size --steps 1 -o "$tmp/c0.nc" 2>/dev/null
+expect_exit 1 "two CM1 files of the same time" "$anvil" info "$tmp/c.nc" "$tmp/c0.nc"
+check "both named" stderr_has "c0.nc and .*c.nc both hold time 0 s\\|c.nc and .*c0.nc both hold time 0 s"
+
+# The WRF file's terrain mesh and coastlines (it has XLAT/XLONG) are not in the others: off.
+flat="--set map.terrain=false --set map.coastlines=false"
+for f in w c f; do
+    fmt=$(case $f in w) echo wrf ;; c) echo cm1 ;; f) echo cf ;; esac)
+    expect_exit 0 "render data.format = $fmt" "$anvil" render --set scene.kind=data \
+        --set data.format=$fmt --set "data.files=[\"$tmp/$f.nc\"]" $small $flat -o "$tmp/$f.pfm"
+done
+off=""
+for s in cloud rain ice snow graupel; do off="$off --set species.$s.enabled=false"; done
+expect_exit 0 "render CM1 with every species off" "$anvil" render --set scene.kind=data \
+    --set data.format=cm1 --set "data.files=[\"$tmp/c.nc\"]" $small $flat $off -o "$tmp/clear.pfm"
+if [ -f "$tmp/w.pfm" ] && [ -f "$tmp/c.pfm" ] && [ -f "$tmp/f.pfm" ] && [ -f "$tmp/clear.pfm" ]; then
+    storm=$(pfm "$tmp/clear.pfm" "$tmp/c.pfm")
+    echo "the CM1 storm against a clear sky: $storm (of the largest value)"
+    check "the CM1 picture is not blank" python3 -c "import sys; sys.exit(0 if $storm > 0.05 else 1)"
+    dc=$(pfm "$tmp/w.pfm" "$tmp/c.pfm")
+    df=$(pfm "$tmp/w.pfm" "$tmp/f.pfm")
+    echo "largest difference to the WRF picture: CM1 $dc, CF $df (of its largest value)"
+    check "CM1 renders the WRF storm" python3 -c "import sys; sys.exit(0 if $dc < 1e-3 else 1)"
+    check "CF renders the WRF storm" python3 -c "import sys; sys.exit(0 if $df < 1e-3 else 1)"
+else
+    require_gl
+    echo "FAIL: no pictures"
+    fail=1
+fi
+
+# Bad input: a unit that is not one, heights that turn back.
+cdl() { # UNITS_OF_RAIN HEIGHTS
+    cat <<EOF
+netcdf bad {
+dimensions: x = 3 ; y = 2 ; z = 3 ; h2 = 1 ;
+variables:
+  double x(x) ; x:units = "km" ; x:axis = "X" ;
+  double y(y) ; y:units = "km" ; y:axis = "Y" ;
+  double h2(h2) ; h2:units = "m" ; h2:axis = "Z" ;
+  double z(z) ; z:units = "m" ; z:positive = "up" ;
+  float t2m(y, x) ; t2m:standard_name = "air_temperature" ; t2m:units = "K" ;
+  float qr(z, y, x) ; qr:standard_name = "mass_fraction_of_rain_in_air" ; qr:units = "$1" ;
+data:
+  x = 0, 1, 2 ; y = 0, 1 ; z = $2 ; h2 = 2 ; t2m = 300, 300, 300, 300, 300, 300 ;
+  qr = 0, 0, 1e-3, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 ;
+}
+EOF
+}
+if command -v ncgen >/dev/null; then
+    cdl "g kg-1" "100, 300, 500" | ncgen -o "$tmp/good.nc"
+    cdl "furlongs" "100, 300, 500" | ncgen -o "$tmp/units.nc"
+    cdl "kg kg-1" "100, 300, 200" | ncgen -o "$tmp/mono.nc"
+    expect_exit 0 "a small CF file" "$anvil" info "$tmp/good.nc"
+    check "missing species named" stdout_has "absent (read as zero): cloud ice snow graupel"
+    check "the levels, not the 2 m height; t2m passed over" stdout_has "variables   rain=qr$"
+    check "3 levels from 0 to 600 m" stdout_has "levels      0 to 600 m (even, m)"
+    check "g/kg converted" stdout_has "qr  *0 \.\. 1e-06 "
+    expect_exit 1 "a wrong unit" "$anvil" info "$tmp/units.nc"
+    check "variable and unit named" stderr_has "units.nc: variable qr: units \"furlongs\" are not a unit of rain"
+    expect_exit 1 "a wrong unit, render" "$anvil" render --set scene.kind=data \
+        --set data.format=cf --set "data.files=[\"$tmp/units.nc\"]" $small -o "$tmp/u.png"
+    check "render names it too" stderr_has "furlongs"
+    expect_exit 1 "non-monotone heights" "$anvil" info "$tmp/mono.nc"
+    check "heights not monotone" stderr_has "mono.nc: vertical coordinate z: heights not monotone"
+    expect_exit 1 "non-monotone heights, render" "$anvil" render --set scene.kind=data \
+        --set data.format=cf --set "data.files=[\"$tmp/mono.nc\"]" $small -o "$tmp/m.png"
+    expect_exit 1 "a CF file read as CM1" "$anvil" render --set scene.kind=data \
+        --set data.format=cm1 --set "data.files=[\"$tmp/good.nc\"]" $small -o "$tmp/g.png"
+    check "not CM1 output" stderr_has "not CM1 output: no coordinate xh"
+fi
+
+# Isabel: every brick of two steps, 8 x 6 x 4 points.
+mkdir -p "$tmp/isabel"
+python3 - "$tmp/isabel" <<'EOF'
+import struct, sys
+d = sys.argv[1]
+n = 8 * 6 * 4
+for step in (1, 2):
+    for f in ["QCLOUD", "QRAIN", "QICE", "QSNOW", "QGRAUP", "QVAPOR", "CLOUD", "PRECIP", "P",
+              "TC", "U", "V", "W"]:
+        if f == "TC":
+            v = [20.0 - 5.0 * (i // 48) for i in range(n)]
+        elif f in ("U", "V", "W"):
+            v = [{"U": 3.0, "V": -4.0, "W": 0.5}[f]] * n
+        elif f == "P":
+            v = [-300.0 + i for i in range(n)]
+        else:
+            v = [1e-3 * step if (i % 48) in (20, 21, 27, 28) and i // 48 in (1, 2) else 0.0
+                 for i in range(n)]
+        v[0] = 1e35
+        open("%s/%sf%02d.bin" % (d, f, step), "wb").write(struct.pack(">%df" % n, *v))
+EOF
+expect_exit 0 "info on an Isabel folder" "$anvil" info --isabel-size 8x6x4 "$tmp/isabel"
+check "Isabel" stdout_has "Isabel bricks"
+check "2 steps" stdout_has "time steps  2"
+check "the published box" stdout_has "23.7 to 41.7 N, -83.0 to -62.0 E"
+for b in QCLOUD QRAIN QICE QSNOW QGRAUP QVAPOR CLOUD PRECIP P TC U V W; do
+    check "brick $b" stdout_has "    $b "
+done
+check "TC range" stdout_has "TC  *5 \.\. 20 "
+check "the second step's bricks" stdout_has "1 f02  all 13 bricks"
+head -c 100 "$tmp/isabel/TCf01.bin" >"$tmp/isabel/TCf03.bin"
+cp "$tmp/isabel/QCLOUDf01.bin" "$tmp/isabel/QCLOUDf03.bin"
+expect_exit 1 "a later brick of the wrong size" "$anvil" info --isabel-size 8x6x4 "$tmp/isabel"
+check "named" stderr_has "TCf03.bin: 100 bytes, expected 768"
+rm "$tmp/isabel/TCf03.bin" "$tmp/isabel/QCLOUDf03.bin"
+expect_exit 1 "an Isabel folder of the wrong size" "$anvil" info "$tmp/isabel"
+check "names data.isabel_size" stderr_has "data.isabel_size"
+
+expect_exit 0 "render Isabel placed without a map block" "$anvil" render --set scene.kind=data \
+    --set data.format=isabel --set "data.files=[\"$tmp/isabel\"]" \
+    --set data.isabel_size=[8,6,4] --set data.isabel_extent=[2000.0,2000.0,19.8] \
+    --set map.graticule=true $small -o "$tmp/i.png"
+check "graticule on the Isabel box" stderr_has "map: graticule every 5 degrees"
+expect_exit 0 "probe an Isabel point by lat/lon, TC as temperature" "$anvil" probe \
+    --set scene.kind=data --set data.format=isabel --set "data.files=[\"$tmp/isabel\"]" \
+    --set data.isabel_size=[8,6,4] --set data.isabel_extent=[2000.0,2000.0,19.8] \
+    --at 30,-75,2475 --quiet
+check "placed" stdout_has "30.000 N, 75.000 W"
+check "TC read" stdout_has "temperature    20.0 C"
+check "QVAPOR read" stdout_has "vapour         0.00 g/kg"
+
+finish
