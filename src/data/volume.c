@@ -58,30 +58,43 @@ bool ext_volume_from_fields(const struct field_volume *in, const struct optics_p
     if (!ext_volume_init(out, &in->grid))
         return false;
     const struct grid3 *g = &in->grid;
-    size_t idx = 0;
+    /* optics_beta with its constant part taken out of the loop: the same operations in the
+     * same order, so the same numbers. */
+    const float *q[SPECIES_COUNT];
+    double denom[SPECIES_COUNT], scale[SPECIES_COUNT];
+    bool ice[SPECIES_COUNT];
+    int used = 0;
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        double dn = 2.0 * optics->density[f] * optics->radius_m[f];
+        if (!in->q[f] || (sel && !sel->enabled[f]) || !(dn > 0.0))
+            continue;
+        q[used] = in->q[f];
+        denom[used] = dn;
+        scale[used] = sel ? sel->scale[f] : 1.0;
+        ice[used] = species_is_ice((enum species)f);
+        used++;
+    }
+    size_t plane = (size_t)g->n[0] * (size_t)g->n[1];
     for (int k = 0; k < g->n[2]; k++) {
         double z = g->origin[2] + (k + 0.5) * g->spacing[2];
         double rho_std = optics_std_atmosphere_density(z);
-        for (int j = 0; j < g->n[1]; j++) {
-            for (int i = 0; i < g->n[0]; i++, idx++) {
-                double rho = in->rho_air ? in->rho_air[idx] : rho_std;
-                if (!isfinite(rho) || rho < 0.0)
-                    rho = rho_std;
-                double ice = 0.0, water = 0.0;
-                for (int f = 0; f < SPECIES_COUNT; f++) {
-                    if (!in->q[f] || (sel && !sel->enabled[f]))
-                        continue;
-                    double b = optics_beta(optics, (enum species)f, in->q[f][idx], rho);
-                    if (sel)
-                        b *= sel->scale[f];
-                    if (species_is_ice((enum species)f))
-                        ice += b;
-                    else
-                        water += b;
-                }
-                out->beta[2 * idx] = (float)ice;
-                out->beta[2 * idx + 1] = (float)water;
+        size_t idx0 = plane * (size_t)k;
+        for (size_t idx = idx0; idx < idx0 + plane; idx++) {
+            double rho = in->rho_air ? in->rho_air[idx] : rho_std;
+            if (!isfinite(rho) || rho < 0.0)
+                rho = rho_std;
+            double sum[2] = {0.0, 0.0}; /* ice, water */
+            for (int u = 0; u < used && rho > 0.0; u++) {
+                double x = q[u][idx];
+                if (!(x > 0.0) || !isfinite(x))
+                    continue;
+                double b = 3.0 * rho * x / denom[u]; /* Nes eq. 5.3 */
+                if (sel)
+                    b *= scale[u];
+                sum[ice[u] ? 0 : 1] += b;
             }
+            out->beta[2 * idx] = (float)sum[0];
+            out->beta[2 * idx + 1] = (float)sum[1];
         }
     }
     return true;

@@ -1,5 +1,6 @@
 #include "data/wrf.h"
 
+#include <float.h>
 #include <glob.h>
 #include <pthread.h>
 #include <math.h>
@@ -812,8 +813,10 @@ size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d)
     /* In double: the dimensions come from the file, and their product may not fit. */
     double cols = (double)s.nx * s.ny;
     double out = (double)arrays_out(w, d) * cols * s.nz * sizeof(float);
-    /* Scratch: summed geopotential on staggered levels and two mass-level buffers. */
-    double scratch = cols * ((double)w->nzs + 2.0 * w->meta.nz) * sizeof(float);
+    /* Scratch: the summed geopotential and PHB on staggered levels, a mass-level buffer, and
+     * the step's resampling plan (a level index and a weight per output voxel). */
+    double scratch = cols * (2.0 * w->nzs + w->meta.nz) * sizeof(float) +
+                     cols * s.nz * (sizeof(uint16_t) + sizeof(float));
     /* Temperature and wind speed: a third mass-level buffer; W on its staggered levels. */
     if (d->temperature || (d->wind && w->meta.has_wind))
         scratch += cols * w->meta.nz * sizeof(float);
@@ -884,6 +887,26 @@ static void sanitize(const struct wrf *w, int step, enum wrf_var v, float *buf, 
     bool fast =
         mass && !(has_fv && fv >= 0.0f && fv <= 1.0f) && !(has_mv && mv >= 0.0f && mv <= 1.0f);
     float flo = INFINITY, fhi = -INFINITY;
+    {
+        /* One branch-free pass first (it vectorises): when every value is good, that is all.
+         * A NaN fill compares unequal to everything, so an absent attribute costs nothing. */
+        float fvv = has_fv ? fv : NAN, mvv = has_mv ? mv : NAN;
+        float top = mass ? 1.0f : FLT_MAX, bottom = mass ? 0.0f : -FLT_MAX;
+        size_t bad = 0;
+        for (size_t i = 0; i < n; i++) {
+            float x = buf[i];
+            flo = x < flo ? x : flo;
+            fhi = x > fhi ? x : fhi;
+            bad += !(x >= bottom && x <= top) | (x == NC_FILL_FLOAT) | (x == fvv) | (x == mvv);
+        }
+        if (bad == 0) {
+            st->min = n > 0 ? flo : 0.0;
+            st->max = n > 0 ? fhi : 0.0;
+            return;
+        }
+        flo = INFINITY;
+        fhi = -INFINITY;
+    }
     for (size_t i = 0; i < n; i++) {
         float x = buf[i];
         if (fast && x >= 0.0f && x <= 1.0f) {
@@ -945,6 +968,13 @@ static bool report(const struct wrf *w, int step, enum wrf_var v, const struct w
     return true;
 }
 
+/* The weight of the upper of two levels at Z0 < ZT < Z1, rounded to a float: the same number
+ * whether a column is resampled alone (wrf_resample_column) or through a step's plan. */
+static float resample_weight(double zt, double z0, double z1)
+{
+    return (float)((zt - z0) / (z1 - z0));
+}
+
 int wrf_resample_column(const double *z, const float *v, int nz, double z_ground, double z_top,
                         double z0, double dz, int n, float outside, float *out, int *below)
 {
@@ -969,7 +999,7 @@ int wrf_resample_column(const double *z, const float *v, int nz, double z_ground
         } else if (k + 1 >= nz) {
             out[o] = v[nz - 1]; /* between the last mass level and the model top */
         } else {
-            double t = (zt - z[k]) / (z[k + 1] - z[k]);
+            double t = resample_weight(zt, z[k], z[k + 1]);
             out[o] = (float)((1.0 - t) * v[k] + t * v[k + 1]);
         }
     }
@@ -1001,99 +1031,226 @@ static bool column_heights(const struct columns *c, size_t col, double *zm)
     return true;
 }
 
-/* One thread's share of resample_var: columns [begin, end). */
-struct resample_job {
-    const struct columns *c;
-    const float *buf;
-    const struct grid3 *g;
-    float outside;
-    float *out;
+/* How every output voxel of a step is resampled from its column's mass levels, worked out
+ * once per step from the heights and shared by every variable: wrf_resample_column's rule
+ * voxel by voxel, kept as the lower mass level K and the weight T of the level above, in
+ * output order (plane by plane), so that applying it to a variable reads the variable's
+ * mass-level planes nearly in order and writes its output planes in order. */
+#define PLAN_OUTSIDE UINT16_MAX
+
+struct plan {
+    size_t cols;
+    int nz, no;
+    const float *zw;     /* staggered heights, m: zw[k * cols + c] (while the plan is made) */
+    double z0, dz;       /* output level o is centred at z0 + (o + 0.5) dz */
+    uint16_t *k;         /* [o * cols + c]: the lower mass level, or PLAN_OUTSIDE */
+    float *t;            /* the weight of level k + 1; 0: level k's value as it is */
+    size_t below, above; /* outputs below the model's ground, above its top */
+};
+
+#define THREADS_MAX 16
+
+/* One thread's share of parallel(): items [begin, end). */
+struct share {
+    void *ctx;
+    bool (*fn)(void *ctx, struct share *self);
     size_t begin, end;
     size_t below, above;
     bool ok;
     pthread_t thread;
 };
 
-static void *resample_range(void *arg)
+static void *run_share(void *arg)
 {
-    struct resample_job *j = arg;
-    const struct columns *c = j->c;
-    int no = j->g->n[2], nz = c->nz;
-    double *zm = malloc((size_t)BLOCK * nz * sizeof(double));
-    float *vin = malloc((size_t)BLOCK * nz * sizeof(float));
-    float *vout = malloc((size_t)BLOCK * no * sizeof(float));
-    j->ok = zm && vin && vout;
-    for (size_t c0 = j->begin; c0 < j->end && j->ok; c0 += BLOCK) {
-        int nb = (int)(j->end - c0 < BLOCK ? j->end - c0 : BLOCK);
-        for (int k = 0; k < nz; k++) {
-            const float *row = j->buf + (size_t)k * c->cols + c0;
-            for (int b = 0; b < nb; b++)
-                vin[b * nz + k] = row[b];
-        }
-        for (int b = 0; b < nb; b++) {
-            size_t col = c0 + (size_t)b;
-            double *z = zm + (size_t)b * nz;
-            column_heights(c, col, z);
-            int below = 0;
-            int outn = wrf_resample_column(
-                z, vin + (size_t)b * nz, nz, c->zw[col], c->zw[(size_t)nz * c->cols + col],
-                j->g->origin[2], j->g->spacing[2], no, j->outside, vout + (size_t)b * no, &below);
-            j->below += (size_t)below;
-            j->above += (size_t)(outn - below);
-        }
-        for (int o = 0; o < no; o++) {
-            float *dst = j->out + c->cols * (size_t)o + c0;
-            for (int b = 0; b < nb; b++)
-                dst[b] = vout[(size_t)b * no + o];
-        }
-    }
-    free(zm);
-    free(vin);
-    free(vout);
+    struct share *s = arg;
+    s->ok = s->begin >= s->end || s->fn(s->ctx, s);
     return NULL;
 }
 
-#define THREADS_MAX 16
-
-/* Resamples one mass-level variable BUF (nz * cols) into OUT on the output grid, on up to
- * THREADS_MAX threads.  False (logged) when out of memory. */
-static bool resample_var(const struct columns *c, const float *buf, const struct grid3 *g,
-                         float outside, float *out, struct wrf_stats *stats)
+/* Runs FN over [0, N) in up to THREADS_MAX contiguous shares of at least MIN items each (one
+ * per CPU), the last share on this thread.  JOBS receives the shares (*COUNT of them); true
+ * when every share's FN returned true. */
+static bool parallel(size_t n, size_t min, void *ctx, bool (*fn)(void *ctx, struct share *self),
+                     struct share *jobs, int *count)
 {
     long cpus = sysconf(_SC_NPROCESSORS_ONLN);
-    size_t blocks = (c->cols + BLOCK - 1) / BLOCK;
-    int n = cpus < 1 ? 1 : cpus > THREADS_MAX ? THREADS_MAX : (int)cpus;
-    if ((size_t)n > blocks / 16 + 1)
-        n = (int)(blocks / 16 + 1); /* small grids: not worth a thread */
-    struct resample_job jobs[THREADS_MAX];
-    size_t per = (blocks + (size_t)n - 1) / (size_t)n * BLOCK;
-    int started = 0;
-    for (int t = 0; t < n; t++) {
-        size_t begin = per * (size_t)t, end = begin + per < c->cols ? begin + per : c->cols;
-        jobs[t] = (struct resample_job){
-            .c = c, .buf = buf, .g = g, .outside = outside, .out = out, .begin = begin, .end = end};
-        if (begin >= end) {
-            jobs[t].ok = true;
-            continue;
-        }
-        if (t == n - 1 || pthread_create(&jobs[t].thread, NULL, resample_range, &jobs[t]) != 0)
-            resample_range(&jobs[t]); /* the last share (or a failed start) on this thread */
+    int tn = cpus < 1 ? 1 : cpus > THREADS_MAX ? THREADS_MAX : (int)cpus;
+    if ((size_t)tn > n / min + 1)
+        tn = (int)(n / min + 1); /* little work: not worth a thread */
+    size_t per = (n + (size_t)tn - 1) / (size_t)tn;
+    bool started[THREADS_MAX] = {false};
+    for (int t = 0; t < tn; t++) {
+        size_t begin = per * (size_t)t < n ? per * (size_t)t : n;
+        size_t end = begin + per < n ? begin + per : n;
+        jobs[t] = (struct share){.ctx = ctx, .fn = fn, .begin = begin, .end = end};
+        if (t == tn - 1 || pthread_create(&jobs[t].thread, NULL, run_share, &jobs[t]) != 0)
+            run_share(&jobs[t]); /* the last share (or a failed start) on this thread */
         else
-            started |= 1 << t;
+            started[t] = true;
     }
     bool ok = true;
-    for (int t = 0; t < n; t++) {
-        if (started & (1 << t))
+    for (int t = 0; t < tn; t++) {
+        if (started[t])
             pthread_join(jobs[t].thread, NULL);
         ok = ok && jobs[t].ok;
-        if (stats) {
-            stats->below_terrain += jobs[t].below;
-            stats->above_top += jobs[t].above;
+    }
+    *count = tn;
+    return ok;
+}
+
+/* Blocks [begin, end) of BLOCK columns of the plan. */
+static bool plan_blocks(void *ctx, struct share *self)
+{
+    struct plan *p = ctx;
+    int nz = p->nz, no = p->no;
+    double *z = malloc((size_t)nz * sizeof(double));
+    uint16_t *kb = malloc((size_t)BLOCK * no * sizeof(uint16_t));
+    float *tb = malloc((size_t)BLOCK * no * sizeof(float));
+    bool ok = z && kb && tb;
+    double tol = 1e-4 * fabs(p->dz);
+    size_t first = self->begin * BLOCK, last = self->end * BLOCK;
+    if (last > p->cols)
+        last = p->cols;
+    for (size_t c0 = first; c0 < last && ok; c0 += BLOCK) {
+        int nb = (int)(last - c0 < BLOCK ? last - c0 : BLOCK);
+        for (int b = 0; b < nb; b++) {
+            size_t col = c0 + (size_t)b;
+            for (int k = 0; k < nz; k++)
+                z[k] = 0.5 * ((double)p->zw[(size_t)k * p->cols + col] +
+                              (double)p->zw[(size_t)(k + 1) * p->cols + col]);
+            double zg = p->zw[col], ztop = p->zw[(size_t)nz * p->cols + col];
+            int k = 0;
+            for (int o = 0; o < no; o++) {
+                /* wrf_resample_column's cases, in its order. */
+                double zt = p->z0 + (o + 0.5) * p->dz;
+                uint16_t kk;
+                float t = 0.0f;
+                if (zt < zg - tol || zt > ztop + tol) {
+                    kk = PLAN_OUTSIDE;
+                    if (zt < zg)
+                        self->below++;
+                    else
+                        self->above++;
+                } else {
+                    while (k + 1 < nz && z[k + 1] <= zt)
+                        k++;
+                    if (fabs(zt - z[k]) <= tol) {
+                        kk = (uint16_t)k;
+                    } else if (k + 1 < nz && fabs(z[k + 1] - zt) <= tol) {
+                        kk = (uint16_t)(k + 1);
+                    } else if (zt < z[0]) {
+                        kk = 0;
+                    } else if (k + 1 >= nz) {
+                        kk = (uint16_t)(nz - 1);
+                    } else {
+                        kk = (uint16_t)k;
+                        t = resample_weight(zt, z[k], z[k + 1]);
+                    }
+                }
+                kb[(size_t)o * BLOCK + b] = kk;
+                tb[(size_t)o * BLOCK + b] = t;
+            }
+        }
+        for (int o = 0; o < no; o++) {
+            memcpy(p->k + p->cols * (size_t)o + c0, kb + (size_t)o * BLOCK,
+                   (size_t)nb * sizeof(uint16_t));
+            memcpy(p->t + p->cols * (size_t)o + c0, tb + (size_t)o * BLOCK,
+                   (size_t)nb * sizeof(float));
         }
     }
-    if (!ok)
-        log_error("out of memory resampling a %d-level column", c->nz);
+    free(z);
+    free(kb);
+    free(tb);
     return ok;
+}
+
+static void plan_finish(struct plan *p)
+{
+    free(p->k);
+    free(p->t);
+    memset(p, 0, sizeof(*p));
+}
+
+/* The plan of NO output levels centred at Z0 + (o + 0.5) DZ over COLS columns whose NZ + 1
+ * staggered heights ZW hold.  False (logged) when out of memory. */
+static bool plan_make(struct plan *p, const float *zw, size_t cols, int nz, double z0, double dz,
+                      int no)
+{
+    *p = (struct plan){.cols = cols, .nz = nz, .no = no, .zw = zw, .z0 = z0, .dz = dz};
+    if (nz >= PLAN_OUTSIDE) {
+        log_error("%d mass levels: at most %d can be resampled", nz, PLAN_OUTSIDE - 1);
+        return false;
+    }
+    p->k = malloc(cols * (size_t)no * sizeof(uint16_t));
+    p->t = malloc(cols * (size_t)no * sizeof(float));
+    bool ok = p->k && p->t;
+    if (ok) {
+        struct share jobs[THREADS_MAX];
+        int n = 0;
+        ok = parallel((cols + BLOCK - 1) / BLOCK, 16, p, plan_blocks, jobs, &n);
+        for (int t = 0; t < n; t++) {
+            p->below += jobs[t].below;
+            p->above += jobs[t].above;
+        }
+    }
+    p->zw = NULL;
+    if (!ok) {
+        log_error("out of memory resampling %d-level columns", nz);
+        plan_finish(p);
+    }
+    return ok;
+}
+
+/* One variable through the plan: the mass levels BUF (nz * cols) into the output OUT. */
+struct apply {
+    const struct plan *p;
+    const float *buf;
+    float outside;
+    const float *fill; /* NULL, or per output level: the value of a voxel that came out NaN
+                          (outside, or from a bad input) */
+    float *out;
+};
+
+static bool apply_planes(void *ctx, struct share *self)
+{
+    const struct apply *a = ctx;
+    const struct plan *p = a->p;
+    size_t cols = p->cols;
+    for (size_t o = self->begin; o < self->end; o++) {
+        const uint16_t *kp = p->k + cols * o;
+        const float *tp = p->t + cols * o;
+        float *dst = a->out + cols * o;
+        for (size_t c = 0; c < cols; c++) {
+            uint16_t k = kp[c];
+            float r;
+            if (k == PLAN_OUTSIDE) {
+                r = a->outside;
+            } else {
+                float v0 = a->buf[(size_t)k * cols + c];
+                double t = tp[c];
+                r = t == 0.0 ? v0
+                             : (float)((1.0 - t) * v0 + t * a->buf[(size_t)(k + 1) * cols + c]);
+            }
+            dst[c] = r;
+        }
+        if (a->fill) {
+            for (size_t c = 0; c < cols; c++)
+                if (!isfinite(dst[c]))
+                    dst[c] = a->fill[o];
+        }
+    }
+    return true;
+}
+
+/* Resamples one mass-level variable BUF into OUT (the plan's output grid), on up to
+ * THREADS_MAX threads. */
+static void resample_var(const struct plan *p, const float *buf, float outside,
+                         const float *fill, float *out)
+{
+    struct apply a = {.p = p, .buf = buf, .outside = outside, .fill = fill, .out = out};
+    struct share jobs[THREADS_MAX];
+    int n = 0;
+    parallel((size_t)p->no, 1, &a, apply_planes, jobs, &n);
 }
 
 /* Reads the staggered V at both faces around the selection's mass points (OX, OY: the shift
@@ -1192,7 +1349,8 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     }
 
     struct columns c = {.nz = w->meta.nz, .nzs = w->nzs, .cols = (size_t)s.nx * s.ny};
-    float *buf = NULL, *buf2 = NULL, *buf3 = NULL;
+    struct plan plan = {0};
+    float *buf = NULL, *buf2 = NULL, *buf3 = NULL, *fill = NULL;
     bool ok = false;
     const struct wrf_file *sf = &w->files[w->steps[step].file];
     bool want_wind = d->wind && sf->varid[WRF_U] >= 0 && sf->varid[WRF_V] >= 0;
@@ -1200,7 +1358,8 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         log_warn("%s: no usable U and V (the staggered wind): wind speed unavailable", path);
     c.zw = malloc(c.cols * (size_t)c.nzs * sizeof(float));
     c.zm = malloc((size_t)c.nz * sizeof(double));
-    buf = malloc(c.cols * (size_t)c.nz * sizeof(float));
+    /* BUF holds PHB on the staggered levels first, then mass-level variables. */
+    buf = malloc(c.cols * (size_t)c.nzs * sizeof(float));
     buf2 = malloc(c.cols * (size_t)c.nz * sizeof(float));
     if (d->temperature || want_wind)
         buf3 = malloc(c.cols * (size_t)c.nz * sizeof(float));
@@ -1211,11 +1370,7 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
 
     data_nc_lock_file(path, "reading", false);
     /* Heights: (PH + PHB) / g on staggered levels. */
-    float *phb = malloc(c.cols * (size_t)c.nzs * sizeof(float));
-    if (!phb) {
-        log_error("%s: out of memory reading time step %d", path, step);
-        goto unlock;
-    }
+    float *phb = buf;
     bool hok =
         read_var(w, step, WRF_PH, &s, c.nzs, c.zw) && read_var(w, step, WRF_PHB, &s, c.nzs, phb);
     if (hok) {
@@ -1234,7 +1389,6 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
             }
         }
     }
-    free(phb);
     if (!hok)
         goto unlock;
     for (size_t i = 0; i < c.cols * (size_t)c.nzs; i++) {
@@ -1278,7 +1432,15 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     g->origin[2] = bottom + (s.z0 + 0.5) * dzf - 0.5 * g->spacing[2];
     size_t nout = grid3_count(g);
 
-    bool counted = false; /* below/above counts come from the first variable resampled */
+    /* Where every output voxel comes from, once for all the variables of the step; the
+     * staggered heights are not needed after it. */
+    if (!plan_make(&plan, c.zw, c.cols, c.nz, g->origin[2], g->spacing[2], g->n[2]))
+        goto unlock;
+    stats->below_terrain = plan.below;
+    stats->above_top = plan.above;
+    free(c.zw);
+    c.zw = NULL;
+
     for (int v = 0; v <= WRF_QVAPOR; v++) {
         if (v < SPECIES_COUNT ? !w->meta.has_species[v] : !(d->qvapor && w->meta.has_qvapor))
             continue;
@@ -1296,9 +1458,7 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         sanitize(w, step, (enum wrf_var)v, buf, c.cols * (size_t)c.nz, 0.0f, &stats->var[v]);
         if (!report(w, step, (enum wrf_var)v, &stats->var[v]))
             goto unlock;
-        if (!resample_var(&c, buf, g, 0.0f, dst, counted ? NULL : stats))
-            goto unlock;
-        counted = true;
+        resample_var(&plan, buf, 0.0f, NULL, dst);
     }
 
     if (want_wind) {
@@ -1307,12 +1467,19 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
             log_error("%s: out of memory for wind speed", path);
             goto unlock;
         }
-        if (!wind_speed(w, step, &s, &c, buf, buf2, buf3, stats) ||
-            !resample_var(&c, buf3, g, 0.0f, out->wind, NULL))
+        if (!wind_speed(w, step, &s, &c, buf, buf2, buf3, stats))
             goto unlock;
+        resample_var(&plan, buf3, 0.0f, NULL, out->wind);
     }
 
+    /* Below the ground, above the top, or where P/PB/T were bad: the standard atmosphere,
+     * one value per output level. */
     if (!d->no_density || d->temperature) {
+        fill = malloc((size_t)g->n[2] * sizeof(float));
+        if (!fill) {
+            log_error("%s: out of memory reading time step %d", path, step);
+            goto unlock;
+        }
         size_t n = c.cols * (size_t)c.nz;
         if (!read_var(w, step, WRF_P, &s, c.nz, buf) || !read_var(w, step, WRF_PB, &s, c.nz, buf2))
             goto unlock;
@@ -1330,7 +1497,7 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
             goto unlock;
         if (d->temperature) {
             for (size_t i = 0; i < n; i++) {
-                double t = optics_wrf_temperature(buf[i], (double)buf2[i] + WRF_T0);
+                double t = optics_wrf_temperature_fast(buf[i], (double)buf2[i] + WRF_T0);
                 buf3[i] = t > 0.0 ? (float)t : NAN;
             }
             out->temperature = malloc(nout * sizeof(float));
@@ -1338,24 +1505,18 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
                 log_error("%s: out of memory for temperature", path);
                 goto unlock;
             }
-            if (!resample_var(&c, buf3, g, NAN, out->temperature, NULL))
-                goto unlock;
-            /* Below the ground, above the top, or where P/PB/T were bad: standard atmosphere. */
             for (int k = 0; k < g->n[2]; k++) {
                 double z = g->origin[2] + (k + 0.5) * g->spacing[2], std, p;
                 wrf_std_atmosphere(z, &std, &p);
-                float *layer = out->temperature + c.cols * (size_t)k;
-                for (size_t col = 0; col < c.cols; col++) {
-                    if (!isfinite(layer[col]))
-                        layer[col] = (float)std;
-                }
+                fill[k] = (float)std;
             }
+            resample_var(&plan, buf3, NAN, fill, out->temperature);
         }
     }
     if (!d->no_density) {
         size_t n = c.cols * (size_t)c.nz;
         for (size_t i = 0; i < n; i++) {
-            double rho = optics_wrf_air_density(buf[i], (double)buf2[i] + WRF_T0);
+            double rho = optics_wrf_air_density_fast(buf[i], (double)buf2[i] + WRF_T0);
             buf[i] = (isfinite(rho) && rho > 0.0) ? (float)rho : NAN;
         }
         out->rho_air = malloc(nout * sizeof(float));
@@ -1363,24 +1524,18 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
             log_error("%s: out of memory for air density", path);
             goto unlock;
         }
-        if (!resample_var(&c, buf, g, NAN, out->rho_air, NULL))
-            goto unlock;
-        /* Below the ground, above the top, or where P/PB/T were bad: standard atmosphere. */
-        for (int k = 0; k < g->n[2]; k++) {
-            double z = g->origin[2] + (k + 0.5) * g->spacing[2];
-            float std = (float)optics_std_atmosphere_density(z);
-            float *layer = out->rho_air + c.cols * (size_t)k;
-            for (size_t col = 0; col < c.cols; col++) {
-                if (!isfinite(layer[col]))
-                    layer[col] = std;
-            }
-        }
+        for (int k = 0; k < g->n[2]; k++)
+            fill[k] = (float)optics_std_atmosphere_density(g->origin[2] +
+                                                           (k + 0.5) * g->spacing[2]);
+        resample_var(&plan, buf, NAN, fill, out->rho_air);
     }
     ok = true;
 
 unlock:
     data_nc_unlock();
 done:
+    plan_finish(&plan);
+    free(fill);
     free(c.zw);
     free(c.zm);
     free(buf);
@@ -1631,7 +1786,7 @@ enum wrf_point_result wrf_read_point(struct wrf *w, int step, const struct wrf_d
         goto unlock;
     sanitize(w, step, WRF_T, bb, (size_t)nz * cols, NAN, &st);
     for (size_t i = 0; i < (size_t)nz * cols; i++) {
-        double t = optics_wrf_temperature(a[i], (double)bb[i] + WRF_T0);
+        double t = optics_wrf_temperature_fast(a[i], (double)bb[i] + WRF_T0);
         col[i] = t > 0.0 ? (float)t : NAN;
         bb[i] = (float)((double)bb[i] + WRF_T0);
     }
