@@ -13,6 +13,7 @@
 #include <netcdf.h>
 
 #include "common/log.h"
+#include "common/parallel.h"
 #include "data/extfile.h"
 #include "data/nclock.h"
 #include "data/ncopen.h"
@@ -869,6 +870,37 @@ static bool fill_attr(int ncid, int varid, const char *name, float *out)
     return nc_get_att_float(ncid, varid, name, vals) == NC_NOERR && (*out = vals[0], true);
 }
 
+/* sanitize's first pass over one share: any value that is not good (outside [BOTTOM, TOP],
+ * NaN, NetCDF's default fill, the variable's fill or missing value: a NaN there compares
+ * unequal to everything, so an absent attribute costs nothing), and the range, kept as
+ * integers that order as the floats do. */
+struct check {
+    const float *buf;
+    float fill, missing, top, bottom;
+    int32_t lo[PARALLEL_MAX], hi[PARALLEL_MAX], bad[PARALLEL_MAX];
+};
+
+static bool check_range(void *ctx, int share, size_t begin, size_t end)
+{
+    struct check *c = ctx;
+    const float fvv = c->fill, mvv = c->missing, top = c->top, bottom = c->bottom;
+    int32_t klo = INT32_MAX, khi = INT32_MIN, bad = 0;
+    for (size_t i = begin; i < end; i++) {
+        float x = c->buf[i];
+        int32_t b;
+        memcpy(&b, &x, sizeof(b));
+        int32_t key = b ^ ((b >> 31) & 0x7fffffff);
+        klo = key < klo ? key : klo;
+        khi = key > khi ? key : khi;
+        bad |= (int32_t)!(x >= bottom) | (int32_t)!(x <= top) | (int32_t)(x == NC_FILL_FLOAT) |
+               (int32_t)(x == fvv) | (int32_t)(x == mvv);
+    }
+    c->lo[share] = klo;
+    c->hi[share] = khi;
+    c->bad[share] = bad;
+    return true;
+}
+
 /* Replaces bad values by REPLACEMENT and counts them.  Mass ratios also lose negatives and
  * values above 1 kg/kg. */
 static void sanitize(const struct wrf *w, int step, enum wrf_var v, float *buf, size_t n,
@@ -888,24 +920,35 @@ static void sanitize(const struct wrf *w, int step, enum wrf_var v, float *buf, 
         mass && !(has_fv && fv >= 0.0f && fv <= 1.0f) && !(has_mv && mv >= 0.0f && mv <= 1.0f);
     float flo = INFINITY, fhi = -INFINITY;
     {
-        /* One branch-free pass first (it vectorises): when every value is good, that is all.
-         * A NaN fill compares unequal to everything, so an absent attribute costs nothing. */
-        float fvv = has_fv ? fv : NAN, mvv = has_mv ? mv : NAN;
-        float top = mass ? 1.0f : FLT_MAX, bottom = mass ? 0.0f : -FLT_MAX;
-        size_t bad = 0;
-        for (size_t i = 0; i < n; i++) {
-            float x = buf[i];
-            flo = x < flo ? x : flo;
-            fhi = x > fhi ? x : fhi;
-            bad += !(x >= bottom && x <= top) | (x == NC_FILL_FLOAT) | (x == fvv) | (x == mvv);
+        /* One branch-free pass first (it vectorises, a share per thread): when every value is
+         * good, that is all. */
+        struct check c = {.buf = buf,
+                          .fill = has_fv ? fv : NAN,
+                          .missing = has_mv ? mv : NAN,
+                          .top = mass ? 1.0f : FLT_MAX,
+                          .bottom = mass ? 0.0f : -FLT_MAX};
+        for (int t = 0; t < PARALLEL_MAX; t++) {
+            c.lo[t] = INT32_MAX;
+            c.hi[t] = INT32_MIN;
         }
-        if (bad == 0) {
-            st->min = n > 0 ? flo : 0.0;
-            st->max = n > 0 ? fhi : 0.0;
+        parallel_for(n, 1 << 20, &c, check_range);
+        int32_t klo = INT32_MAX, khi = INT32_MIN, bad = 0;
+        for (int t = 0; t < PARALLEL_MAX; t++) {
+            klo = c.lo[t] < klo ? c.lo[t] : klo;
+            khi = c.hi[t] > khi ? c.hi[t] : khi;
+            bad |= c.bad[t];
+        }
+        if (!bad) {
+            if (n > 0) {
+                int32_t blo = klo ^ ((klo >> 31) & 0x7fffffff);
+                int32_t bhi = khi ^ ((khi >> 31) & 0x7fffffff);
+                memcpy(&flo, &blo, sizeof(flo));
+                memcpy(&fhi, &bhi, sizeof(fhi));
+            }
+            st->min = n > 0 ? flo + 0.0f : 0.0; /* + 0: -0 reads as 0 */
+            st->max = n > 0 ? fhi + 0.0f : 0.0;
             return;
         }
-        flo = INFINITY;
-        fhi = -INFINITY;
     }
     for (size_t i = 0; i < n; i++) {
         float x = buf[i];
@@ -1046,60 +1089,11 @@ struct plan {
     uint16_t *k;         /* [o * cols + c]: the lower mass level, or PLAN_OUTSIDE */
     float *t;            /* the weight of level k + 1; 0: level k's value as it is */
     size_t below, above; /* outputs below the model's ground, above its top */
+    size_t share_below[PARALLEL_MAX], share_above[PARALLEL_MAX];
 };
-
-#define THREADS_MAX 16
-
-/* One thread's share of parallel(): items [begin, end). */
-struct share {
-    void *ctx;
-    bool (*fn)(void *ctx, struct share *self);
-    size_t begin, end;
-    size_t below, above;
-    bool ok;
-    pthread_t thread;
-};
-
-static void *run_share(void *arg)
-{
-    struct share *s = arg;
-    s->ok = s->begin >= s->end || s->fn(s->ctx, s);
-    return NULL;
-}
-
-/* Runs FN over [0, N) in up to THREADS_MAX contiguous shares of at least MIN items each (one
- * per CPU), the last share on this thread.  JOBS receives the shares (*COUNT of them); true
- * when every share's FN returned true. */
-static bool parallel(size_t n, size_t min, void *ctx, bool (*fn)(void *ctx, struct share *self),
-                     struct share *jobs, int *count)
-{
-    long cpus = sysconf(_SC_NPROCESSORS_ONLN);
-    int tn = cpus < 1 ? 1 : cpus > THREADS_MAX ? THREADS_MAX : (int)cpus;
-    if ((size_t)tn > n / min + 1)
-        tn = (int)(n / min + 1); /* little work: not worth a thread */
-    size_t per = (n + (size_t)tn - 1) / (size_t)tn;
-    bool started[THREADS_MAX] = {false};
-    for (int t = 0; t < tn; t++) {
-        size_t begin = per * (size_t)t < n ? per * (size_t)t : n;
-        size_t end = begin + per < n ? begin + per : n;
-        jobs[t] = (struct share){.ctx = ctx, .fn = fn, .begin = begin, .end = end};
-        if (t == tn - 1 || pthread_create(&jobs[t].thread, NULL, run_share, &jobs[t]) != 0)
-            run_share(&jobs[t]); /* the last share (or a failed start) on this thread */
-        else
-            started[t] = true;
-    }
-    bool ok = true;
-    for (int t = 0; t < tn; t++) {
-        if (started[t])
-            pthread_join(jobs[t].thread, NULL);
-        ok = ok && jobs[t].ok;
-    }
-    *count = tn;
-    return ok;
-}
 
 /* Blocks [begin, end) of BLOCK columns of the plan. */
-static bool plan_blocks(void *ctx, struct share *self)
+static bool plan_blocks(void *ctx, int share, size_t begin, size_t end)
 {
     struct plan *p = ctx;
     int nz = p->nz, no = p->no;
@@ -1108,7 +1102,7 @@ static bool plan_blocks(void *ctx, struct share *self)
     float *tb = malloc((size_t)BLOCK * no * sizeof(float));
     bool ok = z && kb && tb;
     double tol = 1e-4 * fabs(p->dz);
-    size_t first = self->begin * BLOCK, last = self->end * BLOCK;
+    size_t first = begin * BLOCK, last = end * BLOCK, below = 0, above = 0;
     if (last > p->cols)
         last = p->cols;
     for (size_t c0 = first; c0 < last && ok; c0 += BLOCK) {
@@ -1128,9 +1122,9 @@ static bool plan_blocks(void *ctx, struct share *self)
                 if (zt < zg - tol || zt > ztop + tol) {
                     kk = PLAN_OUTSIDE;
                     if (zt < zg)
-                        self->below++;
+                        below++;
                     else
-                        self->above++;
+                        above++;
                 } else {
                     while (k + 1 < nz && z[k + 1] <= zt)
                         k++;
@@ -1161,6 +1155,8 @@ static bool plan_blocks(void *ctx, struct share *self)
     free(z);
     free(kb);
     free(tb);
+    p->share_below[share] = below;
+    p->share_above[share] = above;
     return ok;
 }
 
@@ -1185,12 +1181,10 @@ static bool plan_make(struct plan *p, const float *zw, size_t cols, int nz, doub
     p->t = malloc(cols * (size_t)no * sizeof(float));
     bool ok = p->k && p->t;
     if (ok) {
-        struct share jobs[THREADS_MAX];
-        int n = 0;
-        ok = parallel((cols + BLOCK - 1) / BLOCK, 16, p, plan_blocks, jobs, &n);
-        for (int t = 0; t < n; t++) {
-            p->below += jobs[t].below;
-            p->above += jobs[t].above;
+        ok = parallel_for((cols + BLOCK - 1) / BLOCK, 16, p, plan_blocks);
+        for (int t = 0; t < PARALLEL_MAX; t++) {
+            p->below += p->share_below[t];
+            p->above += p->share_above[t];
         }
     }
     p->zw = NULL;
@@ -1211,12 +1205,12 @@ struct apply {
     float *out;
 };
 
-static bool apply_planes(void *ctx, struct share *self)
+static bool apply_planes(void *ctx, int share, size_t begin, size_t end)
 {
     const struct apply *a = ctx;
     const struct plan *p = a->p;
     size_t cols = p->cols;
-    for (size_t o = self->begin; o < self->end; o++) {
+    for (size_t o = begin; o < end; o++) {
         const uint16_t *kp = p->k + cols * o;
         const float *tp = p->t + cols * o;
         float *dst = a->out + cols * o;
@@ -1242,15 +1236,40 @@ static bool apply_planes(void *ctx, struct share *self)
     return true;
 }
 
-/* Resamples one mass-level variable BUF into OUT (the plan's output grid), on up to
- * THREADS_MAX threads. */
+/* Resamples one mass-level variable BUF into OUT (the plan's output grid), a share of the
+ * planes per thread. */
 static void resample_var(const struct plan *p, const float *buf, float outside,
                          const float *fill, float *out)
 {
     struct apply a = {.p = p, .buf = buf, .outside = outside, .fill = fill, .out = out};
-    struct share jobs[THREADS_MAX];
-    int n = 0;
-    parallel((size_t)p->no, 1, &a, apply_planes, jobs, &n);
+    parallel_for((size_t)p->no, 1, &a, apply_planes);
+}
+
+/* Air on the mass levels: P + PB in P and T in THETA become the absolute temperature in
+ * TEMPERATURE (when not NULL) and, when DENSITY, the air density in P (NaN where the inputs
+ * were bad). */
+struct air {
+    float *p;
+    const float *theta;
+    float *temperature;
+    bool density;
+};
+
+static bool air_range(void *ctx, int share, size_t begin, size_t end)
+{
+    const struct air *a = ctx;
+    for (size_t i = begin; i < end; i++) {
+        double p = a->p[i], theta = (double)a->theta[i] + WRF_T0;
+        if (a->temperature) {
+            double t = optics_wrf_temperature_fast(p, theta);
+            a->temperature[i] = t > 0.0 ? (float)t : NAN;
+        }
+        if (a->density) {
+            double rho = optics_wrf_air_density_fast(p, theta);
+            a->p[i] = (isfinite(rho) && rho > 0.0) ? (float)rho : NAN;
+        }
+    }
+    return true;
 }
 
 /* Reads the staggered V at both faces around the selection's mass points (OX, OY: the shift
@@ -1495,11 +1514,11 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         sanitize(w, step, WRF_T, buf2, n, NAN, &stats->var[WRF_T]);
         if (!report(w, step, WRF_T, &stats->var[WRF_T]))
             goto unlock;
+        /* Temperature (when asked) and air density in one pass, a share per thread. */
+        struct air a = {.p = buf, .theta = buf2, .temperature = d->temperature ? buf3 : NULL,
+                        .density = !d->no_density};
+        parallel_for(n, 1 << 18, &a, air_range);
         if (d->temperature) {
-            for (size_t i = 0; i < n; i++) {
-                double t = optics_wrf_temperature_fast(buf[i], (double)buf2[i] + WRF_T0);
-                buf3[i] = t > 0.0 ? (float)t : NAN;
-            }
             out->temperature = malloc(nout * sizeof(float));
             if (!out->temperature) {
                 log_error("%s: out of memory for temperature", path);
@@ -1514,11 +1533,6 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         }
     }
     if (!d->no_density) {
-        size_t n = c.cols * (size_t)c.nz;
-        for (size_t i = 0; i < n; i++) {
-            double rho = optics_wrf_air_density_fast(buf[i], (double)buf2[i] + WRF_T0);
-            buf[i] = (isfinite(rho) && rho > 0.0) ? (float)rho : NAN;
-        }
         out->rho_air = malloc(nout * sizeof(float));
         if (!out->rho_air) {
             log_error("%s: out of memory for air density", path);
@@ -1543,6 +1557,50 @@ done:
     free(buf3);
     if (!ok)
         field_volume_finish(out);
+    return ok;
+}
+
+bool wrf_read_plain(struct wrf *w, int step, const struct wrf_desc *d, double *bytes)
+{
+    struct selection s;
+    if (step < 0 || step >= w->step_count || !make_selection(w, d, &s)) {
+        log_error("time step %d out of range: the data has %d (0 to %d)", step, w->step_count,
+                  w->step_count - 1);
+        return false;
+    }
+    const struct wrf_file *f = &w->files[w->steps[step].file];
+    float *bufs[WRF_VAR_COUNT] = {NULL};
+    double total = 0.0;
+    bool ok = true;
+    data_nc_lock_file(f->path, "reading", false);
+    for (int v = 0; v < WRF_VAR_COUNT && ok; v++) {
+        bool want = v < SPECIES_COUNT ? w->meta.has_species[v]
+                    : v == WRF_QVAPOR ? d->qvapor && w->meta.has_qvapor
+                    : is_wind(v)      ? d->wind && f->varid[v] >= 0
+                                      : !d->no_density || d->temperature || v == WRF_PH ||
+                                       v == WRF_PHB;
+        if (!want)
+            continue;
+        int levels = v == WRF_PH || v == WRF_PHB || v == WRF_W ? w->nzs : w->meta.nz;
+        /* The staggered U and V: one more point along their axis, as the reader's two faces
+         * cover. */
+        struct selection sv = s;
+        if (v == WRF_U)
+            sv.nx++;
+        if (v == WRF_V)
+            sv.ny++;
+        size_t n = (size_t)sv.nx * sv.ny * (size_t)levels;
+        bufs[v] = malloc(n * sizeof(float));
+        ok = bufs[v] && read_var(w, step, (enum wrf_var)v, &sv, levels, bufs[v]);
+        if (!bufs[v])
+            log_error("%s: out of memory reading %s", f->path, var_names[v]);
+        total += (double)n * sizeof(float);
+    }
+    data_nc_unlock();
+    for (int v = 0; v < WRF_VAR_COUNT; v++)
+        free(bufs[v]);
+    if (bytes)
+        *bytes = total;
     return ok;
 }
 
