@@ -1060,17 +1060,46 @@ struct columns {
     int nz, nzs;
     size_t cols;
     float *zw;  /* staggered heights, m: zw[k * cols + c] */
-    double *zm; /* one column's mass-level heights (for the checks before resampling) */
 };
 
-static bool column_heights(const struct columns *c, size_t col, double *zm)
+/* The staggered heights (PH + PHB) / g of columns [begin, end) into ZW (PH there before),
+ * the first value out of range (its index) and the first column whose mass levels, half way
+ * between two staggered levels, do not increase upward. */
+struct heights {
+    float *zw;
+    const float *phb;
+    size_t cols;
+    int nz;
+    size_t range[PARALLEL_MAX], order[PARALLEL_MAX]; /* SIZE_MAX: none */
+};
+
+static bool heights_columns(void *ctx, int share, size_t begin, size_t end)
 {
-    for (int k = 0; k < c->nz; k++) {
-        zm[k] = 0.5 * ((double)c->zw[(size_t)k * c->cols + col] +
-                       (double)c->zw[(size_t)(k + 1) * c->cols + col]);
-        if (k > 0 && !(zm[k] > zm[k - 1]))
-            return false;
+    struct heights *h = ctx;
+    size_t range = SIZE_MAX, order = SIZE_MAX;
+    for (int k = 0; k <= h->nz; k++) {
+        float *zw = h->zw + (size_t)k * h->cols;
+        const float *phb = h->phb + (size_t)k * h->cols;
+        for (size_t c = begin; c < end; c++) {
+            zw[c] = (float)(((double)zw[c] + (double)phb[c]) / WRF_G);
+            if ((zw[c] < DATA_HEIGHT_MIN_M || zw[c] > DATA_HEIGHT_MAX_M) && range == SIZE_MAX)
+                range = (size_t)k * h->cols + c;
+        }
     }
+    for (size_t c = begin; c < end && order == SIZE_MAX; c++) {
+        double prev = 0.0;
+        for (int k = 0; k < h->nz; k++) {
+            double zm = 0.5 * ((double)h->zw[(size_t)k * h->cols + c] +
+                               (double)h->zw[(size_t)(k + 1) * h->cols + c]);
+            if (k > 0 && !(zm > prev)) {
+                order = c;
+                break;
+            }
+            prev = zm;
+        }
+    }
+    h->range[share] = range;
+    h->order[share] = order;
     return true;
 }
 
@@ -1376,13 +1405,12 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     if (d->wind && !want_wind)
         log_warn("%s: no usable U and V (the staggered wind): wind speed unavailable", path);
     c.zw = malloc(c.cols * (size_t)c.nzs * sizeof(float));
-    c.zm = malloc((size_t)c.nz * sizeof(double));
     /* BUF holds PHB on the staggered levels first, then mass-level variables. */
     buf = malloc(c.cols * (size_t)c.nzs * sizeof(float));
     buf2 = malloc(c.cols * (size_t)c.nz * sizeof(float));
     if (d->temperature || want_wind)
         buf3 = malloc(c.cols * (size_t)c.nz * sizeof(float));
-    if (!c.zw || !c.zm || !buf || !buf2 || ((d->temperature || want_wind) && !buf3)) {
+    if (!c.zw || !buf || !buf2 || ((d->temperature || want_wind) && !buf3)) {
         log_error("%s: out of memory reading time step %d", path, step);
         goto done;
     }
@@ -1396,8 +1424,6 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         size_t n = c.cols * (size_t)c.nzs;
         sanitize(w, step, WRF_PH, c.zw, n, NAN, &stats->var[WRF_PH]);
         sanitize(w, step, WRF_PHB, phb, n, NAN, &stats->var[WRF_PHB]);
-        for (size_t i = 0; i < n; i++)
-            c.zw[i] = (float)(((double)c.zw[i] + (double)phb[i]) / WRF_G);
         for (int v = WRF_PH; v <= WRF_PHB && hok; v++) {
             const struct wrf_var_stats *st = &stats->var[v];
             if (st->nan + st->inf + st->fill > 0) {
@@ -1410,25 +1436,34 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     }
     if (!hok)
         goto unlock;
-    for (size_t i = 0; i < c.cols * (size_t)c.nzs; i++) {
-        if (c.zw[i] < DATA_HEIGHT_MIN_M || c.zw[i] > DATA_HEIGHT_MAX_M) {
-            size_t col = i % c.cols;
-            log_error("%s: variables PH, PHB, time %d: a height of %g m in column (%zu, %zu), "
-                      "level %zu: expected %g m to %g km above sea level",
-                      path, w->steps[step].index, c.zw[i], s.x0 + (col % s.nx) * s.sx,
-                      s.y0 + (col / s.nx) * s.sy, i / c.cols, DATA_HEIGHT_MIN_M,
-                      DATA_HEIGHT_MAX_M / 1000.0);
-            goto unlock;
-        }
+    /* The heights, each checked for its range and each column for increasing upward, in
+     * one pass a share of columns per CPU; the first bad value in the file's order is named,
+     * a height out of range before a column out of order. */
+    struct heights hs = {.zw = c.zw, .phb = phb, .cols = c.cols, .nz = c.nz};
+    for (int t = 0; t < PARALLEL_MAX; t++)
+        hs.range[t] = hs.order[t] = SIZE_MAX;
+    parallel_for(c.cols, 4096, &hs, heights_columns);
+    size_t bad_range = SIZE_MAX, bad_order = SIZE_MAX;
+    for (int t = 0; t < PARALLEL_MAX; t++) {
+        bad_range = hs.range[t] < bad_range ? hs.range[t] : bad_range;
+        bad_order = hs.order[t] < bad_order ? hs.order[t] : bad_order;
     }
-    for (size_t col = 0; col < c.cols; col++) {
-        if (!column_heights(&c, col, c.zm)) {
-            log_error("%s: variables PH, PHB, time %d: heights do not increase upward in column "
-                      "(%zu, %zu)",
-                      path, w->steps[step].index, s.x0 + (col % s.nx) * s.sx,
-                      s.y0 + (col / s.nx) * s.sy);
-            goto unlock;
-        }
+    if (bad_range != SIZE_MAX) {
+        size_t i = bad_range, col = i % c.cols;
+        log_error("%s: variables PH, PHB, time %d: a height of %g m in column (%zu, %zu), "
+                  "level %zu: expected %g m to %g km above sea level",
+                  path, w->steps[step].index, c.zw[i], s.x0 + (col % s.nx) * s.sx,
+                  s.y0 + (col / s.nx) * s.sy, i / c.cols, DATA_HEIGHT_MIN_M,
+                  DATA_HEIGHT_MAX_M / 1000.0);
+        goto unlock;
+    }
+    if (bad_order != SIZE_MAX) {
+        size_t col = bad_order;
+        log_error("%s: variables PH, PHB, time %d: heights do not increase upward in column "
+                  "(%zu, %zu)",
+                  path, w->steps[step].index, s.x0 + (col % s.nx) * s.sx,
+                  s.y0 + (col / s.nx) * s.sy);
+        goto unlock;
     }
 
     /* The output grid. */
@@ -1551,7 +1586,6 @@ done:
     plan_finish(&plan);
     free(fill);
     free(c.zw);
-    free(c.zm);
     free(buf);
     free(buf2);
     free(buf3);
