@@ -12,7 +12,8 @@ static int usage(FILE *out)
 {
     fprintf(out,
             "usage: anvil bench [--quick] [--views-only | --quality-only | --movie-only |\n"
-            "                   --scale-only | --gpu | --cluster-only] [-o DIR]\n"
+            "                   --scale-only | --gpu | --cluster-only | --load-only]\n"
+            "                   [-o DIR]\n"
             "                   [--cache DIR]\n"
             "                   [--configs DIR] [--spp N] [--scene sphere|storm|katrina]...\n"
             "                   [--paraview] [--quiet]\n"
@@ -30,6 +31,10 @@ static int usage(FILE *out)
             "           the light build (scale-table.md)\n"
             "  cluster  cave4 and cave6 drawn by 1, 2 and 4 ranks through mpirun: ms a frame\n"
             "           and the collectives' share (cluster-table.md; left out without MPI)\n"
+            "  --load-only  a time step of a 500 x 500 x 100 WRF file (written to\n"
+            "           $TMPDIR or /tmp, then removed) loaded to extinction against the\n"
+            "           plain NetCDF read of its variables, side by side, with the peak\n"
+            "           memory of each (load-table.md; not part of the default run)\n"
             "  --gpu    the storm on 500 x 500 x 100 voxels as an HMD frame (2 x 1440 x 1600)\n"
             "           and as displays/cave4.cfg (8 x 1280 x 1024) sharing one light map: GPU\n"
             "           ms per frame, the rebuild, fetches per second against the device's\n"
@@ -63,7 +68,7 @@ static int parse(int argc, char **argv, struct bench_options *o)
         {"paraview", no_argument, NULL, 'P'},     {"configs", required_argument, NULL, 'C'},
         {"movie-only", no_argument, NULL, 'M'},   {"help", no_argument, NULL, 'h'},
         {"scale-only", no_argument, NULL, 'S'},   {"gpu", no_argument, NULL, 'G'},
-        {"cluster-only", no_argument, NULL, 'L'},
+        {"cluster-only", no_argument, NULL, 'L'}, {"load-only", no_argument, NULL, 'D'},
         {NULL, 0, NULL, 0},
     };
     bench_options_defaults(o);
@@ -98,6 +103,11 @@ static int parse(int argc, char **argv, struct bench_options *o)
             break;
         case 'L':
             o->views = o->quality = o->movie = o->scale = false;
+            only++;
+            break;
+        case 'D':
+            o->views = o->quality = o->movie = o->scale = o->cluster = false;
+            o->load = true;
             only++;
             break;
         case 'G':
@@ -145,7 +155,7 @@ static int parse(int argc, char **argv, struct bench_options *o)
     }
     if (only > 1) {
         log_error("bench: --views-only, --quality-only, --movie-only, --scale-only, "
-                  "--cluster-only and --gpu exclude each other");
+                  "--cluster-only, --load-only and --gpu exclude each other");
         return EXIT_USAGE;
     }
     if (o->paraview && !o->views) {

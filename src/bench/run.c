@@ -17,6 +17,7 @@
 #include "bench/cluster.h"
 #include "bench/movie.h"
 #include "bench/paraview.h"
+#include "bench/load.h"
 #include "bench/scale.h"
 #include "bench/tables.h"
 #include "common/log.h"
@@ -307,6 +308,26 @@ static bool run_scale(const struct bench_options *o, const char *device)
     return ok;
 }
 
+/* ---- load ------------------------------------------------------------------------------- */
+
+static bool run_load(const struct bench_options *o)
+{
+    struct bench_load_desc d = {.quick = o->quick};
+    struct bench_load_result r;
+    if (!bench_load(&d, &r))
+        return false;
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    bench_table_head(f, o->quick, "load");
+    bench_write_load_table(f, &d, &r);
+    fclose(f);
+    bool ok = write_text(o, "load-table.md", buf, len);
+    echo(o, "%.*s", (int)len, buf);
+    free(buf);
+    return ok;
+}
+
 /* ---- the GPU benchmark ------------------------------------------------------------------ */
 
 static bool run_device(const struct bench_options *o)
@@ -332,7 +353,7 @@ enum bench_status bench_run(const struct bench_options *opts)
 {
     assert(opts && opts->out && opts->configs);
     assert(opts->views || opts->quality || opts->movie || opts->scale || opts->cluster ||
-           opts->device);
+           opts->device || opts->load);
     assert(!(opts->cluster || opts->device) || opts->displays);
     assert(!opts->paraview || opts->paraview_script);
     struct bench_options o = *opts;
@@ -357,6 +378,8 @@ enum bench_status bench_run(const struct bench_options *opts)
     }
     if (!bench_make_dir(o.out))
         return BENCH_FAILED;
+    if (o.load && !o.views && !o.quality && !o.movie && !o.scale && !o.cluster && !o.device)
+        return run_load(&o) ? BENCH_DONE : BENCH_FAILED; /* no GL needed */
     struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){.backend = "egl"});
     if (!ctx)
         return BENCH_NO_GPU;

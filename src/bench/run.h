@@ -31,6 +31,9 @@ struct bench_options {
     bool cluster;         /* cave4 and cave6 on 1, 2 and 4 ranks (bench/cluster.h); left out
                              with a warning where MPI or mpirun is missing, unless it is the
                              only one asked for */
+    bool load;            /* --load-only: a 500 x 500 x 100 WRF step loaded against the plain
+                             NetCDF read of its variables (bench/load.h, load-table.md); not
+                             part of the default run */
     bool device;          /* --gpu: the Isabel-sized storm on an HMD and a CAVE frame
                              (bench/device.h, gpu-table.md) */
     const char *displays; /* folder of cave4.cfg and cave6.cfg (the cluster and device

@@ -191,6 +191,18 @@ bool data_source_load_fields_extra(struct data_source *s, int step, bool tempera
     return wrf_read_step(s->wrf, step, &d, out, NULL);
 }
 
+bool data_source_load_fields_want(struct data_source *s, int step,
+                                  const struct data_fields_want *want, struct field_volume *out)
+{
+    if (!s->wrf)
+        return data_source_load_fields(s, step, out);
+    struct wrf_desc d = s->desc.wrf;
+    d.qvapor = d.qvapor || want->qvapor;
+    d.temperature = d.temperature || want->temperature;
+    d.wind = d.wind || want->wind;
+    return wrf_read_step(s->wrf, step, &d, out, NULL);
+}
+
 bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,
                       double *convert_ms)
 {

@@ -63,6 +63,16 @@ bool data_source_load_fields(struct data_source *s, int step, struct field_volum
 bool data_source_load_fields_extra(struct data_source *s, int step, bool temperature, bool wind,
                                    struct field_volume *out);
 
+/* The fields beyond the mass ratios (and air density) a load reads: each only when asked
+ * (WRF; other formats leave them NULL). */
+struct data_fields_want {
+    bool qvapor, temperature, wind;
+};
+/* As data_source_load_fields_extra, QVAPOR read only when WANT asks (or the description's
+ * wrf.qvapor does). */
+bool data_source_load_fields_want(struct data_source *s, int step,
+                                  const struct data_fields_want *want, struct field_volume *out);
+
 /* Whether PATH begins as a NetCDF file does (classic, 64-bit offset, CDF-5 or HDF5), read
  * from its first bytes: a data file rather than a config.  False for a file that cannot be
  * read. */

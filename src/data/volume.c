@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "common/log.h"
+#include "common/parallel.h"
 
 void field_volume_finish(struct field_volume *v)
 {
@@ -52,38 +53,64 @@ void species_select_defaults(struct species_select *s)
     }
 }
 
+/* ext_volume_from_fields over planes [begin, end): optics_beta with its constant part taken
+ * out of the loop, the same operations in the same order, so the same numbers. */
+struct beta_job {
+    const struct field_volume *in;
+    const float *q[SPECIES_COUNT];
+    double denom[SPECIES_COUNT], scale[SPECIES_COUNT];
+    bool ice[SPECIES_COUNT], scaled;
+    int used;
+    float *beta;
+};
+
+static bool beta_planes(void *ctx, int share, size_t begin, size_t end)
+{
+    const struct beta_job *j = ctx;
+    const struct grid3 *g = &j->in->grid;
+    const float *rho_air = j->in->rho_air;
+    size_t plane = (size_t)g->n[0] * (size_t)g->n[1];
+    for (size_t k = begin; k < end; k++) {
+        double z = g->origin[2] + ((double)k + 0.5) * g->spacing[2];
+        double rho_std = optics_std_atmosphere_density(z);
+        for (size_t idx = plane * k; idx < plane * (k + 1); idx++) {
+            double rho = rho_air ? rho_air[idx] : rho_std;
+            if (!isfinite(rho) || rho < 0.0)
+                rho = rho_std;
+            double sum[2] = {0.0, 0.0}; /* ice, water */
+            for (int u = 0; u < j->used && rho > 0.0; u++) {
+                double x = j->q[u][idx];
+                if (!(x > 0.0) || !isfinite(x))
+                    continue;
+                double b = 3.0 * rho * x / j->denom[u]; /* Nes eq. 5.3 */
+                if (j->scaled)
+                    b *= j->scale[u];
+                sum[j->ice[u] ? 0 : 1] += b;
+            }
+            j->beta[2 * idx] = (float)sum[0];
+            j->beta[2 * idx + 1] = (float)sum[1];
+        }
+    }
+    return true;
+}
+
 bool ext_volume_from_fields(const struct field_volume *in, const struct optics_params *optics,
                             const struct species_select *sel, struct ext_volume *out)
 {
     if (!ext_volume_init(out, &in->grid))
         return false;
-    const struct grid3 *g = &in->grid;
-    size_t idx = 0;
-    for (int k = 0; k < g->n[2]; k++) {
-        double z = g->origin[2] + (k + 0.5) * g->spacing[2];
-        double rho_std = optics_std_atmosphere_density(z);
-        for (int j = 0; j < g->n[1]; j++) {
-            for (int i = 0; i < g->n[0]; i++, idx++) {
-                double rho = in->rho_air ? in->rho_air[idx] : rho_std;
-                if (!isfinite(rho) || rho < 0.0)
-                    rho = rho_std;
-                double ice = 0.0, water = 0.0;
-                for (int f = 0; f < SPECIES_COUNT; f++) {
-                    if (!in->q[f] || (sel && !sel->enabled[f]))
-                        continue;
-                    double b = optics_beta(optics, (enum species)f, in->q[f][idx], rho);
-                    if (sel)
-                        b *= sel->scale[f];
-                    if (species_is_ice((enum species)f))
-                        ice += b;
-                    else
-                        water += b;
-                }
-                out->beta[2 * idx] = (float)ice;
-                out->beta[2 * idx + 1] = (float)water;
-            }
-        }
+    struct beta_job j = {.in = in, .scaled = sel != NULL, .beta = out->beta};
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        double dn = 2.0 * optics->density[f] * optics->radius_m[f];
+        if (!in->q[f] || (sel && !sel->enabled[f]) || !(dn > 0.0))
+            continue;
+        j.q[j.used] = in->q[f];
+        j.denom[j.used] = dn;
+        j.scale[j.used] = sel ? sel->scale[f] : 1.0;
+        j.ice[j.used] = species_is_ice((enum species)f);
+        j.used++;
     }
+    parallel_for((size_t)in->grid.n[2], 1, &j, beta_planes);
     return true;
 }
 

@@ -1,5 +1,6 @@
 #include "data/wrf.h"
 
+#include <float.h>
 #include <glob.h>
 #include <pthread.h>
 #include <math.h>
@@ -12,6 +13,7 @@
 #include <netcdf.h>
 
 #include "common/log.h"
+#include "common/parallel.h"
 #include "data/extfile.h"
 #include "data/nclock.h"
 #include "data/ncopen.h"
@@ -812,8 +814,10 @@ size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d)
     /* In double: the dimensions come from the file, and their product may not fit. */
     double cols = (double)s.nx * s.ny;
     double out = (double)arrays_out(w, d) * cols * s.nz * sizeof(float);
-    /* Scratch: summed geopotential on staggered levels and two mass-level buffers. */
-    double scratch = cols * ((double)w->nzs + 2.0 * w->meta.nz) * sizeof(float);
+    /* Scratch: the summed geopotential and PHB on staggered levels, a mass-level buffer, and
+     * the step's resampling plan (a level index and a weight per output voxel). */
+    double scratch = cols * (2.0 * w->nzs + w->meta.nz) * sizeof(float) +
+                     cols * s.nz * (sizeof(uint16_t) + sizeof(float));
     /* Temperature and wind speed: a third mass-level buffer; W on its staggered levels. */
     if (d->temperature || (d->wind && w->meta.has_wind))
         scratch += cols * w->meta.nz * sizeof(float);
@@ -866,6 +870,37 @@ static bool fill_attr(int ncid, int varid, const char *name, float *out)
     return nc_get_att_float(ncid, varid, name, vals) == NC_NOERR && (*out = vals[0], true);
 }
 
+/* sanitize's first pass over one share: any value that is not good (outside [BOTTOM, TOP],
+ * NaN, NetCDF's default fill, the variable's fill or missing value: a NaN there compares
+ * unequal to everything, so an absent attribute costs nothing), and the range, kept as
+ * integers that order as the floats do. */
+struct check {
+    const float *buf;
+    float fill, missing, top, bottom;
+    int32_t lo[PARALLEL_MAX], hi[PARALLEL_MAX], bad[PARALLEL_MAX];
+};
+
+static bool check_range(void *ctx, int share, size_t begin, size_t end)
+{
+    struct check *c = ctx;
+    const float fvv = c->fill, mvv = c->missing, top = c->top, bottom = c->bottom;
+    int32_t klo = INT32_MAX, khi = INT32_MIN, bad = 0;
+    for (size_t i = begin; i < end; i++) {
+        float x = c->buf[i];
+        int32_t b;
+        memcpy(&b, &x, sizeof(b));
+        int32_t key = b ^ ((b >> 31) & 0x7fffffff);
+        klo = key < klo ? key : klo;
+        khi = key > khi ? key : khi;
+        bad |= (int32_t)!(x >= bottom) | (int32_t)!(x <= top) | (int32_t)(x == NC_FILL_FLOAT) |
+               (int32_t)(x == fvv) | (int32_t)(x == mvv);
+    }
+    c->lo[share] = klo;
+    c->hi[share] = khi;
+    c->bad[share] = bad;
+    return true;
+}
+
 /* Replaces bad values by REPLACEMENT and counts them.  Mass ratios also lose negatives and
  * values above 1 kg/kg. */
 static void sanitize(const struct wrf *w, int step, enum wrf_var v, float *buf, size_t n,
@@ -884,6 +919,37 @@ static void sanitize(const struct wrf *w, int step, enum wrf_var v, float *buf, 
     bool fast =
         mass && !(has_fv && fv >= 0.0f && fv <= 1.0f) && !(has_mv && mv >= 0.0f && mv <= 1.0f);
     float flo = INFINITY, fhi = -INFINITY;
+    {
+        /* One branch-free pass first (it vectorises, a share per thread): when every value is
+         * good, that is all. */
+        struct check c = {.buf = buf,
+                          .fill = has_fv ? fv : NAN,
+                          .missing = has_mv ? mv : NAN,
+                          .top = mass ? 1.0f : FLT_MAX,
+                          .bottom = mass ? 0.0f : -FLT_MAX};
+        for (int t = 0; t < PARALLEL_MAX; t++) {
+            c.lo[t] = INT32_MAX;
+            c.hi[t] = INT32_MIN;
+        }
+        parallel_for(n, 1 << 20, &c, check_range);
+        int32_t klo = INT32_MAX, khi = INT32_MIN, bad = 0;
+        for (int t = 0; t < PARALLEL_MAX; t++) {
+            klo = c.lo[t] < klo ? c.lo[t] : klo;
+            khi = c.hi[t] > khi ? c.hi[t] : khi;
+            bad |= c.bad[t];
+        }
+        if (!bad) {
+            if (n > 0) {
+                int32_t blo = klo ^ ((klo >> 31) & 0x7fffffff);
+                int32_t bhi = khi ^ ((khi >> 31) & 0x7fffffff);
+                memcpy(&flo, &blo, sizeof(flo));
+                memcpy(&fhi, &bhi, sizeof(fhi));
+            }
+            st->min = n > 0 ? flo + 0.0f : 0.0; /* + 0: -0 reads as 0 */
+            st->max = n > 0 ? fhi + 0.0f : 0.0;
+            return;
+        }
+    }
     for (size_t i = 0; i < n; i++) {
         float x = buf[i];
         if (fast && x >= 0.0f && x <= 1.0f) {
@@ -945,6 +1011,13 @@ static bool report(const struct wrf *w, int step, enum wrf_var v, const struct w
     return true;
 }
 
+/* The weight of the upper of two levels at Z0 < ZT < Z1, rounded to a float: the same number
+ * whether a column is resampled alone (wrf_resample_column) or through a step's plan. */
+static float resample_weight(double zt, double z0, double z1)
+{
+    return (float)((zt - z0) / (z1 - z0));
+}
+
 int wrf_resample_column(const double *z, const float *v, int nz, double z_ground, double z_top,
                         double z0, double dz, int n, float outside, float *out, int *below)
 {
@@ -969,7 +1042,7 @@ int wrf_resample_column(const double *z, const float *v, int nz, double z_ground
         } else if (k + 1 >= nz) {
             out[o] = v[nz - 1]; /* between the last mass level and the model top */
         } else {
-            double t = (zt - z[k]) / (z[k + 1] - z[k]);
+            double t = resample_weight(zt, z[k], z[k + 1]);
             out[o] = (float)((1.0 - t) * v[k] + t * v[k + 1]);
         }
     }
@@ -987,113 +1060,245 @@ struct columns {
     int nz, nzs;
     size_t cols;
     float *zw;  /* staggered heights, m: zw[k * cols + c] */
-    double *zm; /* one column's mass-level heights (for the checks before resampling) */
 };
 
-static bool column_heights(const struct columns *c, size_t col, double *zm)
+/* The staggered heights (PH + PHB) / g of columns [begin, end) into ZW (PH there before),
+ * the first value out of range (its index) and the first column whose mass levels, half way
+ * between two staggered levels, do not increase upward. */
+struct heights {
+    float *zw;
+    const float *phb;
+    size_t cols;
+    int nz;
+    size_t range[PARALLEL_MAX], order[PARALLEL_MAX]; /* SIZE_MAX: none */
+};
+
+static bool heights_columns(void *ctx, int share, size_t begin, size_t end)
 {
-    for (int k = 0; k < c->nz; k++) {
-        zm[k] = 0.5 * ((double)c->zw[(size_t)k * c->cols + col] +
-                       (double)c->zw[(size_t)(k + 1) * c->cols + col]);
-        if (k > 0 && !(zm[k] > zm[k - 1]))
-            return false;
+    struct heights *h = ctx;
+    size_t range = SIZE_MAX, order = SIZE_MAX;
+    for (int k = 0; k <= h->nz; k++) {
+        float *zw = h->zw + (size_t)k * h->cols;
+        const float *phb = h->phb + (size_t)k * h->cols;
+        for (size_t c = begin; c < end; c++) {
+            zw[c] = (float)(((double)zw[c] + (double)phb[c]) / WRF_G);
+            if ((zw[c] < DATA_HEIGHT_MIN_M || zw[c] > DATA_HEIGHT_MAX_M) && range == SIZE_MAX)
+                range = (size_t)k * h->cols + c;
+        }
+    }
+    for (size_t c = begin; c < end && order == SIZE_MAX; c++) {
+        double prev = 0.0;
+        for (int k = 0; k < h->nz; k++) {
+            double zm = 0.5 * ((double)h->zw[(size_t)k * h->cols + c] +
+                               (double)h->zw[(size_t)(k + 1) * h->cols + c]);
+            if (k > 0 && !(zm > prev)) {
+                order = c;
+                break;
+            }
+            prev = zm;
+        }
+    }
+    h->range[share] = range;
+    h->order[share] = order;
+    return true;
+}
+
+/* How every output voxel of a step is resampled from its column's mass levels, worked out
+ * once per step from the heights and shared by every variable: wrf_resample_column's rule
+ * voxel by voxel, kept as the lower mass level K and the weight T of the level above, in
+ * output order (plane by plane), so that applying it to a variable reads the variable's
+ * mass-level planes nearly in order and writes its output planes in order. */
+#define PLAN_OUTSIDE UINT16_MAX
+
+struct plan {
+    size_t cols;
+    int nz, no;
+    const float *zw;     /* staggered heights, m: zw[k * cols + c] (while the plan is made) */
+    double z0, dz;       /* output level o is centred at z0 + (o + 0.5) dz */
+    uint16_t *k;         /* [o * cols + c]: the lower mass level, or PLAN_OUTSIDE */
+    float *t;            /* the weight of level k + 1; 0: level k's value as it is */
+    size_t below, above; /* outputs below the model's ground, above its top */
+    size_t share_below[PARALLEL_MAX], share_above[PARALLEL_MAX];
+};
+
+/* Blocks [begin, end) of BLOCK columns of the plan. */
+static bool plan_blocks(void *ctx, int share, size_t begin, size_t end)
+{
+    struct plan *p = ctx;
+    int nz = p->nz, no = p->no;
+    double *z = malloc((size_t)nz * sizeof(double));
+    uint16_t *kb = malloc((size_t)BLOCK * no * sizeof(uint16_t));
+    float *tb = malloc((size_t)BLOCK * no * sizeof(float));
+    bool ok = z && kb && tb;
+    double tol = 1e-4 * fabs(p->dz);
+    size_t first = begin * BLOCK, last = end * BLOCK, below = 0, above = 0;
+    if (last > p->cols)
+        last = p->cols;
+    for (size_t c0 = first; c0 < last && ok; c0 += BLOCK) {
+        int nb = (int)(last - c0 < BLOCK ? last - c0 : BLOCK);
+        for (int b = 0; b < nb; b++) {
+            size_t col = c0 + (size_t)b;
+            for (int k = 0; k < nz; k++)
+                z[k] = 0.5 * ((double)p->zw[(size_t)k * p->cols + col] +
+                              (double)p->zw[(size_t)(k + 1) * p->cols + col]);
+            double zg = p->zw[col], ztop = p->zw[(size_t)nz * p->cols + col];
+            int k = 0;
+            for (int o = 0; o < no; o++) {
+                /* wrf_resample_column's cases, in its order. */
+                double zt = p->z0 + (o + 0.5) * p->dz;
+                uint16_t kk;
+                float t = 0.0f;
+                if (zt < zg - tol || zt > ztop + tol) {
+                    kk = PLAN_OUTSIDE;
+                    if (zt < zg)
+                        below++;
+                    else
+                        above++;
+                } else {
+                    while (k + 1 < nz && z[k + 1] <= zt)
+                        k++;
+                    if (fabs(zt - z[k]) <= tol) {
+                        kk = (uint16_t)k;
+                    } else if (k + 1 < nz && fabs(z[k + 1] - zt) <= tol) {
+                        kk = (uint16_t)(k + 1);
+                    } else if (zt < z[0]) {
+                        kk = 0;
+                    } else if (k + 1 >= nz) {
+                        kk = (uint16_t)(nz - 1);
+                    } else {
+                        kk = (uint16_t)k;
+                        t = resample_weight(zt, z[k], z[k + 1]);
+                    }
+                }
+                kb[(size_t)o * BLOCK + b] = kk;
+                tb[(size_t)o * BLOCK + b] = t;
+            }
+        }
+        for (int o = 0; o < no; o++) {
+            memcpy(p->k + p->cols * (size_t)o + c0, kb + (size_t)o * BLOCK,
+                   (size_t)nb * sizeof(uint16_t));
+            memcpy(p->t + p->cols * (size_t)o + c0, tb + (size_t)o * BLOCK,
+                   (size_t)nb * sizeof(float));
+        }
+    }
+    free(z);
+    free(kb);
+    free(tb);
+    p->share_below[share] = below;
+    p->share_above[share] = above;
+    return ok;
+}
+
+static void plan_finish(struct plan *p)
+{
+    free(p->k);
+    free(p->t);
+    memset(p, 0, sizeof(*p));
+}
+
+/* The plan of NO output levels centred at Z0 + (o + 0.5) DZ over COLS columns whose NZ + 1
+ * staggered heights ZW hold.  False (logged) when out of memory. */
+static bool plan_make(struct plan *p, const float *zw, size_t cols, int nz, double z0, double dz,
+                      int no)
+{
+    *p = (struct plan){.cols = cols, .nz = nz, .no = no, .zw = zw, .z0 = z0, .dz = dz};
+    if (nz >= PLAN_OUTSIDE) {
+        log_error("%d mass levels: at most %d can be resampled", nz, PLAN_OUTSIDE - 1);
+        return false;
+    }
+    p->k = malloc(cols * (size_t)no * sizeof(uint16_t));
+    p->t = malloc(cols * (size_t)no * sizeof(float));
+    bool ok = p->k && p->t;
+    if (ok) {
+        ok = parallel_for((cols + BLOCK - 1) / BLOCK, 16, p, plan_blocks);
+        for (int t = 0; t < PARALLEL_MAX; t++) {
+            p->below += p->share_below[t];
+            p->above += p->share_above[t];
+        }
+    }
+    p->zw = NULL;
+    if (!ok) {
+        log_error("out of memory resampling %d-level columns", nz);
+        plan_finish(p);
+    }
+    return ok;
+}
+
+/* One variable through the plan: the mass levels BUF (nz * cols) into the output OUT. */
+struct apply {
+    const struct plan *p;
+    const float *buf;
+    float outside;
+    const float *fill; /* NULL, or per output level: the value of a voxel that came out NaN
+                          (outside, or from a bad input) */
+    float *out;
+};
+
+static bool apply_planes(void *ctx, int share, size_t begin, size_t end)
+{
+    const struct apply *a = ctx;
+    const struct plan *p = a->p;
+    size_t cols = p->cols;
+    for (size_t o = begin; o < end; o++) {
+        const uint16_t *kp = p->k + cols * o;
+        const float *tp = p->t + cols * o;
+        float *dst = a->out + cols * o;
+        for (size_t c = 0; c < cols; c++) {
+            uint16_t k = kp[c];
+            float r;
+            if (k == PLAN_OUTSIDE) {
+                r = a->outside;
+            } else {
+                float v0 = a->buf[(size_t)k * cols + c];
+                double t = tp[c];
+                r = t == 0.0 ? v0
+                             : (float)((1.0 - t) * v0 + t * a->buf[(size_t)(k + 1) * cols + c]);
+            }
+            dst[c] = r;
+        }
+        if (a->fill) {
+            for (size_t c = 0; c < cols; c++)
+                if (!isfinite(dst[c]))
+                    dst[c] = a->fill[o];
+        }
     }
     return true;
 }
 
-/* One thread's share of resample_var: columns [begin, end). */
-struct resample_job {
-    const struct columns *c;
-    const float *buf;
-    const struct grid3 *g;
-    float outside;
-    float *out;
-    size_t begin, end;
-    size_t below, above;
-    bool ok;
-    pthread_t thread;
-};
-
-static void *resample_range(void *arg)
+/* Resamples one mass-level variable BUF into OUT (the plan's output grid), a share of the
+ * planes per thread. */
+static void resample_var(const struct plan *p, const float *buf, float outside,
+                         const float *fill, float *out)
 {
-    struct resample_job *j = arg;
-    const struct columns *c = j->c;
-    int no = j->g->n[2], nz = c->nz;
-    double *zm = malloc((size_t)BLOCK * nz * sizeof(double));
-    float *vin = malloc((size_t)BLOCK * nz * sizeof(float));
-    float *vout = malloc((size_t)BLOCK * no * sizeof(float));
-    j->ok = zm && vin && vout;
-    for (size_t c0 = j->begin; c0 < j->end && j->ok; c0 += BLOCK) {
-        int nb = (int)(j->end - c0 < BLOCK ? j->end - c0 : BLOCK);
-        for (int k = 0; k < nz; k++) {
-            const float *row = j->buf + (size_t)k * c->cols + c0;
-            for (int b = 0; b < nb; b++)
-                vin[b * nz + k] = row[b];
-        }
-        for (int b = 0; b < nb; b++) {
-            size_t col = c0 + (size_t)b;
-            double *z = zm + (size_t)b * nz;
-            column_heights(c, col, z);
-            int below = 0;
-            int outn = wrf_resample_column(
-                z, vin + (size_t)b * nz, nz, c->zw[col], c->zw[(size_t)nz * c->cols + col],
-                j->g->origin[2], j->g->spacing[2], no, j->outside, vout + (size_t)b * no, &below);
-            j->below += (size_t)below;
-            j->above += (size_t)(outn - below);
-        }
-        for (int o = 0; o < no; o++) {
-            float *dst = j->out + c->cols * (size_t)o + c0;
-            for (int b = 0; b < nb; b++)
-                dst[b] = vout[(size_t)b * no + o];
-        }
-    }
-    free(zm);
-    free(vin);
-    free(vout);
-    return NULL;
+    struct apply a = {.p = p, .buf = buf, .outside = outside, .fill = fill, .out = out};
+    parallel_for((size_t)p->no, 1, &a, apply_planes);
 }
 
-#define THREADS_MAX 16
+/* Air on the mass levels: P + PB in P and T in THETA become the absolute temperature in
+ * TEMPERATURE (when not NULL) and, when DENSITY, the air density in P (NaN where the inputs
+ * were bad). */
+struct air {
+    float *p;
+    const float *theta;
+    float *temperature;
+    bool density;
+};
 
-/* Resamples one mass-level variable BUF (nz * cols) into OUT on the output grid, on up to
- * THREADS_MAX threads.  False (logged) when out of memory. */
-static bool resample_var(const struct columns *c, const float *buf, const struct grid3 *g,
-                         float outside, float *out, struct wrf_stats *stats)
+static bool air_range(void *ctx, int share, size_t begin, size_t end)
 {
-    long cpus = sysconf(_SC_NPROCESSORS_ONLN);
-    size_t blocks = (c->cols + BLOCK - 1) / BLOCK;
-    int n = cpus < 1 ? 1 : cpus > THREADS_MAX ? THREADS_MAX : (int)cpus;
-    if ((size_t)n > blocks / 16 + 1)
-        n = (int)(blocks / 16 + 1); /* small grids: not worth a thread */
-    struct resample_job jobs[THREADS_MAX];
-    size_t per = (blocks + (size_t)n - 1) / (size_t)n * BLOCK;
-    int started = 0;
-    for (int t = 0; t < n; t++) {
-        size_t begin = per * (size_t)t, end = begin + per < c->cols ? begin + per : c->cols;
-        jobs[t] = (struct resample_job){
-            .c = c, .buf = buf, .g = g, .outside = outside, .out = out, .begin = begin, .end = end};
-        if (begin >= end) {
-            jobs[t].ok = true;
-            continue;
+    const struct air *a = ctx;
+    for (size_t i = begin; i < end; i++) {
+        double p = a->p[i], theta = (double)a->theta[i] + WRF_T0;
+        if (a->temperature) {
+            double t = optics_wrf_temperature_fast(p, theta);
+            a->temperature[i] = t > 0.0 ? (float)t : NAN;
         }
-        if (t == n - 1 || pthread_create(&jobs[t].thread, NULL, resample_range, &jobs[t]) != 0)
-            resample_range(&jobs[t]); /* the last share (or a failed start) on this thread */
-        else
-            started |= 1 << t;
-    }
-    bool ok = true;
-    for (int t = 0; t < n; t++) {
-        if (started & (1 << t))
-            pthread_join(jobs[t].thread, NULL);
-        ok = ok && jobs[t].ok;
-        if (stats) {
-            stats->below_terrain += jobs[t].below;
-            stats->above_top += jobs[t].above;
+        if (a->density) {
+            double rho = optics_wrf_air_density_fast(p, theta);
+            a->p[i] = (isfinite(rho) && rho > 0.0) ? (float)rho : NAN;
         }
     }
-    if (!ok)
-        log_error("out of memory resampling a %d-level column", c->nz);
-    return ok;
+    return true;
 }
 
 /* Reads the staggered V at both faces around the selection's mass points (OX, OY: the shift
@@ -1192,38 +1397,33 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     }
 
     struct columns c = {.nz = w->meta.nz, .nzs = w->nzs, .cols = (size_t)s.nx * s.ny};
-    float *buf = NULL, *buf2 = NULL, *buf3 = NULL;
+    struct plan plan = {0};
+    float *buf = NULL, *buf2 = NULL, *buf3 = NULL, *fill = NULL;
     bool ok = false;
     const struct wrf_file *sf = &w->files[w->steps[step].file];
     bool want_wind = d->wind && sf->varid[WRF_U] >= 0 && sf->varid[WRF_V] >= 0;
     if (d->wind && !want_wind)
         log_warn("%s: no usable U and V (the staggered wind): wind speed unavailable", path);
     c.zw = malloc(c.cols * (size_t)c.nzs * sizeof(float));
-    c.zm = malloc((size_t)c.nz * sizeof(double));
-    buf = malloc(c.cols * (size_t)c.nz * sizeof(float));
+    /* BUF holds PHB on the staggered levels first, then mass-level variables. */
+    buf = malloc(c.cols * (size_t)c.nzs * sizeof(float));
     buf2 = malloc(c.cols * (size_t)c.nz * sizeof(float));
     if (d->temperature || want_wind)
         buf3 = malloc(c.cols * (size_t)c.nz * sizeof(float));
-    if (!c.zw || !c.zm || !buf || !buf2 || ((d->temperature || want_wind) && !buf3)) {
+    if (!c.zw || !buf || !buf2 || ((d->temperature || want_wind) && !buf3)) {
         log_error("%s: out of memory reading time step %d", path, step);
         goto done;
     }
 
     data_nc_lock_file(path, "reading", false);
     /* Heights: (PH + PHB) / g on staggered levels. */
-    float *phb = malloc(c.cols * (size_t)c.nzs * sizeof(float));
-    if (!phb) {
-        log_error("%s: out of memory reading time step %d", path, step);
-        goto unlock;
-    }
+    float *phb = buf;
     bool hok =
         read_var(w, step, WRF_PH, &s, c.nzs, c.zw) && read_var(w, step, WRF_PHB, &s, c.nzs, phb);
     if (hok) {
         size_t n = c.cols * (size_t)c.nzs;
         sanitize(w, step, WRF_PH, c.zw, n, NAN, &stats->var[WRF_PH]);
         sanitize(w, step, WRF_PHB, phb, n, NAN, &stats->var[WRF_PHB]);
-        for (size_t i = 0; i < n; i++)
-            c.zw[i] = (float)(((double)c.zw[i] + (double)phb[i]) / WRF_G);
         for (int v = WRF_PH; v <= WRF_PHB && hok; v++) {
             const struct wrf_var_stats *st = &stats->var[v];
             if (st->nan + st->inf + st->fill > 0) {
@@ -1234,28 +1434,36 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
             }
         }
     }
-    free(phb);
     if (!hok)
         goto unlock;
-    for (size_t i = 0; i < c.cols * (size_t)c.nzs; i++) {
-        if (c.zw[i] < DATA_HEIGHT_MIN_M || c.zw[i] > DATA_HEIGHT_MAX_M) {
-            size_t col = i % c.cols;
-            log_error("%s: variables PH, PHB, time %d: a height of %g m in column (%zu, %zu), "
-                      "level %zu: expected %g m to %g km above sea level",
-                      path, w->steps[step].index, c.zw[i], s.x0 + (col % s.nx) * s.sx,
-                      s.y0 + (col / s.nx) * s.sy, i / c.cols, DATA_HEIGHT_MIN_M,
-                      DATA_HEIGHT_MAX_M / 1000.0);
-            goto unlock;
-        }
+    /* The heights, each checked for its range and each column for increasing upward, in
+     * one pass a share of columns per CPU; the first bad value in the file's order is named,
+     * a height out of range before a column out of order. */
+    struct heights hs = {.zw = c.zw, .phb = phb, .cols = c.cols, .nz = c.nz};
+    for (int t = 0; t < PARALLEL_MAX; t++)
+        hs.range[t] = hs.order[t] = SIZE_MAX;
+    parallel_for(c.cols, 4096, &hs, heights_columns);
+    size_t bad_range = SIZE_MAX, bad_order = SIZE_MAX;
+    for (int t = 0; t < PARALLEL_MAX; t++) {
+        bad_range = hs.range[t] < bad_range ? hs.range[t] : bad_range;
+        bad_order = hs.order[t] < bad_order ? hs.order[t] : bad_order;
     }
-    for (size_t col = 0; col < c.cols; col++) {
-        if (!column_heights(&c, col, c.zm)) {
-            log_error("%s: variables PH, PHB, time %d: heights do not increase upward in column "
-                      "(%zu, %zu)",
-                      path, w->steps[step].index, s.x0 + (col % s.nx) * s.sx,
-                      s.y0 + (col / s.nx) * s.sy);
-            goto unlock;
-        }
+    if (bad_range != SIZE_MAX) {
+        size_t i = bad_range, col = i % c.cols;
+        log_error("%s: variables PH, PHB, time %d: a height of %g m in column (%zu, %zu), "
+                  "level %zu: expected %g m to %g km above sea level",
+                  path, w->steps[step].index, c.zw[i], s.x0 + (col % s.nx) * s.sx,
+                  s.y0 + (col / s.nx) * s.sy, i / c.cols, DATA_HEIGHT_MIN_M,
+                  DATA_HEIGHT_MAX_M / 1000.0);
+        goto unlock;
+    }
+    if (bad_order != SIZE_MAX) {
+        size_t col = bad_order;
+        log_error("%s: variables PH, PHB, time %d: heights do not increase upward in column "
+                  "(%zu, %zu)",
+                  path, w->steps[step].index, s.x0 + (col % s.nx) * s.sx,
+                  s.y0 + (col / s.nx) * s.sy);
+        goto unlock;
     }
 
     /* The output grid. */
@@ -1278,7 +1486,15 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     g->origin[2] = bottom + (s.z0 + 0.5) * dzf - 0.5 * g->spacing[2];
     size_t nout = grid3_count(g);
 
-    bool counted = false; /* below/above counts come from the first variable resampled */
+    /* Where every output voxel comes from, once for all the variables of the step; the
+     * staggered heights are not needed after it. */
+    if (!plan_make(&plan, c.zw, c.cols, c.nz, g->origin[2], g->spacing[2], g->n[2]))
+        goto unlock;
+    stats->below_terrain = plan.below;
+    stats->above_top = plan.above;
+    free(c.zw);
+    c.zw = NULL;
+
     for (int v = 0; v <= WRF_QVAPOR; v++) {
         if (v < SPECIES_COUNT ? !w->meta.has_species[v] : !(d->qvapor && w->meta.has_qvapor))
             continue;
@@ -1296,9 +1512,7 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         sanitize(w, step, (enum wrf_var)v, buf, c.cols * (size_t)c.nz, 0.0f, &stats->var[v]);
         if (!report(w, step, (enum wrf_var)v, &stats->var[v]))
             goto unlock;
-        if (!resample_var(&c, buf, g, 0.0f, dst, counted ? NULL : stats))
-            goto unlock;
-        counted = true;
+        resample_var(&plan, buf, 0.0f, NULL, dst);
     }
 
     if (want_wind) {
@@ -1307,12 +1521,19 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
             log_error("%s: out of memory for wind speed", path);
             goto unlock;
         }
-        if (!wind_speed(w, step, &s, &c, buf, buf2, buf3, stats) ||
-            !resample_var(&c, buf3, g, 0.0f, out->wind, NULL))
+        if (!wind_speed(w, step, &s, &c, buf, buf2, buf3, stats))
             goto unlock;
+        resample_var(&plan, buf3, 0.0f, NULL, out->wind);
     }
 
+    /* Below the ground, above the top, or where P/PB/T were bad: the standard atmosphere,
+     * one value per output level. */
     if (!d->no_density || d->temperature) {
+        fill = malloc((size_t)g->n[2] * sizeof(float));
+        if (!fill) {
+            log_error("%s: out of memory reading time step %d", path, step);
+            goto unlock;
+        }
         size_t n = c.cols * (size_t)c.nz;
         if (!read_var(w, step, WRF_P, &s, c.nz, buf) || !read_var(w, step, WRF_PB, &s, c.nz, buf2))
             goto unlock;
@@ -1328,66 +1549,92 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         sanitize(w, step, WRF_T, buf2, n, NAN, &stats->var[WRF_T]);
         if (!report(w, step, WRF_T, &stats->var[WRF_T]))
             goto unlock;
+        /* Temperature (when asked) and air density in one pass, a share per thread. */
+        struct air a = {.p = buf, .theta = buf2, .temperature = d->temperature ? buf3 : NULL,
+                        .density = !d->no_density};
+        parallel_for(n, 1 << 18, &a, air_range);
         if (d->temperature) {
-            for (size_t i = 0; i < n; i++) {
-                double t = optics_wrf_temperature(buf[i], (double)buf2[i] + WRF_T0);
-                buf3[i] = t > 0.0 ? (float)t : NAN;
-            }
             out->temperature = malloc(nout * sizeof(float));
             if (!out->temperature) {
                 log_error("%s: out of memory for temperature", path);
                 goto unlock;
             }
-            if (!resample_var(&c, buf3, g, NAN, out->temperature, NULL))
-                goto unlock;
-            /* Below the ground, above the top, or where P/PB/T were bad: standard atmosphere. */
             for (int k = 0; k < g->n[2]; k++) {
                 double z = g->origin[2] + (k + 0.5) * g->spacing[2], std, p;
                 wrf_std_atmosphere(z, &std, &p);
-                float *layer = out->temperature + c.cols * (size_t)k;
-                for (size_t col = 0; col < c.cols; col++) {
-                    if (!isfinite(layer[col]))
-                        layer[col] = (float)std;
-                }
+                fill[k] = (float)std;
             }
+            resample_var(&plan, buf3, NAN, fill, out->temperature);
         }
     }
     if (!d->no_density) {
-        size_t n = c.cols * (size_t)c.nz;
-        for (size_t i = 0; i < n; i++) {
-            double rho = optics_wrf_air_density(buf[i], (double)buf2[i] + WRF_T0);
-            buf[i] = (isfinite(rho) && rho > 0.0) ? (float)rho : NAN;
-        }
         out->rho_air = malloc(nout * sizeof(float));
         if (!out->rho_air) {
             log_error("%s: out of memory for air density", path);
             goto unlock;
         }
-        if (!resample_var(&c, buf, g, NAN, out->rho_air, NULL))
-            goto unlock;
-        /* Below the ground, above the top, or where P/PB/T were bad: standard atmosphere. */
-        for (int k = 0; k < g->n[2]; k++) {
-            double z = g->origin[2] + (k + 0.5) * g->spacing[2];
-            float std = (float)optics_std_atmosphere_density(z);
-            float *layer = out->rho_air + c.cols * (size_t)k;
-            for (size_t col = 0; col < c.cols; col++) {
-                if (!isfinite(layer[col]))
-                    layer[col] = std;
-            }
-        }
+        for (int k = 0; k < g->n[2]; k++)
+            fill[k] = (float)optics_std_atmosphere_density(g->origin[2] +
+                                                           (k + 0.5) * g->spacing[2]);
+        resample_var(&plan, buf, NAN, fill, out->rho_air);
     }
     ok = true;
 
 unlock:
     data_nc_unlock();
 done:
+    plan_finish(&plan);
+    free(fill);
     free(c.zw);
-    free(c.zm);
     free(buf);
     free(buf2);
     free(buf3);
     if (!ok)
         field_volume_finish(out);
+    return ok;
+}
+
+bool wrf_read_plain(struct wrf *w, int step, const struct wrf_desc *d, double *bytes)
+{
+    struct selection s;
+    if (step < 0 || step >= w->step_count || !make_selection(w, d, &s)) {
+        log_error("time step %d out of range: the data has %d (0 to %d)", step, w->step_count,
+                  w->step_count - 1);
+        return false;
+    }
+    const struct wrf_file *f = &w->files[w->steps[step].file];
+    float *bufs[WRF_VAR_COUNT] = {NULL};
+    double total = 0.0;
+    bool ok = true;
+    data_nc_lock_file(f->path, "reading", false);
+    for (int v = 0; v < WRF_VAR_COUNT && ok; v++) {
+        bool want = v < SPECIES_COUNT ? w->meta.has_species[v]
+                    : v == WRF_QVAPOR ? d->qvapor && w->meta.has_qvapor
+                    : is_wind(v)      ? d->wind && f->varid[v] >= 0
+                                      : !d->no_density || d->temperature || v == WRF_PH ||
+                                       v == WRF_PHB;
+        if (!want)
+            continue;
+        int levels = v == WRF_PH || v == WRF_PHB || v == WRF_W ? w->nzs : w->meta.nz;
+        /* The staggered U and V: one more point along their axis, as the reader's two faces
+         * cover. */
+        struct selection sv = s;
+        if (v == WRF_U)
+            sv.nx++;
+        if (v == WRF_V)
+            sv.ny++;
+        size_t n = (size_t)sv.nx * sv.ny * (size_t)levels;
+        bufs[v] = malloc(n * sizeof(float));
+        ok = bufs[v] && read_var(w, step, (enum wrf_var)v, &sv, levels, bufs[v]);
+        if (!bufs[v])
+            log_error("%s: out of memory reading %s", f->path, var_names[v]);
+        total += (double)n * sizeof(float);
+    }
+    data_nc_unlock();
+    for (int v = 0; v < WRF_VAR_COUNT; v++)
+        free(bufs[v]);
+    if (bytes)
+        *bytes = total;
     return ok;
 }
 
@@ -1631,7 +1878,7 @@ enum wrf_point_result wrf_read_point(struct wrf *w, int step, const struct wrf_d
         goto unlock;
     sanitize(w, step, WRF_T, bb, (size_t)nz * cols, NAN, &st);
     for (size_t i = 0; i < (size_t)nz * cols; i++) {
-        double t = optics_wrf_temperature(a[i], (double)bb[i] + WRF_T0);
+        double t = optics_wrf_temperature_fast(a[i], (double)bb[i] + WRF_T0);
         col[i] = t > 0.0 ? (float)t : NAN;
         bb[i] = (float)((double)bb[i] + WRF_T0);
     }

@@ -145,6 +145,14 @@ size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d);
 bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct field_volume *out,
                    struct wrf_stats *stats);
 
+/* The yardstick of the load path (anvil bench --load-only): reads the variables
+ * wrf_read_step(D) would read for STEP (the species the file has, QVAPOR when D asks, PH, PHB,
+ * P, PB, T, and U, V, W for the wind) over D's selection with one nc_get_vara / nc_get_vars
+ * each into memory, keeps them all until the last is read, and frees them: no checks, no
+ * resampling.  *BYTES (may be NULL) receives the bytes read.  False (logged) on a read error
+ * or out of memory. */
+bool wrf_read_plain(struct wrf *w, int step, const struct wrf_desc *d, double *bytes);
+
 /* What the file holds at one point of a step (the probe, docs/analysis.md). */
 struct wrf_point {
     bool has_species[SPECIES_COUNT];

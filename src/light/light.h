@@ -202,6 +202,10 @@ void light_diffuse_terms_init(const struct light_settings *s, const double sun[3
  * weighted by the extinction at the point: a thin cloud touching a thick one does not lend
  * the thick one its rate.  NaN and negative extinction read as clear, infinity as 1e30. */
 void light_lateral_rates(const struct ext_volume *vol, float *out);
+/* The same for the voxels of plane K only, into OUT (2 n0 n1 floats, the plane's own
+ * indexing): runs lie within a plane, so these are the plane's values of light_lateral_rates
+ * exactly.  Safe to call for different planes from several threads at once. */
+void light_lateral_rates_plane(const struct ext_volume *vol, int k, float *out);
 
 /* The lateral escape of the diffuse light, per unit vertical optical depth, for the rates RX,
  * RY of light_lateral_rates and the Eddington coupling GAMMA (docs/lightmap.md, "Lateral

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "common/log.h"
+#include "common/parallel.h"
 #include "light/light.h"
 
 #define PI 3.14159265358979323846
@@ -246,7 +247,7 @@ float light_lateral_escape(float gamma, float rx, float ry)
     return (rx > 0.0f ? rx * expf(-tr / rx) : 0.0f) + (ry > 0.0f ? ry * expf(-tr / ry) : 0.0f);
 }
 
-void light_lateral_rates(const struct ext_volume *vol, float *out)
+void light_lateral_rates_plane(const struct ext_volume *vol, int k, float *out)
 {
     /* One row at a time, each run's width summed in the order shaders/light_lateral.comp
      * sums it, so both give the same floats. */
@@ -256,37 +257,55 @@ void light_lateral_rates(const struct ext_volume *vol, float *out)
         const int len = n[axis], rows = n[1 - axis];
         const size_t stride = axis == 0 ? 1 : (size_t)n[0];
         const float step = (float)vol->grid.spacing[axis];
-        for (int k = 0; k < n[2]; k++) {
-            for (int r = 0; r < rows; r++) {
-                size_t base = plane * k + (axis == 0 ? (size_t)n[0] * r : (size_t)r);
-                float *o = out + 2 * base + axis;
-                const float *b = vol->beta + 2 * base;
-                int i = 0;
-                while (i < len) {
-                    size_t v = stride * i;
-                    if (!(b[2 * v] + b[2 * v + 1] >= LIGHT_CLEAR_BETA)) { /* clear, or NaN */
-                        o[2 * v] = 0.0f;
-                        i++;
-                        continue;
-                    }
-                    float w = 0.0f;
-                    int end = i;
-                    for (; end < len; end++) {
-                        size_t e = stride * end;
-                        float be = b[2 * e] + b[2 * e + 1];
-                        if (!(be >= LIGHT_CLEAR_BETA))
-                            break;
-                        w += fminf(be, 1e30f) * step;
-                    }
-                    for (int m = i; m < end; m++) { /* w >= LIGHT_CLEAR_BETA step > 0 */
-                        size_t e = stride * m;
-                        o[2 * e] = fminf(b[2 * e] + b[2 * e + 1], 1e30f) / w;
-                    }
-                    i = end;
+        for (int r = 0; r < rows; r++) {
+            size_t base = axis == 0 ? (size_t)n[0] * r : (size_t)r;
+            float *o = out + 2 * base + axis;
+            const float *b = vol->beta + 2 * (plane * (size_t)k + base);
+            int i = 0;
+            while (i < len) {
+                size_t v = stride * i;
+                if (!(b[2 * v] + b[2 * v + 1] >= LIGHT_CLEAR_BETA)) { /* clear, or NaN */
+                    o[2 * v] = 0.0f;
+                    i++;
+                    continue;
                 }
+                float w = 0.0f;
+                int end = i;
+                for (; end < len; end++) {
+                    size_t e = stride * end;
+                    float be = b[2 * e] + b[2 * e + 1];
+                    if (!(be >= LIGHT_CLEAR_BETA))
+                        break;
+                    w += fminf(be, 1e30f) * step;
+                }
+                for (int m = i; m < end; m++) { /* w >= LIGHT_CLEAR_BETA step > 0 */
+                    size_t e = stride * m;
+                    o[2 * e] = fminf(b[2 * e] + b[2 * e + 1], 1e30f) / w;
+                }
+                i = end;
             }
         }
     }
+}
+
+struct rates_job {
+    const struct ext_volume *vol;
+    float *out;
+};
+
+static bool rates_planes(void *ctx, int share, size_t begin, size_t end)
+{
+    const struct rates_job *j = ctx;
+    size_t plane = (size_t)j->vol->grid.n[0] * j->vol->grid.n[1];
+    for (size_t k = begin; k < end; k++)
+        light_lateral_rates_plane(j->vol, (int)k, j->out + 2 * plane * k);
+    return true;
+}
+
+void light_lateral_rates(const struct ext_volume *vol, float *out)
+{
+    struct rates_job j = {.vol = vol, .out = out};
+    parallel_for((size_t)vol->grid.n[2], 1, &j, rates_planes); /* a share of planes per CPU */
 }
 
 /* The terms of one slice, mixed by its ice share. */

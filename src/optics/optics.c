@@ -160,6 +160,25 @@ double optics_wrf_air_density(double p_total_pa, double theta_k)
     return p_total_pa / (WRF_RD * t_abs);                               /* ideal gas */
 }
 
+static double poisson_fast(double p_total_pa)
+{
+    return (double)powf((float)(p_total_pa / WRF_P0), (float)(WRF_RD / WRF_CP));
+}
+
+double optics_wrf_temperature_fast(double p_total_pa, double theta_k)
+{
+    if (!isfinite(p_total_pa) || !isfinite(theta_k) || p_total_pa <= 0.0 || theta_k <= 0.0)
+        return 0.0;
+    return theta_k * poisson_fast(p_total_pa);
+}
+
+double optics_wrf_air_density_fast(double p_total_pa, double theta_k)
+{
+    if (!isfinite(p_total_pa) || !isfinite(theta_k) || p_total_pa <= 0.0 || theta_k <= 0.0)
+        return 0.0;
+    return p_total_pa / (WRF_RD * theta_k * poisson_fast(p_total_pa));
+}
+
 /*
  * Phase functions.  Both share the factor (1 + g^2 - 2 g mu)^(3/2).  Written as a sum of two
  * non-negative terms it never cancels: for g >= 0, (1-g)^2 + 2g(1-mu); for g < 0,

@@ -56,6 +56,11 @@ double optics_wrf_air_density(double p_total_pa, double theta_k);
 /* Absolute air temperature [K] from the same: theta (p/p0)^(R_d/c_p); 0 when P_TOTAL or THETA
  * is not positive and finite. */
 double optics_wrf_temperature(double p_total_pa, double theta_k);
+/* The same two within float rounding (at most 2 float ulps apart, tests/unit/test_optics.c):
+ * the Poisson factor (p / p0)^(R_d / c_p) taken in single precision, a third of the time of
+ * the double one.  For loading a step's millions of values that are stored as floats. */
+double optics_wrf_air_density_fast(double p_total_pa, double theta_k);
+double optics_wrf_temperature_fast(double p_total_pa, double theta_k);
 
 /* Phase functions of the scattering angle's cosine MU, in 1/sr, normalised so that the
  * integral over the sphere is 1.  Finite for |g| <= 0.999 in both precisions: the

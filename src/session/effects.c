@@ -10,6 +10,7 @@
 #include <cglm/cglm.h>
 
 #include "common/log.h"
+#include "common/parallel.h"
 
 #define MEASURE_COLUMNS_MAX 128
 #define MEASURE_STEPS_MAX 4096
@@ -29,34 +30,80 @@ void effects_facts_init(struct effects_facts *f)
     memset(f, 0, sizeof(*f));
 }
 
-/* The share of VOL's extinction in narrow cloud (EFFECTS_NARROW_RATE), or -1 out of memory. */
-static double narrow_share(const struct ext_volume *vol, const struct optics_params *optics)
+/* Per plane of a volume: its extinction in narrow cloud (EFFECTS_NARROW_RATE), all of its
+ * extinction, and its ice and water extinction sums; the planes' sums are added in order
+ * afterwards, so the facts do not depend on how many threads made them. */
+struct plane_facts {
+    const struct ext_volume *vol;
+    const struct optics_params *optics;
+    double *narrow, *total, *ice, *water; /* [n2] each */
+};
+
+static bool facts_planes(void *ctx, int share, size_t begin, size_t end)
 {
-    size_t count = grid3_count(&vol->grid);
-    float *r = malloc(2 * count * sizeof(float));
-    if (!r) {
-        log_error("effects: out of memory for the lateral escape rates of %zu voxels", count);
-        return -1.0;
-    }
-    light_lateral_rates(vol, r);
-    double narrow = 0.0, total = 0.0;
-    for (size_t v = 0; v < count; v++) {
-        float bi = vol->beta[2 * v], bw = vol->beta[2 * v + 1];
-        double b = (bi > 0.0f ? (double)fminf(bi, 1e30f) : 0.0) +
-                   (bw > 0.0f ? (double)fminf(bw, 1e30f) : 0.0);
-        if (!(b > 0.0))
-            continue;
-        total += b;
-        double f_ice = bi > 0.0f ? fmin(bi, 1e30) / b : 0.0;
-        double g = optics->g_water + f_ice * (optics->g_ice - optics->g_water);
-        float gamma = (float)(0.75 * (1.0 - g));
-        float rate = fmaxf(light_lateral_escape(gamma, (float)(r[2 * v] / b), 0.0f),
-                           light_lateral_escape(gamma, 0.0f, (float)(r[2 * v + 1] / b)));
-        if (rate >= EFFECTS_NARROW_RATE)
-            narrow += b;
+    const struct plane_facts *pf = ctx;
+    const struct ext_volume *vol = pf->vol;
+    size_t plane = (size_t)vol->grid.n[0] * vol->grid.n[1];
+    float *r = malloc(2 * plane * sizeof(float)); /* one plane's lateral rates */
+    if (!r)
+        return false;
+    for (size_t k = begin; k < end; k++) {
+        light_lateral_rates_plane(vol, (int)k, r);
+        double narrow = 0.0, total = 0.0, ice = 0.0, water = 0.0;
+        const float *beta = vol->beta + 2 * plane * k;
+        for (size_t v = 0; v < plane; v++) {
+            float bi = beta[2 * v], bw = beta[2 * v + 1];
+            ice += bi > 0.0f ? bi : 0.0;
+            water += bw > 0.0f ? bw : 0.0;
+            double b = (bi > 0.0f ? (double)fminf(bi, 1e30f) : 0.0) +
+                       (bw > 0.0f ? (double)fminf(bw, 1e30f) : 0.0);
+            if (!(b > 0.0))
+                continue;
+            total += b;
+            double f_ice = bi > 0.0f ? fmin(bi, 1e30) / b : 0.0;
+            double g = pf->optics->g_water + f_ice * (pf->optics->g_ice - pf->optics->g_water);
+            float gamma = (float)(0.75 * (1.0 - g));
+            float rate = fmaxf(light_lateral_escape(gamma, (float)(r[2 * v] / b), 0.0f),
+                               light_lateral_escape(gamma, 0.0f, (float)(r[2 * v + 1] / b)));
+            if (rate >= EFFECTS_NARROW_RATE)
+                narrow += b;
+        }
+        pf->narrow[k] = narrow;
+        pf->total[k] = total;
+        pf->ice[k] = ice;
+        pf->water[k] = water;
     }
     free(r);
-    return total > 0.0 ? narrow / total : 0.0;
+    return true;
+}
+
+/* The share of VOL's extinction in narrow cloud and its ice and water sums, in one pass over
+ * the volume a share of planes per CPU, each plane's lateral rates made and used at once (a
+ * plane of scratch per thread, not a volume).  False (logged) out of memory. */
+static bool volume_sums(const struct ext_volume *vol, const struct optics_params *optics,
+                        double *narrow_share, double *ice, double *water)
+{
+    size_t n2 = (size_t)vol->grid.n[2];
+    double *sums = calloc(4 * n2, sizeof(double));
+    struct plane_facts pf = {.vol = vol, .optics = optics, .narrow = sums, .total = sums + n2,
+                             .ice = sums + 2 * n2, .water = sums + 3 * n2};
+    if (!sums || !parallel_for(n2, 1, &pf, facts_planes)) {
+        log_error("effects: out of memory for the lateral escape rates of a %d x %d plane",
+                  vol->grid.n[0], vol->grid.n[1]);
+        free(sums);
+        return false;
+    }
+    double narrow = 0.0, total = 0.0;
+    *ice = *water = 0.0;
+    for (size_t k = 0; k < n2; k++) {
+        narrow += pf.narrow[k];
+        total += pf.total[k];
+        *ice += pf.ice[k];
+        *water += pf.water[k];
+    }
+    free(sums);
+    *narrow_share = total > 0.0 ? narrow / total : 0.0;
+    return true;
 }
 
 bool effects_measure_volume(const struct ext_volume *vol, const double sun[3],
@@ -99,15 +146,8 @@ bool effects_measure_volume(const struct ext_volume *vol, const double sun[3],
             max_tau = fmax(max_tau, tau);
         }
     }
-    double ice = 0.0, water = 0.0;
-    size_t count = (size_t)g->n[0] * g->n[1] * g->n[2];
-    for (size_t v = 0; v < count; v++) {
-        float bi = vol->beta[2 * v], bw = vol->beta[2 * v + 1];
-        ice += bi > 0.0f ? bi : 0.0;
-        water += bw > 0.0f ? bw : 0.0;
-    }
-    double narrow = narrow_share(vol, optics);
-    if (narrow < 0.0)
+    double ice, water, narrow;
+    if (!volume_sums(vol, optics, &narrow, &ice, &water))
         return false;
     f->narrow_share = narrow;
     f->volume_known = true;

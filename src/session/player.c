@@ -94,6 +94,7 @@ struct player {
     int next_shown; /* effects.temporal: the step in the renderer's next volume, -1 none */
     uint64_t next_gen;
     bool wind_warned; /* the series' thread only */
+    bool histogram;   /* player_desc.histogram */
 };
 
 void look_from_config(const struct config *cfg, struct look *look)
@@ -236,7 +237,7 @@ static bool convert(struct player *p, struct field_volume *fv, const struct look
     }
     if (ok && ld->height_k > 0.0)
         ext_volume_stretch_height(out, ld->height_k);
-    if (ok)
+    if (ok && p->histogram)
         out->histogram = histogram_of(fv, &look->transfer); /* NULL: out of memory, no bars */
     return ok;
 }
@@ -275,8 +276,14 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
         /* The transfer function's field is read when it is chosen, shown or not: the editor's
          * histogram shows it. */
         enum transfer_field tff = look->transfer.field;
-        ok = data_source_load_fields_extra(p->src, step, tff == TRANSFER_FIELD_TEMPERATURE,
-                                           tff == TRANSFER_FIELD_WIND, &fv);
+        if (!look->transfer_on && !p->histogram)
+            tff = TRANSFER_FIELD_COUNT; /* no field but the mass ratios is wanted */
+        ok = data_source_load_fields_want(p->src, step,
+                                          &(struct data_fields_want){
+                                              .qvapor = tff == TRANSFER_FIELD_QVAPOR,
+                                              .temperature = tff == TRANSFER_FIELD_TEMPERATURE,
+                                              .wind = tff == TRANSFER_FIELD_WIND},
+                                          &fv);
         break;
     }
     }
@@ -317,7 +324,6 @@ static bool load_desc(const struct config *cfg, struct player_load *ld)
         ld->file_ptrs[i] = ld->files[i];
     }
     ld->source.files = ld->file_ptrs;
-    ld->source.wrf.qvapor = true;
     return true;
 }
 
@@ -355,6 +361,7 @@ struct player *player_create(const struct config *cfg, const struct player_desc 
     }
     p->steps = 1;
     p->next_shown = -1;
+    p->histogram = d && d->histogram;
     if (pthread_mutex_init(&p->lock, NULL) != 0) {
         free(p);
         return NULL;

@@ -52,6 +52,9 @@ struct player_desc {
     double delay_ms;    /* test hook: a slow reader */
     bool still;         /* nothing will play: no time series cache, no background thread */
     bool no_first;      /* do not make the first step (player_take_first) */
+    bool histogram;     /* each step carries the histogram of the look's transfer field (for
+                           the menu's transfer editor); without it that field (QVAPOR, say) is
+                           read only while the transfer function shows it */
 };
 
 /* Opens the scene's time steps (the data files once), makes the step data.step on the

@@ -287,7 +287,8 @@ struct session *session_create(const struct config *cfg, const struct session_de
     /* The data, opened once: the first step now, the rest behind a cache when time can play. */
     double t = time_now_ms();
     s->player = player_create(cfg, &(struct player_desc){.still = !d->playback,
-                                                         .delay_ms = d->load_delay_ms});
+                                                         .delay_ms = d->load_delay_ms,
+                                                         .histogram = d->menu});
     if (!s->player) {
         *rc = 1;
         goto error;

@@ -38,6 +38,17 @@ expect_exit 1 "bad effect value" "$anvil" effects --set effects.forward=maybe
 expect_exit 2 "effects: two configs" "$anvil" effects a.cfg b.cfg
 
 expect_exit 0 "bench --help" "$anvil" bench --help
+expect_exit 2 "bench: --load-only excludes --scale-only" "$anvil" bench --load-only --scale-only
+
+# The load benchmark (no GL): a small WRF series loaded against the plain read of it.
+TMPDIR="$tmp" "$anvil" bench --quick --load-only -o "$tmp/l" >"$tmp/out" 2>"$tmp/err"
+check "load bench exits 0" test $? -eq 0
+check "load table written" grep -q '^| a step, ms (median) | [0-9]* | [0-9]* | \*\*[0-9.]*\*\* |$' \
+    "$tmp/l/load-table.md"
+check "load table: 64 x 64 x 20 and its peak memory" \
+    grep -q '64 × 64 × 20 WRF series' "$tmp/l/load-table.md"
+check "load table: peak memory" grep -q '^| peak memory above the process' "$tmp/l/load-table.md"
+check "load bench leaves no file behind" test -z "$(ls "$tmp"/anvil-bench-load-* 2>/dev/null)"
 expect_exit 1 "bench: unknown scene" "$anvil" bench --scene nowhere
 expect_exit 2 "bench: exclusive options" "$anvil" bench --views-only --quality-only
 

@@ -1172,6 +1172,12 @@ static void test_lateral_rates(void **state)
     for (int i = 0; i < 2 * 10 * 6 * 2; i++)
         assert_true(isfinite(r[i]) && r[i] >= 0.0f);
     assert_float_equal(r[2 * (3 + 10 * (2 + 6 * 0))], 1e-3 / 0.1, 1e-7); /* split by the NaN */
+    /* Plane by plane (the effects' facts): each plane's values of the whole volume's, exactly. */
+    float plane[2 * 10 * 6];
+    for (int k = 0; k < 2; k++) {
+        light_lateral_rates_plane(&v, k, plane);
+        assert_memory_equal(plane, r + 2 * 10 * 6 * k, sizeof(plane));
+    }
     free(r);
     ext_volume_finish(&v);
 }

@@ -192,6 +192,31 @@ static void test_wrf_air_density(void **state)
     assert_true(optics_wrf_air_density(INFINITY, 300.0) == 0.0);
 }
 
+/* The single-precision Poisson factor the load path uses: over WRF's pressures (1 hPa to
+ * 1100 hPa) and potential temperatures, air density and temperature stored as floats are
+ * within 2 float ulps of the double formula's; the same refusals. */
+static void test_wrf_fast_forms(void **state)
+{
+    (void)state;
+    double worst = 0.0;
+    for (int i = 0; i <= 20000; i++) {
+        float p = 100.0f + (110000.0f - 100.0f) * (float)i / 20000.0f;
+        double theta = 250.0 + 0.013 * i;
+        float a = (float)optics_wrf_air_density(p, theta);
+        float b = (float)optics_wrf_air_density_fast(p, theta);
+        float ta = (float)optics_wrf_temperature(p, theta);
+        float tb = (float)optics_wrf_temperature_fast(p, theta);
+        double ua = fabs((double)a - b) / (nextafterf(a, INFINITY) - a);
+        double ut = fabs((double)ta - tb) / (nextafterf(ta, INFINITY) - ta);
+        worst = fmax(worst, fmax(ua, ut));
+    }
+    assert_true(worst <= 2.0);
+    assert_true(optics_wrf_air_density_fast(0.0, 300.0) == 0.0);
+    assert_true(optics_wrf_air_density_fast(85000.0, NAN) == 0.0);
+    assert_true(optics_wrf_temperature_fast(-1.0, 300.0) == 0.0);
+    assert_true(close_rel(optics_wrf_air_density_fast(85000.0, 300.0), 1.034146, 1e-6));
+}
+
 /* ---- phase functions --------------------------------------------------------------------- */
 
 static void test_phase_normalised(void **state)
@@ -444,6 +469,7 @@ int main(void)
         cmocka_unit_test(test_beta_bad_input),
         cmocka_unit_test(test_std_atmosphere),
         cmocka_unit_test(test_wrf_air_density),
+        cmocka_unit_test(test_wrf_fast_forms),
         cmocka_unit_test(test_phase_normalised),
         cmocka_unit_test(test_phase_float_finite),
         cmocka_unit_test(test_cumulative_ends_and_monotone),

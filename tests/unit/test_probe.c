@@ -439,10 +439,20 @@ static void test_histogram_counts(void **state)
             transfer_defaults(&cfg.look.transfer, TRANSFER_FIELD_TEMPERATURE);
         }
         log_set_level(LOG_ERROR);
+        /* Without a menu to show it, no histogram is made. */
+        log_set_level(LOG_ERROR);
         struct player *p = player_create(&cfg, &(struct player_desc){.still = true});
         log_set_level(LOG_INFO);
         assert_non_null(p);
         struct ext_volume vol;
+        assert_true(player_take_first(p, &vol));
+        assert_null(vol.histogram);
+        ext_volume_finish(&vol);
+        player_destroy(p);
+        log_set_level(LOG_ERROR);
+        p = player_create(&cfg, &(struct player_desc){.still = true, .histogram = true});
+        log_set_level(LOG_INFO);
+        assert_non_null(p);
         assert_true(player_take_first(p, &vol));
         assert_non_null(vol.histogram);
         const struct transfer_histogram *h = vol.histogram;

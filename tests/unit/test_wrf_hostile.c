@@ -323,6 +323,25 @@ static void test_implausible_heights(void **state)
     write_synth(path, 4, 4, 3, 2, 0);
     scale_var(path, "PH", 1.0f, -5000.0f * 9.81f);
     expect_refused(path, "a height of -5000 m in column (0, 0), level 0");
+    /* One column whose third staggered level lies at -500 m: its second mass level is below
+     * its first.  Named by its column, on a grid wide enough to be checked by several
+     * threads' shares, the first such column only. */
+    write_synth(path, 100, 100, 3, 2, 0);
+    int nc, ph, phb;
+    assert_int_equal(nc_open(path, NC_WRITE, &nc), NC_NOERR);
+    assert_int_equal(nc_inq_varid(nc, "PH", &ph), NC_NOERR);
+    assert_int_equal(nc_inq_varid(nc, "PHB", &phb), NC_NOERR);
+    const size_t at[2][2] = {{41, 77}, {45, 30}}; /* (x, y): a column in the second half, and
+                                                      the first in the file's order */
+    for (int c = 0; c < 2; c++) {
+        size_t idx[4] = {0, 2, at[c][1], at[c][0]};
+        float base;
+        assert_int_equal(nc_get_var1_float(nc, phb, idx, &base), NC_NOERR);
+        float v = -500.0f * 9.81f - base;
+        assert_int_equal(nc_put_var1_float(nc, ph, idx, &v), NC_NOERR);
+    }
+    assert_int_equal(nc_close(nc), NC_NOERR);
+    expect_refused(path, "heights do not increase upward in column (45, 30)");
 }
 
 static void test_implausible_times(void **state)

@@ -1,0 +1,244 @@
+/* The load path against values computed here from the file read with netcdf-c: every mass
+ * ratio voxel equals the column resampled alone (wrf_resample_column) from the file's values
+ * and heights, bit for bit; air density within float rounding of the double-precision formula
+ * resampled the same way; extinction equal to Nes eq. 5.3 summed per phase.  On the Katrina
+ * and Lambert samples and on a synthetic file read onto other levels, with a crop and a
+ * stride.  And QVAPOR is read only when asked. */
+#include "testutil.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <netcdf.h>
+
+#include "data/source.h"
+#include "data/synth.h"
+#include "data/volume.h"
+#include "data/wrf.h"
+#include "data/wrf_write.h"
+#include "optics/optics.h"
+
+#define CHECK(x) assert_int_equal((x), NC_NOERR)
+
+/* A variable of time TIME over the selection's columns on LEVELS levels (levels slowest). */
+static float *read_nc(int nc, const char *name, int time, int levels, int x0, int sx, int nx,
+                      int y0, int sy, int ny)
+{
+    int varid;
+    CHECK(nc_inq_varid(nc, name, &varid));
+    float *buf = malloc((size_t)levels * nx * ny * sizeof(float));
+    assert_non_null(buf);
+    size_t start[4] = {(size_t)time, 0, (size_t)y0, (size_t)x0};
+    size_t count[4] = {1, (size_t)levels, (size_t)ny, (size_t)nx};
+    ptrdiff_t stride[4] = {1, 1, sy, sx};
+    CHECK(nc_get_vars_float(nc, varid, start, count, stride, buf));
+    return buf;
+}
+
+/* Float ulps between A and B (both finite). */
+static double ulps(float a, float b)
+{
+    float m = fmaxf(fabsf(a), fabsf(b));
+    if (m == 0.0f)
+        return 0.0;
+    return fabs((double)a - (double)b) / (nextafterf(m, INFINITY) - m);
+}
+
+/* Reads step STEP of PATH with D and checks it voxel by voxel against the file. */
+static void check_step(const char *path, int step, const struct wrf_desc *d)
+{
+    struct wrf *w = wrf_open(&path, 1, 0.0);
+    assert_non_null(w);
+    const struct wrf_meta *m = wrf_get_meta(w);
+    struct field_volume out;
+    assert_true(wrf_read_step(w, step, d, &out, NULL));
+    const struct grid3 *g = &out.grid;
+
+    int x0 = d->crop[0] > 0 ? d->crop[0] : 0, y0 = d->crop[2] > 0 ? d->crop[2] : 0;
+    int sx = d->stride[0] > 1 ? d->stride[0] : 1, sy = d->stride[1] > 1 ? d->stride[1] : 1;
+    int nx = g->n[0], ny = g->n[1], nz = m->nz, no = g->n[2];
+    size_t cols = (size_t)nx * ny;
+    int nc;
+    CHECK(nc_open(path, NC_NOWRITE, &nc));
+    float *ph = read_nc(nc, "PH", step, nz + 1, x0, sx, nx, y0, sy, ny);
+    float *phb = read_nc(nc, "PHB", step, nz + 1, x0, sx, nx, y0, sy, ny);
+    float *p = read_nc(nc, "P", step, nz, x0, sx, nx, y0, sy, ny);
+    float *pb = read_nc(nc, "PB", step, nz, x0, sx, nx, y0, sy, ny);
+    float *t = read_nc(nc, "T", step, nz, x0, sx, nx, y0, sy, ny);
+    float *q[SPECIES_COUNT] = {NULL};
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        assert_true((out.q[f] != NULL) == m->has_species[f]);
+        if (m->has_species[f])
+            q[f] = read_nc(nc, species_wrf_name((enum species)f), step, nz, x0, sx, nx, y0, sy,
+                           ny);
+    }
+    CHECK(nc_close(nc));
+
+    double *z = malloc((size_t)nz * sizeof(double));
+    float *col = malloc((size_t)nz * sizeof(float));
+    float *res = malloc((size_t)no * sizeof(float));
+    assert_true(z && col && res);
+    double dz = g->spacing[2], z0 = g->origin[2];
+    size_t compared = 0, interpolated = 0;
+    double worst_rho = 0.0;
+    for (size_t c = 0; c < cols; c++) {
+        /* Heights as docs/data.md says: (PH + PHB) / g on staggered levels, mass levels half
+         * way. */
+        float zw0 = (float)(((double)ph[c] + phb[c]) / WRF_G);
+        float zwt = (float)(((double)ph[(size_t)nz * cols + c] + phb[(size_t)nz * cols + c]) /
+                            WRF_G);
+        for (int k = 0; k < nz; k++) {
+            size_t a = (size_t)k * cols + c, b = a + cols;
+            float za = (float)(((double)ph[a] + phb[a]) / WRF_G);
+            float zb = (float)(((double)ph[b] + phb[b]) / WRF_G);
+            z[k] = 0.5 * ((double)za + (double)zb);
+        }
+        for (int f = 0; f < SPECIES_COUNT; f++) {
+            if (!q[f])
+                continue;
+            for (int k = 0; k < nz; k++) {
+                float v = q[f][(size_t)k * cols + c];
+                col[k] = isfinite(v) && v >= 0.0f && v <= 1.0f ? v : 0.0f;
+            }
+            wrf_resample_column(z, col, nz, zw0, zwt, z0, dz, no, 0.0f, res, NULL);
+            for (int o = 0; o < no; o++) {
+                float got = out.q[f][cols * (size_t)o + c];
+                if (got != res[o])
+                    fail_msg("%s: %s column %zu level %d: %.9g, resampled alone %.9g", path,
+                             species_wrf_name((enum species)f), c, o, got, res[o]);
+                compared++;
+                interpolated += res[o] != 0.0f && res[o] != col[0];
+            }
+        }
+        for (int k = 0; k < nz; k++) {
+            size_t a = (size_t)k * cols + c;
+            double rho = optics_wrf_air_density((double)(p[a] + pb[a]), (double)t[a] + WRF_T0);
+            col[k] = rho > 0.0 ? (float)rho : NAN;
+        }
+        wrf_resample_column(z, col, nz, zw0, zwt, z0, dz, no, NAN, res, NULL);
+        for (int o = 0; o < no; o++) {
+            float want = isfinite(res[o]) ? res[o]
+                                          : (float)optics_std_atmosphere_density(
+                                                z0 + (o + 0.5) * dz);
+            double u = ulps(out.rho_air[cols * (size_t)o + c], want);
+            worst_rho = u > worst_rho ? u : worst_rho;
+        }
+    }
+    /* Nes eq. 5.3 per voxel, summed per phase in species order. */
+    struct optics_params op;
+    optics_params_defaults(&op);
+    struct ext_volume ext;
+    assert_true(ext_volume_from_fields(&out, &op, NULL, &ext));
+    for (size_t i = 0; i < grid3_count(g); i++) {
+        double sum[2] = {0.0, 0.0};
+        for (int f = 0; f < SPECIES_COUNT; f++) {
+            if (out.q[f] && out.q[f][i] > 0.0f)
+                sum[species_is_ice((enum species)f) ? 0 : 1] +=
+                    3.0 * out.rho_air[i] * out.q[f][i] / (2.0 * op.density[f] * op.radius_m[f]);
+        }
+        assert_true(ext.beta[2 * i] == (float)sum[0]);
+        assert_true(ext.beta[2 * i + 1] == (float)sum[1]);
+    }
+    print_message("%s step %d: %zu mass ratios equal (%zu between levels), air density within "
+                  "%.2f ulps\n",
+                  path, step, compared, interpolated, worst_rho);
+    assert_true(compared > 0);
+    assert_true(interpolated > 0); /* the comparison saw resampling, not copies */
+    assert_true(worst_rho <= 2.0);
+
+    ext_volume_finish(&ext);
+    free(z);
+    free(col);
+    free(res);
+    free(ph);
+    free(phb);
+    free(p);
+    free(pb);
+    free(t);
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        free(q[f]);
+    field_volume_finish(&out);
+    wrf_close(w);
+}
+
+static void test_katrina(void **state)
+{
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    check_step(test_shared_data("wrf/katrina_2005_mercator_wsm3.nc"), 2, &d);
+    d.levels = 40; /* finer than the model's 14 levels */
+    d.stride[0] = 2;
+    d.stride[1] = 3;
+    d.crop[0] = 5;
+    d.crop[2] = 7;
+    check_step(test_shared_data("wrf/katrina_2005_mercator_wsm3.nc"), 1, &d);
+}
+
+static void test_lambert(void **state)
+{
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    check_step(test_shared_data("wrf/lambert_thompson_cropped.nc"), 3, &d);
+    d.levels = 11;
+    check_step(test_shared_data("wrf/lambert_thompson_cropped.nc"), 0, &d);
+}
+
+static void test_synth(void **state)
+{
+    char path[512];
+    snprintf(path, sizeof(path), "%s", test_tmp_path("synth.nc"));
+    struct synth_desc sd = {
+        .kind = SYNTH_STORM, .n = {40, 30, 24}, .extent_m = {80000.0, 60000.0, 15000.0}, .seed = 5};
+    struct field_volume in;
+    assert_true(synth_storm_fields(&sd, &in));
+    struct wrf_writer *ww = wrf_writer_create(path, &in.grid, NULL);
+    assert_non_null(ww);
+    assert_true(wrf_writer_add(ww, &in, "2000-01-01_00:00:00"));
+    assert_true(wrf_writer_finish(ww));
+    field_volume_finish(&in);
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    d.levels = 37; /* not the file's 24: every output between two levels */
+    check_step(path, 0, &d);
+    d.stride[0] = 3;
+    d.crop[2] = 4;
+    d.crop[3] = 25;
+    check_step(path, 0, &d);
+}
+
+/* QVAPOR is read when a load asks for it, not otherwise. */
+static void test_qvapor_when_asked(void **state)
+{
+    const char *files[] = {test_shared_data("wrf/katrina_2005_mercator_wsm3.nc")};
+    struct data_source_desc sd = {.format = DATA_SOURCE_WRF, .files = files, .file_count = 1};
+    wrf_desc_defaults(&sd.wrf);
+    optics_params_defaults(&sd.optics);
+    species_select_defaults(&sd.select);
+    struct data_source *s = data_source_open(&sd);
+    assert_non_null(s);
+    assert_true(wrf_get_meta(data_source_wrf(s))->has_qvapor);
+    struct field_volume v;
+    assert_true(data_source_load_fields_want(s, 0, &(struct data_fields_want){0}, &v));
+    assert_null(v.qvapor);
+    assert_null(v.temperature);
+    assert_non_null(v.q[SPECIES_CLOUD]);
+    field_volume_finish(&v);
+    assert_true(data_source_load_fields_want(s, 0, &(struct data_fields_want){.qvapor = true}, &v));
+    assert_non_null(v.qvapor);
+    assert_null(v.temperature);
+    field_volume_finish(&v);
+    data_source_close(s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_katrina),
+        cmocka_unit_test(test_lambert),
+        cmocka_unit_test(test_synth),
+        cmocka_unit_test(test_qvapor_when_asked),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
