@@ -14,6 +14,10 @@
 // temporal_f) from a second extinction texture (the light map pair is LIGHTMAP_PAIR).
 // MULTIPLE 1 = multiple scattering (effects.multiple): the light map's diffuse light (an
 // Eddington field along the light) is scattered toward the eye beside the sun's.
+// LAYERS N (0 to 4) = N colour-mapped layers (docs/analysis.md): each step samples every
+// layer's field (trilinear), classifies it by its colour map (post-classification) and either
+// adds an emitting, absorbing medium of the map's colour (emit) or tints the clouds' scattered
+// light (tint); see march_step.  An emitting layer turns SKIP off (render.c).
 // SKIP 1 = empty-space skipping (render/cells.c): steps whose extinction sample lies in a
 // macro cell holding nothing are leapt, exactly (they would add nothing and take nothing off);
 // with TEMPORAL the cells hold the larger of both steps.  COUNT 1 = add what each ray did
@@ -120,6 +124,47 @@ uint n_beta = 0u, n_light = 0u, n_cells = 0u, n_leapt = 0u;
 #if TINT
 layout(binding = BIND_EYE_TEX_TINT) uniform sampler3D tint_tex; // rgb: colour of scattered light
 #endif
+#ifndef LAYERS
+#define LAYERS 0
+#endif
+#if LAYERS
+layout(binding = BIND_EYE_TEX_LAYERS) uniform sampler3D layer_tex;   // channel i: layer i's field
+layout(binding = BIND_EYE_TEX_LAYER_LUT) uniform sampler2D layer_lut; // row i: rgb, alpha over x
+uniform vec4 layer_lo;       // field value at the map's first entry
+uniform vec4 layer_scale;    // 1 / (hi - lo)
+uniform vec4 layer_strength; // emit: extinction at alpha 1 (1/m); tint: the tint's weight; 0 off
+uniform vec4 layer_tint;     // 1: tint mode, 0: emit
+uniform vec2 layer_lut_size; // entries per map, maps
+
+// The layers at P: EMIT.rgb the emitting layers' sum of extinction times colour, EMIT.a their
+// extinction (1/m); TINT the product of the tinting layers' colours.
+void layers_at(vec3 p, out vec4 emit, out vec3 tint)
+{
+    vec4 s = texture(layer_tex, (p - box_min) / box_size);
+    emit = vec4(0.0);
+    tint = vec3(1.0);
+    for (int i = 0; i < LAYERS; i++) {
+        if (layer_strength[i] <= 0.0 || isnan(s[i]))
+            continue;
+        float x = clamp((s[i] - layer_lo[i]) * layer_scale[i], 0.0, 1.0);
+        vec2 uv = vec2((x * (layer_lut_size.x - 1.0) + 0.5) / layer_lut_size.x,
+                       (float(i) + 0.5) / layer_lut_size.y);
+        vec4 c = texture(layer_lut, uv);
+        if (layer_tint[i] > 0.5) {
+            tint *= mix(vec3(1.0), c.rgb, clamp(c.a * layer_strength[i], 0.0, 1.0));
+        } else {
+            float sigma = c.a * layer_strength[i];
+            emit += vec4(c.rgb * sigma, sigma);
+        }
+    }
+}
+
+// (1 - e^-x) / x, 1 at x = 0.
+float absorbed_share(float x)
+{
+    return x < 1e-4 ? 1.0 - 0.5 * x : (1.0 - exp(-x)) / x;
+}
+#endif
 #if TEMPORAL
 layout(binding = BIND_EYE_TEX_BETA_NEXT) uniform sampler3D beta_next_tex; // step k + 1, as beta_tex
 #endif
@@ -183,10 +228,37 @@ vec2 beta_at(vec3 p)
 // One step of the ray ORIGIN + t DIR over [TA, TA + DS] with beta B (ice phase, water phase)
 // and the eye phases PHASE: adds what it scatters toward the eye to RADIANCE and takes its
 // transmittance off TRANS.
+// With LAYERS the step holds the layers' medium too, each at its value at the step's middle:
+// the emitting layers add extinction sigma = sum alpha_i s_i and emission sum sigma_i c_i
+// (Max 1995's emission-absorption model), the clouds' beta keeps its own light.  Over a step
+// of constant coefficients the exact solution of dL/ds = -(beta + sigma) L + j is
+// L += T (1 - e^-(tau + tau_l)) j / (beta + sigma): each medium's light takes its share of the
+// step's extinction, and both are attenuated by the sum.  So the layers add
+// T f(tau + tau_l) ds sum sigma_i c_i and the clouds' light is scaled by f(tau + tau_l) / f(tau),
+// f(x) = (1 - e^-x) / x; the transmittance is multiplied by e^-(tau + tau_l).
 void march_step(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
                 inout vec3 radiance, inout float trans)
 {
     float beta = b.r + b.g;
+#if LAYERS
+    vec4 emit;
+    vec3 tint;
+    float layer_trans = 1.0;
+    layers_at(origin + dir * (ta + 0.5 * ds), emit, tint);
+    if (emit.a > 0.0) {
+        float tau_l = emit.a * ds, tau_c = max(beta, 0.0) * ds;
+        float f_all = absorbed_share(tau_c + tau_l);
+        radiance += trans * f_all * ds * emit.rgb;
+        if (beta <= 0.0) {
+            trans *= exp(-tau_l);
+            return;
+        }
+        // The clouds' share, below, is scaled by f_all / f(tau); the layers' transmittance
+        // is taken off after it.
+        tint *= f_all / absorbed_share(tau_c);
+        layer_trans = exp(-tau_l);
+    }
+#endif
     if (beta <= 0.0)
         return;
     float tau = beta * ds;
@@ -213,14 +285,23 @@ void march_step(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
                                  lightmap_light(origin + dir * (ta + ds)),
                                  tau);
 #endif
+#if !LAYERS
+    vec3 tint = vec3(1.0);
+#endif
 #if TINT
     vec3 p = origin + dir * (ta + 0.5 * ds);
-    vec3 tint = texture(tint_tex, (p - box_min) / box_size).rgb;
+    tint *= texture(tint_tex, (p - box_min) / box_size).rgb;
+#endif
+#if TINT || LAYERS
     radiance += trans * light * sun_radiance * tint;
 #else
     radiance += trans * light * sun_radiance;
 #endif
+#if LAYERS
+    trans *= ts * layer_trans;
+#else
     trans *= ts;
+#endif
 }
 
 void main()

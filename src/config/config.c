@@ -38,7 +38,42 @@ static const char *const coast_res_names[] = {"crude", "low", "intermediate", NU
 static const char *const overlay_when_names[] = {"run", "always", "never", NULL};
 static const char *const probe_mode_names[] = {"first_visible", "distance", NULL};
 
+static const char *const layer_field_names[] = {"qvapor", "condensate", "temperature", "wind",
+                                                "theta",  "rh",         NULL};
+static_assert(sizeof(layer_field_names) / sizeof(layer_field_names[0]) ==
+                  TRANSFER_FIELD_COUNT + 1,
+              "a name per transfer field");
+static const char *const layer_mode_names[] = {"emit", "tint", NULL};
+
 /* clang-format off */
+#define LOFF(member) offsetof(struct config_layer, member)
+static const struct config_field layer_fields[] = {
+    {.path = "field", .type = T_ENUM, .n = 1, .offset = LOFF(field), .names = layer_field_names,
+     .flags = F_GIVEN, .given = LOFF(has_field),
+     .help = "the field shown: qvapor, condensate, temperature, wind (speed), theta (potential "
+             "temperature) or rh (relative humidity); default: the transfer function's"},
+    {.path = "transfer", .type = T_TRANSFER, .n = 1, .offset = LOFF(transfer), .flags = F_GIVEN,
+     .given = LOFF(has_transfer),
+     .help = "its colour map: a transfer function file's name or its group in place "
+             "(docs/menu.md); default: the field's default function"},
+    {.path = "opacity", .type = T_DOUBLE, .n = 1, .offset = LOFF(opacity), .min = 0, .max = 1e3,
+     .def = {1.0},
+     .help = "multiplies the layer's extinction (emit) or the strength of its tint"},
+    {.path = "mode", .type = T_ENUM, .n = 1, .offset = LOFF(mode), .names = layer_mode_names,
+     .def = {0},
+     .help = "\"emit\": the layer glows in its colour and hides what is behind it by its "
+             "alpha; \"tint\": it colours the clouds' scattered light instead"},
+    {.path = "enabled", .type = T_BOOL, .n = 1, .offset = LOFF(enabled), .max = 1, .def = {1},
+     .help = "shown (false: kept for the menu)"},
+};
+static const struct config_table layer_table = {
+    .fields = layer_fields,
+    .count = (int)(sizeof(layer_fields) / sizeof(layer_fields[0])),
+    .size = sizeof(struct config_layer),
+    .example = "look.layers.[0].opacity=0.5",
+    .elem_name = "layer",
+};
+
 #define OFF(member) offsetof(struct config, member)
 
 #define BOOL(p, m, d, h) \
@@ -229,13 +264,19 @@ static const struct config_field settings[] = {
     {.path = "look.species.*.tint", .type = T_DOUBLE, .n = 3, .offset = OFF(look.tint),
      .stride = sizeof(double[3]), .min = 0, .max = 1, .flags = F_SPECIES, .def = {1, 1, 1},
      .help = "the colour this species' scattered light takes, linear RGB (white: none)"},
+    {.path = "look.layers", .type = T_GROUPS, .offset = OFF(look.layers),
+     .count_offset = OFF(look.layer_count), .min = 0, .max = TRANSFER_LAYER_MAX,
+     .flags = F_GIVEN, .given = OFF(look.has_layers), .elems = &layer_table,
+     .def_elems = NULL, .def_count = 0,
+     .help = "colour-mapped fields composited with the clouds (docs/analysis.md), each a group "
+             "of the look.layers.[i] settings, at most 4"},
     {.path = "look.transfer", .type = T_TRANSFER, .n = 1, .offset = OFF(look.transfer),
      .flags = F_GIVEN, .given = OFF(look.has_transfer),
-     .help = "a transfer function for one field (docs/menu.md: its file's name, or the "
-             "file's transfer group written in place; \"none\": none); shown instead of the "
-             "clouds unless look.show_transfer is false"},
+     .help = "older files' one transfer function (its file's name, or its group in place; "
+             "\"none\": none): read as the first layer, in \"emit\" mode, when look.layers is "
+             "not given (the two do not go together)"},
     BOOL("look.show_transfer", look.show_transfer, 1,
-         "show look.transfer (false: keep it for the menu, show the clouds)"),
+         "with look.transfer: whether that layer is on"),
 
     BOOL("probe.on", probe.on, 0,
          "start with the probe on (anvil run, scripted renders: the values at the wand or "
@@ -356,6 +397,22 @@ bool config_validate(const struct config *cfg)
     if (cfg->scene.kind == SCENE_DATA && cfg->data.file_count == 0) {
         log_error("%s%sdata.files: scene.kind = \"data\" needs at least one file", file, colon);
         return false;
+    }
+    if (cfg->look.has_layers && cfg->look.has_transfer) {
+        log_error("%s%slook.transfer: give the layers' functions in look.layers (look.transfer "
+                  "is the one function of older files), not both",
+                  file, colon);
+        return false;
+    }
+    for (int i = 0; i < cfg->look.layer_count; i++) {
+        const struct config_layer *l = &cfg->look.layers[i];
+        if (l->has_field && l->has_transfer && (int)l->transfer.field != l->field) {
+            log_error("%s%slook.layers.[%d].field: \"%s\" differs from its transfer "
+                      "function's field \"%s\"",
+                      file, colon, i, transfer_field_name((enum transfer_field)l->field),
+                      transfer_field_name(l->transfer.field));
+            return false;
+        }
     }
     static const char axes[] = "xyz";
     for (int a = 0; a < 3; a++) {

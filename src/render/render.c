@@ -1,5 +1,6 @@
 #include "render/render.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -33,6 +34,12 @@ struct renderer {
     bool have_tint;
     struct grid3 grid;
     bool have_volume;
+    struct gpu_texture layer_fields; /* RGBA32F 3D: the volume's layers' fields (LAYERS) */
+    enum transfer_field layer_field[TRANSFER_LAYER_MAX];
+    bool layer_held[TRANSFER_LAYER_MAX]; /* the volume has layer i's field */
+    struct gpu_texture layer_lut;    /* RGBA32F 2D: a colour map per row */
+    struct render_layer layers[TRANSFER_LAYER_MAX];
+    int layer_count;
     struct gpu_texture beta_next; /* effects.temporal: step k + 1 (TEMPORAL 1) */
     struct grid3 grid_next;
     bool have_next;
@@ -126,6 +133,8 @@ void renderer_destroy(struct renderer *r)
     gpu_texture_finish(&r->beta);
     gpu_texture_finish(&r->beta_next);
     gpu_texture_finish(&r->tint);
+    gpu_texture_finish(&r->layer_fields);
+    gpu_texture_finish(&r->layer_lut);
     gpu_texture_finish(&r->phase);
     gpu_program_finish(&r->tonemap);
     gpu_program_finish(&r->tonemap_packed);
@@ -184,6 +193,121 @@ static bool put_beta(struct renderer *r, struct gpu_texture *tex, const struct e
     return true;
 }
 
+/* The layers' fields of VOL into one RGBA32F texture (none: the texture goes). */
+static bool put_layer_fields(struct renderer *r, const struct ext_volume *vol)
+{
+    bool any = false;
+    for (int i = 0; i < TRANSFER_LAYER_MAX; i++) {
+        r->layer_held[i] = vol->layer[i] != NULL;
+        r->layer_field[i] = vol->layer_field[i];
+        any |= r->layer_held[i];
+    }
+    if (!any) {
+        gpu_texture_finish(&r->layer_fields);
+        return true;
+    }
+    const int *n = vol->grid.n;
+    if (!r->layer_fields.id || memcmp(r->layer_fields.size, n, sizeof(int) * 3) != 0) {
+        gpu_texture_finish(&r->layer_fields);
+        if (!gpu_texture_init(&r->layer_fields, 3, n, GPU_RGBA32F, NULL))
+            return false;
+    }
+    /* Eight z layers at a time: the interleaved copy stays small. */
+    size_t plane = (size_t)n[0] * n[1];
+    int step = 8;
+    float *tmp = malloc(plane * (size_t)step * 4 * sizeof(float));
+    if (!tmp) {
+        log_error("out of memory uploading the layers' fields");
+        return false;
+    }
+    for (int z = 0; z < n[2]; z += step) {
+        int count = n[2] - z < step ? n[2] - z : step;
+        size_t base = plane * (size_t)z;
+        for (size_t v = 0; v < plane * (size_t)count; v++)
+            for (int i = 0; i < 4; i++)
+                tmp[4 * v + i] = vol->layer[i] ? vol->layer[i][base + v] : 0.0f;
+        gpu_texture_upload_layers(&r->layer_fields, z, count, tmp);
+    }
+    free(tmp);
+    return true;
+}
+
+void render_layer_from_transfer(const struct transfer_layer *l, struct render_layer *out)
+{
+    memset(out, 0, sizeof(*out));
+    const struct transfer_function *tf = &l->tf;
+    out->on = l->enabled && l->opacity > 0.0;
+    out->tint = l->mode == TRANSFER_LAYER_TINT;
+    out->field = tf->field;
+    out->lo = (float)tf->lo;
+    out->hi = (float)tf->hi;
+    out->strength = (float)(out->tint ? l->opacity : tf->density * l->opacity);
+    for (int i = 0; i < RENDER_LAYER_LUT; i++)
+        for (int c = 0; c < TRANSFER_CHANNELS; c++)
+            out->lut[i][c] =
+                transfer_eval(tf, (enum transfer_channel)c, (float)i / (RENDER_LAYER_LUT - 1));
+}
+
+bool renderer_set_layers(struct renderer *r, const struct render_layer *layers, int count)
+{
+    assert(count >= 0 && count <= TRANSFER_LAYER_MAX);
+    if (count == r->layer_count && r->layer_lut.id &&
+        memcmp(layers, r->layers, (size_t)count * sizeof(*layers)) == 0)
+        return true;
+    memset(r->layers, 0, sizeof(r->layers));
+    if (count > 0)
+        memcpy(r->layers, layers, (size_t)count * sizeof(*layers));
+    r->layer_count = count;
+    static float table[TRANSFER_LAYER_MAX][RENDER_LAYER_LUT][4];
+    memset(table, 0, sizeof(table));
+    for (int i = 0; i < count; i++)
+        memcpy(table[i], layers[i].lut, sizeof(table[i]));
+    if (r->layer_lut.id) {
+        gpu_texture_upload(&r->layer_lut, table);
+        return true;
+    }
+    const int size[3] = {RENDER_LAYER_LUT, TRANSFER_LAYER_MAX, 1};
+    return gpu_texture_init(&r->layer_lut, 2, size, GPU_RGBA32F, table);
+}
+
+/* The layers the next draw shows: on, and over a field the volume holds.  Returns how many of
+ * the first layers the pass reads (the LAYERS define) and whether one of them emits. */
+static int layers_shown(const struct renderer *r, bool *emits)
+{
+    int n = 0;
+    *emits = false;
+    if (!r->layer_fields.id)
+        return 0;
+    for (int i = 0; i < r->layer_count; i++) {
+        const struct render_layer *l = &r->layers[i];
+        if (l->on && l->strength > 0.0f && r->layer_held[i] && r->layer_field[i] == l->field) {
+            n = i + 1;
+            *emits |= !l->tint;
+        }
+    }
+    return n;
+}
+
+static void layer_uniforms(const struct renderer *r, const struct gpu_program *prog, int n)
+{
+    float lo[4] = {0}, scale[4] = {0}, strength[4] = {0}, tint[4] = {0};
+    for (int i = 0; i < n; i++) {
+        const struct render_layer *l = &r->layers[i];
+        if (!(l->on && r->layer_held[i] && r->layer_field[i] == l->field))
+            continue;
+        lo[i] = l->lo;
+        scale[i] = l->hi > l->lo ? 1.0f / (l->hi - l->lo) : 0.0f;
+        strength[i] = l->strength;
+        tint[i] = l->tint ? 1.0f : 0.0f;
+    }
+    gpu_uniform_vec4(prog, "layer_lo", lo);
+    gpu_uniform_vec4(prog, "layer_scale", scale);
+    gpu_uniform_vec4(prog, "layer_strength", strength);
+    gpu_uniform_vec4(prog, "layer_tint", tint);
+    const float size[2] = {(float)RENDER_LAYER_LUT, (float)TRANSFER_LAYER_MAX};
+    gpu_uniform_vec2(prog, "layer_lut_size", size);
+}
+
 bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
 {
     double start = time_now_ms();
@@ -200,11 +324,14 @@ bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
     } else {
         gpu_texture_finish(&r->tint);
     }
+    if (!put_layer_fields(r, vol))
+        return false;
     r->grid = vol->grid;
     r->have_volume = true;
     r->pair_stale = true;
     size_t voxels = (size_t)n[0] * n[1] * n[2];
-    r->stats.upload_bytes += voxels * (r->half ? 4 : 8) + (vol->tint ? voxels * 4 : 0);
+    r->stats.upload_bytes += voxels * (r->half ? 4 : 8) + (vol->tint ? voxels * 4 : 0) +
+                             (r->layer_fields.id ? voxels * 16 : 0);
     r->stats.uploads++;
     if (!render_cells_build(&r->cells, &r->cell_programs, &r->beta, NULL))
         return false;
@@ -438,17 +565,23 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
                                               : "#define PHASE_MIX 0\n#define PHASE_ICE 0\n";
     /* Empty-space skipping reads the cells of what the pass samples: with temporal the pair's.
      * It takes two passes (raycast.comp, PASS 1 and 2); without it one (PASS 0). */
+    bool emits;
+    int layers = layers_shown(r, &emits);
+    char layer_define[32] = "";
+    if (layers > 0)
+        snprintf(layer_define, sizeof(layer_define), "#define LAYERS %d\n", layers);
+    /* An emitting layer fills space the cells call empty: no skipping then. */
     const struct render_cells *cells = NULL;
-    if (!s->no_skip)
+    if (!s->no_skip && !emits)
         cells = temporal ? renderer_pair_cells(r) : (r->cells.levels ? &r->cells : NULL);
     const struct gpu_program *progs[2] = {NULL, NULL};
     for (int pass = 0; pass < (cells ? 2 : 1); pass++) {
-        snprintf(defines, sizeof(defines), "%s%s%s%s%s%s%s%s#define PASS %d\n", light_defines,
+        snprintf(defines, sizeof(defines), "%s%s%s%s%s%s%s%s%s#define PASS %d\n", light_defines,
                  opaque ? "#define OPAQUE 1\n" : "", phase,
                  s->no_ground_shadow ? "#define GROUND_SHADOW 0\n" : "",
                  r->have_tint ? "#define TINT 1\n" : "", temporal ? "#define TEMPORAL 1\n" : "",
                  cells ? "#define SKIP 1\n" : "", r->counting ? "#define COUNT 1\n" : "",
-                 cells ? pass + 1 : 0);
+                 layer_define, cells ? pass + 1 : 0);
         progs[pass] = variant(r, defines);
         if (!progs[pass])
             return false;
@@ -460,8 +593,15 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     memcpy(viewm, view->view, sizeof(viewm));
     glm_mat4_mul(proj, viewm, vp);
     glm_mat4_inv(vp, inv);
-    for (int pass = 0; pass < (cells ? 2 : 1); pass++)
+    for (int pass = 0; pass < (cells ? 2 : 1); pass++) {
         eye_uniforms(r, progs[pass], s, view, inv, cells);
+        if (layers > 0)
+            layer_uniforms(r, progs[pass], layers);
+    }
+    if (layers > 0) {
+        gpu_texture_bind(&r->layer_fields, BIND_EYE_TEX_LAYERS);
+        gpu_texture_bind(&r->layer_lut, BIND_EYE_TEX_LAYER_LUT);
+    }
     gpu_texture_bind(&r->beta, BIND_EYE_TEX_BETA);
     gpu_texture_bind(&r->phase, BIND_EYE_TEX_PHASE);
     if (r->have_tint)

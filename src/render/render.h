@@ -113,6 +113,31 @@ bool renderer_has_next(const struct renderer *r);
 const struct gpu_texture *renderer_next_texture(const struct renderer *r);
 const struct grid3 *renderer_next_grid(const struct renderer *r);
 
+/* ---- colour-mapped layers (docs/analysis.md) ---------------------------------------------
+ * Up to TRANSFER_LAYER_MAX scalar fields beside the extinction (ext_volume.layer, uploaded by
+ * renderer_set_volume into one RGBA32F texture, a field per channel), each classified after
+ * trilinear interpolation by its colour map (a row of an RGBA32F table, linear filtering). */
+#define RENDER_LAYER_LUT 256
+
+struct render_layer {
+    bool on;
+    bool tint;                        /* tints the clouds' light instead of emitting */
+    enum transfer_field field;        /* drawn only while the volume's layer holds this field */
+    float lo, hi;                     /* field values at the map's first and last entry */
+    float strength;                   /* emit: extinction at alpha 1, 1/m; tint: its weight */
+    float lut[RENDER_LAYER_LUT][4];   /* linear RGB and alpha, entry i at lo + i/(N-1) (hi-lo) */
+};
+
+/* L as the eye pass draws it: its transfer function tabulated, the extinction at alpha 1 its
+ * density times its opacity (emit) or the tint's weight its opacity (tint).  No GL. */
+void render_layer_from_transfer(const struct transfer_layer *l, struct render_layer *out);
+
+/* Draws the following views with LAYERS[0 .. COUNT) (COUNT <= TRANSFER_LAYER_MAX; 0: none),
+ * layer i over the volume's field i.  The maps are uploaded only when they changed.  An
+ * emitting layer that is on turns empty-space skipping off for the eye pass (the cells know
+ * only the clouds).  False (logged) when the table cannot be made. */
+bool renderer_set_layers(struct renderer *r, const struct render_layer *layers, int count);
+
 /* Tabulates the eye phase functions. */
 bool renderer_set_optics(struct renderer *r, const struct optics_params *optics);
 

@@ -136,8 +136,8 @@ static void model_from_session(struct session *s, struct menu_model *m)
         m->species_scale[f] = look->select.scale[f];
         memcpy(m->species_tint[f], look->tint.rgb[f], sizeof(m->species_tint[f]));
     }
-    m->transfer_on = look->transfer_on;
-    m->transfer = look->transfer;
+    m->transfer_on = look->layer_count > 0 && look->layers[0].enabled;
+    m->transfer = *look_edited_transfer(look);
     m->sun_azimuth = fmod(s->sun_az + 360.0, 360.0);
     m->sun_elevation = s->sun_el;
     m->step_m = s->settings.step_m;
@@ -582,15 +582,17 @@ void session_look_text(const struct session *s, char *buf, size_t size)
                 look->select.scale[sp], (double)t[0], (double)t[1], (double)t[2]);
     }
     fprintf(f, "    };\n");
-    struct transfer_function plain;
-    transfer_defaults(&plain, TRANSFER_FIELD_QVAPOR);
-    if (look->transfer_on || !transfer_equal(&look->transfer, &plain)) {
-        transfer_file_write_group(f, "transfer", &look->transfer, "    ");
-        fprintf(f, "    show_transfer = %s;\n", look->transfer_on ? "true" : "false");
-    } else {
-        fprintf(f, "    transfer = \"none\";\n");
+    fprintf(f, "    layers = (");
+    for (int i = 0; i < look->layer_count; i++) {
+        const struct transfer_layer *l = &look->layers[i];
+        fprintf(f, "%s\n        {\n            field = \"%s\";\n", i ? "," : "",
+                transfer_field_name(l->tf.field));
+        transfer_file_write_group(f, "transfer", &l->tf, "            ");
+        fprintf(f, "            opacity = %.17e;\n            mode = \"%s\";\n"
+                   "            enabled = %s;\n        }",
+                l->opacity, transfer_layer_mode_name(l->mode), l->enabled ? "true" : "false");
     }
-    fprintf(f, "};\n");
+    fprintf(f, "%s);\n};\n", look->layer_count ? "\n    " : "");
     if (set->probe.on)
         fprintf(f, "probe = { on = true; mode = \"%s\"; threshold = %.17e; distance = %.17e; };\n",
                 set->probe.mode == PROBE_AT_DISTANCE ? "distance" : "first_visible",
@@ -660,6 +662,24 @@ static void transfer_path(const struct session *s, int slot, char *buf, size_t s
     snprintf(buf, size, "%s/tf-%d.cfg", s->transfers_dir, slot + 1);
 }
 
+/* The transfer editor's function and its on/off into LOOK's first layer (made, emitting and
+ * opaque, when the look has none and the edit is more than the untouched default off). */
+static void edit_layer0(struct look *look, bool on, const struct transfer_function *tf)
+{
+    if (look->layer_count == 0) {
+        struct transfer_function plain;
+        transfer_defaults(&plain, TRANSFER_FIELD_QVAPOR);
+        if (!on && transfer_equal(tf, &plain))
+            return;
+        look->layer_count = 1;
+        look->layers[0] = (struct transfer_layer){
+            .enabled = on, .mode = TRANSFER_LAYER_EMIT, .opacity = 1.0, .tf = *tf};
+        return;
+    }
+    look->layers[0].enabled = on;
+    look->layers[0].tf = *tf;
+}
+
 static void apply_changes(struct session *s, unsigned ch)
 {
     struct menu_model *m = menu_model(s->menu);
@@ -677,8 +697,7 @@ static void apply_changes(struct session *s, unsigned ch)
             set.look.select.scale[sp] = m->species_scale[sp];
             memcpy(set.look.tint.rgb[sp], m->species_tint[sp], sizeof(m->species_tint[sp]));
         }
-        set.look.transfer_on = m->transfer_on;
-        set.look.transfer = m->transfer;
+        edit_layer0(&set.look, m->transfer_on, &m->transfer);
     }
     if (ch & MENU_CHANGE_SUN)
         session_set_sun(s, m->sun_azimuth, m->sun_elevation);
@@ -704,8 +723,7 @@ static void apply_changes(struct session *s, unsigned ch)
                 /* A function loaded is shown at once, as an edited one is. */
                 m->transfer = tf;
                 m->transfer_on = true;
-                set.look.transfer = tf;
-                set.look.transfer_on = true;
+                edit_layer0(&set.look, true, &tf);
             }
             snprintf(status, sizeof(status), ok ? "loaded %s" : "kept the current one: %s",
                      ok ? path : log_last_error());
@@ -1301,9 +1319,14 @@ static void overlay_model_of(struct session *s, const struct frame_state *f,
                  when[0] ? ", " : "", s->shown + 1, s->playback.count);
     else
         snprintf(m->date_text, sizeof(m->date_text), "%s", when);
-    m->legend = co->legend && s->settings.look.transfer_on;
-    if (m->legend)
-        m->transfer = s->settings.look.transfer;
+    /* The legend of the first layer shown. */
+    const struct look *look = &s->settings.look;
+    for (int i = 0; co->legend && i < look->layer_count && !m->legend; i++) {
+        if (look->layers[i].enabled && look->layers[i].opacity > 0.0) {
+            m->legend = true;
+            m->transfer = look->layers[i].tf;
+        }
+    }
     m->north = co->north;
     if (!m->north)
         return;
@@ -1444,6 +1467,12 @@ bool session_draw(struct session *s, struct display *d, const struct frame_state
             return false;
     }
     if (s->probe_view && !draw_probe(s, f, tw))
+        return false;
+    const struct look *look = &s->settings.look;
+    struct render_layer layers[TRANSFER_LAYER_MAX];
+    for (int i = 0; i < look->layer_count; i++)
+        render_layer_from_transfer(&look->layers[i], &layers[i]);
+    if (!renderer_set_layers(s->renderer, layers, look->layer_count))
         return false;
     if (!display_draw(d, s->renderer, &s->drawn))
         return false;

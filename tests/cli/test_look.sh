@@ -77,18 +77,48 @@ for look in species transfer; do
 done
 check "species: the tint and the step saved" bash -c \
     "grep -q 'data = { step = 1; };' '$tmp/bookmark-1.cfg' && grep -q 'cloud = { enabled = true; scale = 2.4' '$tmp/bookmark-1.cfg'"
-check "transfer: the function in place, shown" bash -c \
-    "grep -q 'field = \"condensate\";' '$tmp/bookmark-2.cfg' && grep -q 'show_transfer = true;' '$tmp/bookmark-2.cfg'"
+check "transfer: the function in place, as layer 0, shown" bash -c \
+    "grep -q 'layers = (' '$tmp/bookmark-2.cfg' && grep -q 'field = \"condensate\";' '$tmp/bookmark-2.cfg' && grep -q 'mode = \"emit\";' '$tmp/bookmark-2.cfg' && grep -q 'enabled = true;' '$tmp/bookmark-2.cfg'"
 check "Save view printed the camera block too" grep -q "camera = {" "$tmp/species.out"
 
 # The same transfer function named by its file renders alike (the group moved to tf.cfg).
-sed -n '/^    transfer = {/,/^    };/p' "$tmp/bookmark-2.cfg" | sed 's/^    //' >"$tmp/tf.cfg"
-sed '/^    transfer = {/,/^    };/c\    transfer = "tf.cfg";' "$tmp/bookmark-2.cfg" >"$tmp/byfile.cfg"
+sed -n '/^            transfer = {/,/^            };/p' "$tmp/bookmark-2.cfg" | sed 's/^            //' \
+    >"$tmp/tf.cfg"
+sed '/^            transfer = {/,/^            };/c\            transfer = "tf.cfg";' \
+    "$tmp/bookmark-2.cfg" >"$tmp/byfile.cfg"
 check "the bookmark now names tf.cfg" grep -q 'transfer = "tf.cfg";' "$tmp/byfile.cfg"
 (cd "$tmp" && "$anvil" render --quiet byfile.cfg $small -o byfile.pfm)
 check "look.transfer from a file renders as in place" cmp -s "$tmp/byfile.pfm" "$tmp/transfer-batch.pfm"
 
+# An older file's look.transfer is read as layer 0: the same picture as the layer.
+sed -n '/^            transfer = {/,/^            };/p' "$tmp/bookmark-2.cfg" | sed 's/^        //' \
+    >"$tmp/old-tf.txt"
+sed '/^    layers = (/,/^    );/d' "$tmp/bookmark-2.cfg" | sed '/^look = {/r '"$tmp/old-tf.txt" \
+    >"$tmp/old.cfg"
+check "an older file's look.transfer" grep -q '^    transfer = {' "$tmp/old.cfg"
+(cd "$tmp" && "$anvil" render --quiet old.cfg $small -o old.pfm)
+check "  renders as the layer it becomes" cmp -s "$tmp/old.pfm" "$tmp/transfer-batch.pfm"
+
+# Two layers, one tinting the clouds by temperature: a different picture, and its bookmark
+# made by hand renders without a message.
+sed 's/^    layers = (/    layers = ( { field = "temperature"; mode = "tint"; opacity = 0.8; },/' \
+    "$tmp/bookmark-2.cfg" >"$tmp/two.cfg"
+(cd "$tmp" && "$anvil" render --quiet two.cfg $small -o two.pfm 2>"$tmp/err")
+check "two layers render" test -s "$tmp/two.pfm"
+check "  the tint changes the picture" bash -c "! cmp -s '$tmp/two.pfm' '$tmp/transfer-batch.pfm'"
+
 # Wrong types: one message with file:line, exit 1.
+printf 'look = {\n  layers = (\n    { field = "temperature";\n      mode = "glow"; }\n  );\n};\n' \
+    >"$tmp/glow.cfg"
+expect_exit 1 "a layer mode that is not one" "$anvil" render "$tmp/glow.cfg" -o "$tmp/x.png"
+check "  names file:line and the setting" stderr_has 'glow.cfg:4: look.layers.\[0\].mode: expected'
+printf 'look = { layers = ( {}, {}, {}, {}, {} ); };\n' >"$tmp/five-layers.cfg"
+expect_exit 1 "five layers" "$anvil" render "$tmp/five-layers.cfg" -o "$tmp/x.png"
+check "  says at most 4" stderr_has 'five-layers.cfg:1: look.layers: expected 0 to 4 layers, got 5'
+printf 'look = { transfer = "tf.cfg"; layers = ( {} ); };\n' >"$tmp/both.cfg"
+expect_exit 1 "look.transfer and look.layers" "$anvil" render "$tmp/both.cfg" -o "$tmp/x.png"
+check "  not both" stderr_has 'both.cfg: look.transfer: give the layers'"'"' functions in look.layers'
+
 printf 'look = {\n    species = {\n        cloud = { tint = "red"; };\n    };\n};\n' >"$tmp/tint.cfg"
 expect_exit 1 "a tint that is a word" "$anvil" render "$tmp/tint.cfg" -o "$tmp/x.png"
 check "  names file:line and the setting" \

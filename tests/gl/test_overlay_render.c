@@ -96,8 +96,9 @@ static void test_legend_in_the_picture(void **state)
     open_scene(&sc, sets, 4);
     struct session_settings set;
     session_get_settings(sc.s, &set);
-    set.look.transfer_on = true;
-    transfer_defaults(&set.look.transfer, TRANSFER_FIELD_TEMPERATURE);
+    set.look.layer_count = 1;
+    set.look.layers[0] = (struct transfer_layer){.enabled = true, .opacity = 1.0};
+    transfer_defaults(&set.look.layers[0].tf, TRANSFER_FIELD_TEMPERATURE);
     set.revision++;
     session_set_settings(sc.s, &set);
     assert_true(session_settle(sc.s));
@@ -124,7 +125,7 @@ static void test_legend_in_the_picture(void **state)
         const float *rgb = &img.rgba[4 * ((size_t)py * img.width + px)];
         for (int ch = 0; ch < 3; ch++) {
             int got = image_tonemap(rgb[ch], exposure);
-            float want = transfer_eval(&set.look.transfer, (enum transfer_channel)ch, x);
+            float want = transfer_eval(&set.look.layers[0].tf, (enum transfer_channel)ch, x);
             int want8 = (int)lroundf(fminf(fmaxf(want, 0.0f), 1.0f) * 255.0f);
             if (abs(got - want8) > 4)
                 fail_msg("legend at %.3f (pixel %d, %d), channel %d: %d on screen, the function "
