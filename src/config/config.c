@@ -74,6 +74,42 @@ static const struct config_table layer_table = {
     .elem_name = "layer",
 };
 
+static const char *const slice_axis_names[] = {"x", "y", "z", "plane", NULL};
+#define SOFF(member) offsetof(struct config_slice, member)
+static const struct config_field slice_fields[] = {
+    {.path = "field", .type = T_ENUM, .n = 1, .offset = SOFF(field), .names = layer_field_names,
+     .flags = F_GIVEN, .given = SOFF(has_field),
+     .help = "the field shown (as look.layers.[i].field); default: the transfer function's"},
+    {.path = "transfer", .type = T_TRANSFER, .n = 1, .offset = SOFF(transfer), .flags = F_GIVEN,
+     .given = SOFF(has_transfer),
+     .help = "its colour map (red, green, blue; alpha is not used): a file's name or a group "
+             "in place; default: the field's default function"},
+    {.path = "axis", .type = T_ENUM, .n = 1, .offset = SOFF(axis), .names = slice_axis_names,
+     .def = {2},
+     .help = "\"x\", \"y\", \"z\": the plane across that axis at position; \"plane\": "
+             "through point, across normal"},
+    {.path = "position", .type = T_DOUBLE, .n = 1, .offset = SOFF(position_km), .min = -1e5,
+     .max = 1e5, .def = {5.0}, .help = "where the plane crosses its axis, world km"},
+    {.path = "point", .type = T_DOUBLE, .n = 3, .offset = SOFF(point_km), .min = -1e5,
+     .max = 1e5, .def = {0, 0, 5}, .help = "a point of the plane (axis = \"plane\"), world km"},
+    {.path = "normal", .type = T_DOUBLE, .n = 3, .offset = SOFF(normal), .min = -1, .max = 1,
+     .def = {0, 0, 1}, .help = "the plane's normal (axis = \"plane\"), not [0, 0, 0]"},
+    {.path = "opacity", .type = T_DOUBLE, .n = 1, .offset = SOFF(opacity), .min = 0, .max = 1,
+     .def = {1.0}, .help = "1: opaque; less lets the clouds behind show through"},
+    {.path = "contour_every", .type = T_DOUBLE, .n = 1, .offset = SOFF(contour_every), .min = 0,
+     .max = 1e9, .def = {0.0},
+     .help = "contour lines at every multiple of this many field units (0: none)"},
+    {.path = "enabled", .type = T_BOOL, .n = 1, .offset = SOFF(enabled), .max = 1, .def = {1},
+     .help = "shown (false: kept)"},
+};
+static const struct config_table slice_table = {
+    .fields = slice_fields,
+    .count = (int)(sizeof(slice_fields) / sizeof(slice_fields[0])),
+    .size = sizeof(struct config_slice),
+    .example = "look.slices.[0].position=5.0",
+    .elem_name = "slice",
+};
+
 #define OFF(member) offsetof(struct config, member)
 
 #define BOOL(p, m, d, h) \
@@ -270,6 +306,11 @@ static const struct config_field settings[] = {
      .def_elems = NULL, .def_count = 0,
      .help = "colour-mapped fields composited with the clouds (docs/analysis.md), each a group "
              "of the look.layers.[i] settings, at most 4"},
+    {.path = "look.slices", .type = T_GROUPS, .offset = OFF(look.slices),
+     .count_offset = OFF(look.slice_count), .min = 0, .max = TRANSFER_SLICE_MAX,
+     .elems = &slice_table, .def_elems = NULL, .def_count = 0,
+     .help = "planes through a field drawn in the volume (docs/analysis.md), each a group of "
+             "the look.slices.[i] settings, at most 4"},
     {.path = "look.transfer", .type = T_TRANSFER, .n = 1, .offset = OFF(look.transfer),
      .flags = F_GIVEN, .given = OFF(look.has_transfer),
      .help = "older files' one transfer function (its file's name, or its group in place; "
@@ -411,6 +452,20 @@ bool config_validate(const struct config *cfg)
                       "function's field \"%s\"",
                       file, colon, i, transfer_field_name((enum transfer_field)l->field),
                       transfer_field_name(l->transfer.field));
+            return false;
+        }
+    }
+    for (int i = 0; i < cfg->look.slice_count; i++) {
+        const struct config_slice *sl = &cfg->look.slices[i];
+        if (sl->has_field && sl->has_transfer && (int)sl->transfer.field != sl->field) {
+            log_error("%s%slook.slices.[%d].field: \"%s\" differs from its transfer "
+                      "function's field \"%s\"",
+                      file, colon, i, transfer_field_name((enum transfer_field)sl->field),
+                      transfer_field_name(sl->transfer.field));
+            return false;
+        }
+        if (sl->axis == 3 && length3(sl->normal) < 1e-9) {
+            log_error("%s%slook.slices.[%d].normal: must not be [0, 0, 0]", file, colon, i);
             return false;
         }
     }

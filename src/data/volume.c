@@ -28,6 +28,8 @@ void ext_volume_finish(struct ext_volume *v)
     free(v->tint);
     for (int i = 0; i < TRANSFER_LAYER_MAX; i++)
         free(v->layer[i]);
+    for (int i = 0; i < TRANSFER_SLICE_MAX; i++)
+        free(v->slice[i]);
     free(v->histogram);
     memset(v, 0, sizeof(*v));
 }

@@ -66,6 +66,9 @@ struct ext_volume {
      * values, or NULL; LAYER_FIELD[i] says which field it is (classified on the GPU). */
     float *layer[TRANSFER_LAYER_MAX];
     enum transfer_field layer_field[TRANSFER_LAYER_MAX];
+    /* The look's slices' fields, likewise. */
+    float *slice[TRANSFER_SLICE_MAX];
+    enum transfer_field slice_field[TRANSFER_SLICE_MAX];
     struct transfer_histogram *histogram; /* NULL, or owned: the values of the look's transfer
                                              field of the step it was made from */
 };

@@ -62,6 +62,21 @@ struct transfer_layer {
     struct transfer_function tf;
 };
 
+/* A slice (docs/analysis.md): the plane NORMAL . p = NORMAL . POINT (world metres) through the
+ * field TF.field, coloured by TF's red, green and blue (its alpha is not used) at OPACITY, with
+ * contour lines every CONTOUR_EVERY field units (0: none), composited with the clouds where
+ * the ray crosses it. */
+#define TRANSFER_SLICE_MAX 4
+
+struct transfer_slice {
+    bool enabled;
+    double point[3];     /* metres */
+    double normal[3];    /* unit */
+    double opacity;      /* [0, 1] */
+    double contour_every; /* field units; 0: no lines */
+    struct transfer_function tf;
+};
+
 /* "emit", "tint"; false for an unknown name. */
 const char *transfer_layer_mode_name(int mode);
 

@@ -40,6 +40,12 @@ struct renderer {
     struct gpu_texture layer_lut;    /* RGBA32F 2D: a colour map per row */
     struct render_layer layers[TRANSFER_LAYER_MAX];
     int layer_count;
+    struct gpu_texture slice_fields; /* RGBA32F 3D: the volume's slices' fields (SLICES) */
+    enum transfer_field slice_field[TRANSFER_SLICE_MAX];
+    bool slice_held[TRANSFER_SLICE_MAX];
+    struct render_slice slices[TRANSFER_SLICE_MAX];
+    int slice_count;
+    bool lut_stale;
     struct gpu_texture beta_next; /* effects.temporal: step k + 1 (TEMPORAL 1) */
     struct grid3 grid_next;
     bool have_next;
@@ -134,6 +140,7 @@ void renderer_destroy(struct renderer *r)
     gpu_texture_finish(&r->beta_next);
     gpu_texture_finish(&r->tint);
     gpu_texture_finish(&r->layer_fields);
+    gpu_texture_finish(&r->slice_fields);
     gpu_texture_finish(&r->layer_lut);
     gpu_texture_finish(&r->phase);
     gpu_program_finish(&r->tonemap);
@@ -193,23 +200,17 @@ static bool put_beta(struct renderer *r, struct gpu_texture *tex, const struct e
     return true;
 }
 
-/* The layers' fields of VOL into one RGBA32F texture (none: the texture goes). */
-static bool put_layer_fields(struct renderer *r, const struct ext_volume *vol)
+/* Four fields (NULL: none) of N voxels into one RGBA32F texture TEX, a field per channel
+ * (none at all: the texture goes). */
+static bool put_fields(struct gpu_texture *tex, const int n[3], float *const fields[4])
 {
-    bool any = false;
-    for (int i = 0; i < TRANSFER_LAYER_MAX; i++) {
-        r->layer_held[i] = vol->layer[i] != NULL;
-        r->layer_field[i] = vol->layer_field[i];
-        any |= r->layer_held[i];
-    }
-    if (!any) {
-        gpu_texture_finish(&r->layer_fields);
+    if (!fields[0] && !fields[1] && !fields[2] && !fields[3]) {
+        gpu_texture_finish(tex);
         return true;
     }
-    const int *n = vol->grid.n;
-    if (!r->layer_fields.id || memcmp(r->layer_fields.size, n, sizeof(int) * 3) != 0) {
-        gpu_texture_finish(&r->layer_fields);
-        if (!gpu_texture_init(&r->layer_fields, 3, n, GPU_RGBA32F, NULL))
+    if (!tex->id || memcmp(tex->size, n, sizeof(int) * 3) != 0) {
+        gpu_texture_finish(tex);
+        if (!gpu_texture_init(tex, 3, n, GPU_RGBA32F, NULL))
             return false;
     }
     /* Eight z layers at a time: the interleaved copy stays small. */
@@ -225,11 +226,25 @@ static bool put_layer_fields(struct renderer *r, const struct ext_volume *vol)
         size_t base = plane * (size_t)z;
         for (size_t v = 0; v < plane * (size_t)count; v++)
             for (int i = 0; i < 4; i++)
-                tmp[4 * v + i] = vol->layer[i] ? vol->layer[i][base + v] : 0.0f;
-        gpu_texture_upload_layers(&r->layer_fields, z, count, tmp);
+                tmp[4 * v + i] = fields[i] ? fields[i][base + v] : 0.0f;
+        gpu_texture_upload_layers(tex, z, count, tmp);
     }
     free(tmp);
     return true;
+}
+
+/* The layers' and the slices' fields of VOL. */
+static bool put_layer_fields(struct renderer *r, const struct ext_volume *vol)
+{
+    static_assert(TRANSFER_LAYER_MAX == 4 && TRANSFER_SLICE_MAX == 4, "a field per channel");
+    for (int i = 0; i < TRANSFER_LAYER_MAX; i++) {
+        r->layer_held[i] = vol->layer[i] != NULL;
+        r->layer_field[i] = vol->layer_field[i];
+        r->slice_held[i] = vol->slice[i] != NULL;
+        r->slice_field[i] = vol->slice_field[i];
+    }
+    return put_fields(&r->layer_fields, vol->grid.n, vol->layer) &&
+           put_fields(&r->slice_fields, vol->grid.n, vol->slice);
 }
 
 void render_layer_from_transfer(const struct transfer_layer *l, struct render_layer *out)
@@ -248,26 +263,111 @@ void render_layer_from_transfer(const struct transfer_layer *l, struct render_la
                 transfer_eval(tf, (enum transfer_channel)c, (float)i / (RENDER_LAYER_LUT - 1));
 }
 
+/* The colour maps of the layers (rows 0 to 3) and the slices (rows 4 to 7), when changed. */
+static bool put_luts(struct renderer *r)
+{
+    if (!r->lut_stale && r->layer_lut.id)
+        return true;
+    static float table[TRANSFER_LAYER_MAX + TRANSFER_SLICE_MAX][RENDER_LAYER_LUT][4];
+    memset(table, 0, sizeof(table));
+    for (int i = 0; i < r->layer_count; i++)
+        memcpy(table[i], r->layers[i].lut, sizeof(table[i]));
+    for (int i = 0; i < r->slice_count; i++)
+        memcpy(table[TRANSFER_LAYER_MAX + i], r->slices[i].lut, sizeof(table[i]));
+    r->lut_stale = false;
+    if (r->layer_lut.id) {
+        gpu_texture_upload(&r->layer_lut, table);
+        return true;
+    }
+    const int size[3] = {RENDER_LAYER_LUT, TRANSFER_LAYER_MAX + TRANSFER_SLICE_MAX, 1};
+    return gpu_texture_init(&r->layer_lut, 2, size, GPU_RGBA32F, table);
+}
+
 bool renderer_set_layers(struct renderer *r, const struct render_layer *layers, int count)
 {
     assert(count >= 0 && count <= TRANSFER_LAYER_MAX);
-    if (count == r->layer_count && r->layer_lut.id &&
-        memcmp(layers, r->layers, (size_t)count * sizeof(*layers)) == 0)
+    if (count == r->layer_count && memcmp(layers, r->layers, (size_t)count * sizeof(*layers)) == 0)
         return true;
     memset(r->layers, 0, sizeof(r->layers));
     if (count > 0)
         memcpy(r->layers, layers, (size_t)count * sizeof(*layers));
     r->layer_count = count;
-    static float table[TRANSFER_LAYER_MAX][RENDER_LAYER_LUT][4];
-    memset(table, 0, sizeof(table));
-    for (int i = 0; i < count; i++)
-        memcpy(table[i], layers[i].lut, sizeof(table[i]));
-    if (r->layer_lut.id) {
-        gpu_texture_upload(&r->layer_lut, table);
-        return true;
+    r->lut_stale = true;
+    return true;
+}
+
+void render_slice_from_transfer(const struct transfer_slice *sl, struct render_slice *out)
+{
+    memset(out, 0, sizeof(*out));
+    const struct transfer_function *tf = &sl->tf;
+    out->on = sl->enabled && sl->opacity > 0.0;
+    out->field = tf->field;
+    double d = 0.0;
+    for (int a = 0; a < 3; a++) {
+        out->normal[a] = (float)sl->normal[a];
+        d += sl->normal[a] * sl->point[a];
     }
-    const int size[3] = {RENDER_LAYER_LUT, TRANSFER_LAYER_MAX, 1};
-    return gpu_texture_init(&r->layer_lut, 2, size, GPU_RGBA32F, table);
+    out->offset = (float)d;
+    out->lo = (float)tf->lo;
+    out->hi = (float)tf->hi;
+    out->opacity = (float)sl->opacity;
+    out->contour_every = (float)sl->contour_every;
+    for (int i = 0; i < RENDER_LAYER_LUT; i++)
+        for (int c = 0; c < TRANSFER_CHANNELS; c++)
+            out->lut[i][c] =
+                transfer_eval(tf, (enum transfer_channel)c, (float)i / (RENDER_LAYER_LUT - 1));
+}
+
+bool renderer_set_slices(struct renderer *r, const struct render_slice *slices, int count)
+{
+    assert(count >= 0 && count <= TRANSFER_SLICE_MAX);
+    if (count == r->slice_count && memcmp(slices, r->slices, (size_t)count * sizeof(*slices)) == 0)
+        return true;
+    memset(r->slices, 0, sizeof(r->slices));
+    if (count > 0)
+        memcpy(r->slices, slices, (size_t)count * sizeof(*slices));
+    r->slice_count = count;
+    r->lut_stale = true;
+    return true;
+}
+
+/* How many of the first slices the next draw reads (the SLICES define). */
+static int slices_shown(const struct renderer *r)
+{
+    int n = 0;
+    if (!r->slice_fields.id)
+        return 0;
+    for (int i = 0; i < r->slice_count; i++) {
+        const struct render_slice *sl = &r->slices[i];
+        if (sl->on && r->slice_held[i] && r->slice_field[i] == sl->field)
+            n = i + 1;
+    }
+    return n;
+}
+
+static void slice_uniforms(const struct renderer *r, const struct gpu_program *prog, int n)
+{
+    float planes[4][4] = {{0}}, lo[4] = {0}, scale[4] = {0}, opacity[4] = {0}, every[4] = {0};
+    for (int i = 0; i < n; i++) {
+        const struct render_slice *sl = &r->slices[i];
+        if (!(sl->on && r->slice_held[i] && r->slice_field[i] == sl->field))
+            continue;
+        memcpy(planes[i], sl->normal, sizeof(sl->normal));
+        planes[i][3] = sl->offset;
+        lo[i] = sl->lo;
+        scale[i] = sl->hi > sl->lo ? 1.0f / (sl->hi - sl->lo) : 0.0f;
+        opacity[i] = sl->opacity;
+        every[i] = sl->contour_every;
+    }
+    static const char *const names[4] = {"slice_plane[0]", "slice_plane[1]", "slice_plane[2]",
+                                         "slice_plane[3]"};
+    for (int i = 0; i < 4; i++)
+        gpu_uniform_vec4(prog, names[i], planes[i]);
+    gpu_uniform_vec4(prog, "slice_lo", lo);
+    gpu_uniform_vec4(prog, "slice_scale", scale);
+    gpu_uniform_vec4(prog, "slice_opacity", opacity);
+    gpu_uniform_vec4(prog, "slice_contour", every);
+    gpu_uniform_int(prog, "slice_row", TRANSFER_LAYER_MAX); /* put_luts */
 }
 
 /* The layers the next draw shows: on, and over a field the volume holds.  Returns how many of
@@ -304,7 +404,8 @@ static void layer_uniforms(const struct renderer *r, const struct gpu_program *p
     gpu_uniform_vec4(prog, "layer_scale", scale);
     gpu_uniform_vec4(prog, "layer_strength", strength);
     gpu_uniform_vec4(prog, "layer_tint", tint);
-    const float size[2] = {(float)RENDER_LAYER_LUT, (float)TRANSFER_LAYER_MAX};
+    const float size[2] = {(float)RENDER_LAYER_LUT,
+                           (float)(TRANSFER_LAYER_MAX + TRANSFER_SLICE_MAX)};
     gpu_uniform_vec2(prog, "layer_lut_size", size);
 }
 
@@ -331,7 +432,8 @@ bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
     r->pair_stale = true;
     size_t voxels = (size_t)n[0] * n[1] * n[2];
     r->stats.upload_bytes += voxels * (r->half ? 4 : 8) + (vol->tint ? voxels * 4 : 0) +
-                             (r->layer_fields.id ? voxels * 16 : 0);
+                             (r->layer_fields.id ? voxels * 16 : 0) +
+                             (r->slice_fields.id ? voxels * 16 : 0);
     r->stats.uploads++;
     if (!render_cells_build(&r->cells, &r->cell_programs, &r->beta, NULL))
         return false;
@@ -567,12 +669,18 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
      * It takes two passes (raycast.comp, PASS 1 and 2); without it one (PASS 0). */
     bool emits;
     int layers = layers_shown(r, &emits);
-    char layer_define[32] = "";
-    if (layers > 0)
-        snprintf(layer_define, sizeof(layer_define), "#define LAYERS %d\n", layers);
-    /* An emitting layer fills space the cells call empty: no skipping then. */
+    int slices = slices_shown(r);
+    char layer_define[64] = "";
+    snprintf(layer_define, sizeof(layer_define), "%s%d\n#define SLICES %d\n",
+             "#define LAYERS ", layers, slices);
+    if (layers == 0 && slices == 0)
+        layer_define[0] = '\0';
+    if ((layers > 0 || slices > 0) && !put_luts(r))
+        return false;
+    /* An emitting layer fills space the cells call empty, and a slice lies in it too: no
+     * skipping then. */
     const struct render_cells *cells = NULL;
-    if (!s->no_skip && !emits)
+    if (!s->no_skip && !emits && slices == 0)
         cells = temporal ? renderer_pair_cells(r) : (r->cells.levels ? &r->cells : NULL);
     const struct gpu_program *progs[2] = {NULL, NULL};
     for (int pass = 0; pass < (cells ? 2 : 1); pass++) {
@@ -595,13 +703,17 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     glm_mat4_inv(vp, inv);
     for (int pass = 0; pass < (cells ? 2 : 1); pass++) {
         eye_uniforms(r, progs[pass], s, view, inv, cells);
-        if (layers > 0)
+        if (layers > 0 || slices > 0)
             layer_uniforms(r, progs[pass], layers);
+        if (slices > 0)
+            slice_uniforms(r, progs[pass], slices);
     }
-    if (layers > 0) {
+    if (layers > 0)
         gpu_texture_bind(&r->layer_fields, BIND_EYE_TEX_LAYERS);
+    if (slices > 0)
+        gpu_texture_bind(&r->slice_fields, BIND_EYE_TEX_SLICES);
+    if (layers > 0 || slices > 0)
         gpu_texture_bind(&r->layer_lut, BIND_EYE_TEX_LAYER_LUT);
-    }
     gpu_texture_bind(&r->beta, BIND_EYE_TEX_BETA);
     gpu_texture_bind(&r->phase, BIND_EYE_TEX_PHASE);
     if (r->have_tint)

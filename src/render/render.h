@@ -138,6 +138,28 @@ void render_layer_from_transfer(const struct transfer_layer *l, struct render_la
  * only the clouds).  False (logged) when the table cannot be made. */
 bool renderer_set_layers(struct renderer *r, const struct render_layer *layers, int count);
 
+/* Slices (docs/analysis.md): planes through the volume's slice fields (ext_volume.slice, a
+ * second RGBA32F texture), each ray compositing a slice where it crosses it inside the box and
+ * before the ground or opaque geometry: its colour map's colour at the field's interpolated
+ * value, dark on contour lines, at its opacity. */
+struct render_slice {
+    bool on;
+    enum transfer_field field;      /* drawn only while the volume's slice holds this field */
+    float normal[3], offset;        /* the plane normal . p = offset, world metres */
+    float lo, hi;
+    float opacity;                  /* [0, 1] */
+    float contour_every;            /* field units; 0: none */
+    float lut[RENDER_LAYER_LUT][4]; /* as render_layer's (alpha unused) */
+};
+
+/* SL as the eye pass draws it.  No GL. */
+void render_slice_from_transfer(const struct transfer_slice *sl, struct render_slice *out);
+
+/* Draws the following views with SLICES[0 .. COUNT) (COUNT <= TRANSFER_SLICE_MAX), slice i
+ * over the volume's slice field i.  A slice that is on turns empty-space skipping off.  False
+ * (logged) when the table cannot be made. */
+bool renderer_set_slices(struct renderer *r, const struct render_slice *slices, int count);
+
 /* Tabulates the eye phase functions. */
 bool renderer_set_optics(struct renderer *r, const struct optics_params *optics);
 

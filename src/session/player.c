@@ -119,7 +119,36 @@ void look_from_config(const struct config *cfg, struct look *look)
             l->mode = c->mode;
             l->opacity = c->opacity;
         }
-    } else if (cl->has_transfer) {
+    }
+    look->slice_count = cl->slice_count;
+    for (int i = 0; i < cl->slice_count; i++) {
+        const struct config_slice *c = &cl->slices[i];
+        struct transfer_slice *sl = &look->slices[i];
+        if (c->has_transfer)
+            sl->tf = c->transfer;
+        else
+            transfer_defaults(&sl->tf, (enum transfer_field)c->field);
+        sl->enabled = c->enabled;
+        sl->opacity = c->opacity;
+        sl->contour_every = c->contour_every;
+        double n[3] = {0.0, 0.0, 0.0}, len = 0.0;
+        if (c->axis < 3) {
+            n[c->axis] = 1.0;
+            for (int a = 0; a < 3; a++)
+                sl->point[a] = a == c->axis ? c->position_km * 1000.0 : 0.0;
+        } else {
+            for (int a = 0; a < 3; a++) {
+                n[a] = c->normal[a];
+                sl->point[a] = c->point_km[a] * 1000.0;
+            }
+        }
+        for (int a = 0; a < 3; a++)
+            len += n[a] * n[a];
+        len = sqrt(len);
+        for (int a = 0; a < 3; a++)
+            sl->normal[a] = len > 0.0 ? n[a] / len : (a == 2);
+    }
+    if (!cl->has_layers && cl->has_transfer) {
         /* An older file's one function: the first layer, emitting, fully opaque. */
         look->layer_count = 1;
         look->layers[0] = (struct transfer_layer){
@@ -128,17 +157,12 @@ void look_from_config(const struct config *cfg, struct look *look)
     }
 }
 
-const struct transfer_function *look_edited_transfer(const struct look *look)
+void look_edited_transfer(const struct look *look, struct transfer_function *out)
 {
-    static struct transfer_function plain;
-    static bool made;
     if (look->layer_count > 0)
-        return &look->layers[0].tf;
-    if (!made) {
-        transfer_defaults(&plain, TRANSFER_FIELD_QVAPOR);
-        made = true;
-    }
-    return &plain;
+        *out = look->layers[0].tf;
+    else
+        transfer_defaults(out, TRANSFER_FIELD_QVAPOR);
 }
 
 /* The histogram of TF's field over its range on FV (owned by the caller), or NULL when out of
@@ -187,10 +211,24 @@ static bool convert(struct player *p, struct field_volume *fv, const struct look
         derived_field(fv, f, out->layer[i]);
         out->layer_field[i] = f;
     }
+    for (int i = 0; ok && i < look->slice_count; i++) {
+        enum transfer_field f = look->slices[i].tf.field;
+        out->slice[i] = malloc(grid3_count(&fv->grid) * sizeof(float));
+        if (!out->slice[i]) {
+            log_error("out of memory for slice %d's field", i + 1);
+            ok = false;
+            break;
+        }
+        derived_field(fv, f, out->slice[i]);
+        out->slice_field[i] = f;
+    }
     if (ok && ld->height_k > 0.0)
         ext_volume_stretch_height(out, ld->height_k);
-    if (ok)
-        out->histogram = histogram_of(fv, look_edited_transfer(look)); /* NULL: no bars */
+    if (ok) {
+        struct transfer_function edited;
+        look_edited_transfer(look, &edited);
+        out->histogram = histogram_of(fv, &edited); /* NULL: out of memory, no bars */
+    }
     return ok;
 }
 
@@ -228,8 +266,13 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
         /* The transfer function's field is read when it is chosen, shown or not: the editor's
          * histogram shows it. */
         bool temperature = false, wind = false;
-        for (int i = -1; i < look->layer_count; i++) {
-            enum transfer_field f = (i < 0 ? look_edited_transfer(look) : &look->layers[i].tf)->field;
+        struct transfer_function edited;
+        look_edited_transfer(look, &edited);
+        for (int i = -1; i < look->layer_count + look->slice_count; i++) {
+            enum transfer_field f = (i < 0                   ? &edited
+                                     : i < look->layer_count ? &look->layers[i].tf
+                                                             : &look->slices[i - look->layer_count].tf)
+                                        ->field;
             temperature |= f == TRANSFER_FIELD_TEMPERATURE || f == TRANSFER_FIELD_THETA ||
                            f == TRANSFER_FIELD_RH;
             wind |= f == TRANSFER_FIELD_WIND;

@@ -41,11 +41,13 @@ struct look {
     struct species_tint tint;
     int layer_count; /* 0 .. TRANSFER_LAYER_MAX */
     struct transfer_layer layers[TRANSFER_LAYER_MAX];
+    int slice_count; /* 0 .. TRANSFER_SLICE_MAX */
+    struct transfer_slice slices[TRANSFER_SLICE_MAX];
 };
 
 /* The function the transfer editor shows: layer 0's, or the default function of QVAPOR
  * without layers. */
-const struct transfer_function *look_edited_transfer(const struct look *look);
+void look_edited_transfer(const struct look *look, struct transfer_function *out);
 
 void look_from_config(const struct config *cfg, struct look *look);
 

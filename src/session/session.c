@@ -137,7 +137,7 @@ static void model_from_session(struct session *s, struct menu_model *m)
         memcpy(m->species_tint[f], look->tint.rgb[f], sizeof(m->species_tint[f]));
     }
     m->transfer_on = look->layer_count > 0 && look->layers[0].enabled;
-    m->transfer = *look_edited_transfer(look);
+    look_edited_transfer(look, &m->transfer);
     m->sun_azimuth = fmod(s->sun_az + 360.0, 360.0);
     m->sun_elevation = s->sun_el;
     m->step_m = s->settings.step_m;
@@ -592,7 +592,23 @@ void session_look_text(const struct session *s, char *buf, size_t size)
                    "            enabled = %s;\n        }",
                 l->opacity, transfer_layer_mode_name(l->mode), l->enabled ? "true" : "false");
     }
-    fprintf(f, "%s);\n};\n", look->layer_count ? "\n    " : "");
+    fprintf(f, "%s);\n", look->layer_count ? "\n    " : "");
+    fprintf(f, "    slices = (");
+    for (int i = 0; i < look->slice_count; i++) {
+        const struct transfer_slice *sl = &look->slices[i];
+        fprintf(f, "%s\n        {\n            field = \"%s\";\n", i ? "," : "",
+                transfer_field_name(sl->tf.field));
+        transfer_file_write_group(f, "transfer", &sl->tf, "            ");
+        fprintf(f, "            axis = \"plane\";\n"
+                   "            point = [%.17e, %.17e, %.17e];\n"
+                   "            normal = [%.17e, %.17e, %.17e];\n"
+                   "            opacity = %.17e;\n            contour_every = %.17e;\n"
+                   "            enabled = %s;\n        }",
+                sl->point[0] / 1000.0, sl->point[1] / 1000.0, sl->point[2] / 1000.0,
+                sl->normal[0], sl->normal[1], sl->normal[2], sl->opacity, sl->contour_every,
+                sl->enabled ? "true" : "false");
+    }
+    fprintf(f, "%s);\n};\n", look->slice_count ? "\n    " : "");
     if (set->probe.on)
         fprintf(f, "probe = { on = true; mode = \"%s\"; threshold = %.17e; distance = %.17e; };\n",
                 set->probe.mode == PROBE_AT_DISTANCE ? "distance" : "first_visible",
@@ -1473,6 +1489,11 @@ bool session_draw(struct session *s, struct display *d, const struct frame_state
     for (int i = 0; i < look->layer_count; i++)
         render_layer_from_transfer(&look->layers[i], &layers[i]);
     if (!renderer_set_layers(s->renderer, layers, look->layer_count))
+        return false;
+    struct render_slice slices[TRANSFER_SLICE_MAX];
+    for (int i = 0; i < look->slice_count; i++)
+        render_slice_from_transfer(&look->slices[i], &slices[i]);
+    if (!renderer_set_slices(s->renderer, slices, look->slice_count))
         return false;
     if (!display_draw(d, s->renderer, &s->drawn))
         return false;

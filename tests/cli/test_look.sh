@@ -107,6 +107,25 @@ sed 's/^    layers = (/    layers = ( { field = "temperature"; mode = "tint"; op
 check "two layers render" test -s "$tmp/two.pfm"
 check "  the tint changes the picture" bash -c "! cmp -s '$tmp/two.pfm' '$tmp/transfer-batch.pfm'"
 
+# A scene with a slice (temperature at 3 km, contours every 5 K), a layer added in the menu,
+# saved: the bookmark holds the layer and the slice and renders the session's picture.
+printf '@include "%s"\nlook = { slices = ( { field = "temperature"; axis = "z"; position = 3.0; opacity = 0.8; contour_every = 5.0; } ); };\n' \
+    "$cfg" >"$tmp/slice.cfg"
+(cd "$tmp" && rm -f bookmark-*.cfg && "$anvil" render --quiet slice.cfg $small --input transfer.txt \
+    -o slice-session.pfm >slice.out)
+check "slice: the scripted session exits 0" test $? -eq 0
+check "slice: the bookmark holds the layer and the slice" bash -c \
+    "grep -q 'field = \"condensate\";' '$tmp/bookmark-1.cfg' && grep -q 'slices = (' '$tmp/bookmark-1.cfg' && grep -q 'axis = \"plane\";' '$tmp/bookmark-1.cfg' && grep -q 'field = \"temperature\";' '$tmp/bookmark-1.cfg'"
+(cd "$tmp" && "$anvil" render --quiet bookmark-1.cfg $small -o slice-batch.pfm)
+check "slice: the same image as the session that saved it" \
+    cmp -s "$tmp/slice-session.pfm" "$tmp/slice-batch.pfm"
+check "slice: the slice is in the picture" \
+    bash -c "! cmp -s '$tmp/slice-batch.pfm' '$tmp/transfer-batch.pfm'"
+printf '@include "%s"\nlook = { slices = ( { axis = "plane"; normal = [0.0, 0.0, 0.0]; } ); };\n' \
+    "$cfg" >"$tmp/flat.cfg"
+expect_exit 1 "a slice without a normal" "$anvil" render "$tmp/flat.cfg" -o "$tmp/x.png"
+check "  says so" stderr_has 'flat.cfg: look.slices.\[0\].normal: must not be \[0, 0, 0\]'
+
 # Wrong types: one message with file:line, exit 1.
 printf 'look = {\n  layers = (\n    { field = "temperature";\n      mode = "glow"; }\n  );\n};\n' \
     >"$tmp/glow.cfg"

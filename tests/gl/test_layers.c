@@ -1,8 +1,8 @@
-/* Colour-mapped layers in the eye pass on EGL/llvmpipe (render.h, "colour-mapped layers"):
+/* Colour-mapped layers and slices in the eye pass on EGL/llvmpipe (render.h):
  * classified after interpolation (a sharp step of the colour map is one sharp edge in the
  * picture where a field classified per voxel shows a ramp a voxel wide), composited with the
  * clouds by the emission-absorption rule of raycast.comp, tinting the clouds, and not leapt by
- * empty-space skipping. */
+ * empty-space skipping; slices in the colours of their maps, with contours, behind clouds. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -261,6 +261,69 @@ static void test_tint_mode(void **state)
     ext_volume_finish(&v);
 }
 
+/* A slice across z at 1 km through a field rising one unit a voxel along x, its colour map red
+ * = s / 7, green = 1 - s / 7, blue 0.5: each pixel between the outer voxel centres is the
+ * map's colour at s = x / 1 km - 0.5 within 1/255; with contours every 2 units the pixels
+ * within a quarter voxel of s = 2 are dark and the others keep their colour; under a dark
+ * cloud (no sun) the slice is seen through the kilometre of cloud above it, e^-(beta 1 km). */
+static void test_slice_colours(void **state)
+{
+    float field[NX];
+    for (int i = 0; i < NX; i++)
+        field[i] = (float)i;
+    for (int k = 0; k < 3; k++) {
+        const double beta = k == 2 ? 4e-4 : 0.0;
+        struct ext_volume v = {0};
+        make_volume(&v, (float)beta, field);
+        v.slice[0] = v.layer[0]; /* the same field, as a slice's */
+        v.layer[0] = NULL;
+        v.slice_field[0] = TRANSFER_FIELD_TEMPERATURE;
+        struct transfer_slice sl = {.enabled = true, .point = {0, 0, 1000.0},
+                                    .normal = {0, 0, 1}, .opacity = 1.0,
+                                    .contour_every = k == 1 ? 2.0 : 0.0};
+        transfer_defaults(&sl.tf, TRANSFER_FIELD_TEMPERATURE);
+        sl.tf.lo = 0.0;
+        sl.tf.hi = 7.0;
+        struct transfer_function *tf = &sl.tf;
+        tf->count[TRANSFER_RED] = 2;
+        tf->points[TRANSFER_RED][0] = (struct transfer_point){0.0f, 0.0f};
+        tf->points[TRANSFER_RED][1] = (struct transfer_point){1.0f, 1.0f};
+        tf->count[TRANSFER_GREEN] = 2;
+        tf->points[TRANSFER_GREEN][0] = (struct transfer_point){0.0f, 1.0f};
+        tf->points[TRANSFER_GREEN][1] = (struct transfer_point){1.0f, 0.0f};
+        tf->count[TRANSFER_BLUE] = 1;
+        tf->points[TRANSFER_BLUE][0] = (struct transfer_point){0.0f, 0.5f};
+        struct render_slice rs;
+        render_slice_from_transfer(&sl, &rs);
+        assert_true(renderer_set_slices(renderer, &rs, 1));
+        struct image img = {0};
+        draw(&v, NULL, false, &img);
+        assert_true(renderer_set_slices(renderer, NULL, 0));
+        double seen = exp(-beta * 1000.0);
+        int dark = 0;
+        for (int p = 8; p < W - 8; p++) { /* a voxel from the faces: a whole gradient */
+            double sv = (p + 0.5) * NX * 1000.0 / W / 1000.0 - 0.5;
+            const float *px = &img.rgba[4 * ((size_t)1 * W + p)];
+            double off = fabs(sv / 2.0 - round(sv / 2.0)) * 2.0;
+            if (k == 1 && off < 0.25) {
+                assert_float_equal(px[0], 0.02, 1e-4);
+                dark++;
+                continue;
+            }
+            if (k == 1 && off < 0.3)
+                continue; /* the line's edge: the gradient's differences round */
+            assert_float_equal(px[0], seen * sv / 7.0, 1.0 / 255.0);
+            assert_float_equal(px[1], seen * (1.0 - sv / 7.0), 1.0 / 255.0);
+            assert_float_equal(px[2], seen * 0.5, 1.0 / 255.0);
+            assert_float_equal(px[3], 0.0, 1e-6); /* opaque */
+        }
+        if (k == 1)
+            assert_int_equal(dark, 3 * 4); /* at s = 2, 4 and 6, four pixels each */
+        image_finish(&img);
+        ext_volume_finish(&v);
+    }
+}
+
 static int setup(void **state)
 {
     ctx = test_gl_context_or_skip();
@@ -283,6 +346,7 @@ int main(void)
         cmocka_unit_test(test_layers_not_skipped),
         cmocka_unit_test(test_composited_with_clouds),
         cmocka_unit_test(test_tint_mode),
+        cmocka_unit_test(test_slice_colours),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
