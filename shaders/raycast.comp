@@ -184,12 +184,13 @@ uniform vec4 slice_plane[4];  // normal . p = w, world metres
 uniform vec4 slice_lo, slice_scale, slice_opacity; // opacity 0: off
 uniform vec4 slice_contour;   // a line at every multiple of this many field units; 0: none
 uniform int slice_row;        // the colour map of slice i is row slice_row + i
+uniform vec2 pixel_footprint; // a pixel's width at ray parameter t: x + y t, metres
 float slice_t[4];             // where this ray crosses each slice (1e30: not in the box)
 
-// Composites slice I at ray parameter T over RADIANCE and TRANS: its colour map's colour at the
-// field's interpolated value, dark within a quarter of the smallest voxel spacing of a
-// contour (the field's distance to the nearest multiple over its gradient along the plane).
-void slice_composite(int i, vec3 p, inout vec3 radiance, inout float trans)
+// Composites slice I at P, ray parameter T, over RADIANCE and TRANS: its colour map's colour at
+// the field's interpolated value, dark within a pixel of a contour (the field's distance to the
+// nearest multiple over its gradient along the plane: lines two pixels wide on screen).
+void slice_composite(int i, vec3 p, float t, inout vec3 radiance, inout float trans)
 {
     vec3 u = (p - box_min) / box_size;
     float s = texture(slice_tex, u)[i];
@@ -209,7 +210,7 @@ void slice_composite(int i, vec3 p, inout vec3 radiance, inout float trans)
         float grad = length(g - n * dot(n, g));
         float v = s / slice_contour[i];
         float off = abs(v - round(v)) * slice_contour[i]; // field units to the nearest line
-        float width = 0.25 * min(voxel_size.x, min(voxel_size.y, voxel_size.z));
+        float width = pixel_footprint.x + pixel_footprint.y * t; // a pixel there, metres
         if (grad > 0.0 && off < width * grad)
             c = vec3(0.02);
     }
@@ -377,7 +378,7 @@ void march_step(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
         if (best < 0)
             break;
         march_medium(origin, dir, t, bt - t, b, phase, radiance, trans);
-        slice_composite(best, origin + dir * bt, radiance, trans);
+        slice_composite(best, origin + dir * bt, bt, radiance, trans);
         slice_t[best] = 1e30; // drawn
         t = bt;
     }

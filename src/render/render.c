@@ -247,7 +247,15 @@ static bool put_layer_fields(struct renderer *r, const struct ext_volume *vol)
            put_fields(&r->slice_fields, vol->grid.n, vol->slice);
 }
 
-void render_layer_from_transfer(const struct transfer_layer *l, struct render_layer *out)
+float render_display_to_radiance(float c, float exposure)
+{
+    double v = c < 0.0f ? 0.0 : c > 1.0f ? 1.0 : c;
+    double d = (v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4)) * 0.999;
+    return (float)(d / (1.0 - d) / exposure);
+}
+
+void render_layer_from_transfer(const struct transfer_layer *l, float exposure,
+                                struct render_layer *out)
 {
     memset(out, 0, sizeof(*out));
     const struct transfer_function *tf = &l->tf;
@@ -258,9 +266,12 @@ void render_layer_from_transfer(const struct transfer_layer *l, struct render_la
     out->hi = (float)tf->hi;
     out->strength = (float)(out->tint ? l->opacity : tf->density * l->opacity);
     for (int i = 0; i < RENDER_LAYER_LUT; i++)
-        for (int c = 0; c < TRANSFER_CHANNELS; c++)
-            out->lut[i][c] =
-                transfer_eval(tf, (enum transfer_channel)c, (float)i / (RENDER_LAYER_LUT - 1));
+        for (int c = 0; c < TRANSFER_CHANNELS; c++) {
+            float x = (float)i / (RENDER_LAYER_LUT - 1);
+            float v = transfer_eval(tf, (enum transfer_channel)c, x);
+            bool factor = c == TRANSFER_ALPHA || out->tint;
+            out->lut[i][c] = factor ? v : render_display_to_radiance(v, exposure);
+        }
 }
 
 /* The colour maps of the layers (rows 0 to 3) and the slices (rows 4 to 7), when changed. */
@@ -296,7 +307,8 @@ bool renderer_set_layers(struct renderer *r, const struct render_layer *layers, 
     return true;
 }
 
-void render_slice_from_transfer(const struct transfer_slice *sl, struct render_slice *out)
+void render_slice_from_transfer(const struct transfer_slice *sl, float exposure,
+                                struct render_slice *out)
 {
     memset(out, 0, sizeof(*out));
     const struct transfer_function *tf = &sl->tf;
@@ -313,9 +325,11 @@ void render_slice_from_transfer(const struct transfer_slice *sl, struct render_s
     out->opacity = (float)sl->opacity;
     out->contour_every = (float)sl->contour_every;
     for (int i = 0; i < RENDER_LAYER_LUT; i++)
-        for (int c = 0; c < TRANSFER_CHANNELS; c++)
-            out->lut[i][c] =
-                transfer_eval(tf, (enum transfer_channel)c, (float)i / (RENDER_LAYER_LUT - 1));
+        for (int c = 0; c < TRANSFER_CHANNELS; c++) {
+            float x = (float)i / (RENDER_LAYER_LUT - 1);
+            float v = transfer_eval(tf, (enum transfer_channel)c, x);
+            out->lut[i][c] = c == TRANSFER_ALPHA ? v : render_display_to_radiance(v, exposure);
+        }
 }
 
 bool renderer_set_slices(struct renderer *r, const struct render_slice *slices, int count)
@@ -345,8 +359,17 @@ static int slices_shown(const struct renderer *r)
     return n;
 }
 
-static void slice_uniforms(const struct renderer *r, const struct gpu_program *prog, int n)
+static void slice_uniforms(const struct renderer *r, const struct gpu_program *prog, int n,
+                           const struct render_view *view)
 {
+    /* A pixel's width: the narrower of its two sides, constant (orthographic, proj[15] = 1)
+     * or growing with the distance (perspective). */
+    float px = 2.0f / (fabsf(view->proj[0]) * (float)view->width);
+    float py = 2.0f / (fabsf(view->proj[5]) * (float)view->height);
+    float foot = fminf(px, py);
+    float footprint[2] = {view->proj[15] != 0.0f ? foot : 0.0f,
+                          view->proj[15] != 0.0f ? 0.0f : foot};
+    gpu_uniform_vec2(prog, "pixel_footprint", footprint);
     float planes[4][4] = {{0}}, lo[4] = {0}, scale[4] = {0}, opacity[4] = {0}, every[4] = {0};
     for (int i = 0; i < n; i++) {
         const struct render_slice *sl = &r->slices[i];
@@ -706,7 +729,7 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
         if (layers > 0 || slices > 0)
             layer_uniforms(r, progs[pass], layers);
         if (slices > 0)
-            slice_uniforms(r, progs[pass], slices);
+            slice_uniforms(r, progs[pass], slices, view);
     }
     if (layers > 0)
         gpu_texture_bind(&r->layer_fields, BIND_EYE_TEX_LAYERS);

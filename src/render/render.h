@@ -128,9 +128,18 @@ struct render_layer {
     float lut[RENDER_LAYER_LUT][4];   /* linear RGB and alpha, entry i at lo + i/(N-1) (hi-lo) */
 };
 
+/* The radiance that tone mapping at EXPOSURE (> 0) shows as the display colour C in [0, 1]
+ * (sRGB): the inverse of image_tonemap, white kept just below its asymptote, as the panels'
+ * texels (session/panel.c). */
+float render_display_to_radiance(float c, float exposure);
+
 /* L as the eye pass draws it: its transfer function tabulated, the extinction at alpha 1 its
- * density times its opacity (emit) or the tint's weight its opacity (tint).  No GL. */
-void render_layer_from_transfer(const struct transfer_layer *l, struct render_layer *out);
+ * density times its opacity (emit) or the tint's weight its opacity (tint).  An emitting
+ * layer's colours are display colours: radiance that tone mapping at EXPOSURE turns back into
+ * them, so that a layer as opaque as can be shows the legend's colours (a tint's are factors,
+ * as they are).  No GL. */
+void render_layer_from_transfer(const struct transfer_layer *l, float exposure,
+                                struct render_layer *out);
 
 /* Draws the following views with LAYERS[0 .. COUNT) (COUNT <= TRANSFER_LAYER_MAX; 0: none),
  * layer i over the volume's field i.  The maps are uploaded only when they changed.  An
@@ -152,8 +161,10 @@ struct render_slice {
     float lut[RENDER_LAYER_LUT][4]; /* as render_layer's (alpha unused) */
 };
 
-/* SL as the eye pass draws it.  No GL. */
-void render_slice_from_transfer(const struct transfer_slice *sl, struct render_slice *out);
+/* SL as the eye pass draws it, its colours display colours at EXPOSURE (as an emitting
+ * layer's).  No GL. */
+void render_slice_from_transfer(const struct transfer_slice *sl, float exposure,
+                                struct render_slice *out);
 
 /* Draws the following views with SLICES[0 .. COUNT) (COUNT <= TRANSFER_SLICE_MAX), slice i
  * over the volume's slice field i.  A slice that is on turns empty-space skipping off.  False

@@ -269,10 +269,11 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
         struct transfer_function edited;
         look_edited_transfer(look, &edited);
         for (int i = -1; i < look->layer_count + look->slice_count; i++) {
-            enum transfer_field f = (i < 0                   ? &edited
-                                     : i < look->layer_count ? &look->layers[i].tf
-                                                             : &look->slices[i - look->layer_count].tf)
-                                        ->field;
+            const struct transfer_function *tf =
+                i < 0                   ? &edited
+                : i < look->layer_count ? &look->layers[i].tf
+                                        : &look->slices[i - look->layer_count].tf;
+            enum transfer_field f = tf->field;
             temperature |= f == TRANSFER_FIELD_TEMPERATURE || f == TRANSFER_FIELD_THETA ||
                            f == TRANSFER_FIELD_RH;
             wind |= f == TRANSFER_FIELD_WIND;

@@ -1487,12 +1487,12 @@ bool session_draw(struct session *s, struct display *d, const struct frame_state
     const struct look *look = &s->settings.look;
     struct render_layer layers[TRANSFER_LAYER_MAX];
     for (int i = 0; i < look->layer_count; i++)
-        render_layer_from_transfer(&look->layers[i], &layers[i]);
+        render_layer_from_transfer(&look->layers[i], exposure, &layers[i]);
     if (!renderer_set_layers(s->renderer, layers, look->layer_count))
         return false;
     struct render_slice slices[TRANSFER_SLICE_MAX];
     for (int i = 0; i < look->slice_count; i++)
-        render_slice_from_transfer(&look->slices[i], &slices[i]);
+        render_slice_from_transfer(&look->slices[i], exposure, &slices[i]);
     if (!renderer_set_slices(s->renderer, slices, look->slice_count))
         return false;
     if (!display_draw(d, s->renderer, &s->drawn))

@@ -68,7 +68,7 @@ static void draw(const struct ext_volume *v, const struct transfer_layer *layer,
     assert_true(renderer_set_volume(renderer, v));
     struct render_layer rl;
     if (layer)
-        render_layer_from_transfer(layer, &rl);
+        render_layer_from_transfer(layer, 1.0f, &rl);
     assert_true(renderer_set_layers(renderer, &rl, layer ? 1 : 0));
     struct render_settings s;
     settings(&s, 0.0f);
@@ -107,13 +107,13 @@ static void step_layer(struct transfer_layer *l, double lo, double hi, float x, 
     assert_true(transfer_valid(tf, NULL, 0));
 }
 
-/* The red of row 1's pixels, and how many lie strictly between 0 and FULL (1/255 apart). */
+/* The red of row 1's pixels, and how many lie strictly between 0 and FULL (1e-4 of it apart). */
 static int partial_pixels(const struct image *img, double full, float red[W])
 {
     int partial = 0;
     for (int p = 0; p < W; p++) {
         red[p] = img->rgba[4 * ((size_t)1 * W + p)];
-        if (red[p] > 1.0 / 255.0 && red[p] < full - 1.0 / 255.0)
+        if (red[p] > 1e-4 * full && red[p] < full * (1.0 - 1e-4))
             partial++;
     }
     return partial;
@@ -131,7 +131,8 @@ static void test_post_classification_step(void **state)
     float field[NX];
     for (int i = 0; i < NX; i++)
         field[i] = (float)i;
-    const double density = 1.5e-3, full = 1.0 - exp(-density * DEPTH_M);
+    const double density = 1.5e-3;
+    const double full = (1.0 - exp(-density * DEPTH_M)) * render_display_to_radiance(1.0f, 1.0f);
     struct transfer_layer l;
     const float step = 117.5f / 255.0f; /* s = 3.2255 */
     step_layer(&l, 0.0, 7.0, step, density);
@@ -147,7 +148,7 @@ static void test_post_classification_step(void **state)
         bool lit = x / 1000.0 - 0.5 > 7.0 * step;
         if (lit && edge < 0)
             edge = p;
-        assert_float_equal(red[p], lit ? full : 0.0, 1.0 / 255.0);
+        assert_float_equal(red[p], lit ? full : 0.0, 1e-4 * full);
         assert_float_equal(img.rgba[4 * ((size_t)1 * W + p) + 1], 0.0, 1e-6); /* no green */
     }
     assert_int_equal(edge, 30); /* 3.73 km of 8 km across 64 pixels: 29.8 */
@@ -187,7 +188,8 @@ static void test_layers_not_skipped(void **state)
     draw(&v, &l, true, &b);
     for (size_t i = 0; i < (size_t)W * 4 * 4; i++)
         assert_float_equal(a.rgba[i], b.rgba[i], 1e-6);
-    assert_float_equal(a.rgba[4 * W + 4 * 10], 1.0 - exp(-2.0), 1e-4);
+    double l1 = render_display_to_radiance(1.0f, 1.0f);
+    assert_float_equal(a.rgba[4 * W + 4 * 10], (1.0 - exp(-2.0)) * l1, 1e-4 * l1);
     image_finish(&a);
     image_finish(&b);
     ext_volume_finish(&v);
@@ -211,7 +213,8 @@ static void test_composited_with_clouds(void **state)
     const float *px = &img.rgba[4 * W + 4 * 20];
     double t = exp(-(beta + sigma) * DEPTH_M);
     assert_float_equal(px[3], t, 1e-4);
-    assert_float_equal(px[0], sigma / (beta + sigma) * (1.0 - t), 1e-4);
+    double l1 = render_display_to_radiance(1.0f, 1.0f);
+    assert_float_equal(px[0], sigma / (beta + sigma) * (1.0 - t) * l1, 1e-4 * l1);
     image_finish(&img);
     /* Off: the clouds alone. */
     l.enabled = false;
@@ -243,7 +246,7 @@ static void test_tint_mode(void **state)
     top_view(&view);
     for (int k = 0; k < 2; k++) {
         struct render_layer rl;
-        render_layer_from_transfer(&l, &rl);
+        render_layer_from_transfer(&l, 1.0f, &rl);
         assert_true(renderer_set_layers(renderer, &rl, k));
         struct gpu_texture out = {0};
         assert_true(renderer_draw(renderer, &s, &view, &out));
@@ -262,10 +265,11 @@ static void test_tint_mode(void **state)
 }
 
 /* A slice across z at 1 km through a field rising one unit a voxel along x, its colour map red
- * = s / 7, green = 1 - s / 7, blue 0.5: each pixel between the outer voxel centres is the
- * map's colour at s = x / 1 km - 0.5 within 1/255; with contours every 2 units the pixels
- * within a quarter voxel of s = 2 are dark and the others keep their colour; under a dark
- * cloud (no sun) the slice is seen through the kilometre of cloud above it, e^-(beta 1 km). */
+ * = s / 7, green = 1 - s / 7, blue 0.5: each pixel between the outer voxel centres shows the
+ * map's colour at s = x / 1 km - 0.5 within 1/255 once tone mapped; with contours every 2
+ * units the pixels within a pixel (125 m: 0.125 units) of s = 2, 4, 6 are dark, the others
+ * keep their colour; under a dark cloud (no sun) the slice is seen through the kilometre of
+ * cloud above it, e^-(beta 1 km). */
 static void test_slice_colours(void **state)
 {
     float field[NX];
@@ -294,7 +298,7 @@ static void test_slice_colours(void **state)
         tf->count[TRANSFER_BLUE] = 1;
         tf->points[TRANSFER_BLUE][0] = (struct transfer_point){0.0f, 0.5f};
         struct render_slice rs;
-        render_slice_from_transfer(&sl, &rs);
+        render_slice_from_transfer(&sl, 1.0f, &rs);
         assert_true(renderer_set_slices(renderer, &rs, 1));
         struct image img = {0};
         draw(&v, NULL, false, &img);
@@ -305,20 +309,27 @@ static void test_slice_colours(void **state)
             double sv = (p + 0.5) * NX * 1000.0 / W / 1000.0 - 0.5;
             const float *px = &img.rgba[4 * ((size_t)1 * W + p)];
             double off = fabs(sv / 2.0 - round(sv / 2.0)) * 2.0;
-            if (k == 1 && off < 0.25) {
+            if (k == 1 && off < 0.125) {
                 assert_float_equal(px[0], 0.02, 1e-4);
                 dark++;
                 continue;
             }
-            if (k == 1 && off < 0.3)
+            if (k == 1 && off < 0.2)
                 continue; /* the line's edge: the gradient's differences round */
-            assert_float_equal(px[0], seen * sv / 7.0, 1.0 / 255.0);
-            assert_float_equal(px[1], seen * (1.0 - sv / 7.0), 1.0 / 255.0);
-            assert_float_equal(px[2], seen * 0.5, 1.0 / 255.0);
+            const double want[3] = {sv / 7.0, 1.0 - sv / 7.0, 0.5};
+            for (int c = 0; c < 3; c++) {
+                if (k < 2) { /* on screen, the map's colour to the byte */
+                    int got = image_tonemap(px[c], 1.0f);
+                    assert_true(abs(got - (int)lround(want[c] * 255.0)) <= 1);
+                } else { /* behind the cloud: that colour's radiance, dimmed */
+                    double l = render_display_to_radiance((float)want[c], 1.0f);
+                    assert_float_equal(px[c], seen * l, 1e-3 * l + 1e-6);
+                }
+            }
             assert_float_equal(px[3], 0.0, 1e-6); /* opaque */
         }
         if (k == 1)
-            assert_int_equal(dark, 3 * 4); /* at s = 2, 4 and 6, four pixels each */
+            assert_int_equal(dark, 3 * 2); /* at s = 2, 4 and 6, two pixels each */
         image_finish(&img);
         ext_volume_finish(&v);
     }
