@@ -449,12 +449,27 @@ static void canvas_xy(const int r[4], float x, float v, float *px, float *py)
 /* A value of FIELD in the unit the editor labels it with (g/kg, C, m/s). */
 static double shown_value(enum transfer_field f, double v)
 {
-    return f == TRANSFER_FIELD_TEMPERATURE ? v - 273.15 : f == TRANSFER_FIELD_WIND ? v : v * 1e3;
+    if (f == TRANSFER_FIELD_TEMPERATURE)
+        return v - 273.15;
+    if (f == TRANSFER_FIELD_WIND || f == TRANSFER_FIELD_THETA || f == TRANSFER_FIELD_RH)
+        return v;
+    return v * 1e3;
 }
 
 static const char *shown_unit(enum transfer_field f)
 {
-    return f == TRANSFER_FIELD_TEMPERATURE ? "C" : f == TRANSFER_FIELD_WIND ? "m/s" : "g/kg";
+    switch (f) {
+    case TRANSFER_FIELD_TEMPERATURE:
+        return "C";
+    case TRANSFER_FIELD_WIND:
+        return "m/s";
+    case TRANSFER_FIELD_THETA:
+        return "K";
+    case TRANSFER_FIELD_RH:
+        return "%";
+    default:
+        return "g/kg";
+    }
 }
 
 static const char *field_title(enum transfer_field f)
@@ -466,6 +481,10 @@ static const char *field_title(enum transfer_field f)
         return "condensate";
     case TRANSFER_FIELD_TEMPERATURE:
         return "temperature";
+    case TRANSFER_FIELD_THETA:
+        return "potential temperature";
+    case TRANSFER_FIELD_RH:
+        return "relative humidity";
     default:
         return "wind speed";
     }

@@ -1335,14 +1335,20 @@ static void overlay_model_of(struct session *s, const struct frame_state *f,
                  when[0] ? ", " : "", s->shown + 1, s->playback.count);
     else
         snprintf(m->date_text, sizeof(m->date_text), "%s", when);
-    /* The legend of the first layer shown. */
+    /* A legend per layer and slice shown, layers first. */
     const struct look *look = &s->settings.look;
-    for (int i = 0; co->legend && i < look->layer_count && !m->legend; i++) {
-        if (look->layers[i].enabled && look->layers[i].opacity > 0.0) {
-            m->legend = true;
-            m->transfer = look->layers[i].tf;
-        }
+    for (int i = 0; co->legend && i < look->layer_count + look->slice_count; i++) {
+        bool layer = i < look->layer_count;
+        const struct transfer_layer *l = layer ? &look->layers[i] : NULL;
+        const struct transfer_slice *sl = layer ? NULL : &look->slices[i - look->layer_count];
+        bool shown = layer ? l->enabled && l->opacity > 0.0 : sl->enabled && sl->opacity > 0.0;
+        if (!shown || m->legend_count == OVERLAY_LEGENDS)
+            continue;
+        m->legends[m->legend_count++] = layer ? l->tf : sl->tf;
     }
+    m->legend = m->legend_count > 0;
+    if (m->legend)
+        m->transfer = m->legends[0];
     m->north = co->north;
     if (!m->north)
         return;
@@ -1380,8 +1386,14 @@ const struct overlay_model *session_overlay(const struct session *s)
 
 bool session_overlay_point(const struct session *s, float x, double world[3])
 {
+    return session_legend_point(s, 0, x, world);
+}
+
+bool session_legend_point(const struct session *s, int legend, float x, double world[3])
+{
     int px, py;
-    if (!s->overlay || !overlay_legend_pixel(overlay_view_overlay(s->overlay), x, &px, &py))
+    if (!s->overlay ||
+        !overlay_legend_pixel_at(overlay_view_overlay(s->overlay), legend, x, &px, &py))
         return false;
     overlay_view_point(s->overlay, (float)px + 0.5f, (float)py + 0.5f, world);
     return true;

@@ -214,6 +214,8 @@ const struct overlay_model *session_overlay(const struct session *s);
 /* Where in the world the overlay's legend shows the value at X in [0, 1] of its range (false
  * without a legend): for tests that read it off a picture. */
 bool session_overlay_point(const struct session *s, float x, double world[3]);
+/* The same for legend LEGEND (layers first, then slices, as the overlay lists them). */
+bool session_legend_point(const struct session *s, int legend, float x, double world[3]);
 
 /* The help text's lines for the keys and what they do here ("W  move forward"), through the
  * display's key table. */
