@@ -29,6 +29,8 @@ enum id {
     ID_AZIMUTH, ID_ELEVATION,
     ID_RAY_STEP, ID_RESOLUTION, ID_EPSILON, ID_DIFFUSE,
     ID_SAVE_VIEW, ID_PROBE_ON, ID_PROBE_MODE, ID_PROBE_THRESHOLD, ID_PROBE_DISTANCE,
+    ID_LAYER_ADD, ID_LAYER_ON, ID_LAYER_FIELD, ID_LAYER_MODE, ID_LAYER_EDIT, ID_LAYER_REMOVE,
+    ID_LAYER_OPACITY,
 };
 
 struct widget {
@@ -74,10 +76,10 @@ struct menu {
     unsigned changes;
 };
 
-static const char *const page_names[MENU_PAGE_COUNT] = {"time",  "fields",  "transfer",
-                                                        "light", "quality", "probe"};
-static const char *const page_titles[MENU_PAGE_COUNT] = {"Time",  "Fields",  "Transfer",
-                                                         "Light", "Quality", "Probe"};
+static const char *const page_names[MENU_PAGE_COUNT] = {
+    "time", "fields", "layers", "transfer", "light", "quality", "probe"};
+static const char *const page_titles[MENU_PAGE_COUNT] = {
+    "Time", "Fields", "Layers", "Transfer", "Light", "Quality", "Probe"};
 
 const char *menu_page_name(enum menu_page p)
 {
@@ -151,6 +153,8 @@ static double slider_value(const struct menu *m, const struct widget *wd)
         return log10(md->probe_threshold > 0.0 ? md->probe_threshold : 1e-4);
     case ID_PROBE_DISTANCE:
         return md->probe_distance_m / 1000.0;
+    case ID_LAYER_OPACITY:
+        return md->layer_count > 0 ? md->layers[md->layer_edited].opacity : 0.0;
     default:
         return 0.0;
     }
@@ -210,6 +214,9 @@ static void slider_label(const struct menu *m, const struct widget *wd, char *bu
         break;
     case ID_PROBE_DISTANCE:
         snprintf(buf, n, "Distance along the ray: %.0f km", v);
+        break;
+    case ID_LAYER_OPACITY:
+        snprintf(buf, n, "Layer %d opacity: %.2f", m->model.layer_edited + 1, v);
         break;
     default:
         snprintf(buf, n, "%s", wd->label);
@@ -337,6 +344,39 @@ static void layout(struct menu *m)
             add(m, W_BUTTON, ID_SAVE, 0, "transfer.save", x, y, bw2, 30, "Save");
             add(m, W_BUTTON, ID_LOAD, 0, "transfer.load", x + bw2 + 8, y, bw2, 30, "Load");
         }
+        break;
+    }
+    case MENU_PAGE_LAYERS: {
+        /* A row per layer: on/off with its field's name, the field, emit or tint, edit (the
+         * Transfer page's function), remove; the edited layer's opacity below. */
+        struct widget *wd = add(m, W_BUTTON, ID_LAYER_ADD, 0, "layers.add", 16, y, 180, 32,
+                                "Add layer");
+        if (wd)
+            wd->disabled = md->layer_count >= TRANSFER_LAYER_MAX;
+        y += 42;
+        for (int i = 0; i < md->layer_count; i++, y += 40) {
+            const struct transfer_layer *l = &md->layers[i];
+            char name[NAME_LEN];
+            snprintf(name, sizeof(name), "layers.%d.on", i + 1);
+            snprintf(label, sizeof(label), "%d on", i + 1);
+            wd = add(m, W_TOGGLE, ID_LAYER_ON, i, name, 16, y, 86, 32, label);
+            if (wd)
+                wd->selected = l->enabled;
+            snprintf(name, sizeof(name), "layers.%d.field", i + 1);
+            wd = add(m, W_BUTTON, ID_LAYER_FIELD, i, name, 108, y, 200, 32,
+                     transfer_field_label(l->tf.field));
+            snprintf(name, sizeof(name), "layers.%d.mode", i + 1);
+            add(m, W_BUTTON, ID_LAYER_MODE, i, name, 314, y, 76, 32,
+                l->mode == TRANSFER_LAYER_TINT ? "tint" : "emit");
+            snprintf(name, sizeof(name), "layers.%d.edit", i + 1);
+            wd = add(m, W_BUTTON, ID_LAYER_EDIT, i, name, 396, y, 76, 32, "Edit");
+            if (wd)
+                wd->selected = md->layer_edited == i;
+            snprintf(name, sizeof(name), "layers.%d.remove", i + 1);
+            add(m, W_BUTTON, ID_LAYER_REMOVE, i, name, 478, y, m->w - 16 - 478, 32, "Remove");
+        }
+        if (md->layer_count > 0)
+            slider(m, ID_LAYER_OPACITY, 0, "layers.opacity", y + 8, 0.0, 2.0, "");
         break;
     }
     case MENU_PAGE_LIGHT:
@@ -890,15 +930,19 @@ bool menu_widget_known(struct menu *m, const char *name)
     enum menu_page page = m->page;
     int sub = m->sub;
     bool found = false;
+    /* The Layers page with every row it can have (a script may add the layers it aims at). */
+    int layers = m->model.layer_count;
     for (int p = 0; p < MENU_PAGE_COUNT && !found; p++) {
         for (int s = 0; s < 2 && !found; s++) {
             m->page = (enum menu_page)p;
             m->sub = s;
+            m->model.layer_count = p == MENU_PAGE_LAYERS ? TRANSFER_LAYER_MAX : layers;
             layout(m);
             for (int i = 0; i < m->n_widgets && !found; i++)
                 found = strcmp(m->widgets[i].name, name) == 0;
         }
     }
+    m->model.layer_count = layers;
     m->page = page;
     m->sub = sub;
     layout(m);
@@ -981,6 +1025,12 @@ static void commit_slider(struct menu *m, const struct widget *wd, double v)
         md->probe_distance_m = v * 1000.0;
         m->changes |= MENU_CHANGE_PROBE;
         break;
+    case ID_LAYER_OPACITY:
+        if (md->layer_count > 0) {
+            md->layers[md->layer_edited].opacity = v;
+            m->changes |= MENU_CHANGE_TRANSFER;
+        }
+        break;
     default:
         break;
     }
@@ -999,6 +1049,16 @@ static void step_by(struct menu *m, int delta)
         md->step = s;
         m->changes |= MENU_CHANGE_STEP;
     }
+}
+
+/* Layer I becomes the one the Transfer page edits. */
+static void select_layer(struct menu *m, int i)
+{
+    struct menu_model *md = &m->model;
+    md->layer_edited = i;
+    md->transfer = md->layers[i].tf;
+    md->transfer_on = md->layers[i].enabled;
+    m->point = -1;
 }
 
 /* A button released over itself. */
@@ -1088,6 +1148,58 @@ static void activate(struct menu *m, const struct widget *wd)
     case ID_PROBE_ON:
         md->probe_on = !md->probe_on;
         m->changes |= MENU_CHANGE_PROBE;
+        break;
+    case ID_LAYER_ADD:
+        if (md->layer_count < TRANSFER_LAYER_MAX) {
+            /* A temperature layer, shown: the first thing a forecaster adds. */
+            struct transfer_layer *l = &md->layers[md->layer_count];
+            *l = (struct transfer_layer){.enabled = true, .opacity = 1.0,
+                                         .mode = TRANSFER_LAYER_EMIT};
+            transfer_defaults(&l->tf, TRANSFER_FIELD_TEMPERATURE);
+            md->layer_edited = md->layer_count++;
+            select_layer(m, md->layer_edited);
+            m->changes |= MENU_CHANGE_TRANSFER;
+        }
+        break;
+    case ID_LAYER_ON:
+        md->layers[wd->index].enabled = !md->layers[wd->index].enabled;
+        if (wd->index == md->layer_edited)
+            md->transfer_on = md->layers[wd->index].enabled;
+        m->changes |= MENU_CHANGE_TRANSFER;
+        break;
+    case ID_LAYER_FIELD: {
+        struct transfer_layer *l = &md->layers[wd->index];
+        transfer_defaults(&l->tf, (enum transfer_field)((l->tf.field + 1) % TRANSFER_FIELD_COUNT));
+        if (wd->index == md->layer_edited)
+            select_layer(m, wd->index);
+        m->changes |= MENU_CHANGE_TRANSFER;
+        break;
+    }
+    case ID_LAYER_MODE:
+        md->layers[wd->index].mode = md->layers[wd->index].mode == TRANSFER_LAYER_TINT
+                                         ? TRANSFER_LAYER_EMIT
+                                         : TRANSFER_LAYER_TINT;
+        m->changes |= MENU_CHANGE_TRANSFER;
+        break;
+    case ID_LAYER_EDIT:
+        /* Its function in the Transfer page's editor, at once. */
+        select_layer(m, wd->index);
+        m->page = MENU_PAGE_TRANSFER;
+        m->sub = 1;
+        break;
+    case ID_LAYER_REMOVE:
+        for (int i = wd->index; i + 1 < md->layer_count; i++)
+            md->layers[i] = md->layers[i + 1];
+        md->layer_count--;
+        if (md->layer_edited >= md->layer_count)
+            md->layer_edited = md->layer_count > 0 ? md->layer_count - 1 : 0;
+        if (md->layer_count > 0) {
+            select_layer(m, md->layer_edited);
+        } else {
+            transfer_defaults(&md->transfer, TRANSFER_FIELD_QVAPOR);
+            md->transfer_on = false;
+        }
+        m->changes |= MENU_CHANGE_TRANSFER;
         break;
     case ID_PROBE_MODE:
         md->probe_mode = md->probe_mode == MENU_PROBE_AT_DISTANCE ? MENU_PROBE_FIRST_VISIBLE

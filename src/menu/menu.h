@@ -29,8 +29,8 @@
 #define MENU_FONT_PATH "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"
 #define MENU_SLOTS 4
 
-enum menu_page { MENU_PAGE_TIME, MENU_PAGE_FIELDS, MENU_PAGE_TRANSFER, MENU_PAGE_LIGHT,
-                 MENU_PAGE_QUALITY, MENU_PAGE_PROBE, MENU_PAGE_COUNT };
+enum menu_page { MENU_PAGE_TIME, MENU_PAGE_FIELDS, MENU_PAGE_LAYERS, MENU_PAGE_TRANSFER,
+                 MENU_PAGE_LIGHT, MENU_PAGE_QUALITY, MENU_PAGE_PROBE, MENU_PAGE_COUNT };
 
 /* How the probe picks its point (session/probe.h's enum probe_mode). */
 enum { MENU_PROBE_FIRST_VISIBLE, MENU_PROBE_AT_DISTANCE };
@@ -49,9 +49,13 @@ struct menu_model {
     /* Transfer */
     double species_scale[SPECIES_COUNT]; /* multiplies the species' extinction, [0, 4] */
     float species_tint[SPECIES_COUNT][3];
-    bool transfer_on;                    /* the function is shown (replaces the clouds); any
-                                            edit of the function turns it on */
-    struct transfer_function transfer;
+    bool transfer_on;                    /* the edited layer is shown; any edit of the
+                                            function turns it on */
+    struct transfer_function transfer;   /* the edited layer's function */
+    /* Layers (the application keeps layers[layer_edited] and TRANSFER, TRANSFER_ON alike) */
+    int layer_count;
+    struct transfer_layer layers[TRANSFER_LAYER_MAX];
+    int layer_edited;                    /* the layer the Transfer page edits */
     bool histogram_valid;                /* the field's histogram for the step on screen */
     struct transfer_histogram histogram; /* drawn behind the curves when it is of transfer's
                                             field and range */

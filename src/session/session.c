@@ -138,6 +138,9 @@ static void model_from_session(struct session *s, struct menu_model *m)
     }
     m->transfer_on = look->layer_count > 0 && look->layers[0].enabled;
     look_edited_transfer(look, &m->transfer);
+    m->layer_count = look->layer_count;
+    memcpy(m->layers, look->layers, sizeof(m->layers));
+    m->layer_edited = 0;
     m->sun_azimuth = fmod(s->sun_az + 360.0, 360.0);
     m->sun_elevation = s->sun_el;
     m->step_m = s->settings.step_m;
@@ -678,9 +681,23 @@ static void transfer_path(const struct session *s, int slot, char *buf, size_t s
     snprintf(buf, size, "%s/tf-%d.cfg", s->transfers_dir, slot + 1);
 }
 
-/* The transfer editor's function and its on/off into LOOK's first layer (made, emitting and
- * opaque, when the look has none and the edit is more than the untouched default off). */
-static void edit_layer0(struct look *look, bool on, const struct transfer_function *tf)
+static void edit_layer(struct look *look, int i, bool on, const struct transfer_function *tf);
+
+/* The menu's layers into LOOK, the transfer editor's function and its on/off into the edited
+ * one (a first layer made, emitting and opaque, when there is none and the edit is more than
+ * the untouched default off); the model then holds what LOOK holds. */
+static void edit_layers(struct look *look, struct menu_model *m)
+{
+    look->layer_count = m->layer_count;
+    memcpy(look->layers, m->layers, sizeof(look->layers));
+    int i = m->layer_edited >= 0 && m->layer_edited < look->layer_count ? m->layer_edited : 0;
+    edit_layer(look, i, m->transfer_on, &m->transfer);
+    m->layer_count = look->layer_count;
+    memcpy(m->layers, look->layers, sizeof(m->layers));
+    m->layer_edited = look->layer_count > 0 ? i : 0;
+}
+
+static void edit_layer(struct look *look, int i, bool on, const struct transfer_function *tf)
 {
     if (look->layer_count == 0) {
         struct transfer_function plain;
@@ -692,8 +709,8 @@ static void edit_layer0(struct look *look, bool on, const struct transfer_functi
             .enabled = on, .mode = TRANSFER_LAYER_EMIT, .opacity = 1.0, .tf = *tf};
         return;
     }
-    look->layers[0].enabled = on;
-    look->layers[0].tf = *tf;
+    look->layers[i].enabled = on;
+    look->layers[i].tf = *tf;
 }
 
 static void apply_changes(struct session *s, unsigned ch)
@@ -713,7 +730,7 @@ static void apply_changes(struct session *s, unsigned ch)
             set.look.select.scale[sp] = m->species_scale[sp];
             memcpy(set.look.tint.rgb[sp], m->species_tint[sp], sizeof(m->species_tint[sp]));
         }
-        edit_layer0(&set.look, m->transfer_on, &m->transfer);
+        edit_layers(&set.look, m);
     }
     if (ch & MENU_CHANGE_SUN)
         session_set_sun(s, m->sun_azimuth, m->sun_elevation);
@@ -739,7 +756,7 @@ static void apply_changes(struct session *s, unsigned ch)
                 /* A function loaded is shown at once, as an edited one is. */
                 m->transfer = tf;
                 m->transfer_on = true;
-                edit_layer0(&set.look, true, &tf);
+                edit_layers(&set.look, m);
             }
             snprintf(status, sizeof(status), ok ? "loaded %s" : "kept the current one: %s",
                      ok ? path : log_last_error());

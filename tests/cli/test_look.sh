@@ -59,10 +59,41 @@ cat >"$tmp/transfer.txt" <<'SCRIPT'
 17 button trigger up
 18 key menu
 SCRIPT
+# The Layers page: a temperature layer added, then a second turned to wind speed tinting the
+# clouds at a quarter of its strength (the slider), saved.
+cat >"$tmp/layers.txt" <<'SCRIPT'
+0 key menu
+0 aim tab.layers
+1 button trigger down
+2 button trigger up
+3 aim layers.add
+4 button trigger down
+5 button trigger up
+6 aim layers.add
+7 button trigger down
+8 button trigger up
+9 aim layers.2.field
+10 button trigger down
+11 button trigger up
+12 aim layers.2.mode
+13 button trigger down
+14 button trigger up
+15 aim layers.opacity 0.5 0.5
+16 button trigger down
+17 aim layers.opacity 0.125 0.5
+18 button trigger up
+19 aim tab.time
+20 button trigger down
+21 button trigger up
+22 aim time.save
+23 button trigger down
+24 button trigger up
+25 key menu
+SCRIPT
 printf '0 key menu\n1 key menu\n' >"$tmp/plain.txt"
 (cd "$tmp" && "$anvil" render --quiet "$cfg" $small --input plain.txt -o plain.pfm)
 n=0
-for look in species transfer; do
+for look in species transfer layers; do
     n=$((n + 1))
     (cd "$tmp" && "$anvil" render --quiet "$cfg" $small --input "$look.txt" \
         -o "$look-session.pfm" >"$look.out")
@@ -79,6 +110,8 @@ check "species: the tint and the step saved" bash -c \
     "grep -q 'data = { step = 1; };' '$tmp/bookmark-1.cfg' && grep -q 'cloud = { enabled = true; scale = 2.4' '$tmp/bookmark-1.cfg'"
 check "transfer: the function in place, as layer 0, shown" bash -c \
     "grep -q 'layers = (' '$tmp/bookmark-2.cfg' && grep -q 'field = \"condensate\";' '$tmp/bookmark-2.cfg' && grep -q 'mode = \"emit\";' '$tmp/bookmark-2.cfg' && grep -q 'enabled = true;' '$tmp/bookmark-2.cfg'"
+check "layers: two layers saved, the second wind speed tinting" bash -c \
+    "grep -q 'field = \"temperature\";' '$tmp/bookmark-3.cfg' && grep -q 'field = \"wind\";' '$tmp/bookmark-3.cfg' && grep -q 'mode = \"tint\";' '$tmp/bookmark-3.cfg' && grep -q 'opacity = 2\.[0-9]*e-01;' '$tmp/bookmark-3.cfg'"
 check "Save view printed the camera block too" grep -q "camera = {" "$tmp/species.out"
 
 # The same transfer function named by its file renders alike (the group moved to tf.cfg).
