@@ -4,7 +4,7 @@
 
 #include "data/wrf_write.h"
 
-#define RD 287.0    /* J/(kg K), dry air (Wallace and Hobbs 2006, eq. 3.3) */
+#define RD 287.0    /* J/(kg K), dry air (Wallace and Hobbs 2006, §3.1) */
 #define CP 1004.5   /* J/(kg K), dry air at constant pressure (as WRF's cp) */
 #define P0 100000.0 /* Pa */
 #define EPSILON 0.622 /* R_d / R_v */

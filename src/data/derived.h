@@ -16,10 +16,10 @@
  * Hobbs 2006, eq. 3.3, dry air); Pa.  NAN for a non-positive or non-finite input. */
 double derived_pressure(double rho_kg_m3, double t_k);
 /* Potential temperature theta = T (p0 / p)^(R_d / c_p), p0 = 1000 hPa (Poisson's equation,
- * Wallace and Hobbs 2006, eq. 3.54); K.  NAN for bad input. */
+ * Wallace and Hobbs 2006, §3.4); K.  NAN for bad input. */
 double derived_theta(double t_k, double p_pa);
 /* Relative humidity over liquid water, per cent: 100 e / e_s with the vapour pressure
- * e = p q / (epsilon + q) from the mixing ratio q (Wallace and Hobbs 2006, eq. 3.59, epsilon =
+ * e = p q / (epsilon + q) from the mixing ratio q (Wallace and Hobbs 2006, §3.5, epsilon =
  * 0.622) and the saturation vapour pressure e_s = 6.112 exp(17.67 (T - 273.15) /
  * (T - 29.65)) hPa (Bolton 1980, eq. 10).  NAN for bad input. */
 double derived_rh(double t_k, double p_pa, double q_kg_kg);
