@@ -29,8 +29,24 @@
 #define MENU_FONT_PATH "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"
 #define MENU_SLOTS 4
 
-enum menu_page { MENU_PAGE_TIME, MENU_PAGE_FIELDS, MENU_PAGE_LAYERS, MENU_PAGE_TRANSFER,
-                 MENU_PAGE_LIGHT, MENU_PAGE_QUALITY, MENU_PAGE_PROBE, MENU_PAGE_COUNT };
+enum menu_page { MENU_PAGE_TIME, MENU_PAGE_FIELDS, MENU_PAGE_LAYERS, MENU_PAGE_SLICES,
+                 MENU_PAGE_TRANSFER, MENU_PAGE_LIGHT, MENU_PAGE_QUALITY, MENU_PAGE_PROBE,
+                 MENU_PAGE_COUNT };
+
+/* A slice as the Slices page moves it: across AXIS (0 x, 1 y, 2 z) at POSITION_M along it
+ * (world metres), its normal tilted by TILT_DEG from the axis (about x for the y and z axes,
+ * about y for x), through the box's centre otherwise.  menu_slice_plane makes its plane. */
+struct menu_slice {
+    struct transfer_slice slice;
+    int axis;
+    double position_m, tilt_deg;
+};
+
+/* SL's point and normal from its axis, position and tilt; BOX_CENTRE in world metres. */
+void menu_slice_plane(struct menu_slice *sl, const double box_centre[3]);
+/* The axis, position and tilt that come closest to SL->slice's plane (its normal's largest
+ * component the axis). */
+void menu_slice_from_plane(struct menu_slice *sl);
 
 /* How the probe picks its point (session/probe.h's enum probe_mode). */
 enum { MENU_PROBE_FIRST_VISIBLE, MENU_PROBE_AT_DISTANCE };
@@ -56,6 +72,11 @@ struct menu_model {
     int layer_count;
     struct transfer_layer layers[TRANSFER_LAYER_MAX];
     int layer_edited;                    /* the layer the Transfer page edits */
+    /* Slices */
+    int slice_count;
+    struct menu_slice slices[TRANSFER_SLICE_MAX];
+    int slice_selected;                  /* the one the sliders move */
+    double box_min_m[3], box_max_m[3];   /* the volume's box, world metres (the sliders' range) */
     bool histogram_valid;                /* the field's histogram for the step on screen */
     struct transfer_histogram histogram; /* drawn behind the curves when it is of transfer's
                                             field and range */
@@ -89,6 +110,7 @@ enum {
     MENU_CHANGE_VISIBLE = 1u << 9,  /* shown or hidden */
     MENU_CHANGE_PROBE = 1u << 10,   /* on/off, mode, threshold, distance */
     MENU_ACTION_SAVE_VIEW = 1u << 11, /* "Save view": the view and look as a scene file */
+    MENU_CHANGE_SLICES = 1u << 12,  /* a slice added, removed, moved, tilted or changed */
 };
 
 struct menu_desc {

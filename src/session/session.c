@@ -141,6 +141,17 @@ static void model_from_session(struct session *s, struct menu_model *m)
     m->layer_count = look->layer_count;
     memcpy(m->layers, look->layers, sizeof(m->layers));
     m->layer_edited = 0;
+    m->slice_count = look->slice_count;
+    for (int i = 0; i < look->slice_count; i++) {
+        m->slices[i].slice = look->slices[i];
+        menu_slice_from_plane(&m->slices[i]);
+    }
+    m->slice_selected = 0;
+    const struct grid3 *box = renderer_grid(s->renderer);
+    for (int a = 0; a < 3; a++) {
+        m->box_min_m[a] = box->origin[a];
+        m->box_max_m[a] = box->origin[a] + box->n[a] * box->spacing[a];
+    }
     m->sun_azimuth = fmod(s->sun_az + 360.0, 360.0);
     m->sun_elevation = s->sun_el;
     m->step_m = s->settings.step_m;
@@ -731,6 +742,11 @@ static void apply_changes(struct session *s, unsigned ch)
             memcpy(set.look.tint.rgb[sp], m->species_tint[sp], sizeof(m->species_tint[sp]));
         }
         edit_layers(&set.look, m);
+    }
+    if (ch & MENU_CHANGE_SLICES) {
+        set.look.slice_count = m->slice_count;
+        for (int i = 0; i < m->slice_count; i++)
+            set.look.slices[i] = m->slices[i].slice;
     }
     if (ch & MENU_CHANGE_SUN)
         session_set_sun(s, m->sun_azimuth, m->sun_elevation);

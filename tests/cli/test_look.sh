@@ -90,10 +90,39 @@ cat >"$tmp/layers.txt" <<'SCRIPT'
 24 button trigger up
 25 key menu
 SCRIPT
+# The Slices page: a temperature slice added, moved down, tilted, with contours, saved.
+cat >"$tmp/slices.txt" <<'SCRIPT'
+0 key menu
+0 aim tab.slices
+1 button trigger down
+2 button trigger up
+3 aim slices.add
+4 button trigger down
+5 button trigger up
+6 aim slices.position 0.5 0.5
+7 button trigger down
+8 aim slices.position 0.2 0.5
+9 button trigger up
+10 aim slices.tilt 0.5 0.5
+11 button trigger down
+12 aim slices.tilt 0.7 0.5
+13 button trigger up
+14 aim slices.contours 0.0 0.5
+15 button trigger down
+16 aim slices.contours 0.5 0.5
+17 button trigger up
+18 aim tab.time
+19 button trigger down
+20 button trigger up
+21 aim time.save
+22 button trigger down
+23 button trigger up
+24 key menu
+SCRIPT
 printf '0 key menu\n1 key menu\n' >"$tmp/plain.txt"
 (cd "$tmp" && "$anvil" render --quiet "$cfg" $small --input plain.txt -o plain.pfm)
 n=0
-for look in species transfer layers; do
+for look in species transfer layers slices; do
     n=$((n + 1))
     (cd "$tmp" && "$anvil" render --quiet "$cfg" $small --input "$look.txt" \
         -o "$look-session.pfm" >"$look.out")
@@ -112,6 +141,8 @@ check "transfer: the function in place, as layer 0, shown" bash -c \
     "grep -q 'layers = (' '$tmp/bookmark-2.cfg' && grep -q 'field = \"condensate\";' '$tmp/bookmark-2.cfg' && grep -q 'mode = \"emit\";' '$tmp/bookmark-2.cfg' && grep -q 'enabled = true;' '$tmp/bookmark-2.cfg'"
 check "layers: two layers saved, the second wind speed tinting" bash -c \
     "grep -q 'field = \"temperature\";' '$tmp/bookmark-3.cfg' && grep -q 'field = \"wind\";' '$tmp/bookmark-3.cfg' && grep -q 'mode = \"tint\";' '$tmp/bookmark-3.cfg' && grep -q 'opacity = 2\.[0-9]*e-01;' '$tmp/bookmark-3.cfg'"
+check "slices: a tilted slice with contours saved" bash -c \
+    "grep -q 'slices = (' '$tmp/bookmark-4.cfg' && grep -q 'axis = \"plane\";' '$tmp/bookmark-4.cfg' && ! grep -q 'normal = \[0.0*e+00, 0.0*e+00, 1.0*e+00\]' '$tmp/bookmark-4.cfg' && ! grep -q 'contour_every = 0.0*e+00' '$tmp/bookmark-4.cfg'"
 check "Save view printed the camera block too" grep -q "camera = {" "$tmp/species.out"
 
 # The same transfer function named by its file renders alike (the group moved to tf.cfg).
