@@ -9,7 +9,7 @@
 // OPAQUE 1 = opaque geometry was drawn first (render/opaque.c): rays stop at its distance and
 // it is the background there.  PHASE_MIX 0 = one phase for every species (PHASE_ICE 1 the ice
 // phase, 0 the water phase) instead of the beta-weighted mix (effects.phase off).
-// TINT 1 = the scattered light takes a per-voxel colour (species tints, transfer functions).
+// TINT 1 = the scattered light takes a per-voxel colour (the species' tints).
 // TEMPORAL 1 = temporal interpolation (effects.temporal): beta = mix(beta_k, beta_k+1,
 // temporal_f) from a second extinction texture (the light map pair is LIGHTMAP_PAIR).
 // MULTIPLE 1 = multiple scattering (effects.multiple): the light map's diffuse light (an

@@ -286,8 +286,8 @@ static const struct config_field settings[] = {
          "movies too) or \"never\"; in a CAVE or HMD it is a panel in the room"),
     BOOL("overlay.date", overlay.date, 1, "the shown time step's date and time (WRF Times)"),
     BOOL("overlay.legend", overlay.legend, 1,
-         "a colour legend for the colour-mapped field (transfer function mode), with its "
-         "units"),
+         "a colour legend for each colour-mapped layer and slice shown (at most 4), with "
+         "its field's name and units"),
     BOOL("overlay.north", overlay.north, 1, "a north arrow"),
     BOOL("overlay.box", overlay.box, 1, "the domain's box, with km ticks along its floor"),
 

@@ -101,7 +101,7 @@ enum {
     MENU_CHANGE_PLAYBACK = 1u << 0, /* playing, loop or speed */
     MENU_CHANGE_STEP = 1u << 1,     /* step chosen by the user */
     MENU_CHANGE_SPECIES = 1u << 2,  /* on/off, scale, tint: the volume must be made again */
-    MENU_CHANGE_TRANSFER = 1u << 3, /* transfer mode or function: likewise */
+    MENU_CHANGE_TRANSFER = 1u << 3, /* a layer or its function: likewise */
     MENU_CHANGE_SUN = 1u << 4,
     MENU_CHANGE_QUALITY = 1u << 5,
     MENU_ACTION_SAVE = 1u << 6,     /* save model.transfer into slot model.slot */

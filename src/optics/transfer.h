@@ -1,10 +1,10 @@
 /*
- * optics/transfer: a piecewise-linear RGBA transfer function for scalar fields shown in
- * classic transfer-function mode (Dye 2007 §4.3): four independent channels of control points
- * (x in [0, 1] over the field's range [lo, hi], value in [0, 1]), linearly interpolated and
- * clamped outside their first and last point.  Alpha becomes extinction (alpha times DENSITY,
- * 1/m), red, green and blue tint the scattered light.  Pure numbers: no files (config/ reads
- * and writes them), no GL, no volumes.
+ * optics/transfer: a piecewise-linear RGBA transfer function for scalar fields (Dye 2007 §4.3):
+ * four independent channels of control points (x in [0, 1] over the field's range [lo, hi],
+ * value in [0, 1]), linearly interpolated and clamped outside their first and last point; and
+ * the colour-mapped layers and slices that show fields through them.  Alpha becomes a layer's
+ * extinction (alpha times DENSITY times its opacity, 1/m), red, green and blue its colour.
+ * Pure numbers: no files (config/ reads and writes them), no GL, no volumes.
  */
 #ifndef ANVIL_OPTICS_TRANSFER_H
 #define ANVIL_OPTICS_TRANSFER_H

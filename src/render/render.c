@@ -297,7 +297,8 @@ static bool put_luts(struct renderer *r)
 bool renderer_set_layers(struct renderer *r, const struct render_layer *layers, int count)
 {
     assert(count >= 0 && count <= TRANSFER_LAYER_MAX);
-    if (count == r->layer_count && memcmp(layers, r->layers, (size_t)count * sizeof(*layers)) == 0)
+    if (count == r->layer_count &&
+        (count == 0 || memcmp(layers, r->layers, (size_t)count * sizeof(*layers)) == 0))
         return true;
     memset(r->layers, 0, sizeof(r->layers));
     if (count > 0)
@@ -335,7 +336,8 @@ void render_slice_from_transfer(const struct transfer_slice *sl, float exposure,
 bool renderer_set_slices(struct renderer *r, const struct render_slice *slices, int count)
 {
     assert(count >= 0 && count <= TRANSFER_SLICE_MAX);
-    if (count == r->slice_count && memcmp(slices, r->slices, (size_t)count * sizeof(*slices)) == 0)
+    if (count == r->slice_count &&
+        (count == 0 || memcmp(slices, r->slices, (size_t)count * sizeof(*slices)) == 0))
         return true;
     memset(r->slices, 0, sizeof(r->slices));
     if (count > 0)

@@ -58,7 +58,8 @@ struct render_view {
 struct render_stats {
     unsigned views;         /* views drawn */
     double upload_ms;       /* CPU+GPU time of the last volume upload */
-    uint64_t upload_bytes;  /* bytes of every volume uploaded (extinction, tints, next) */
+    uint64_t upload_bytes;  /* bytes of every volume uploaded (extinction, tints, the layers'
+                               and slices' fields, next) */
     unsigned uploads;       /* volumes uploaded */
 };
 

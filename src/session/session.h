@@ -139,10 +139,11 @@ unsigned session_take_requests(struct session *s);
 void session_view_text(const struct session *s, char *buf, size_t size);
 void session_sun_text(const struct session *s, char *buf, size_t size);
 /* What a scene file needs besides the camera and the sun to render what the session shows:
- * the time step (data.step), the look (look.species.*, look.transfer written in place,
- * look.show_transfer), the quality the menu changed (render.step, lightmap.resolution,
- * lightmap.epsilon) and the effects as the session decided them (all but temporal and
- * distortion), the probe when it is on.  SIZE of 16 KiB holds any look. */
+ * the time step (data.step), the look (look.species.*, look.layers and look.slices with their
+ * transfer functions written in place), the quality the menu changed (render.step,
+ * lightmap.resolution, lightmap.epsilon) and the effects as the session decided them (all but
+ * temporal and distortion), the probe when it is on.  SIZE of 96 KiB holds any look (four
+ * layers and four slices whose functions have every point they can hold: about 45 KiB). */
 void session_look_text(const struct session *s, char *buf, size_t size);
 /* The menu's status line (a saved bookmark); no-op without a menu. */
 void session_set_status(struct session *s, const char *text);

@@ -187,6 +187,33 @@ static void test_legend_per_layer(void **state)
     double p[3];
     assert_false(session_legend_point(sc.s, 3, 0.5f, p));
     image_finish(&img);
+
+    /* The largest look (four layers and four slices, every channel full of points) fits the
+     * 96 KiB that Save view gives it (src/app/loop.c). */
+    set.look.layer_count = TRANSFER_LAYER_MAX;
+    set.look.slice_count = TRANSFER_SLICE_MAX;
+    for (int i = 0; i < TRANSFER_LAYER_MAX + TRANSFER_SLICE_MAX; i++) {
+        struct transfer_function *tf = i < TRANSFER_LAYER_MAX ? &set.look.layers[i].tf
+                                                              : &set.look.slices[i - 4].tf;
+        if (i >= TRANSFER_LAYER_MAX)
+            set.look.slices[i - 4] = set.look.slices[0];
+        else
+            set.look.layers[i] = set.look.layers[0];
+        for (int c = 0; c < TRANSFER_CHANNELS; c++) {
+            tf->count[c] = TRANSFER_MAX_POINTS;
+            for (int k = 0; k < TRANSFER_MAX_POINTS; k++)
+                tf->points[c][k] = (struct transfer_point){k / 31.0f * 0.999f, 0.123456789f};
+        }
+        memset(tf->name, 'n', sizeof(tf->name) - 1);
+        tf->name[sizeof(tf->name) - 1] = '\0';
+    }
+    set.revision++;
+    session_set_settings(sc.s, &set);
+    static char text[98304];
+    session_look_text(sc.s, text, sizeof(text));
+    assert_non_null(strstr(text, "slices = ("));
+    assert_null(strstr(text, "is longer than"));
+    assert_true(strlen(text) > 16384); /* more than Save view once gave a look */
     close_scene(&sc);
 }
 
