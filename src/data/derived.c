@@ -4,9 +4,9 @@
 
 #include "data/wrf_write.h"
 
-#define RD 287.0    /* J/(kg K), dry air (Wallace and Hobbs 2006, §3.1) */
-#define CP 1004.5   /* J/(kg K), dry air at constant pressure (as WRF's cp) */
-#define P0 100000.0 /* Pa */
+#define RD 287.0      /* J/(kg K), dry air (Wallace and Hobbs 2006, §3.1) */
+#define CP 1004.5     /* J/(kg K), dry air at constant pressure (as WRF's cp) */
+#define P0 100000.0   /* Pa */
 #define EPSILON 0.622 /* R_d / R_v */
 
 double derived_pressure(double rho, double t)
@@ -29,8 +29,8 @@ double derived_rh(double t, double p, double q)
         return NAN;
     if (q < 0.0)
         q = 0.0;
-    double e = p * q / (EPSILON + q);                                  /* Pa */
-    double es = 611.2 * exp(17.67 * (t - 273.15) / (t - 29.65));      /* Pa */
+    double e = p * q / (EPSILON + q);                            /* Pa */
+    double es = 611.2 * exp(17.67 * (t - 273.15) / (t - 29.65)); /* Pa */
     return 100.0 * e / es;
 }
 
@@ -63,8 +63,8 @@ void derived_field(const struct field_volume *fv, enum transfer_field field, flo
         for (size_t ij = 0; ij < layer; ij++, idx++) {
             double t = fv->temperature ? fv->temperature[idx] : t_std;
             double q = fv->qvapor ? fv->qvapor[idx] : vapour_std;
-            double p = fv->rho_air && fv->temperature ? derived_pressure(fv->rho_air[idx], t)
-                                                      : p_std;
+            double p =
+                fv->rho_air && fv->temperature ? derived_pressure(fv->rho_air[idx], t) : p_std;
             if (!isfinite(p))
                 p = p_std;
             double v;

@@ -282,8 +282,10 @@ static void test_slice_colours(void **state)
         v.slice[0] = v.layer[0]; /* the same field, as a slice's */
         v.layer[0] = NULL;
         v.slice_field[0] = TRANSFER_FIELD_TEMPERATURE;
-        struct transfer_slice sl = {.enabled = true, .point = {0, 0, 1000.0},
-                                    .normal = {0, 0, 1}, .opacity = 1.0,
+        struct transfer_slice sl = {.enabled = true,
+                                    .point = {0, 0, 1000.0},
+                                    .normal = {0, 0, 1},
+                                    .opacity = 1.0,
                                     .contour_every = k == 1 ? 2.0 : 0.0};
         transfer_defaults(&sl.tf, TRANSFER_FIELD_TEMPERATURE);
         sl.tf.lo = 0.0;
