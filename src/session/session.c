@@ -1041,6 +1041,26 @@ static bool ready(void *user, int step)
     return player_ready(user, step);
 }
 
+/* A drag outside the menu while its Slices page shows moves the selected slice: up and down
+ * along its axis (SLICE_DRAG_SHARE of the box's extent per pixel), left and right tilts it
+ * (SLICE_DRAG_DEG per pixel); the change goes to the settings as the page's sliders send it. */
+#define SLICE_DRAG_SHARE (1.0 / 400.0)
+#define SLICE_DRAG_DEG 0.2
+static void drag_slice(struct session *s, float du, float dv)
+{
+    struct menu_model *m = menu_model(s->menu);
+    struct menu_slice *sl = &m->slices[m->slice_selected];
+    int a = sl->axis;
+    double lo = m->box_min_m[a], hi = m->box_max_m[a], c[3];
+    sl->position_m = fmin(hi, fmax(lo, sl->position_m - dv * (hi - lo) * SLICE_DRAG_SHARE));
+    sl->tilt_deg = fmin(60.0, fmax(-60.0, sl->tilt_deg + du * SLICE_DRAG_DEG));
+    for (int k = 0; k < 3; k++)
+        c[k] = 0.5 * (m->box_min_m[k] + m->box_max_m[k]);
+    menu_slice_plane(sl, c);
+    menu_model_changed(s->menu);
+    apply_changes(s, MENU_CHANGE_SLICES);
+}
+
 /* One event: the menu's, navigation's or the session's own. */
 static bool handle(struct session *s, mat4 from_world, struct input_event e)
 {
@@ -1091,6 +1111,11 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
     case INPUT_DRAG:
         if (s->drag_blocked)
             break;
+        if (s->menu && menu_visible(s->menu) && menu_page(s->menu) == MENU_PAGE_SLICES &&
+            menu_model(s->menu)->slice_count > 0) {
+            drag_slice(s, e.u, e.v);
+            break;
+        }
         if (s->tracker)
             s->nav.orientation_deg[0] = fmod(s->nav.orientation_deg[0] + DRAG_DEG * e.u, 360.0);
         else

@@ -190,6 +190,30 @@ printf '@include "%s"\nlook = { slices = ( { axis = "plane"; normal = [0.0, 0.0,
 expect_exit 1 "a slice without a normal" "$anvil" render "$tmp/flat.cfg" -o "$tmp/x.png"
 check "  says so" stderr_has 'flat.cfg: look.slices.\[0\].normal: must not be \[0, 0, 0\]'
 
+# A mouse drag outside the menu while the Slices page shows moves the slice (up: higher) and
+# tilts it (right); no drag leaves it half way up the box.
+drag_script() {
+    printf '0 key menu\n0 aim tab.slices\n1 button trigger down\n2 button trigger up\n'
+    printf '3 aim slices.add\n4 button trigger down\n5 button trigger up\n'
+    printf '6 pose world 0 0 0 0 0 1\n7 button trigger down\n8 drag %s\n9 drag %s\n' "$1" "$2"
+    printf '10 button trigger up\n11 aim tab.time\n12 button trigger down\n13 button trigger up\n'
+    printf '14 aim time.save\n15 button trigger down\n16 button trigger up\n17 key menu\n'
+}
+slice_z() { sed -n 's/^ *point = \[[^,]*, [^,]*, \(.*\)\];/\1/p' "$1"; }
+mkdir -p "$tmp/drag" "$tmp/still"
+drag_script "0 -100" "50 0" >"$tmp/drag/in.txt"
+drag_script "0 0" "0 0" >"$tmp/still/in.txt"
+for d in drag still; do
+    (cd "$tmp/$d" && "$anvil" render --quiet "$cfg" $small --input in.txt -o session.pfm \
+        >/dev/null && "$anvil" render --quiet bookmark-1.cfg $small -o batch.pfm)
+done
+check "drag: the bookmark renders the session's picture" \
+    cmp -s "$tmp/drag/session.pfm" "$tmp/drag/batch.pfm"
+check "drag: the slice went up" awk -v a="$(slice_z "$tmp/drag/bookmark-1.cfg")" \
+    -v b="$(slice_z "$tmp/still/bookmark-1.cfg")" 'BEGIN { exit !(a > b + 1.0) }'
+check "drag: and tilted" bash -c "! grep -q 'normal = \[0.0*e+00, 0.0*e+00, 1.0*e+00\]' '$tmp/drag/bookmark-1.cfg'"
+check "no drag: level" grep -q 'normal = \[0.0*e+00, 0.0*e+00, 1.0*e+00\]' "$tmp/still/bookmark-1.cfg"
+
 # Wrong types: one message with file:line, exit 1.
 printf 'look = {\n  layers = (\n    { field = "temperature";\n      mode = "glow"; }\n  );\n};\n' \
     >"$tmp/glow.cfg"
