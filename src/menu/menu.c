@@ -1186,6 +1186,8 @@ static void step_by(struct menu *m, int delta)
     }
 }
 
+#define MENU_LAYER_OPACITY 0.02 /* of a layer the Layers page adds */
+
 /* Layer I becomes the one the Transfer page edits. */
 static void select_layer(struct menu *m, int i)
 {
@@ -1335,9 +1337,11 @@ static void activate(struct menu *m, const struct widget *wd)
         break;
     case ID_LAYER_ADD:
         if (md->layer_count < TRANSFER_LAYER_MAX) {
-            /* A temperature layer, shown: the first thing a forecaster adds. */
+            /* A temperature layer, shown: the first thing a forecaster adds.  Faint: the
+             * default function's density is made for a column of a few km, and a layer fills
+             * the whole domain, hundreds of km along a slanting ray. */
             struct transfer_layer *l = &md->layers[md->layer_count];
-            *l = (struct transfer_layer){.enabled = true, .opacity = 1.0,
+            *l = (struct transfer_layer){.enabled = true, .opacity = MENU_LAYER_OPACITY,
                                          .mode = TRANSFER_LAYER_EMIT};
             transfer_defaults(&l->tf, TRANSFER_FIELD_TEMPERATURE);
             md->layer_edited = md->layer_count++;
