@@ -9,11 +9,17 @@
 // OPAQUE 1 = opaque geometry was drawn first (render/opaque.c): rays stop at its distance and
 // it is the background there.  PHASE_MIX 0 = one phase for every species (PHASE_ICE 1 the ice
 // phase, 0 the water phase) instead of the beta-weighted mix (effects.phase off).
-// TINT 1 = the scattered light takes a per-voxel colour (species tints, transfer functions).
+// TINT 1 = the scattered light takes a per-voxel colour (the species' tints).
 // TEMPORAL 1 = temporal interpolation (effects.temporal): beta = mix(beta_k, beta_k+1,
 // temporal_f) from a second extinction texture (the light map pair is LIGHTMAP_PAIR).
 // MULTIPLE 1 = multiple scattering (effects.multiple): the light map's diffuse light (an
 // Eddington field along the light) is scattered toward the eye beside the sun's.
+// LAYERS N (0 to 4) = N colour-mapped layers (docs/analysis.md): each step samples every
+// layer's field (trilinear), classifies it by its colour map (post-classification) and either
+// adds an emitting, absorbing medium of the map's colour (emit) or tints the clouds' scattered
+// light (tint); see march_medium.  An emitting layer turns SKIP off (render.c).
+// SLICES N (0 to 4) = N slices: planes through a field, composited where the ray crosses them
+// (after the medium of the step that holds the crossing); they turn SKIP off too.
 // SKIP 1 = empty-space skipping (render/cells.c): steps whose extinction sample lies in a
 // macro cell holding nothing are leapt, exactly (they would add nothing and take nothing off);
 // with TEMPORAL the cells hold the larger of both steps.  COUNT 1 = add what each ray did
@@ -120,6 +126,100 @@ uint n_beta = 0u, n_light = 0u, n_cells = 0u, n_leapt = 0u;
 #if TINT
 layout(binding = BIND_EYE_TEX_TINT) uniform sampler3D tint_tex; // rgb: colour of scattered light
 #endif
+#ifndef LAYERS
+#define LAYERS 0
+#endif
+#ifndef SLICES
+#define SLICES 0
+#endif
+#if LAYERS || SLICES
+layout(binding = BIND_EYE_TEX_LAYER_LUT) uniform sampler2D layer_lut; // row i: rgb, alpha over x
+uniform vec2 layer_lut_size; // entries per map, maps
+
+// Colour map ROW at X in [0, 1] of its range.
+vec4 colour_map(int row, float x)
+{
+    vec2 uv = vec2((x * (layer_lut_size.x - 1.0) + 0.5) / layer_lut_size.x,
+                   (float(row) + 0.5) / layer_lut_size.y);
+    return texture(layer_lut, uv);
+}
+#endif
+#if LAYERS
+layout(binding = BIND_EYE_TEX_LAYERS) uniform sampler3D layer_tex;   // channel i: layer i's field
+uniform vec4 layer_lo;       // field value at the map's first entry
+uniform vec4 layer_scale;    // 1 / (hi - lo)
+uniform vec4 layer_strength; // emit: extinction at alpha 1 (1/m); tint: the tint's weight; 0 off
+uniform vec4 layer_tint;     // 1: tint mode, 0: emit
+
+// The layers at P: EMIT.rgb the emitting layers' sum of extinction times colour, EMIT.a their
+// extinction (1/m); TINT the product of the tinting layers' colours.
+void layers_at(vec3 p, out vec4 emit, out vec3 tint)
+{
+    vec4 s = texture(layer_tex, (p - box_min) / box_size);
+    emit = vec4(0.0);
+    tint = vec3(1.0);
+    for (int i = 0; i < LAYERS; i++) {
+        if (layer_strength[i] <= 0.0 || isnan(s[i]))
+            continue;
+        float x = clamp((s[i] - layer_lo[i]) * layer_scale[i], 0.0, 1.0);
+        vec4 c = colour_map(i, x);
+        if (layer_tint[i] > 0.5) {
+            tint *= mix(vec3(1.0), c.rgb, clamp(c.a * layer_strength[i], 0.0, 1.0));
+        } else {
+            float sigma = c.a * layer_strength[i];
+            emit += vec4(c.rgb * sigma, sigma);
+        }
+    }
+}
+
+// (1 - e^-x) / x, 1 at x = 0.
+float absorbed_share(float x)
+{
+    return x < 1e-4 ? 1.0 - 0.5 * x : (1.0 - exp(-x)) / x;
+}
+#endif
+#if SLICES
+layout(binding = BIND_EYE_TEX_SLICES) uniform sampler3D slice_tex; // channel i: slice i's field
+uniform vec4 slice_plane[4];  // normal . p = w, world metres
+uniform vec4 slice_lo, slice_scale, slice_opacity; // opacity 0: off
+uniform vec4 slice_contour;   // a line at every multiple of this many field units; 0: none
+uniform int slice_row;        // the colour map of slice i is row slice_row + i
+uniform vec2 pixel_footprint; // a pixel's width at ray parameter t: x + y t, metres
+float slice_t[4];             // where this ray crosses each slice (1e30: not in the box)
+
+// Composites slice I at P, ray parameter T, over RADIANCE and TRANS: its colour map's colour at
+// the field's interpolated value, dark within a pixel of a contour (the field's distance to the
+// nearest multiple over its gradient along the plane: lines two pixels wide on screen).
+void slice_composite(int i, vec3 p, float t, inout vec3 radiance, inout float trans)
+{
+    vec3 u = (p - box_min) / box_size;
+    float s = texture(slice_tex, u)[i];
+    if (isnan(s))
+        return;
+    vec3 c = colour_map(slice_row + i,
+                        clamp((s - slice_lo[i]) * slice_scale[i], 0.0, 1.0)).rgb;
+    if (slice_contour[i] > 0.0) {
+        vec3 h = voxel_size / box_size;
+        vec3 g = vec3(texture(slice_tex, u + vec3(h.x, 0, 0))[i] -
+                          texture(slice_tex, u - vec3(h.x, 0, 0))[i],
+                      texture(slice_tex, u + vec3(0, h.y, 0))[i] -
+                          texture(slice_tex, u - vec3(0, h.y, 0))[i],
+                      texture(slice_tex, u + vec3(0, 0, h.z))[i] -
+                          texture(slice_tex, u - vec3(0, 0, h.z))[i]) / (2.0 * voxel_size);
+        vec3 n = slice_plane[i].xyz;
+        float grad = length(g - n * dot(n, g));
+        float v = s / slice_contour[i];
+        float off = abs(v - round(v)) * slice_contour[i]; // field units to the nearest line
+        float width = pixel_footprint.x + pixel_footprint.y * t; // a pixel there, metres
+        if (grad > 0.0 && off < width * grad)
+            c = vec3(0.02);
+    }
+    float a = slice_opacity[i];
+    radiance += trans * a * c;
+    trans *= 1.0 - a;
+}
+
+#endif
 #if TEMPORAL
 layout(binding = BIND_EYE_TEX_BETA_NEXT) uniform sampler3D beta_next_tex; // step k + 1, as beta_tex
 #endif
@@ -183,10 +283,37 @@ vec2 beta_at(vec3 p)
 // One step of the ray ORIGIN + t DIR over [TA, TA + DS] with beta B (ice phase, water phase)
 // and the eye phases PHASE: adds what it scatters toward the eye to RADIANCE and takes its
 // transmittance off TRANS.
-void march_step(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
-                inout vec3 radiance, inout float trans)
+// With LAYERS the step holds the layers' medium too, each at its value at the step's middle:
+// the emitting layers add extinction sigma = sum alpha_i s_i and emission sum sigma_i c_i
+// (Max 1995's emission-absorption model), the clouds' beta keeps its own light.  Over a step
+// of constant coefficients the exact solution of dL/ds = -(beta + sigma) L + j is
+// L += T (1 - e^-(tau + tau_l)) j / (beta + sigma): each medium's light takes its share of the
+// step's extinction, and both are attenuated by the sum.  So the layers add
+// T f(tau + tau_l) ds sum sigma_i c_i and the clouds' light is scaled by f(tau + tau_l) / f(tau),
+// f(x) = (1 - e^-x) / x; the transmittance is multiplied by e^-(tau + tau_l).
+void march_medium(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
+                  inout vec3 radiance, inout float trans)
 {
     float beta = b.r + b.g;
+#if LAYERS
+    vec4 emit;
+    vec3 tint;
+    float layer_trans = 1.0;
+    layers_at(origin + dir * (ta + 0.5 * ds), emit, tint);
+    if (emit.a > 0.0) {
+        float tau_l = emit.a * ds, tau_c = max(beta, 0.0) * ds;
+        float f_all = absorbed_share(tau_c + tau_l);
+        radiance += trans * f_all * ds * emit.rgb;
+        if (beta <= 0.0) {
+            trans *= exp(-tau_l);
+            return;
+        }
+        // The clouds' share, below, is scaled by f_all / f(tau); the layers' transmittance
+        // is taken off after it.
+        tint *= f_all / absorbed_share(tau_c);
+        layer_trans = exp(-tau_l);
+    }
+#endif
     if (beta <= 0.0)
         return;
     float tau = beta * ds;
@@ -213,14 +340,52 @@ void march_step(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
                                  lightmap_light(origin + dir * (ta + ds)),
                                  tau);
 #endif
+#if !LAYERS
+    vec3 tint = vec3(1.0);
+#endif
 #if TINT
     vec3 p = origin + dir * (ta + 0.5 * ds);
-    vec3 tint = texture(tint_tex, (p - box_min) / box_size).rgb;
+    tint *= texture(tint_tex, (p - box_min) / box_size).rgb;
+#endif
+#if TINT || LAYERS
     radiance += trans * light * sun_radiance * tint;
 #else
     radiance += trans * light * sun_radiance;
 #endif
+#if LAYERS
+    trans *= ts * layer_trans;
+#else
     trans *= ts;
+#endif
+}
+
+// A step; with SLICES cut at the slices it crosses, nearest first: the medium up to a slice,
+// the slice, the medium on (the step's one extinction sample B for every part).
+void march_step(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
+                inout vec3 radiance, inout float trans)
+{
+#if SLICES
+    float t = ta, end = ta + ds;
+    for (int k = 0; k < SLICES; k++) {
+        int best = -1;
+        float bt = end;
+        for (int i = 0; i < SLICES; i++) {
+            if (slice_t[i] >= t && slice_t[i] < bt) {
+                best = i;
+                bt = slice_t[i];
+            }
+        }
+        if (best < 0)
+            break;
+        march_medium(origin, dir, t, bt - t, b, phase, radiance, trans);
+        slice_composite(best, origin + dir * bt, bt, radiance, trans);
+        slice_t[best] = 1e30; // drawn
+        t = bt;
+    }
+    march_medium(origin, dir, t, end - t, b, phase, radiance, trans);
+#else
+    march_medium(origin, dir, ta, ds, b, phase, radiance, trans);
+#endif
 }
 
 void main()
@@ -264,6 +429,17 @@ void main()
 
     vec3 radiance = vec3(0.0);
     float trans = 1.0;
+#if SLICES
+    for (int i = 0; i < SLICES; i++) {
+        float nd = dot(slice_plane[i].xyz, dir);
+        slice_t[i] = 1e30;
+        if (slice_opacity[i] > 0.0 && abs(nd) > 1e-12) {
+            float ts = (slice_plane[i].w - dot(slice_plane[i].xyz, origin)) / nd;
+            if (ts >= t0 && ts < t1)
+                slice_t[i] = ts;
+        }
+    }
+#endif
 #if SKIP
     vec3 inv_dir = 1.0 / dir_stand_in(dir);
     float nudge = 1e-3 * min(voxel_size.x, min(voxel_size.y, voxel_size.z));

@@ -396,7 +396,7 @@ static void screenshot(struct display *d, struct session *s)
  * menu changed). */
 static void bookmark(struct session *s, const struct loop_desc *ld)
 {
-    enum { LOOK_MAX = 16384 };
+    enum { LOOK_MAX = 98304 }; /* any look: session_look_text */
     char view[1024], sun[256], name[64];
     char *look = malloc(LOOK_MAX), *text = malloc(LOOK_MAX + 4096);
     if (!look || !text) {

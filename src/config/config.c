@@ -39,7 +39,78 @@ static const char *const coast_res_names[] = {"crude", "low", "intermediate", NU
 static const char *const overlay_when_names[] = {"run", "always", "never", NULL};
 static const char *const probe_mode_names[] = {"first_visible", "distance", NULL};
 
+static const char *const layer_field_names[] = {"qvapor", "condensate", "temperature", "wind",
+                                                "theta",  "rh",         NULL};
+static_assert(sizeof(layer_field_names) / sizeof(layer_field_names[0]) ==
+                  TRANSFER_FIELD_COUNT + 1,
+              "a name per transfer field");
+static const char *const layer_mode_names[] = {"emit", "tint", NULL};
+
 /* clang-format off */
+#define LOFF(member) offsetof(struct config_layer, member)
+static const struct config_field layer_fields[] = {
+    {.path = "field", .type = T_ENUM, .n = 1, .offset = LOFF(field), .names = layer_field_names,
+     .flags = F_GIVEN, .given = LOFF(has_field),
+     .help = "the field shown: qvapor, condensate, temperature, wind (speed), theta (potential "
+             "temperature) or rh (relative humidity); default: the transfer function's"},
+    {.path = "transfer", .type = T_TRANSFER, .n = 1, .offset = LOFF(transfer), .flags = F_GIVEN,
+     .given = LOFF(has_transfer),
+     .help = "its colour map: a transfer function file's name or its group in place "
+             "(docs/menu.md); default: the field's default function"},
+    {.path = "opacity", .type = T_DOUBLE, .n = 1, .offset = LOFF(opacity), .min = 0, .max = 1e3,
+     .def = {1.0},
+     .help = "multiplies the layer's extinction (emit) or the strength of its tint"},
+    {.path = "mode", .type = T_ENUM, .n = 1, .offset = LOFF(mode), .names = layer_mode_names,
+     .def = {0},
+     .help = "\"emit\": the layer glows in its colour and hides what is behind it by its "
+             "alpha; \"tint\": it colours the clouds' scattered light instead"},
+    {.path = "enabled", .type = T_BOOL, .n = 1, .offset = LOFF(enabled), .max = 1, .def = {1},
+     .help = "shown (false: kept for the menu)"},
+};
+static const struct config_table layer_table = {
+    .fields = layer_fields,
+    .count = (int)(sizeof(layer_fields) / sizeof(layer_fields[0])),
+    .size = sizeof(struct config_layer),
+    .example = "look.layers.[0].opacity=0.5",
+    .elem_name = "layer",
+};
+
+static const char *const slice_axis_names[] = {"x", "y", "z", "plane", NULL};
+#define SOFF(member) offsetof(struct config_slice, member)
+static const struct config_field slice_fields[] = {
+    {.path = "field", .type = T_ENUM, .n = 1, .offset = SOFF(field), .names = layer_field_names,
+     .flags = F_GIVEN, .given = SOFF(has_field),
+     .help = "the field shown (as look.layers.[i].field); default: the transfer function's"},
+    {.path = "transfer", .type = T_TRANSFER, .n = 1, .offset = SOFF(transfer), .flags = F_GIVEN,
+     .given = SOFF(has_transfer),
+     .help = "its colour map (red, green, blue; alpha is not used): a file's name or a group "
+             "in place; default: the field's default function"},
+    {.path = "axis", .type = T_ENUM, .n = 1, .offset = SOFF(axis), .names = slice_axis_names,
+     .def = {2},
+     .help = "\"x\", \"y\", \"z\": the plane across that axis at position; \"plane\": "
+             "through point, across normal"},
+    {.path = "position", .type = T_DOUBLE, .n = 1, .offset = SOFF(position_km), .min = -1e5,
+     .max = 1e5, .def = {5.0}, .help = "where the plane crosses its axis, world km"},
+    {.path = "point", .type = T_DOUBLE, .n = 3, .offset = SOFF(point_km), .min = -1e5,
+     .max = 1e5, .def = {0, 0, 5}, .help = "a point of the plane (axis = \"plane\"), world km"},
+    {.path = "normal", .type = T_DOUBLE, .n = 3, .offset = SOFF(normal), .min = -1, .max = 1,
+     .def = {0, 0, 1}, .help = "the plane's normal (axis = \"plane\"), not [0, 0, 0]"},
+    {.path = "opacity", .type = T_DOUBLE, .n = 1, .offset = SOFF(opacity), .min = 0, .max = 1,
+     .def = {1.0}, .help = "1: opaque; less lets the clouds behind show through"},
+    {.path = "contour_every", .type = T_DOUBLE, .n = 1, .offset = SOFF(contour_every), .min = 0,
+     .max = 1e9, .def = {0.0},
+     .help = "contour lines at every multiple of this many field units (0: none)"},
+    {.path = "enabled", .type = T_BOOL, .n = 1, .offset = SOFF(enabled), .max = 1, .def = {1},
+     .help = "shown (false: kept)"},
+};
+static const struct config_table slice_table = {
+    .fields = slice_fields,
+    .count = (int)(sizeof(slice_fields) / sizeof(slice_fields[0])),
+    .size = sizeof(struct config_slice),
+    .example = "look.slices.[0].position=5.0",
+    .elem_name = "slice",
+};
+
 #define OFF(member) offsetof(struct config, member)
 
 #define BOOL(p, m, d, h) \
@@ -217,8 +288,8 @@ static const struct config_field settings[] = {
          "movies too) or \"never\"; in a CAVE or HMD it is a panel in the room"),
     BOOL("overlay.date", overlay.date, 1, "the shown time step's date and time (WRF Times)"),
     BOOL("overlay.legend", overlay.legend, 1,
-         "a colour legend for the colour-mapped field (transfer function mode), with its "
-         "units"),
+         "a colour legend for each colour-mapped layer and slice shown (at most 4), with "
+         "its field's name and units"),
     BOOL("overlay.north", overlay.north, 1, "a north arrow"),
     BOOL("overlay.box", overlay.box, 1, "the domain's box, with km ticks along its floor"),
 
@@ -231,13 +302,24 @@ static const struct config_field settings[] = {
     {.path = "look.species.*.tint", .type = T_DOUBLE, .n = 3, .offset = OFF(look.tint),
      .stride = sizeof(double[3]), .min = 0, .max = 1, .flags = F_SPECIES, .def = {1, 1, 1},
      .help = "the colour this species' scattered light takes, linear RGB (white: none)"},
+    {.path = "look.layers", .type = T_GROUPS, .offset = OFF(look.layers),
+     .count_offset = OFF(look.layer_count), .min = 0, .max = TRANSFER_LAYER_MAX,
+     .flags = F_GIVEN, .given = OFF(look.has_layers), .elems = &layer_table,
+     .def_elems = NULL, .def_count = 0,
+     .help = "colour-mapped fields composited with the clouds (docs/analysis.md), each a group "
+             "of the look.layers.[i] settings, at most 4"},
+    {.path = "look.slices", .type = T_GROUPS, .offset = OFF(look.slices),
+     .count_offset = OFF(look.slice_count), .min = 0, .max = TRANSFER_SLICE_MAX,
+     .elems = &slice_table, .def_elems = NULL, .def_count = 0,
+     .help = "planes through a field drawn in the volume (docs/analysis.md), each a group of "
+             "the look.slices.[i] settings, at most 4"},
     {.path = "look.transfer", .type = T_TRANSFER, .n = 1, .offset = OFF(look.transfer),
      .flags = F_GIVEN, .given = OFF(look.has_transfer),
-     .help = "a transfer function for one field (docs/menu.md: its file's name, or the "
-             "file's transfer group written in place; \"none\": none); shown instead of the "
-             "clouds unless look.show_transfer is false"},
+     .help = "older files' one transfer function (its file's name, or its group in place; "
+             "\"none\": none): read as the first layer, in \"emit\" mode, when look.layers is "
+             "not given (the two do not go together)"},
     BOOL("look.show_transfer", look.show_transfer, 1,
-         "show look.transfer (false: keep it for the menu, show the clouds)"),
+         "with look.transfer: whether that layer is on"),
 
     BOOL("probe.on", probe.on, 0,
          "start with the probe on (anvil run, scripted renders: the values at the wand or "
@@ -358,6 +440,36 @@ bool config_validate(const struct config *cfg)
     if (cfg->scene.kind == SCENE_DATA && cfg->data.file_count == 0) {
         log_error("%s%sdata.files: scene.kind = \"data\" needs at least one file", file, colon);
         return false;
+    }
+    if (cfg->look.has_layers && cfg->look.has_transfer) {
+        log_error("%s%slook.transfer: give the layers' functions in look.layers (look.transfer "
+                  "is the one function of older files), not both",
+                  file, colon);
+        return false;
+    }
+    for (int i = 0; i < cfg->look.layer_count; i++) {
+        const struct config_layer *l = &cfg->look.layers[i];
+        if (l->has_field && l->has_transfer && (int)l->transfer.field != l->field) {
+            log_error("%s%slook.layers.[%d].field: \"%s\" differs from its transfer "
+                      "function's field \"%s\"",
+                      file, colon, i, transfer_field_name((enum transfer_field)l->field),
+                      transfer_field_name(l->transfer.field));
+            return false;
+        }
+    }
+    for (int i = 0; i < cfg->look.slice_count; i++) {
+        const struct config_slice *sl = &cfg->look.slices[i];
+        if (sl->has_field && sl->has_transfer && (int)sl->transfer.field != sl->field) {
+            log_error("%s%slook.slices.[%d].field: \"%s\" differs from its transfer "
+                      "function's field \"%s\"",
+                      file, colon, i, transfer_field_name((enum transfer_field)sl->field),
+                      transfer_field_name(sl->transfer.field));
+            return false;
+        }
+        if (sl->axis == 3 && length3(sl->normal) < 1e-9) {
+            log_error("%s%slook.slices.[%d].normal: must not be [0, 0, 0]", file, colon, i);
+            return false;
+        }
     }
     static const char axes[] = "xyz";
     for (int a = 0; a < 3; a++) {

@@ -174,11 +174,42 @@ struct config_overlay {
  * pages change, so that a scene file renders what a menu session showed.  The species'
  * enabled and scale are config_optics' (look.species.<name>.enabled and .scale are the same
  * settings as species.<name>.enabled and .scale). */
+/* One colour-mapped layer, look.layers.[i] (optics/transfer.h, struct transfer_layer). */
+struct config_layer {
+    int field;                         /* .field: enum transfer_field */
+    bool has_field;                    /* .field was given (else the transfer's field) */
+    struct transfer_function transfer; /* .transfer: a file name or a group in place */
+    bool has_transfer;                 /* .transfer was given (else the field's default) */
+    double opacity;                    /* .opacity */
+    int mode;                          /* .mode: enum transfer_layer_mode */
+    bool enabled;                      /* .enabled */
+};
+
+/* One slice, look.slices.[i] (optics/transfer.h, struct transfer_slice). */
+struct config_slice {
+    int field;                         /* .field: enum transfer_field */
+    bool has_field;
+    struct transfer_function transfer; /* .transfer */
+    bool has_transfer;
+    int axis;                          /* .axis: 0 x, 1 y, 2 z, 3 "plane" (point, normal) */
+    double position_km;                /* .position: along the axis, world km */
+    double point_km[3];                /* .point (axis = "plane"), world km */
+    double normal[3];                  /* .normal (axis = "plane") */
+    double opacity;                    /* .opacity */
+    double contour_every;              /* .contour_every: field units, 0 none */
+    bool enabled;                      /* .enabled */
+};
+
 struct config_look {
     double tint[SPECIES_COUNT][3]; /* look.species.<name>.tint: linear RGB in [0, 1] */
     bool has_transfer;             /* look.transfer was given */
-    struct transfer_function transfer; /* look.transfer: a file name or a group in place */
-    bool show_transfer;            /* look.show_transfer: the function replaces the clouds */
+    struct transfer_function transfer; /* look.transfer: layer 0 of files without look.layers */
+    bool show_transfer;            /* look.show_transfer: whether that layer is on */
+    struct config_layer layers[TRANSFER_LAYER_MAX]; /* look.layers */
+    int layer_count;
+    bool has_layers;               /* look.layers was given */
+    struct config_slice slices[TRANSFER_SLICE_MAX]; /* look.slices */
+    int slice_count;
 };
 
 /* The probe (docs/analysis.md): how it starts; the menu changes it while running. */

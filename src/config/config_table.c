@@ -222,7 +222,9 @@ void config_table_defaults(const struct config_table *t, void *base)
             break;
         case T_GROUPS:
             assert(s->def_count >= s->min && s->def_count <= s->max);
-            memcpy(member(base, s->offset), s->def_elems, (size_t)s->def_count * s->elems->size);
+            if (s->def_count > 0)
+                memcpy(member(base, s->offset), s->def_elems,
+                       (size_t)s->def_count * s->elems->size);
             *(int *)member(base, s->count_offset) = s->def_count;
             break;
         default:

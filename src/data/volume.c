@@ -27,6 +27,10 @@ void ext_volume_finish(struct ext_volume *v)
         return;
     free(v->beta);
     free(v->tint);
+    for (int i = 0; i < TRANSFER_LAYER_MAX; i++)
+        free(v->layer[i]);
+    for (int i = 0; i < TRANSFER_SLICE_MAX; i++)
+        free(v->slice[i]);
     free(v->histogram);
     memset(v, 0, sizeof(*v));
 }
@@ -184,34 +188,6 @@ bool ext_volume_tint_from_fields(const struct field_volume *in,
                 t[3] = 255;
             }
         }
-    }
-    return true;
-}
-
-bool ext_volume_from_scalar(const struct grid3 *grid, const float *scalar, const float *lut,
-                            int n, double lo, double hi, double density,
-                            struct ext_volume *out)
-{
-    if (!ext_volume_init(out, grid))
-        return false;
-    out->tint = alloc_tint(grid);
-    if (!out->tint) {
-        ext_volume_finish(out);
-        return false;
-    }
-    size_t count = grid3_count(grid);
-    double span = hi - lo;
-    for (size_t i = 0; i < count; i++) {
-        double s = scalar ? scalar[i] : 0.0;
-        double x = span > 0.0 && isfinite(s) ? (s - lo) / span : 0.0;
-        x = x < 0.0 ? 0.0 : x > 1.0 ? 1.0 : x;
-        int e = (int)(x * (n - 1) + 0.5);
-        const float *c = &lut[4 * e];
-        out->beta[2 * i] = 0.0f;
-        out->beta[2 * i + 1] = (float)(c[3] * density);
-        for (int k = 0; k < 3; k++)
-            out->tint[4 * i + k] = unorm8(c[k]);
-        out->tint[4 * i + 3] = 255;
     }
     return true;
 }

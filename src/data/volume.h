@@ -61,7 +61,14 @@ struct ext_volume {
     struct grid3 grid;
     float *beta;
     uint8_t *tint; /* NULL (white), or RGBA8 per voxel: the colour the scattered light takes
-                      (the beta-weighted species tints, or a transfer function's colour) */
+                      (the beta-weighted species tints) */
+    /* The look's colour-mapped layers (optics/transfer.h): layer i's scalar field, grid3_count
+     * values, or NULL; LAYER_FIELD[i] says which field it is (classified on the GPU). */
+    float *layer[TRANSFER_LAYER_MAX];
+    enum transfer_field layer_field[TRANSFER_LAYER_MAX];
+    /* The look's slices' fields, likewise. */
+    float *slice[TRANSFER_SLICE_MAX];
+    enum transfer_field slice_field[TRANSFER_SLICE_MAX];
     struct transfer_histogram *histogram; /* NULL, or owned: the values of the look's transfer
                                              field of the step it was made from */
 };
@@ -101,14 +108,6 @@ bool ext_volume_tint_from_fields(const struct field_volume *in,
                                  const struct optics_params *optics,
                                  const struct species_select *sel,
                                  const struct species_tint *tint, struct ext_volume *out);
-
-/* Classic transfer-function mode: the scalar field SCALAR (grid3_count values on IN's grid,
- * e.g. fields->qvapor) through LUT, a table of N RGBA entries over [LO, HI], becomes
- * extinction alpha * DENSITY (1/m, scattering with the water phase) and tint RGB.  OUT is
- * initialised here. */
-bool ext_volume_from_scalar(const struct grid3 *grid, const float *scalar, const float *lut,
-                            int n, double lo, double hi, double density,
-                            struct ext_volume *out);
 
 /* Height exaggeration (Nes §5.5.2): multiplies the z origin and spacing by K (> 0) and divides
  * the extinction by K, so the volume is K times taller and every vertical column keeps its

@@ -29,6 +29,10 @@ enum id {
     ID_AZIMUTH, ID_ELEVATION,
     ID_RAY_STEP, ID_RESOLUTION, ID_EPSILON, ID_DIFFUSE,
     ID_SAVE_VIEW, ID_PROBE_ON, ID_PROBE_MODE, ID_PROBE_THRESHOLD, ID_PROBE_DISTANCE,
+    ID_LAYER_ADD, ID_LAYER_ON, ID_LAYER_FIELD, ID_LAYER_MODE, ID_LAYER_EDIT, ID_LAYER_REMOVE,
+    ID_LAYER_OPACITY,
+    ID_SLICE_ADD, ID_SLICE_ON, ID_SLICE_FIELD, ID_SLICE_AXIS, ID_SLICE_SELECT, ID_SLICE_REMOVE,
+    ID_SLICE_POSITION, ID_SLICE_TILT, ID_SLICE_OPACITY, ID_SLICE_CONTOURS,
 };
 
 struct widget {
@@ -74,10 +78,37 @@ struct menu {
     unsigned changes;
 };
 
-static const char *const page_names[MENU_PAGE_COUNT] = {"time",  "fields",  "transfer",
-                                                        "light", "quality", "probe"};
-static const char *const page_titles[MENU_PAGE_COUNT] = {"Time",  "Fields",  "Transfer",
-                                                         "Light", "Quality", "Probe"};
+static const char *const page_names[MENU_PAGE_COUNT] = {
+    "time", "fields", "layers", "slices", "transfer", "light", "quality", "probe"};
+static const char *const page_titles[MENU_PAGE_COUNT] = {
+    "Time", "Fields", "Layers", "Slices", "Transfer", "Light", "Quality", "Probe"};
+
+void menu_slice_plane(struct menu_slice *sl, const double box_centre[3])
+{
+    double t = sl->tilt_deg * M_PI / 180.0;
+    double n[3] = {0.0, 0.0, 0.0};
+    int a = sl->axis, b = a == 0 ? 1 : a == 1 ? 2 : 1; /* B: the axis the normal leans to */
+    n[a] = cos(t);
+    n[b] = sin(t);
+    for (int k = 0; k < 3; k++) {
+        sl->slice.normal[k] = n[k];
+        sl->slice.point[k] = k == a ? sl->position_m : box_centre[k];
+    }
+}
+
+void menu_slice_from_plane(struct menu_slice *sl)
+{
+    const double *n = sl->slice.normal;
+    int a = 0;
+    for (int k = 1; k < 3; k++)
+        if (fabs(n[k]) > fabs(n[a]))
+            a = k;
+    int b = a == 0 ? 1 : a == 1 ? 2 : 1;
+    double sign = n[a] < 0.0 ? -1.0 : 1.0;
+    sl->axis = a;
+    sl->tilt_deg = atan2(sign * n[b], fabs(n[a])) * 180.0 / M_PI;
+    sl->position_m = sl->slice.point[a];
+}
 
 const char *menu_page_name(enum menu_page p)
 {
@@ -151,6 +182,21 @@ static double slider_value(const struct menu *m, const struct widget *wd)
         return log10(md->probe_threshold > 0.0 ? md->probe_threshold : 1e-4);
     case ID_PROBE_DISTANCE:
         return md->probe_distance_m / 1000.0;
+    case ID_LAYER_OPACITY:
+        return md->layer_count > 0 ? md->layers[md->layer_edited].opacity : 0.0;
+    case ID_SLICE_POSITION:
+        return md->slice_count > 0 ? md->slices[md->slice_selected].position_m / 1000.0 : 0.0;
+    case ID_SLICE_TILT:
+        return md->slice_count > 0 ? md->slices[md->slice_selected].tilt_deg : 0.0;
+    case ID_SLICE_OPACITY:
+        return md->slice_count > 0 ? md->slices[md->slice_selected].slice.opacity : 0.0;
+    case ID_SLICE_CONTOURS: {
+        /* Contour lines across the colour map's range: its span over the spacing. */
+        if (md->slice_count == 0)
+            return 0.0;
+        const struct transfer_slice *sl = &md->slices[md->slice_selected].slice;
+        return sl->contour_every > 0.0 ? (sl->tf.hi - sl->tf.lo) / sl->contour_every : 0.0;
+    }
     default:
         return 0.0;
     }
@@ -210,6 +256,26 @@ static void slider_label(const struct menu *m, const struct widget *wd, char *bu
         break;
     case ID_PROBE_DISTANCE:
         snprintf(buf, n, "Distance along the ray: %.0f km", v);
+        break;
+    case ID_LAYER_OPACITY:
+        snprintf(buf, n, "Layer %d opacity: %.2f", m->model.layer_edited + 1, v);
+        break;
+    case ID_SLICE_POSITION:
+        snprintf(buf, n, "Slice %d at %c = %.1f km", m->model.slice_selected + 1,
+                 "xyz"[m->model.slice_count ? m->model.slices[m->model.slice_selected].axis : 2],
+                 v);
+        break;
+    case ID_SLICE_TILT:
+        snprintf(buf, n, "Tilt: %.0f deg", v);
+        break;
+    case ID_SLICE_OPACITY:
+        snprintf(buf, n, "Slice opacity: %.2f", v);
+        break;
+    case ID_SLICE_CONTOURS:
+        if ((int)lround(v) == 0)
+            snprintf(buf, n, "Contours: none");
+        else
+            snprintf(buf, n, "Contours: %d across the colour map", (int)lround(v));
         break;
     default:
         snprintf(buf, n, "%s", wd->label);
@@ -339,6 +405,82 @@ static void layout(struct menu *m)
         }
         break;
     }
+    case MENU_PAGE_LAYERS: {
+        /* A row per layer: on/off with its field's name, the field, emit or tint, edit (the
+         * Transfer page's function), remove; the edited layer's opacity below. */
+        struct widget *wd = add(m, W_BUTTON, ID_LAYER_ADD, 0, "layers.add", 16, y, 180, 32,
+                                "Add layer");
+        if (wd)
+            wd->disabled = md->layer_count >= TRANSFER_LAYER_MAX;
+        y += 42;
+        for (int i = 0; i < md->layer_count; i++, y += 40) {
+            const struct transfer_layer *l = &md->layers[i];
+            char name[NAME_LEN];
+            snprintf(name, sizeof(name), "layers.%d.on", i + 1);
+            snprintf(label, sizeof(label), "%d on", i + 1);
+            wd = add(m, W_TOGGLE, ID_LAYER_ON, i, name, 16, y, 86, 32, label);
+            if (wd)
+                wd->selected = l->enabled;
+            snprintf(name, sizeof(name), "layers.%d.field", i + 1);
+            wd = add(m, W_BUTTON, ID_LAYER_FIELD, i, name, 108, y, 200, 32,
+                     transfer_field_label(l->tf.field));
+            snprintf(name, sizeof(name), "layers.%d.mode", i + 1);
+            add(m, W_BUTTON, ID_LAYER_MODE, i, name, 314, y, 76, 32,
+                l->mode == TRANSFER_LAYER_TINT ? "tint" : "emit");
+            snprintf(name, sizeof(name), "layers.%d.edit", i + 1);
+            wd = add(m, W_BUTTON, ID_LAYER_EDIT, i, name, 396, y, 76, 32, "Edit");
+            if (wd)
+                wd->selected = md->layer_edited == i;
+            snprintf(name, sizeof(name), "layers.%d.remove", i + 1);
+            add(m, W_BUTTON, ID_LAYER_REMOVE, i, name, 478, y, m->w - 16 - 478, 32, "Remove");
+        }
+        if (md->layer_count > 0)
+            slider(m, ID_LAYER_OPACITY, 0, "layers.opacity", y + 8, 0.0, 2.0, "");
+        break;
+    }
+    case MENU_PAGE_SLICES: {
+        /* A row per slice: on/off, the field, the axis, select (the sliders move it), remove;
+         * the selected slice's position, tilt, opacity and contours below. */
+        struct widget *wd = add(m, W_BUTTON, ID_SLICE_ADD, 0, "slices.add", 16, y, 180, 32,
+                                "Add slice");
+        if (wd)
+            wd->disabled = md->slice_count >= TRANSFER_SLICE_MAX;
+        y += 40;
+        for (int i = 0; i < md->slice_count; i++, y += 38) {
+            const struct menu_slice *sl = &md->slices[i];
+            char name[NAME_LEN];
+            snprintf(name, sizeof(name), "slices.%d.on", i + 1);
+            snprintf(label, sizeof(label), "%d on", i + 1);
+            wd = add(m, W_TOGGLE, ID_SLICE_ON, i, name, 16, y, 86, 30, label);
+            if (wd)
+                wd->selected = sl->slice.enabled;
+            snprintf(name, sizeof(name), "slices.%d.field", i + 1);
+            add(m, W_BUTTON, ID_SLICE_FIELD, i, name, 108, y, 200, 30,
+                transfer_field_label(sl->slice.tf.field));
+            snprintf(name, sizeof(name), "slices.%d.axis", i + 1);
+            snprintf(label, sizeof(label), "across %c", "xyz"[sl->axis]);
+            add(m, W_BUTTON, ID_SLICE_AXIS, i, name, 314, y, 86, 30, label);
+            snprintf(name, sizeof(name), "slices.%d.select", i + 1);
+            wd = add(m, W_BUTTON, ID_SLICE_SELECT, i, name, 406, y, 70, 30, "Move");
+            if (wd)
+                wd->selected = md->slice_selected == i;
+            snprintf(name, sizeof(name), "slices.%d.remove", i + 1);
+            add(m, W_BUTTON, ID_SLICE_REMOVE, i, name, 482, y, m->w - 16 - 482, 30, "Remove");
+        }
+        if (md->slice_count > 0) {
+            int a = md->slices[md->slice_selected].axis;
+            y += 4;
+            slider(m, ID_SLICE_POSITION, 0, "slices.position", y, md->box_min_m[a] / 1000.0,
+                   md->box_max_m[a] / 1000.0, "");
+            y += 46;
+            slider(m, ID_SLICE_TILT, 0, "slices.tilt", y, -60.0, 60.0, "");
+            y += 46;
+            slider(m, ID_SLICE_OPACITY, 0, "slices.opacity", y, 0.0, 1.0, "");
+            y += 46;
+            slider(m, ID_SLICE_CONTOURS, 0, "slices.contours", y, 0.0, 20.0, "");
+        }
+        break;
+    }
     case MENU_PAGE_LIGHT:
         slider(m, ID_AZIMUTH, 0, "light.azimuth", y, 0.0, 360.0, "");
         y += 56;
@@ -449,12 +591,27 @@ static void canvas_xy(const int r[4], float x, float v, float *px, float *py)
 /* A value of FIELD in the unit the editor labels it with (g/kg, C, m/s). */
 static double shown_value(enum transfer_field f, double v)
 {
-    return f == TRANSFER_FIELD_TEMPERATURE ? v - 273.15 : f == TRANSFER_FIELD_WIND ? v : v * 1e3;
+    if (f == TRANSFER_FIELD_TEMPERATURE)
+        return v - 273.15;
+    if (f == TRANSFER_FIELD_WIND || f == TRANSFER_FIELD_THETA || f == TRANSFER_FIELD_RH)
+        return v;
+    return v * 1e3;
 }
 
 static const char *shown_unit(enum transfer_field f)
 {
-    return f == TRANSFER_FIELD_TEMPERATURE ? "C" : f == TRANSFER_FIELD_WIND ? "m/s" : "g/kg";
+    switch (f) {
+    case TRANSFER_FIELD_TEMPERATURE:
+        return "C";
+    case TRANSFER_FIELD_WIND:
+        return "m/s";
+    case TRANSFER_FIELD_THETA:
+        return "K";
+    case TRANSFER_FIELD_RH:
+        return "%";
+    default:
+        return "g/kg";
+    }
 }
 
 static const char *field_title(enum transfer_field f)
@@ -466,6 +623,10 @@ static const char *field_title(enum transfer_field f)
         return "condensate";
     case TRANSFER_FIELD_TEMPERATURE:
         return "temperature";
+    case TRANSFER_FIELD_THETA:
+        return "potential temperature";
+    case TRANSFER_FIELD_RH:
+        return "relative humidity";
     default:
         return "wind speed";
     }
@@ -871,15 +1032,22 @@ bool menu_widget_known(struct menu *m, const char *name)
     enum menu_page page = m->page;
     int sub = m->sub;
     bool found = false;
+    /* The Layers and Slices pages with every row they can have (a script may add the layers
+     * and slices it aims at). */
+    int layers = m->model.layer_count, slices = m->model.slice_count;
     for (int p = 0; p < MENU_PAGE_COUNT && !found; p++) {
         for (int s = 0; s < 2 && !found; s++) {
             m->page = (enum menu_page)p;
             m->sub = s;
+            m->model.layer_count = p == MENU_PAGE_LAYERS ? TRANSFER_LAYER_MAX : layers;
+            m->model.slice_count = p == MENU_PAGE_SLICES ? TRANSFER_SLICE_MAX : slices;
             layout(m);
             for (int i = 0; i < m->n_widgets && !found; i++)
                 found = strcmp(m->widgets[i].name, name) == 0;
         }
     }
+    m->model.layer_count = layers;
+    m->model.slice_count = slices;
     m->page = page;
     m->sub = sub;
     layout(m);
@@ -912,6 +1080,15 @@ static void canvas_value(const struct widget *wd, float px, float py, float *x, 
     *v = ((float)(r[1] + r[3]) - 6.0f - py) / (float)(r[3] - 12);
     *x = *x < 0.0f ? 0.0f : *x > 1.0f ? 1.0f : *x;
     *v = *v < 0.0f ? 0.0f : *v > 1.0f ? 1.0f : *v;
+}
+
+/* SL's plane from its axis, position and tilt, through the centre of MD's box. */
+static void slice_plane_in_box(const struct menu_model *md, struct menu_slice *sl)
+{
+    double c[3];
+    for (int k = 0; k < 3; k++)
+        c[k] = 0.5 * (md->box_min_m[k] + md->box_max_m[k]);
+    menu_slice_plane(sl, c);
 }
 
 static void commit_slider(struct menu *m, const struct widget *wd, double v)
@@ -962,6 +1139,33 @@ static void commit_slider(struct menu *m, const struct widget *wd, double v)
         md->probe_distance_m = v * 1000.0;
         m->changes |= MENU_CHANGE_PROBE;
         break;
+    case ID_LAYER_OPACITY:
+        if (md->layer_count > 0) {
+            md->layers[md->layer_edited].opacity = v;
+            m->changes |= MENU_CHANGE_TRANSFER;
+        }
+        break;
+    case ID_SLICE_POSITION:
+    case ID_SLICE_TILT:
+    case ID_SLICE_OPACITY:
+    case ID_SLICE_CONTOURS: {
+        if (md->slice_count == 0)
+            break;
+        struct menu_slice *sl = &md->slices[md->slice_selected];
+        if (wd->id == ID_SLICE_POSITION)
+            sl->position_m = v * 1000.0;
+        else if (wd->id == ID_SLICE_TILT)
+            sl->tilt_deg = v;
+        else if (wd->id == ID_SLICE_OPACITY)
+            sl->slice.opacity = v;
+        else {
+            int count = (int)lround(v);
+            sl->slice.contour_every = count > 0 ? (sl->slice.tf.hi - sl->slice.tf.lo) / count : 0.0;
+        }
+        slice_plane_in_box(md, sl);
+        m->changes |= MENU_CHANGE_SLICES;
+        break;
+    }
     default:
         break;
     }
@@ -980,6 +1184,18 @@ static void step_by(struct menu *m, int delta)
         md->step = s;
         m->changes |= MENU_CHANGE_STEP;
     }
+}
+
+#define MENU_LAYER_OPACITY 0.02 /* of a layer the Layers page adds */
+
+/* Layer I becomes the one the Transfer page edits. */
+static void select_layer(struct menu *m, int i)
+{
+    struct menu_model *md = &m->model;
+    md->layer_edited = i;
+    md->transfer = md->layers[i].tf;
+    md->transfer_on = md->layers[i].enabled;
+    m->point = -1;
 }
 
 /* A button released over itself. */
@@ -1069,6 +1285,109 @@ static void activate(struct menu *m, const struct widget *wd)
     case ID_PROBE_ON:
         md->probe_on = !md->probe_on;
         m->changes |= MENU_CHANGE_PROBE;
+        break;
+    case ID_SLICE_ADD:
+        if (md->slice_count < TRANSFER_SLICE_MAX) {
+            /* Temperature across z, half way up the box, opaque. */
+            struct menu_slice *sl = &md->slices[md->slice_count];
+            memset(sl, 0, sizeof(*sl));
+            sl->slice.enabled = true;
+            sl->slice.opacity = 1.0;
+            transfer_defaults(&sl->slice.tf, TRANSFER_FIELD_TEMPERATURE);
+            sl->axis = 2;
+            sl->position_m = 0.5 * (md->box_min_m[2] + md->box_max_m[2]);
+            slice_plane_in_box(md, sl);
+            md->slice_selected = md->slice_count++;
+            m->changes |= MENU_CHANGE_SLICES;
+        }
+        break;
+    case ID_SLICE_ON:
+        md->slices[wd->index].slice.enabled = !md->slices[wd->index].slice.enabled;
+        m->changes |= MENU_CHANGE_SLICES;
+        break;
+    case ID_SLICE_FIELD: {
+        struct transfer_slice *sl = &md->slices[wd->index].slice;
+        int count = sl->contour_every > 0.0 ? (int)lround((sl->tf.hi - sl->tf.lo) /
+                                                          sl->contour_every)
+                                            : 0;
+        transfer_defaults(&sl->tf, (enum transfer_field)((sl->tf.field + 1) % TRANSFER_FIELD_COUNT));
+        sl->contour_every = count > 0 ? (sl->tf.hi - sl->tf.lo) / count : 0.0;
+        m->changes |= MENU_CHANGE_SLICES;
+        break;
+    }
+    case ID_SLICE_AXIS: {
+        struct menu_slice *sl = &md->slices[wd->index];
+        sl->axis = (sl->axis + 1) % 3;
+        sl->tilt_deg = 0.0;
+        sl->position_m = 0.5 * (md->box_min_m[sl->axis] + md->box_max_m[sl->axis]);
+        slice_plane_in_box(md, sl);
+        m->changes |= MENU_CHANGE_SLICES;
+        break;
+    }
+    case ID_SLICE_SELECT:
+        md->slice_selected = wd->index;
+        break;
+    case ID_SLICE_REMOVE:
+        for (int i = wd->index; i + 1 < md->slice_count; i++)
+            md->slices[i] = md->slices[i + 1];
+        md->slice_count--;
+        if (md->slice_selected >= md->slice_count)
+            md->slice_selected = md->slice_count > 0 ? md->slice_count - 1 : 0;
+        m->changes |= MENU_CHANGE_SLICES;
+        break;
+    case ID_LAYER_ADD:
+        if (md->layer_count < TRANSFER_LAYER_MAX) {
+            /* A temperature layer, shown: the first thing a forecaster adds.  Faint: the
+             * default function's density is made for a column of a few km, and a layer fills
+             * the whole domain, hundreds of km along a slanting ray. */
+            struct transfer_layer *l = &md->layers[md->layer_count];
+            *l = (struct transfer_layer){.enabled = true, .opacity = MENU_LAYER_OPACITY,
+                                         .mode = TRANSFER_LAYER_EMIT};
+            transfer_defaults(&l->tf, TRANSFER_FIELD_TEMPERATURE);
+            md->layer_edited = md->layer_count++;
+            select_layer(m, md->layer_edited);
+            m->changes |= MENU_CHANGE_TRANSFER;
+        }
+        break;
+    case ID_LAYER_ON:
+        md->layers[wd->index].enabled = !md->layers[wd->index].enabled;
+        if (wd->index == md->layer_edited)
+            md->transfer_on = md->layers[wd->index].enabled;
+        m->changes |= MENU_CHANGE_TRANSFER;
+        break;
+    case ID_LAYER_FIELD: {
+        struct transfer_layer *l = &md->layers[wd->index];
+        transfer_defaults(&l->tf, (enum transfer_field)((l->tf.field + 1) % TRANSFER_FIELD_COUNT));
+        if (wd->index == md->layer_edited)
+            select_layer(m, wd->index);
+        m->changes |= MENU_CHANGE_TRANSFER;
+        break;
+    }
+    case ID_LAYER_MODE:
+        md->layers[wd->index].mode = md->layers[wd->index].mode == TRANSFER_LAYER_TINT
+                                         ? TRANSFER_LAYER_EMIT
+                                         : TRANSFER_LAYER_TINT;
+        m->changes |= MENU_CHANGE_TRANSFER;
+        break;
+    case ID_LAYER_EDIT:
+        /* Its function in the Transfer page's editor, at once. */
+        select_layer(m, wd->index);
+        m->page = MENU_PAGE_TRANSFER;
+        m->sub = 1;
+        break;
+    case ID_LAYER_REMOVE:
+        for (int i = wd->index; i + 1 < md->layer_count; i++)
+            md->layers[i] = md->layers[i + 1];
+        md->layer_count--;
+        if (md->layer_edited >= md->layer_count)
+            md->layer_edited = md->layer_count > 0 ? md->layer_count - 1 : 0;
+        if (md->layer_count > 0) {
+            select_layer(m, md->layer_edited);
+        } else {
+            transfer_defaults(&md->transfer, TRANSFER_FIELD_QVAPOR);
+            md->transfer_on = false;
+        }
+        m->changes |= MENU_CHANGE_TRANSFER;
         break;
     case ID_PROBE_MODE:
         md->probe_mode = md->probe_mode == MENU_PROBE_AT_DISTANCE ? MENU_PROBE_FIRST_VISIBLE

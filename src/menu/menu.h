@@ -29,8 +29,24 @@
 #define MENU_FONT_PATH "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"
 #define MENU_SLOTS 4
 
-enum menu_page { MENU_PAGE_TIME, MENU_PAGE_FIELDS, MENU_PAGE_TRANSFER, MENU_PAGE_LIGHT,
-                 MENU_PAGE_QUALITY, MENU_PAGE_PROBE, MENU_PAGE_COUNT };
+enum menu_page { MENU_PAGE_TIME, MENU_PAGE_FIELDS, MENU_PAGE_LAYERS, MENU_PAGE_SLICES,
+                 MENU_PAGE_TRANSFER, MENU_PAGE_LIGHT, MENU_PAGE_QUALITY, MENU_PAGE_PROBE,
+                 MENU_PAGE_COUNT };
+
+/* A slice as the Slices page moves it: across AXIS (0 x, 1 y, 2 z) at POSITION_M along it
+ * (world metres), its normal tilted by TILT_DEG from the axis (about x for the y and z axes,
+ * about y for x), through the box's centre otherwise.  menu_slice_plane makes its plane. */
+struct menu_slice {
+    struct transfer_slice slice;
+    int axis;
+    double position_m, tilt_deg;
+};
+
+/* SL's point and normal from its axis, position and tilt; BOX_CENTRE in world metres. */
+void menu_slice_plane(struct menu_slice *sl, const double box_centre[3]);
+/* The axis, position and tilt that come closest to SL->slice's plane (its normal's largest
+ * component the axis). */
+void menu_slice_from_plane(struct menu_slice *sl);
 
 /* How the probe picks its point (session/probe.h's enum probe_mode). */
 enum { MENU_PROBE_FIRST_VISIBLE, MENU_PROBE_AT_DISTANCE };
@@ -49,9 +65,18 @@ struct menu_model {
     /* Transfer */
     double species_scale[SPECIES_COUNT]; /* multiplies the species' extinction, [0, 4] */
     float species_tint[SPECIES_COUNT][3];
-    bool transfer_on;                    /* the function is shown (replaces the clouds); any
-                                            edit of the function turns it on */
-    struct transfer_function transfer;
+    bool transfer_on;                    /* the edited layer is shown; any edit of the
+                                            function turns it on */
+    struct transfer_function transfer;   /* the edited layer's function */
+    /* Layers (the application keeps layers[layer_edited] and TRANSFER, TRANSFER_ON alike) */
+    int layer_count;
+    struct transfer_layer layers[TRANSFER_LAYER_MAX];
+    int layer_edited;                    /* the layer the Transfer page edits */
+    /* Slices */
+    int slice_count;
+    struct menu_slice slices[TRANSFER_SLICE_MAX];
+    int slice_selected;                  /* the one the sliders move */
+    double box_min_m[3], box_max_m[3];   /* the volume's box, world metres (the sliders' range) */
     bool histogram_valid;                /* the field's histogram for the step on screen */
     struct transfer_histogram histogram; /* drawn behind the curves when it is of transfer's
                                             field and range */
@@ -76,7 +101,7 @@ enum {
     MENU_CHANGE_PLAYBACK = 1u << 0, /* playing, loop or speed */
     MENU_CHANGE_STEP = 1u << 1,     /* step chosen by the user */
     MENU_CHANGE_SPECIES = 1u << 2,  /* on/off, scale, tint: the volume must be made again */
-    MENU_CHANGE_TRANSFER = 1u << 3, /* transfer mode or function: likewise */
+    MENU_CHANGE_TRANSFER = 1u << 3, /* a layer or its function: likewise */
     MENU_CHANGE_SUN = 1u << 4,
     MENU_CHANGE_QUALITY = 1u << 5,
     MENU_ACTION_SAVE = 1u << 6,     /* save model.transfer into slot model.slot */
@@ -85,6 +110,7 @@ enum {
     MENU_CHANGE_VISIBLE = 1u << 9,  /* shown or hidden */
     MENU_CHANGE_PROBE = 1u << 10,   /* on/off, mode, threshold, distance */
     MENU_ACTION_SAVE_VIEW = 1u << 11, /* "Save view": the view and look as a scene file */
+    MENU_CHANGE_SLICES = 1u << 12,  /* a slice added, removed, moved, tilted or changed */
 };
 
 struct menu_desc {

@@ -1,4 +1,4 @@
-/* The information panel: date and time, the legend of the colour-mapped field, north. */
+/* The information panel: date and time, the legends of the colour-mapped fields, north. */
 #include "menu/overlay.h"
 
 #include <math.h>
@@ -29,6 +29,7 @@ struct overlay {
     uint8_t pixels[W * H * 4];
     struct overlay_model drawn;
     bool have_drawn, legend;
+    int legends; /* bars drawn */
     unsigned generation;
 };
 
@@ -83,6 +84,12 @@ void overlay_value_text(enum transfer_field field, double v, char *buf, int size
     case TRANSFER_FIELD_WIND:
         snprintf(buf, (size_t)size, "%.3g m/s", v);
         break;
+    case TRANSFER_FIELD_THETA:
+        snprintf(buf, (size_t)size, "%.4g K", v);
+        break;
+    case TRANSFER_FIELD_RH:
+        snprintf(buf, (size_t)size, "%.3g %%", v);
+        break;
     default:
         snprintf(buf, (size_t)size, "%.3g", v);
         break;
@@ -100,6 +107,10 @@ static const char *field_title(enum transfer_field f)
         return "temperature";
     case TRANSFER_FIELD_WIND:
         return "wind speed";
+    case TRANSFER_FIELD_THETA:
+        return "potential temperature";
+    case TRANSFER_FIELD_RH:
+        return "relative humidity";
     default:
         return "field";
     }
@@ -129,6 +140,33 @@ static void draw_legend(struct overlay *o, const struct transfer_function *tf)
     menu_font_draw(o->small, o->pixels, W, H, BAR_X0, BAR_Y1 + 4, lo, ink);
     menu_font_draw(o->small, o->pixels, W, H, BAR_X1 - menu_font_width(o->small, hi), BAR_Y1 + 4,
                    hi, ink);
+}
+
+/* Several legends, one row each below the date: the field's name and its range's ends on
+ * one line, the bar under it. */
+static void legend_row(int i, int n, int *y0, int *y1)
+{
+    int top = 40, h = (H - top - 4) / n;
+    *y0 = top + i * h + 18;
+    *y1 = top + (i + 1) * h - 2;
+}
+
+static void draw_legend_row(struct overlay *o, const struct transfer_function *tf, int i, int n)
+{
+    int y0, y1;
+    legend_row(i, n, &y0, &y1);
+    char lo[32], hi[32], title[96];
+    overlay_value_text(tf->field, tf->lo, lo, sizeof(lo));
+    overlay_value_text(tf->field, tf->hi, hi, sizeof(hi));
+    snprintf(title, sizeof(title), "%s  %s", field_title(tf->field), lo);
+    menu_font_draw(o->small, o->pixels, W, H, BAR_X0, y0 - 17, title, dim);
+    menu_font_draw(o->small, o->pixels, W, H, BAR_X1 - menu_font_width(o->small, hi), y0 - 17,
+                   hi, ink);
+    for (int x = BAR_X0; x < BAR_X1; x++) {
+        uint8_t rgb[3];
+        legend_color(tf, (float)(x - BAR_X0) / (float)(BAR_X1 - 1 - BAR_X0), rgb);
+        fill(o->pixels, x, y0, x + 1, y1, rgb);
+    }
 }
 
 /* A filled arrow through the centre, its tip toward ANGLE (clockwise from up), and an N. */
@@ -168,8 +206,13 @@ const uint8_t *overlay_pixels(struct overlay *o, const struct overlay_model *m,
         if (m->date)
             menu_font_draw(o->font, o->pixels, W, H, 16, 14, m->date_text, ink);
         o->legend = m->legend;
-        if (m->legend)
+        o->legends = m->legend ? (m->legend_count > 1 ? m->legend_count : 1) : 0;
+        if (o->legends > OVERLAY_LEGENDS)
+            o->legends = OVERLAY_LEGENDS;
+        if (o->legends == 1)
             draw_legend(o, &m->transfer);
+        for (int i = 0; o->legends > 1 && i < o->legends; i++)
+            draw_legend_row(o, &m->legends[i], i, o->legends);
         if (m->north)
             draw_north(o, m->north_deg);
         o->drawn = *m;
@@ -179,6 +222,19 @@ const uint8_t *overlay_pixels(struct overlay *o, const struct overlay_model *m,
     if (generation)
         *generation = o->generation;
     return o->pixels;
+}
+
+bool overlay_legend_pixel_at(const struct overlay *o, int i, float x, int *px, int *py)
+{
+    if (i < 0 || i >= o->legends)
+        return false;
+    if (o->legends == 1)
+        return overlay_legend_pixel(o, x, px, py);
+    int y0, y1;
+    legend_row(i, o->legends, &y0, &y1);
+    *px = BAR_X0 + (int)lroundf(x * (float)(BAR_X1 - 1 - BAR_X0));
+    *py = (y0 + y1) / 2;
+    return true;
 }
 
 bool overlay_legend_pixel(const struct overlay *o, float x, int *px, int *py)

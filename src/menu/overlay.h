@@ -15,12 +15,17 @@
 
 #define OVERLAY_WIDTH 320
 #define OVERLAY_HEIGHT 160
+#define OVERLAY_LEGENDS 4 /* bars the panel holds */
 
 struct overlay_model {
     bool date;
     char date_text[96];         /* "2005-08-28 06:00 UTC, step 3 of 4" */
     bool legend;                /* a colour-mapped field is shown */
-    struct transfer_function transfer;
+    struct transfer_function transfer; /* the first one's colour map */
+    /* Every colour-mapped field shown (layers, then slices), the first OVERLAY_LEGENDS of
+     * them: one bar each; legends[0] is TRANSFER. */
+    int legend_count;
+    struct transfer_function legends[OVERLAY_LEGENDS];
     bool north;
     float north_deg;            /* where north points on the panel, clockwise from up */
 };
@@ -39,6 +44,8 @@ const uint8_t *overlay_pixels(struct overlay *o, const struct overlay_model *m,
 /* Where the legend shows the field's value at X in [0, 1] of its range: a pixel inside the
  * bar.  False without a legend. */
 bool overlay_legend_pixel(const struct overlay *o, float x, int *px, int *py);
+/* The same for legend I (0 .. legend_count - 1 of the model last drawn); false without it. */
+bool overlay_legend_pixel_at(const struct overlay *o, int i, float x, int *px, int *py);
 
 /* The legend's label of a transfer function's range end: the value in the field's display
  * units ("12.5 g/kg", "-20 C", "35 m/s") into BUF. */

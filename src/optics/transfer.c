@@ -4,11 +4,13 @@
 #include <stdio.h>
 #include <string.h>
 
-static const char *const field_names[TRANSFER_FIELD_COUNT] = {"qvapor", "condensate",
-                                                               "temperature", "wind"};
-static const char *const field_labels[TRANSFER_FIELD_COUNT] = {"QVAPOR", "condensate",
-                                                                "temperature", "wind speed"};
-static const char *const field_units[TRANSFER_FIELD_COUNT] = {"kg/kg", "kg/kg", "K", "m/s"};
+static const char *const field_names[TRANSFER_FIELD_COUNT] = {
+    "qvapor", "condensate", "temperature", "wind", "theta", "rh"};
+static const char *const field_labels[TRANSFER_FIELD_COUNT] = {
+    "QVAPOR", "condensate", "temperature", "wind speed", "potential temperature",
+    "relative humidity"};
+static const char *const field_units[TRANSFER_FIELD_COUNT] = {"kg/kg", "kg/kg", "K",
+                                                              "m/s",   "K",     "%"};
 static const char *const channel_names[TRANSFER_CHANNELS] = {"red", "green", "blue", "alpha"};
 
 const char *transfer_field_name(enum transfer_field f)
@@ -37,6 +39,12 @@ void transfer_format_value(enum transfer_field f, double v, char *buf, int size)
     case TRANSFER_FIELD_WIND:
         snprintf(buf, (size_t)size, "%.3g m/s", v);
         break;
+    case TRANSFER_FIELD_THETA:
+        snprintf(buf, (size_t)size, "%.1f K", v);
+        break;
+    case TRANSFER_FIELD_RH:
+        snprintf(buf, (size_t)size, "%.0f %%", v);
+        break;
     default:
         snprintf(buf, (size_t)size, "%.3g g/kg", v * 1000.0);
         break;
@@ -52,6 +60,11 @@ bool transfer_field_from_name(const char *name, enum transfer_field *out)
         }
     }
     return false;
+}
+
+const char *transfer_layer_mode_name(int mode)
+{
+    return mode == TRANSFER_LAYER_TINT ? "tint" : "emit";
 }
 
 const char *transfer_channel_name(enum transfer_channel c)
@@ -80,6 +93,12 @@ void transfer_defaults(struct transfer_function *tf, enum transfer_field field)
     } else if (field == TRANSFER_FIELD_WIND) {
         tf->lo = 0.0;
         tf->hi = 60.0; /* m/s: a major hurricane's eyewall */
+    } else if (field == TRANSFER_FIELD_THETA) {
+        tf->lo = 290.0; /* K: a tropical boundary layer */
+        tf->hi = 370.0; /* the tropical tropopause */
+    } else if (field == TRANSFER_FIELD_RH) {
+        tf->lo = 0.0;
+        tf->hi = 100.0; /* %: saturation */
     } else {
         tf->lo = 0.0;
         tf->hi = 0.005;

@@ -1,10 +1,10 @@
 /*
- * optics/transfer: a piecewise-linear RGBA transfer function for scalar fields shown in
- * classic transfer-function mode (Dye 2007 §4.3): four independent channels of control points
- * (x in [0, 1] over the field's range [lo, hi], value in [0, 1]), linearly interpolated and
- * clamped outside their first and last point.  Alpha becomes extinction (alpha times DENSITY,
- * 1/m), red, green and blue tint the scattered light.  Pure numbers: no files (config/ reads
- * and writes them), no GL, no volumes.
+ * optics/transfer: a piecewise-linear RGBA transfer function for scalar fields (Dye 2007 §4.3):
+ * four independent channels of control points (x in [0, 1] over the field's range [lo, hi],
+ * value in [0, 1]), linearly interpolated and clamped outside their first and last point; and
+ * the colour-mapped layers and slices that show fields through them.  Alpha becomes a layer's
+ * extinction (alpha times DENSITY times its opacity, 1/m), red, green and blue its colour.
+ * Pure numbers: no files (config/ reads and writes them), no GL, no volumes.
  */
 #ifndef ANVIL_OPTICS_TRANSFER_H
 #define ANVIL_OPTICS_TRANSFER_H
@@ -29,6 +29,8 @@ enum transfer_field {
                                    1976 standard atmosphere) */
     TRANSFER_FIELD_WIND,        /* wind speed |(U, V, W)|, m/s (zero where the data has no
                                    U and V) */
+    TRANSFER_FIELD_THETA,       /* potential temperature, K (data/derived.h) */
+    TRANSFER_FIELD_RH,          /* relative humidity over liquid water, % (data/derived.h) */
     TRANSFER_FIELD_COUNT
 };
 
@@ -45,19 +47,54 @@ struct transfer_function {
     struct transfer_point points[TRANSFER_CHANNELS][TRANSFER_MAX_POINTS]; /* x ascending */
 };
 
+/* A colour-mapped layer (docs/analysis.md): the scalar field TF.field, interpolated on the GPU
+ * and then classified by TF (post-classification), composited with the clouds in the eye
+ * pass.  EMIT: the layer emits its colour and absorbs with extinction alpha * TF.density *
+ * OPACITY (1/m), unlit by the sun.  TINT: the clouds' scattered light is multiplied by
+ * mix(1, rgb, alpha * OPACITY); the layer adds no medium of its own. */
+#define TRANSFER_LAYER_MAX 4
+enum transfer_layer_mode { TRANSFER_LAYER_EMIT, TRANSFER_LAYER_TINT };
+
+struct transfer_layer {
+    bool enabled;
+    int mode;       /* enum transfer_layer_mode */
+    double opacity; /* >= 0 */
+    struct transfer_function tf;
+};
+
+/* A slice (docs/analysis.md): the plane NORMAL . p = NORMAL . POINT (world metres) through the
+ * field TF.field, coloured by TF's red, green and blue (its alpha is not used) at OPACITY, with
+ * contour lines every CONTOUR_EVERY field units (0: none), composited with the clouds where
+ * the ray crosses it. */
+#define TRANSFER_SLICE_MAX 4
+
+struct transfer_slice {
+    bool enabled;
+    double point[3];     /* metres */
+    double normal[3];    /* unit */
+    double opacity;      /* [0, 1] */
+    double contour_every; /* field units; 0: no lines */
+    struct transfer_function tf;
+};
+
+/* "emit", "tint"; false for an unknown name. */
+const char *transfer_layer_mode_name(int mode);
+
 /* A default for FIELD: a grey ramp with alpha rising over the upper half of the range. */
 void transfer_defaults(struct transfer_function *tf, enum transfer_field field);
 
-/* "qvapor", "condensate", "temperature", "wind"; transfer_field_from_name returns false for an
- * unknown name. */
+/* "qvapor", "condensate", "temperature", "wind", "theta", "rh"; transfer_field_from_name
+ * returns false for an unknown name. */
 const char *transfer_field_name(enum transfer_field f);
 bool transfer_field_from_name(const char *name, enum transfer_field *out);
-/* What the menu shows: "QVAPOR", "condensate", "temperature", "wind speed". */
+/* What the menu shows: "QVAPOR", "condensate", "temperature", "wind speed", "potential
+ * temperature", "relative humidity". */
 const char *transfer_field_label(enum transfer_field f);
-/* The unit of the field's values ("kg/kg", "K", "m/s"). */
+/* The unit of the field's values ("kg/kg", "K", "m/s", "%"). */
 const char *transfer_field_unit(enum transfer_field f);
 /* A value of field F as a label, ASCII: mixing ratios in g/kg ("12 g/kg"), temperature in
- * degrees Celsius ("-73.2 C"), wind speed in m/s ("60 m/s"). */
+ * degrees Celsius ("-73.2 C"), wind speed in m/s ("60 m/s"), potential temperature in K ("300 K"),
+ * relative humidity in per cent ("85 %"). */
 void transfer_format_value(enum transfer_field f, double v, char *buf, int size);
 const char *transfer_channel_name(enum transfer_channel c); /* "red", ... "alpha" */
 

@@ -1,5 +1,6 @@
 #include "render/render.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -33,6 +34,18 @@ struct renderer {
     bool have_tint;
     struct grid3 grid;
     bool have_volume;
+    struct gpu_texture layer_fields; /* RGBA32F 3D: the volume's layers' fields (LAYERS) */
+    enum transfer_field layer_field[TRANSFER_LAYER_MAX];
+    bool layer_held[TRANSFER_LAYER_MAX]; /* the volume has layer i's field */
+    struct gpu_texture layer_lut;    /* RGBA32F 2D: a colour map per row */
+    struct render_layer layers[TRANSFER_LAYER_MAX];
+    int layer_count;
+    struct gpu_texture slice_fields; /* RGBA32F 3D: the volume's slices' fields (SLICES) */
+    enum transfer_field slice_field[TRANSFER_SLICE_MAX];
+    bool slice_held[TRANSFER_SLICE_MAX];
+    struct render_slice slices[TRANSFER_SLICE_MAX];
+    int slice_count;
+    bool lut_stale;
     struct gpu_texture beta_next; /* effects.temporal: step k + 1 (TEMPORAL 1) */
     struct grid3 grid_next;
     bool have_next;
@@ -126,6 +139,9 @@ void renderer_destroy(struct renderer *r)
     gpu_texture_finish(&r->beta);
     gpu_texture_finish(&r->beta_next);
     gpu_texture_finish(&r->tint);
+    gpu_texture_finish(&r->layer_fields);
+    gpu_texture_finish(&r->slice_fields);
+    gpu_texture_finish(&r->layer_lut);
     gpu_texture_finish(&r->phase);
     gpu_program_finish(&r->tonemap);
     gpu_program_finish(&r->tonemap_packed);
@@ -184,6 +200,240 @@ static bool put_beta(struct renderer *r, struct gpu_texture *tex, const struct e
     return true;
 }
 
+/* Four fields (NULL: none) of N voxels into one RGBA32F texture TEX, a field per channel
+ * (none at all: the texture goes). */
+static bool put_fields(struct gpu_texture *tex, const int n[3], float *const fields[4])
+{
+    if (!fields[0] && !fields[1] && !fields[2] && !fields[3]) {
+        gpu_texture_finish(tex);
+        return true;
+    }
+    if (!tex->id || memcmp(tex->size, n, sizeof(int) * 3) != 0) {
+        gpu_texture_finish(tex);
+        if (!gpu_texture_init(tex, 3, n, GPU_RGBA32F, NULL))
+            return false;
+    }
+    /* Eight z layers at a time: the interleaved copy stays small. */
+    size_t plane = (size_t)n[0] * n[1];
+    int step = 8;
+    float *tmp = malloc(plane * (size_t)step * 4 * sizeof(float));
+    if (!tmp) {
+        log_error("out of memory uploading the layers' fields");
+        return false;
+    }
+    for (int z = 0; z < n[2]; z += step) {
+        int count = n[2] - z < step ? n[2] - z : step;
+        size_t base = plane * (size_t)z;
+        for (size_t v = 0; v < plane * (size_t)count; v++)
+            for (int i = 0; i < 4; i++)
+                tmp[4 * v + i] = fields[i] ? fields[i][base + v] : 0.0f;
+        gpu_texture_upload_layers(tex, z, count, tmp);
+    }
+    free(tmp);
+    return true;
+}
+
+/* The layers' and the slices' fields of VOL. */
+static bool put_layer_fields(struct renderer *r, const struct ext_volume *vol)
+{
+    static_assert(TRANSFER_LAYER_MAX == 4 && TRANSFER_SLICE_MAX == 4, "a field per channel");
+    for (int i = 0; i < TRANSFER_LAYER_MAX; i++) {
+        r->layer_held[i] = vol->layer[i] != NULL;
+        r->layer_field[i] = vol->layer_field[i];
+        r->slice_held[i] = vol->slice[i] != NULL;
+        r->slice_field[i] = vol->slice_field[i];
+    }
+    return put_fields(&r->layer_fields, vol->grid.n, vol->layer) &&
+           put_fields(&r->slice_fields, vol->grid.n, vol->slice);
+}
+
+float render_display_to_radiance(float c, float exposure)
+{
+    double v = c < 0.0f ? 0.0 : c > 1.0f ? 1.0 : c;
+    double d = (v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4)) * 0.999;
+    return (float)(d / (1.0 - d) / exposure);
+}
+
+void render_layer_from_transfer(const struct transfer_layer *l, float exposure,
+                                struct render_layer *out)
+{
+    memset(out, 0, sizeof(*out));
+    const struct transfer_function *tf = &l->tf;
+    out->on = l->enabled && l->opacity > 0.0;
+    out->tint = l->mode == TRANSFER_LAYER_TINT;
+    out->field = tf->field;
+    out->lo = (float)tf->lo;
+    out->hi = (float)tf->hi;
+    out->strength = (float)(out->tint ? l->opacity : tf->density * l->opacity);
+    for (int i = 0; i < RENDER_LAYER_LUT; i++)
+        for (int c = 0; c < TRANSFER_CHANNELS; c++) {
+            float x = (float)i / (RENDER_LAYER_LUT - 1);
+            float v = transfer_eval(tf, (enum transfer_channel)c, x);
+            bool factor = c == TRANSFER_ALPHA || out->tint;
+            out->lut[i][c] = factor ? v : render_display_to_radiance(v, exposure);
+        }
+}
+
+/* The colour maps of the layers (rows 0 to 3) and the slices (rows 4 to 7), when changed. */
+static bool put_luts(struct renderer *r)
+{
+    if (!r->lut_stale && r->layer_lut.id)
+        return true;
+    static float table[TRANSFER_LAYER_MAX + TRANSFER_SLICE_MAX][RENDER_LAYER_LUT][4];
+    memset(table, 0, sizeof(table));
+    for (int i = 0; i < r->layer_count; i++)
+        memcpy(table[i], r->layers[i].lut, sizeof(table[i]));
+    for (int i = 0; i < r->slice_count; i++)
+        memcpy(table[TRANSFER_LAYER_MAX + i], r->slices[i].lut, sizeof(table[i]));
+    r->lut_stale = false;
+    if (r->layer_lut.id) {
+        gpu_texture_upload(&r->layer_lut, table);
+        return true;
+    }
+    const int size[3] = {RENDER_LAYER_LUT, TRANSFER_LAYER_MAX + TRANSFER_SLICE_MAX, 1};
+    return gpu_texture_init(&r->layer_lut, 2, size, GPU_RGBA32F, table);
+}
+
+bool renderer_set_layers(struct renderer *r, const struct render_layer *layers, int count)
+{
+    assert(count >= 0 && count <= TRANSFER_LAYER_MAX);
+    if (count == r->layer_count &&
+        (count == 0 || memcmp(layers, r->layers, (size_t)count * sizeof(*layers)) == 0))
+        return true;
+    memset(r->layers, 0, sizeof(r->layers));
+    if (count > 0)
+        memcpy(r->layers, layers, (size_t)count * sizeof(*layers));
+    r->layer_count = count;
+    r->lut_stale = true;
+    return true;
+}
+
+void render_slice_from_transfer(const struct transfer_slice *sl, float exposure,
+                                struct render_slice *out)
+{
+    memset(out, 0, sizeof(*out));
+    const struct transfer_function *tf = &sl->tf;
+    out->on = sl->enabled && sl->opacity > 0.0;
+    out->field = tf->field;
+    double d = 0.0;
+    for (int a = 0; a < 3; a++) {
+        out->normal[a] = (float)sl->normal[a];
+        d += sl->normal[a] * sl->point[a];
+    }
+    out->offset = (float)d;
+    out->lo = (float)tf->lo;
+    out->hi = (float)tf->hi;
+    out->opacity = (float)sl->opacity;
+    out->contour_every = (float)sl->contour_every;
+    for (int i = 0; i < RENDER_LAYER_LUT; i++)
+        for (int c = 0; c < TRANSFER_CHANNELS; c++) {
+            float x = (float)i / (RENDER_LAYER_LUT - 1);
+            float v = transfer_eval(tf, (enum transfer_channel)c, x);
+            out->lut[i][c] = c == TRANSFER_ALPHA ? v : render_display_to_radiance(v, exposure);
+        }
+}
+
+bool renderer_set_slices(struct renderer *r, const struct render_slice *slices, int count)
+{
+    assert(count >= 0 && count <= TRANSFER_SLICE_MAX);
+    if (count == r->slice_count &&
+        (count == 0 || memcmp(slices, r->slices, (size_t)count * sizeof(*slices)) == 0))
+        return true;
+    memset(r->slices, 0, sizeof(r->slices));
+    if (count > 0)
+        memcpy(r->slices, slices, (size_t)count * sizeof(*slices));
+    r->slice_count = count;
+    r->lut_stale = true;
+    return true;
+}
+
+/* How many of the first slices the next draw reads (the SLICES define). */
+static int slices_shown(const struct renderer *r)
+{
+    int n = 0;
+    if (!r->slice_fields.id)
+        return 0;
+    for (int i = 0; i < r->slice_count; i++) {
+        const struct render_slice *sl = &r->slices[i];
+        if (sl->on && r->slice_held[i] && r->slice_field[i] == sl->field)
+            n = i + 1;
+    }
+    return n;
+}
+
+static void slice_uniforms(const struct renderer *r, const struct gpu_program *prog, int n,
+                           const struct render_view *view)
+{
+    /* A pixel's width: the narrower of its two sides, constant (orthographic, proj[15] = 1)
+     * or growing with the distance (perspective). */
+    float px = 2.0f / (fabsf(view->proj[0]) * (float)view->width);
+    float py = 2.0f / (fabsf(view->proj[5]) * (float)view->height);
+    float foot = fminf(px, py);
+    float footprint[2] = {view->proj[15] != 0.0f ? foot : 0.0f,
+                          view->proj[15] != 0.0f ? 0.0f : foot};
+    gpu_uniform_vec2(prog, "pixel_footprint", footprint);
+    float planes[4][4] = {{0}}, lo[4] = {0}, scale[4] = {0}, opacity[4] = {0}, every[4] = {0};
+    for (int i = 0; i < n; i++) {
+        const struct render_slice *sl = &r->slices[i];
+        if (!(sl->on && r->slice_held[i] && r->slice_field[i] == sl->field))
+            continue;
+        memcpy(planes[i], sl->normal, sizeof(sl->normal));
+        planes[i][3] = sl->offset;
+        lo[i] = sl->lo;
+        scale[i] = sl->hi > sl->lo ? 1.0f / (sl->hi - sl->lo) : 0.0f;
+        opacity[i] = sl->opacity;
+        every[i] = sl->contour_every;
+    }
+    static const char *const names[4] = {"slice_plane[0]", "slice_plane[1]", "slice_plane[2]",
+                                         "slice_plane[3]"};
+    for (int i = 0; i < 4; i++)
+        gpu_uniform_vec4(prog, names[i], planes[i]);
+    gpu_uniform_vec4(prog, "slice_lo", lo);
+    gpu_uniform_vec4(prog, "slice_scale", scale);
+    gpu_uniform_vec4(prog, "slice_opacity", opacity);
+    gpu_uniform_vec4(prog, "slice_contour", every);
+    gpu_uniform_int(prog, "slice_row", TRANSFER_LAYER_MAX); /* put_luts */
+}
+
+/* The layers the next draw shows: on, and over a field the volume holds.  Returns how many of
+ * the first layers the pass reads (the LAYERS define) and whether one of them emits. */
+static int layers_shown(const struct renderer *r, bool *emits)
+{
+    int n = 0;
+    *emits = false;
+    if (!r->layer_fields.id)
+        return 0;
+    for (int i = 0; i < r->layer_count; i++) {
+        const struct render_layer *l = &r->layers[i];
+        if (l->on && l->strength > 0.0f && r->layer_held[i] && r->layer_field[i] == l->field) {
+            n = i + 1;
+            *emits |= !l->tint;
+        }
+    }
+    return n;
+}
+
+static void layer_uniforms(const struct renderer *r, const struct gpu_program *prog, int n)
+{
+    float lo[4] = {0}, scale[4] = {0}, strength[4] = {0}, tint[4] = {0};
+    for (int i = 0; i < n; i++) {
+        const struct render_layer *l = &r->layers[i];
+        if (!(l->on && r->layer_held[i] && r->layer_field[i] == l->field))
+            continue;
+        lo[i] = l->lo;
+        scale[i] = l->hi > l->lo ? 1.0f / (l->hi - l->lo) : 0.0f;
+        strength[i] = l->strength;
+        tint[i] = l->tint ? 1.0f : 0.0f;
+    }
+    gpu_uniform_vec4(prog, "layer_lo", lo);
+    gpu_uniform_vec4(prog, "layer_scale", scale);
+    gpu_uniform_vec4(prog, "layer_strength", strength);
+    gpu_uniform_vec4(prog, "layer_tint", tint);
+    const float size[2] = {(float)RENDER_LAYER_LUT,
+                           (float)(TRANSFER_LAYER_MAX + TRANSFER_SLICE_MAX)};
+    gpu_uniform_vec2(prog, "layer_lut_size", size);
+}
+
 bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
 {
     double start = time_now_ms();
@@ -200,11 +450,15 @@ bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
     } else {
         gpu_texture_finish(&r->tint);
     }
+    if (!put_layer_fields(r, vol))
+        return false;
     r->grid = vol->grid;
     r->have_volume = true;
     r->pair_stale = true;
     size_t voxels = (size_t)n[0] * n[1] * n[2];
-    r->stats.upload_bytes += voxels * (r->half ? 4 : 8) + (vol->tint ? voxels * 4 : 0);
+    r->stats.upload_bytes += voxels * (r->half ? 4 : 8) + (vol->tint ? voxels * 4 : 0) +
+                             (r->layer_fields.id ? voxels * 16 : 0) +
+                             (r->slice_fields.id ? voxels * 16 : 0);
     r->stats.uploads++;
     if (!render_cells_build(&r->cells, &r->cell_programs, &r->beta, NULL))
         return false;
@@ -438,17 +692,29 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
                                               : "#define PHASE_MIX 0\n#define PHASE_ICE 0\n";
     /* Empty-space skipping reads the cells of what the pass samples: with temporal the pair's.
      * It takes two passes (raycast.comp, PASS 1 and 2); without it one (PASS 0). */
+    bool emits;
+    int layers = layers_shown(r, &emits);
+    int slices = slices_shown(r);
+    char layer_define[64] = "";
+    snprintf(layer_define, sizeof(layer_define), "%s%d\n#define SLICES %d\n",
+             "#define LAYERS ", layers, slices);
+    if (layers == 0 && slices == 0)
+        layer_define[0] = '\0';
+    if ((layers > 0 || slices > 0) && !put_luts(r))
+        return false;
+    /* An emitting layer fills space the cells call empty, and a slice lies in it too: no
+     * skipping then. */
     const struct render_cells *cells = NULL;
-    if (!s->no_skip)
+    if (!s->no_skip && !emits && slices == 0)
         cells = temporal ? renderer_pair_cells(r) : (r->cells.levels ? &r->cells : NULL);
     const struct gpu_program *progs[2] = {NULL, NULL};
     for (int pass = 0; pass < (cells ? 2 : 1); pass++) {
-        snprintf(defines, sizeof(defines), "%s%s%s%s%s%s%s%s#define PASS %d\n", light_defines,
+        snprintf(defines, sizeof(defines), "%s%s%s%s%s%s%s%s%s#define PASS %d\n", light_defines,
                  opaque ? "#define OPAQUE 1\n" : "", phase,
                  s->no_ground_shadow ? "#define GROUND_SHADOW 0\n" : "",
                  r->have_tint ? "#define TINT 1\n" : "", temporal ? "#define TEMPORAL 1\n" : "",
                  cells ? "#define SKIP 1\n" : "", r->counting ? "#define COUNT 1\n" : "",
-                 cells ? pass + 1 : 0);
+                 layer_define, cells ? pass + 1 : 0);
         progs[pass] = variant(r, defines);
         if (!progs[pass])
             return false;
@@ -460,8 +726,19 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     memcpy(viewm, view->view, sizeof(viewm));
     glm_mat4_mul(proj, viewm, vp);
     glm_mat4_inv(vp, inv);
-    for (int pass = 0; pass < (cells ? 2 : 1); pass++)
+    for (int pass = 0; pass < (cells ? 2 : 1); pass++) {
         eye_uniforms(r, progs[pass], s, view, inv, cells);
+        if (layers > 0 || slices > 0)
+            layer_uniforms(r, progs[pass], layers);
+        if (slices > 0)
+            slice_uniforms(r, progs[pass], slices, view);
+    }
+    if (layers > 0)
+        gpu_texture_bind(&r->layer_fields, BIND_EYE_TEX_LAYERS);
+    if (slices > 0)
+        gpu_texture_bind(&r->slice_fields, BIND_EYE_TEX_SLICES);
+    if (layers > 0 || slices > 0)
+        gpu_texture_bind(&r->layer_lut, BIND_EYE_TEX_LAYER_LUT);
     gpu_texture_bind(&r->beta, BIND_EYE_TEX_BETA);
     gpu_texture_bind(&r->phase, BIND_EYE_TEX_PHASE);
     if (r->have_tint)

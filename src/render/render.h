@@ -58,7 +58,8 @@ struct render_view {
 struct render_stats {
     unsigned views;         /* views drawn */
     double upload_ms;       /* CPU+GPU time of the last volume upload */
-    uint64_t upload_bytes;  /* bytes of every volume uploaded (extinction, tints, next) */
+    uint64_t upload_bytes;  /* bytes of every volume uploaded (extinction, tints, the layers'
+                               and slices' fields, next) */
     unsigned uploads;       /* volumes uploaded */
 };
 
@@ -112,6 +113,64 @@ bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol);
 bool renderer_has_next(const struct renderer *r);
 const struct gpu_texture *renderer_next_texture(const struct renderer *r);
 const struct grid3 *renderer_next_grid(const struct renderer *r);
+
+/* ---- colour-mapped layers (docs/analysis.md) ---------------------------------------------
+ * Up to TRANSFER_LAYER_MAX scalar fields beside the extinction (ext_volume.layer, uploaded by
+ * renderer_set_volume into one RGBA32F texture, a field per channel), each classified after
+ * trilinear interpolation by its colour map (a row of an RGBA32F table, linear filtering). */
+#define RENDER_LAYER_LUT 256
+
+struct render_layer {
+    bool on;
+    bool tint;                        /* tints the clouds' light instead of emitting */
+    enum transfer_field field;        /* drawn only while the volume's layer holds this field */
+    float lo, hi;                     /* field values at the map's first and last entry */
+    float strength;                   /* emit: extinction at alpha 1, 1/m; tint: its weight */
+    float lut[RENDER_LAYER_LUT][4];   /* linear RGB and alpha, entry i at lo + i/(N-1) (hi-lo) */
+};
+
+/* The radiance that tone mapping at EXPOSURE (> 0) shows as the display colour C in [0, 1]
+ * (sRGB): the inverse of image_tonemap, white kept just below its asymptote, as the panels'
+ * texels (session/panel.c). */
+float render_display_to_radiance(float c, float exposure);
+
+/* L as the eye pass draws it: its transfer function tabulated, the extinction at alpha 1 its
+ * density times its opacity (emit) or the tint's weight its opacity (tint).  An emitting
+ * layer's colours are display colours: radiance that tone mapping at EXPOSURE turns back into
+ * them, so that a layer as opaque as can be shows the legend's colours (a tint's are factors,
+ * as they are).  No GL. */
+void render_layer_from_transfer(const struct transfer_layer *l, float exposure,
+                                struct render_layer *out);
+
+/* Draws the following views with LAYERS[0 .. COUNT) (COUNT <= TRANSFER_LAYER_MAX; 0: none),
+ * layer i over the volume's field i.  The maps are uploaded only when they changed.  An
+ * emitting layer that is on turns empty-space skipping off for the eye pass (the cells know
+ * only the clouds).  False (logged) when the table cannot be made. */
+bool renderer_set_layers(struct renderer *r, const struct render_layer *layers, int count);
+
+/* Slices (docs/analysis.md): planes through the volume's slice fields (ext_volume.slice, a
+ * second RGBA32F texture), each ray compositing a slice where it crosses it inside the box and
+ * before the ground or opaque geometry: its colour map's colour at the field's interpolated
+ * value, dark on contour lines, at its opacity. */
+struct render_slice {
+    bool on;
+    enum transfer_field field;      /* drawn only while the volume's slice holds this field */
+    float normal[3], offset;        /* the plane normal . p = offset, world metres */
+    float lo, hi;
+    float opacity;                  /* [0, 1] */
+    float contour_every;            /* field units; 0: none */
+    float lut[RENDER_LAYER_LUT][4]; /* as render_layer's (alpha unused) */
+};
+
+/* SL as the eye pass draws it, its colours display colours at EXPOSURE (as an emitting
+ * layer's).  No GL. */
+void render_slice_from_transfer(const struct transfer_slice *sl, float exposure,
+                                struct render_slice *out);
+
+/* Draws the following views with SLICES[0 .. COUNT) (COUNT <= TRANSFER_SLICE_MAX), slice i
+ * over the volume's slice field i.  A slice that is on turns empty-space skipping off.  False
+ * (logged) when the table cannot be made. */
+bool renderer_set_slices(struct renderer *r, const struct render_slice *slices, int count);
 
 /* Tabulates the eye phase functions. */
 bool renderer_set_optics(struct renderer *r, const struct optics_params *optics);

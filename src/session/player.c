@@ -8,6 +8,7 @@
 #include "session/player.h"
 #include "session/scene.h"
 #include "common/log.h"
+#include "data/derived.h"
 #include "data/detail.h"
 #include "data/series.h"
 #include "data/source.h"
@@ -15,7 +16,6 @@
 #include "data/wrf.h"
 #include "data/wrf_write.h"
 
-#define LUT_SIZE 256
 #define DATE_LEN 64
 
 void playback_init(struct playback *pb, int count, int step, double speed, bool loop)
@@ -93,8 +93,8 @@ struct player {
     uint64_t shown_gen;
     int next_shown; /* effects.temporal: the step in the renderer's next volume, -1 none */
     uint64_t next_gen;
-    bool wind_warned; /* the series' thread only */
-    bool histogram;   /* player_desc.histogram */
+    bool field_warned[TRANSFER_FIELD_COUNT]; /* the series' thread only */
+    bool histogram; /* player_desc.histogram */
 };
 
 void look_from_config(const struct config *cfg, struct look *look)
@@ -106,35 +106,64 @@ void look_from_config(const struct config *cfg, struct look *look)
         for (int c = 0; c < 3; c++)
             look->tint.rgb[f][c] = (float)cfg->look.tint[f][c];
     }
-    if (cfg->look.has_transfer) {
-        look->transfer = cfg->look.transfer;
-        look->transfer_on = cfg->look.show_transfer;
-    } else {
-        transfer_defaults(&look->transfer, TRANSFER_FIELD_QVAPOR);
+    const struct config_look *cl = &cfg->look;
+    if (cl->has_layers) {
+        look->layer_count = cl->layer_count;
+        for (int i = 0; i < cl->layer_count; i++) {
+            const struct config_layer *c = &cl->layers[i];
+            struct transfer_layer *l = &look->layers[i];
+            if (c->has_transfer)
+                l->tf = c->transfer;
+            else
+                transfer_defaults(&l->tf, (enum transfer_field)c->field);
+            l->enabled = c->enabled;
+            l->mode = c->mode;
+            l->opacity = c->opacity;
+        }
+    }
+    look->slice_count = cl->slice_count;
+    for (int i = 0; i < cl->slice_count; i++) {
+        const struct config_slice *c = &cl->slices[i];
+        struct transfer_slice *sl = &look->slices[i];
+        if (c->has_transfer)
+            sl->tf = c->transfer;
+        else
+            transfer_defaults(&sl->tf, (enum transfer_field)c->field);
+        sl->enabled = c->enabled;
+        sl->opacity = c->opacity;
+        sl->contour_every = c->contour_every;
+        double n[3] = {0.0, 0.0, 0.0}, len = 0.0;
+        if (c->axis < 3) {
+            n[c->axis] = 1.0;
+            for (int a = 0; a < 3; a++)
+                sl->point[a] = a == c->axis ? c->position_km * 1000.0 : 0.0;
+        } else {
+            for (int a = 0; a < 3; a++) {
+                n[a] = c->normal[a];
+                sl->point[a] = c->point_km[a] * 1000.0;
+            }
+        }
+        for (int a = 0; a < 3; a++)
+            len += n[a] * n[a];
+        len = sqrt(len);
+        for (int a = 0; a < 3; a++)
+            sl->normal[a] = len > 0.0 ? n[a] / len : (a == 2);
+    }
+    if (!cl->has_layers && cl->has_transfer) {
+        /* An older file's one function: the first layer, emitting, fully opaque. */
+        look->layer_count = 1;
+        look->layers[0] = (struct transfer_layer){
+            .enabled = cl->show_transfer, .mode = TRANSFER_LAYER_EMIT, .opacity = 1.0,
+            .tf = cl->transfer};
     }
 }
 
-/* The value of FIELD at voxel IDX of FV, at height Z (what transfer_scalar holds there). */
-static double scalar_at(const struct field_volume *fv, enum transfer_field field, size_t idx,
-                        double vapour, double temp)
+void look_edited_transfer(const struct look *look, struct transfer_function *out)
 {
-    switch (field) {
-    case TRANSFER_FIELD_QVAPOR:
-        return fv->qvapor ? fv->qvapor[idx] : (float)vapour;
-    case TRANSFER_FIELD_TEMPERATURE:
-        return fv->temperature ? fv->temperature[idx] : (float)temp;
-    case TRANSFER_FIELD_WIND:
-        return fv->wind ? fv->wind[idx] : 0.0f;
-    default: {
-        double sum = 0.0;
-        for (int f = 0; f < SPECIES_COUNT; f++) {
-            float q = fv->q[f] ? fv->q[f][idx] : 0.0f;
-            if (isfinite(q) && q > 0.0f)
-                sum += q;
-        }
-        return (float)sum;
-    }
-    }
+    if (look->layer_count > 0)
+        *out = look->layers[0].tf;
+    else
+        transfer_defaults(out, TRANSFER_FIELD_QVAPOR);
 }
 
 /* The histogram of TF's field over its range on FV (owned by the caller), or NULL when out of
@@ -143,65 +172,18 @@ static struct transfer_histogram *histogram_of(const struct field_volume *fv,
                                                const struct transfer_function *tf)
 {
     struct transfer_histogram *h = malloc(sizeof(*h));
-    if (!h)
+    float *s = malloc(grid3_count(&fv->grid) * sizeof(float));
+    if (!h || !s) {
+        free(h);
+        free(s);
         return NULL;
+    }
     transfer_histogram_init(h, tf->field, tf->lo, tf->hi);
-    const struct grid3 *g = &fv->grid;
-    size_t idx = 0;
-    for (int k = 0; k < g->n[2]; k++) {
-        double z = g->origin[2] + (k + 0.5) * g->spacing[2];
-        double vapour = 0.010 * exp(-z / 2500.0), temp, pressure;
-        wrf_std_atmosphere(z, &temp, &pressure);
-        for (size_t ij = 0; ij < (size_t)g->n[0] * (size_t)g->n[1]; ij++, idx++)
-            transfer_histogram_add(h, scalar_at(fv, tf->field, idx, vapour, temp));
-    }
+    derived_field(fv, tf->field, s);
+    for (size_t i = 0; i < grid3_count(&fv->grid); i++)
+        transfer_histogram_add(h, s[i]);
+    free(s);
     return h;
-}
-
-/* The scalar field a transfer function shows, on FV's grid (caller frees). */
-static float *transfer_scalar(const struct field_volume *fv, enum transfer_field field)
-{
-    const struct grid3 *g = &fv->grid;
-    size_t n = grid3_count(g);
-    const float *have = field == TRANSFER_FIELD_QVAPOR        ? fv->qvapor
-                        : field == TRANSFER_FIELD_TEMPERATURE ? fv->temperature
-                        : field == TRANSFER_FIELD_WIND        ? fv->wind
-                                                              : NULL;
-    if (have) {
-        float *s = malloc(n * sizeof(float));
-        if (s)
-            memcpy(s, have, n * sizeof(float));
-        return s;
-    }
-    float *s = calloc(n, sizeof(float));
-    if (!s)
-        return NULL;
-    size_t idx = 0;
-    for (int k = 0; k < g->n[2]; k++) {
-        double z = g->origin[2] + (k + 0.5) * g->spacing[2];
-        /* Without QVAPOR: 10 g/kg at the ground, 2.5 km scale height. */
-        float vapour = (float)(0.010 * exp(-z / 2500.0));
-        /* Without P, PB, T: the standard atmosphere.  Without U, V: no wind (zero). */
-        double temp, pressure;
-        wrf_std_atmosphere(z, &temp, &pressure);
-        for (size_t ij = 0; ij < (size_t)g->n[0] * (size_t)g->n[1]; ij++, idx++) {
-            if (field == TRANSFER_FIELD_QVAPOR || field == TRANSFER_FIELD_TEMPERATURE ||
-                field == TRANSFER_FIELD_WIND) {
-                s[idx] = field == TRANSFER_FIELD_QVAPOR        ? vapour
-                         : field == TRANSFER_FIELD_TEMPERATURE ? (float)temp
-                                                               : 0.0f;
-                continue;
-            }
-            double sum = 0.0;
-            for (int f = 0; f < SPECIES_COUNT; f++) {
-                float q = fv->q[f] ? fv->q[f][idx] : 0.0f;
-                if (isfinite(q) && q > 0.0f)
-                    sum += q;
-            }
-            s[idx] = (float)sum;
-        }
-    }
-    return s;
 }
 
 /* Mass ratios -> extinction with the look (on the series' thread). */
@@ -210,35 +192,44 @@ static bool convert(struct player *p, struct field_volume *fv, const struct look
 {
     const struct player_load *ld = &p->ld;
     detail_apply_fields(&ld->detail, fv);
-    bool ok;
-    if (look->transfer_on) {
-        float lut[4 * LUT_SIZE];
-        const struct transfer_function *tf = &look->transfer;
-        for (int i = 0; i < LUT_SIZE; i++)
-            for (int c = 0; c < TRANSFER_CHANNELS; c++)
-                lut[4 * i + c] = transfer_eval(tf, (enum transfer_channel)c,
-                                               (float)i / (LUT_SIZE - 1));
-        if (tf->field == TRANSFER_FIELD_WIND && !fv->wind && !p->wind_warned) {
-            log_warn("transfer function: wind speed is unavailable (the data has no U and V): "
-                     "the field shows as zero");
-            p->wind_warned = true;
+    bool ok = ext_volume_from_fields(fv, &ld->optics, &look->select, out) &&
+              ext_volume_tint_from_fields(fv, &ld->optics, &look->select, &look->tint, out);
+    /* Every layer's field, on or off (turning one on shows at once); classified on the GPU. */
+    for (int i = 0; ok && i < look->layer_count; i++) {
+        enum transfer_field f = look->layers[i].tf.field;
+        if (!derived_field_available(fv, f) && !p->field_warned[f]) {
+            log_warn("layer %d: %s is unavailable (the data lacks what it is made from): a "
+                     "stand-in is shown (docs/analysis.md)",
+                     i + 1, transfer_field_label(f));
+            p->field_warned[f] = true;
         }
-        float *scalar = transfer_scalar(fv, tf->field);
-        if (!scalar) {
-            log_error("out of memory for the transfer function's field");
-            return false;
+        out->layer[i] = malloc(grid3_count(&fv->grid) * sizeof(float));
+        if (!out->layer[i]) {
+            log_error("out of memory for layer %d's field", i + 1);
+            ok = false;
+            break;
         }
-        ok = ext_volume_from_scalar(&fv->grid, scalar, lut, LUT_SIZE, tf->lo, tf->hi,
-                                    tf->density, out);
-        free(scalar);
-    } else {
-        ok = ext_volume_from_fields(fv, &ld->optics, &look->select, out) &&
-             ext_volume_tint_from_fields(fv, &ld->optics, &look->select, &look->tint, out);
+        derived_field(fv, f, out->layer[i]);
+        out->layer_field[i] = f;
+    }
+    for (int i = 0; ok && i < look->slice_count; i++) {
+        enum transfer_field f = look->slices[i].tf.field;
+        out->slice[i] = malloc(grid3_count(&fv->grid) * sizeof(float));
+        if (!out->slice[i]) {
+            log_error("out of memory for slice %d's field", i + 1);
+            ok = false;
+            break;
+        }
+        derived_field(fv, f, out->slice[i]);
+        out->slice_field[i] = f;
     }
     if (ok && ld->height_k > 0.0)
         ext_volume_stretch_height(out, ld->height_k);
-    if (ok && p->histogram)
-        out->histogram = histogram_of(fv, &look->transfer); /* NULL: out of memory, no bars */
+    if (ok && p->histogram) {
+        struct transfer_function edited;
+        look_edited_transfer(look, &edited);
+        out->histogram = histogram_of(fv, &edited); /* NULL: out of memory, no bars */
+    }
     return ok;
 }
 
@@ -273,17 +264,26 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
         ok = synth_storm_fields(&ld->synth, &fv);
         break;
     case PLAYER_FIELDS: {
-        /* The transfer function's field is read when it is chosen, shown or not: the editor's
-         * histogram shows it. */
-        enum transfer_field tff = look->transfer.field;
-        if (!look->transfer_on && !p->histogram)
-            tff = TRANSFER_FIELD_COUNT; /* no field but the mass ratios is wanted */
-        ok = data_source_load_fields_want(p->src, step,
-                                          &(struct data_fields_want){
-                                              .qvapor = tff == TRANSFER_FIELD_QVAPOR,
-                                              .temperature = tff == TRANSFER_FIELD_TEMPERATURE,
-                                              .wind = tff == TRANSFER_FIELD_WIND},
-                                          &fv);
+        /* The fields the layers and slices show, and the transfer editor's (read while the
+         * menu is there: its histogram shows it). */
+        bool qvapor = false, temperature = false, wind = false;
+        struct transfer_function edited;
+        look_edited_transfer(look, &edited);
+        for (int i = p->histogram ? -1 : 0; i < look->layer_count + look->slice_count; i++) {
+            const struct transfer_function *tf =
+                i < 0                   ? &edited
+                : i < look->layer_count ? &look->layers[i].tf
+                                        : &look->slices[i - look->layer_count].tf;
+            enum transfer_field f = tf->field;
+            qvapor |= f == TRANSFER_FIELD_QVAPOR;
+            temperature |= f == TRANSFER_FIELD_TEMPERATURE || f == TRANSFER_FIELD_THETA ||
+                           f == TRANSFER_FIELD_RH;
+            wind |= f == TRANSFER_FIELD_WIND;
+        }
+        ok = data_source_load_fields_want(
+            p->src, step,
+            &(struct data_fields_want){.qvapor = qvapor, .temperature = temperature, .wind = wind},
+            &fv);
         break;
     }
     }

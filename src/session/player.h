@@ -34,13 +34,20 @@ bool playback_tick(struct playback *pb, double dt, bool (*ready)(void *user, int
 
 /* ---- the player: the time series cache over the scene's data --------------------------- */
 
-/* How the volume is made from mass ratios (changed by the menu). */
+/* How the volume is made from mass ratios, and the colour-mapped layers shown with it
+ * (changed by the menu).  The menu's transfer editor edits layer 0. */
 struct look {
     struct species_select select;
     struct species_tint tint;
-    bool transfer_on;
-    struct transfer_function transfer;
+    int layer_count; /* 0 .. TRANSFER_LAYER_MAX */
+    struct transfer_layer layers[TRANSFER_LAYER_MAX];
+    int slice_count; /* 0 .. TRANSFER_SLICE_MAX */
+    struct transfer_slice slices[TRANSFER_SLICE_MAX];
 };
+
+/* The function the transfer editor shows: layer 0's, or the default function of QVAPOR
+ * without layers. */
+void look_edited_transfer(const struct look *look, struct transfer_function *out);
 
 void look_from_config(const struct config *cfg, struct look *look);
 

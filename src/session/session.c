@@ -136,8 +136,22 @@ static void model_from_session(struct session *s, struct menu_model *m)
         m->species_scale[f] = look->select.scale[f];
         memcpy(m->species_tint[f], look->tint.rgb[f], sizeof(m->species_tint[f]));
     }
-    m->transfer_on = look->transfer_on;
-    m->transfer = look->transfer;
+    m->transfer_on = look->layer_count > 0 && look->layers[0].enabled;
+    look_edited_transfer(look, &m->transfer);
+    m->layer_count = look->layer_count;
+    memcpy(m->layers, look->layers, sizeof(m->layers));
+    m->layer_edited = 0;
+    m->slice_count = look->slice_count;
+    for (int i = 0; i < look->slice_count; i++) {
+        m->slices[i].slice = look->slices[i];
+        menu_slice_from_plane(&m->slices[i]);
+    }
+    m->slice_selected = 0;
+    const struct grid3 *box = renderer_grid(s->renderer);
+    for (int a = 0; a < 3; a++) {
+        m->box_min_m[a] = box->origin[a];
+        m->box_max_m[a] = box->origin[a] + box->n[a] * box->spacing[a];
+    }
     m->sun_azimuth = fmod(s->sun_az + 360.0, 360.0);
     m->sun_elevation = s->sun_el;
     m->step_m = s->settings.step_m;
@@ -583,15 +597,33 @@ void session_look_text(const struct session *s, char *buf, size_t size)
                 look->select.scale[sp], (double)t[0], (double)t[1], (double)t[2]);
     }
     fprintf(f, "    };\n");
-    struct transfer_function plain;
-    transfer_defaults(&plain, TRANSFER_FIELD_QVAPOR);
-    if (look->transfer_on || !transfer_equal(&look->transfer, &plain)) {
-        transfer_file_write_group(f, "transfer", &look->transfer, "    ");
-        fprintf(f, "    show_transfer = %s;\n", look->transfer_on ? "true" : "false");
-    } else {
-        fprintf(f, "    transfer = \"none\";\n");
+    fprintf(f, "    layers = (");
+    for (int i = 0; i < look->layer_count; i++) {
+        const struct transfer_layer *l = &look->layers[i];
+        fprintf(f, "%s\n        {\n            field = \"%s\";\n", i ? "," : "",
+                transfer_field_name(l->tf.field));
+        transfer_file_write_group(f, "transfer", &l->tf, "            ");
+        fprintf(f, "            opacity = %.17e;\n            mode = \"%s\";\n"
+                   "            enabled = %s;\n        }",
+                l->opacity, transfer_layer_mode_name(l->mode), l->enabled ? "true" : "false");
     }
-    fprintf(f, "};\n");
+    fprintf(f, "%s);\n", look->layer_count ? "\n    " : "");
+    fprintf(f, "    slices = (");
+    for (int i = 0; i < look->slice_count; i++) {
+        const struct transfer_slice *sl = &look->slices[i];
+        fprintf(f, "%s\n        {\n            field = \"%s\";\n", i ? "," : "",
+                transfer_field_name(sl->tf.field));
+        transfer_file_write_group(f, "transfer", &sl->tf, "            ");
+        fprintf(f, "            axis = \"plane\";\n"
+                   "            point = [%.17e, %.17e, %.17e];\n"
+                   "            normal = [%.17e, %.17e, %.17e];\n"
+                   "            opacity = %.17e;\n            contour_every = %.17e;\n"
+                   "            enabled = %s;\n        }",
+                sl->point[0] / 1000.0, sl->point[1] / 1000.0, sl->point[2] / 1000.0,
+                sl->normal[0], sl->normal[1], sl->normal[2], sl->opacity, sl->contour_every,
+                sl->enabled ? "true" : "false");
+    }
+    fprintf(f, "%s);\n};\n", look->slice_count ? "\n    " : "");
     if (set->probe.on)
         fprintf(f, "probe = { on = true; mode = \"%s\"; threshold = %.17e; distance = %.17e; };\n",
                 set->probe.mode == PROBE_AT_DISTANCE ? "distance" : "first_visible",
@@ -661,6 +693,38 @@ static void transfer_path(const struct session *s, int slot, char *buf, size_t s
     snprintf(buf, size, "%s/tf-%d.cfg", s->transfers_dir, slot + 1);
 }
 
+static void edit_layer(struct look *look, int i, bool on, const struct transfer_function *tf);
+
+/* The menu's layers into LOOK, the transfer editor's function and its on/off into the edited
+ * one (a first layer made, emitting and opaque, when there is none and the edit is more than
+ * the untouched default off); the model then holds what LOOK holds. */
+static void edit_layers(struct look *look, struct menu_model *m)
+{
+    look->layer_count = m->layer_count;
+    memcpy(look->layers, m->layers, sizeof(look->layers));
+    int i = m->layer_edited >= 0 && m->layer_edited < look->layer_count ? m->layer_edited : 0;
+    edit_layer(look, i, m->transfer_on, &m->transfer);
+    m->layer_count = look->layer_count;
+    memcpy(m->layers, look->layers, sizeof(m->layers));
+    m->layer_edited = look->layer_count > 0 ? i : 0;
+}
+
+static void edit_layer(struct look *look, int i, bool on, const struct transfer_function *tf)
+{
+    if (look->layer_count == 0) {
+        struct transfer_function plain;
+        transfer_defaults(&plain, TRANSFER_FIELD_QVAPOR);
+        if (!on && transfer_equal(tf, &plain))
+            return;
+        look->layer_count = 1;
+        look->layers[0] = (struct transfer_layer){
+            .enabled = on, .mode = TRANSFER_LAYER_EMIT, .opacity = 1.0, .tf = *tf};
+        return;
+    }
+    look->layers[i].enabled = on;
+    look->layers[i].tf = *tf;
+}
+
 static void apply_changes(struct session *s, unsigned ch)
 {
     struct menu_model *m = menu_model(s->menu);
@@ -678,8 +742,12 @@ static void apply_changes(struct session *s, unsigned ch)
             set.look.select.scale[sp] = m->species_scale[sp];
             memcpy(set.look.tint.rgb[sp], m->species_tint[sp], sizeof(m->species_tint[sp]));
         }
-        set.look.transfer_on = m->transfer_on;
-        set.look.transfer = m->transfer;
+        edit_layers(&set.look, m);
+    }
+    if (ch & MENU_CHANGE_SLICES) {
+        set.look.slice_count = m->slice_count;
+        for (int i = 0; i < m->slice_count; i++)
+            set.look.slices[i] = m->slices[i].slice;
     }
     if (ch & MENU_CHANGE_SUN)
         session_set_sun(s, m->sun_azimuth, m->sun_elevation);
@@ -705,8 +773,7 @@ static void apply_changes(struct session *s, unsigned ch)
                 /* A function loaded is shown at once, as an edited one is. */
                 m->transfer = tf;
                 m->transfer_on = true;
-                set.look.transfer = tf;
-                set.look.transfer_on = true;
+                edit_layers(&set.look, m);
             }
             snprintf(status, sizeof(status), ok ? "loaded %s" : "kept the current one: %s",
                      ok ? path : log_last_error());
@@ -975,6 +1042,26 @@ static bool ready(void *user, int step)
     return player_ready(user, step);
 }
 
+/* A drag outside the menu while its Slices page shows moves the selected slice: up and down
+ * along its axis (SLICE_DRAG_SHARE of the box's extent per pixel), left and right tilts it
+ * (SLICE_DRAG_DEG per pixel); the change goes to the settings as the page's sliders send it. */
+#define SLICE_DRAG_SHARE (1.0 / 400.0)
+#define SLICE_DRAG_DEG 0.2
+static void drag_slice(struct session *s, float du, float dv)
+{
+    struct menu_model *m = menu_model(s->menu);
+    struct menu_slice *sl = &m->slices[m->slice_selected];
+    int a = sl->axis;
+    double lo = m->box_min_m[a], hi = m->box_max_m[a], c[3];
+    sl->position_m = fmin(hi, fmax(lo, sl->position_m - dv * (hi - lo) * SLICE_DRAG_SHARE));
+    sl->tilt_deg = fmin(60.0, fmax(-60.0, sl->tilt_deg + du * SLICE_DRAG_DEG));
+    for (int k = 0; k < 3; k++)
+        c[k] = 0.5 * (m->box_min_m[k] + m->box_max_m[k]);
+    menu_slice_plane(sl, c);
+    menu_model_changed(s->menu);
+    apply_changes(s, MENU_CHANGE_SLICES);
+}
+
 /* One event: the menu's, navigation's or the session's own. */
 static bool handle(struct session *s, mat4 from_world, struct input_event e)
 {
@@ -1025,6 +1112,11 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
     case INPUT_DRAG:
         if (s->drag_blocked)
             break;
+        if (s->menu && menu_visible(s->menu) && menu_page(s->menu) == MENU_PAGE_SLICES &&
+            menu_model(s->menu)->slice_count > 0) {
+            drag_slice(s, e.u, e.v);
+            break;
+        }
         if (s->tracker)
             s->nav.orientation_deg[0] = fmod(s->nav.orientation_deg[0] + DRAG_DEG * e.u, 360.0);
         else
@@ -1302,9 +1394,20 @@ static void overlay_model_of(struct session *s, const struct frame_state *f,
                  when[0] ? ", " : "", s->shown + 1, s->playback.count);
     else
         snprintf(m->date_text, sizeof(m->date_text), "%s", when);
-    m->legend = co->legend && s->settings.look.transfer_on;
+    /* A legend per layer and slice shown, layers first. */
+    const struct look *look = &s->settings.look;
+    for (int i = 0; co->legend && i < look->layer_count + look->slice_count; i++) {
+        bool layer = i < look->layer_count;
+        const struct transfer_layer *l = layer ? &look->layers[i] : NULL;
+        const struct transfer_slice *sl = layer ? NULL : &look->slices[i - look->layer_count];
+        bool shown = layer ? l->enabled && l->opacity > 0.0 : sl->enabled && sl->opacity > 0.0;
+        if (!shown || m->legend_count == OVERLAY_LEGENDS)
+            continue;
+        m->legends[m->legend_count++] = layer ? l->tf : sl->tf;
+    }
+    m->legend = m->legend_count > 0;
     if (m->legend)
-        m->transfer = s->settings.look.transfer;
+        m->transfer = m->legends[0];
     m->north = co->north;
     if (!m->north)
         return;
@@ -1342,8 +1445,14 @@ const struct overlay_model *session_overlay(const struct session *s)
 
 bool session_overlay_point(const struct session *s, float x, double world[3])
 {
+    return session_legend_point(s, 0, x, world);
+}
+
+bool session_legend_point(const struct session *s, int legend, float x, double world[3])
+{
     int px, py;
-    if (!s->overlay || !overlay_legend_pixel(overlay_view_overlay(s->overlay), x, &px, &py))
+    if (!s->overlay ||
+        !overlay_legend_pixel_at(overlay_view_overlay(s->overlay), legend, x, &px, &py))
         return false;
     overlay_view_point(s->overlay, (float)px + 0.5f, (float)py + 0.5f, world);
     return true;
@@ -1445,6 +1554,17 @@ bool session_draw(struct session *s, struct display *d, const struct frame_state
             return false;
     }
     if (s->probe_view && !draw_probe(s, f, tw))
+        return false;
+    const struct look *look = &s->settings.look;
+    struct render_layer layers[TRANSFER_LAYER_MAX];
+    for (int i = 0; i < look->layer_count; i++)
+        render_layer_from_transfer(&look->layers[i], exposure, &layers[i]);
+    if (!renderer_set_layers(s->renderer, layers, look->layer_count))
+        return false;
+    struct render_slice slices[TRANSFER_SLICE_MAX];
+    for (int i = 0; i < look->slice_count; i++)
+        render_slice_from_transfer(&look->slices[i], exposure, &slices[i]);
+    if (!renderer_set_slices(s->renderer, slices, look->slice_count))
         return false;
     if (!display_draw(d, s->renderer, &s->drawn))
         return false;

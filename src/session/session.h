@@ -139,10 +139,11 @@ unsigned session_take_requests(struct session *s);
 void session_view_text(const struct session *s, char *buf, size_t size);
 void session_sun_text(const struct session *s, char *buf, size_t size);
 /* What a scene file needs besides the camera and the sun to render what the session shows:
- * the time step (data.step), the look (look.species.*, look.transfer written in place,
- * look.show_transfer), the quality the menu changed (render.step, lightmap.resolution,
- * lightmap.epsilon) and the effects as the session decided them (all but temporal and
- * distortion), the probe when it is on.  SIZE of 16 KiB holds any look. */
+ * the time step (data.step), the look (look.species.*, look.layers and look.slices with their
+ * transfer functions written in place), the quality the menu changed (render.step,
+ * lightmap.resolution, lightmap.epsilon) and the effects as the session decided them (all but
+ * temporal and distortion), the probe when it is on.  SIZE of 96 KiB holds any look (four
+ * layers and four slices whose functions have every point they can hold: about 45 KiB). */
 void session_look_text(const struct session *s, char *buf, size_t size);
 /* The menu's status line (a saved bookmark); no-op without a menu. */
 void session_set_status(struct session *s, const char *text);
@@ -214,6 +215,8 @@ const struct overlay_model *session_overlay(const struct session *s);
 /* Where in the world the overlay's legend shows the value at X in [0, 1] of its range (false
  * without a legend): for tests that read it off a picture. */
 bool session_overlay_point(const struct session *s, float x, double world[3]);
+/* The same for legend LEGEND (layers first, then slices, as the overlay lists them). */
+bool session_legend_point(const struct session *s, int legend, float x, double world[3]);
 
 /* The help text's lines for the keys and what they do here ("W  move forward"), through the
  * display's key table. */

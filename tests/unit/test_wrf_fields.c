@@ -1,8 +1,6 @@
 /* Temperature and wind speed for classic transfer-function mode: hand-computed values on a
  * small WRF file made here (staggered U, V, W), the synthetic writer's wind, Katrina, and the
  * transfer function's field names. */
-#include "testutil.h"
-
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -10,7 +8,10 @@
 
 #include <netcdf.h>
 
+#include "testutil.h"
+
 #include "common/log.h"
+#include "data/derived.h"
 #include "data/synth.h"
 #include "data/wrf.h"
 #include "data/wrf_write.h"
@@ -272,9 +273,47 @@ static void test_katrina(void **state)
     wrf_close(w);
 }
 
+/* The derived fields against numbers worked by hand from their formulas: theta at 850 hPa and
+ * 288.15 K is 288.15 (1000/850)^(287/1004.5) = 301.85 K; at 20 C and 1000 hPa the saturation
+ * vapour pressure is 23.37 hPa (Bolton eq. 10), so q = 0.622 e/(p - e) with e = 11.685 hPa
+ * (half of it) is 50 %; pressure from rho and T by the gas law. */
+static void test_derived_fields(void **state)
+{
+    (void)state;
+    assert_float_equal(derived_theta(288.15, 85000.0), 301.845, 0.01);
+    assert_float_equal(derived_theta(300.0, 100000.0), 300.0, 1e-9);
+    double es = 611.2 * exp(17.67 * 20.0 / (293.15 - 29.65));
+    assert_float_equal(es, 2337.0, 1.0);
+    double e = 0.5 * es, q = 0.622 * e / (100000.0 - e);
+    assert_float_equal(derived_rh(293.15, 100000.0, q), 50.0, 1e-6);
+    assert_float_equal(derived_pressure(1.2, 290.0), 1.2 * 287.0 * 290.0, 1e-6);
+    assert_true(isnan(derived_theta(-1.0, 1e5)) && isnan(derived_rh(290.0, 0.0, 0.01)));
+
+    /* On a volume: per voxel, from the volume's temperature, density and QVAPOR. */
+    struct field_volume fv = {0};
+    fv.grid = (struct grid3){.n = {2, 1, 2}, .spacing = {1000, 1000, 1000}};
+    float t[4] = {300.0f, 290.0f, 280.0f, 270.0f}, rho[4] = {1.1f, 1.1f, 0.9f, 0.9f};
+    float qv[4] = {0.015f, 0.01f, 0.005f, 0.001f};
+    fv.temperature = t;
+    fv.rho_air = rho;
+    fv.qvapor = qv;
+    float out[4];
+    derived_field(&fv, TRANSFER_FIELD_THETA, out);
+    for (int i = 0; i < 4; i++)
+        assert_float_equal(out[i], derived_theta(t[i], derived_pressure(rho[i], t[i])), 1e-3);
+    assert_true(derived_field_available(&fv, TRANSFER_FIELD_RH));
+    derived_field(&fv, TRANSFER_FIELD_RH, out);
+    for (int i = 0; i < 4; i++)
+        assert_float_equal(out[i], derived_rh(t[i], derived_pressure(rho[i], t[i]), qv[i]),
+                           1e-3);
+    fv.rho_air = NULL;
+    assert_false(derived_field_available(&fv, TRANSFER_FIELD_THETA));
+}
+
 static void test_field_names(void **state)
 {
-    const char *names[] = {"qvapor", "condensate", "temperature", "wind"};
+    const char *names[] = {"qvapor", "condensate", "temperature", "wind", "theta", "rh"};
+    assert_int_equal(TRANSFER_FIELD_COUNT, sizeof(names) / sizeof(names[0]));
     for (int f = 0; f < TRANSFER_FIELD_COUNT; f++) {
         enum transfer_field got;
         assert_true(transfer_field_from_name(names[f], &got));
@@ -306,6 +345,7 @@ int main(void)
         cmocka_unit_test(test_synth_wind_and_temperature),
         cmocka_unit_test(test_katrina),
         cmocka_unit_test(test_field_names),
+        cmocka_unit_test(test_derived_fields),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -5,7 +5,7 @@
 # the file's own history names).  Made before the session and the one frame loop replaced the
 # four loops of old; menu.pfm again when panels came to show their own sRGB colours under the
 # Reinhard tone mapping (they had been made for an older 1 - exp(-x) one), and when the menu
-# gained its Probe page and Save view button.
+# gained its Probe page and Save view button, and its Layers and Slices pages.
 #   sh tests/data/golden/cases.sh ANVIL_BINARY SOURCE_DIR OUT_DIR
 set -e
 anvil=$1

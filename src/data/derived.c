@@ -1,0 +1,99 @@
+#include "data/derived.h"
+
+#include <math.h>
+
+#include "data/wrf_write.h"
+
+#define RD 287.0      /* J/(kg K), dry air (Wallace and Hobbs 2006, §3.1) */
+#define CP 1004.5     /* J/(kg K), dry air at constant pressure (as WRF's cp) */
+#define P0 100000.0   /* Pa */
+#define EPSILON 0.622 /* R_d / R_v */
+
+double derived_pressure(double rho, double t)
+{
+    if (!isfinite(rho) || !isfinite(t) || rho <= 0.0 || t <= 0.0)
+        return NAN;
+    return rho * RD * t;
+}
+
+double derived_theta(double t, double p)
+{
+    if (!isfinite(t) || !isfinite(p) || t <= 0.0 || p <= 0.0)
+        return NAN;
+    return t * pow(P0 / p, RD / CP);
+}
+
+double derived_rh(double t, double p, double q)
+{
+    if (!isfinite(t) || !isfinite(p) || !isfinite(q) || t <= 30.0 || p <= 0.0)
+        return NAN;
+    if (q < 0.0)
+        q = 0.0;
+    double e = p * q / (EPSILON + q);                            /* Pa */
+    double es = 611.2 * exp(17.67 * (t - 273.15) / (t - 29.65)); /* Pa */
+    return 100.0 * e / es;
+}
+
+bool derived_field_available(const struct field_volume *fv, enum transfer_field field)
+{
+    switch (field) {
+    case TRANSFER_FIELD_QVAPOR:
+        return fv->qvapor != NULL;
+    case TRANSFER_FIELD_TEMPERATURE:
+        return fv->temperature != NULL;
+    case TRANSFER_FIELD_WIND:
+        return fv->wind != NULL;
+    case TRANSFER_FIELD_THETA:
+        return fv->temperature && fv->rho_air;
+    case TRANSFER_FIELD_RH:
+        return fv->temperature && fv->rho_air && fv->qvapor;
+    default:
+        return true;
+    }
+}
+
+void derived_field(const struct field_volume *fv, enum transfer_field field, float *out)
+{
+    const struct grid3 *g = &fv->grid;
+    size_t idx = 0, layer = (size_t)g->n[0] * (size_t)g->n[1];
+    for (int k = 0; k < g->n[2]; k++) {
+        double z = g->origin[2] + (k + 0.5) * g->spacing[2];
+        double vapour_std = 0.010 * exp(-z / 2500.0), t_std, p_std;
+        wrf_std_atmosphere(z, &t_std, &p_std);
+        for (size_t ij = 0; ij < layer; ij++, idx++) {
+            double t = fv->temperature ? fv->temperature[idx] : t_std;
+            double q = fv->qvapor ? fv->qvapor[idx] : vapour_std;
+            double p =
+                fv->rho_air && fv->temperature ? derived_pressure(fv->rho_air[idx], t) : p_std;
+            if (!isfinite(p))
+                p = p_std;
+            double v;
+            switch (field) {
+            case TRANSFER_FIELD_QVAPOR:
+                v = q;
+                break;
+            case TRANSFER_FIELD_TEMPERATURE:
+                v = t;
+                break;
+            case TRANSFER_FIELD_WIND:
+                v = fv->wind ? fv->wind[idx] : 0.0;
+                break;
+            case TRANSFER_FIELD_THETA:
+                v = derived_theta(t, p);
+                break;
+            case TRANSFER_FIELD_RH:
+                v = derived_rh(t, p, q);
+                break;
+            default: {
+                v = 0.0;
+                for (int f = 0; f < SPECIES_COUNT; f++) {
+                    float m = fv->q[f] ? fv->q[f][idx] : 0.0f;
+                    if (isfinite(m) && m > 0.0f)
+                        v += m;
+                }
+            }
+            }
+            out[idx] = (float)v;
+        }
+    }
+}
