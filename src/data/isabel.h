@@ -36,6 +36,7 @@ struct isabel_desc {
     bool qvapor;        /* also read QVAPOR */
     bool temperature;   /* also read TC into field_volume.temperature (K) */
     bool wind;          /* also read U, V, W into field_volume.wind (speed, m/s) */
+    bool wind_components; /* with WIND: also keep U, V, W as field_volume u, v, w */
     double memory_mb;   /* refuse a step whose arrays need more (data.memory); 0 = no limit */
 };
 

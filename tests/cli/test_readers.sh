@@ -82,6 +82,19 @@ else
     fail=1
 fi
 
+# The probe's wind from CM1's staggered u, v, w and CF's eastward_wind, northward_wind and
+# upward_air_velocity: the same storm, so the same speed and direction.
+placed="--set map.use_origin=true --set map.origin=[30.0,-75.0]"
+for f in c f; do
+    fmt=$(case $f in c) echo cm1 ;; f) echo cf ;; esac)
+    expect_exit 0 "probe $fmt" "$anvil" probe --set scene.kind=data --set data.format=$fmt \
+        --set "data.files=[\"$tmp/$f.nc\"]" $placed --at 30.05,-74.95,3000 --quiet
+    check "$fmt: the wind's speed and direction" stdout_has "wind           [0-9.]* m/s from [0-9]* deg$"
+    check "$fmt: the vertical wind" stdout_has "vertical wind  [-+][0-9.]* m/s"
+    grep "wind" "$tmp/out" >"$tmp/wind.$fmt"
+done
+check "CM1 and CF: the same wind" cmp "$tmp/wind.cm1" "$tmp/wind.cf"
+
 # Bad input: a unit that is not one, heights that turn back.
 cdl() { # UNITS_OF_RAIN HEIGHTS
     cat <<EOF
@@ -173,5 +186,7 @@ expect_exit 0 "probe an Isabel point by lat/lon, TC as temperature" "$anvil" pro
 check "placed" stdout_has "30.000 N, 75.000 W"
 check "TC read" stdout_has "temperature    20.0 C"
 check "QVAPOR read" stdout_has "vapour         0.00 g/kg"
+check "the wind from U and V" stdout_has "wind           5.0 m/s from 323 deg$"
+check "the vertical wind from W" stdout_has "vertical wind  +0.50 m/s"
 
 finish

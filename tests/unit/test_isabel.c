@@ -11,6 +11,7 @@
 #include "common/log.h"
 #include "data/geo.h"
 #include "data/isabel.h"
+#include "data/probe.h"
 #include "data/source.h"
 #include "data/wrf_write.h"
 
@@ -158,6 +159,38 @@ static void test_every_brick(void **state)
     assert_non_null(fv.wind);
     assert_float_equal(fv.wind[3], 13.0, 1e-5); /* |(3, -4, 12)| */
     assert_float_equal(fv.wind[7], 0.0, 1e-9);  /* land */
+    assert_null(fv.u); /* the components only when asked for */
+    field_volume_finish(&fv);
+
+    /* Asked for: U, V, W kept beside the speed, land zero in each, and counted in the budget
+     * (four arrays for the wind rather than three). */
+    struct isabel_desc comp = d;
+    comp.wind_components = true;
+    assert_true(isabel_read_step(&comp, 0, &fv, NULL));
+    assert_non_null(fv.u);
+    assert_non_null(fv.v);
+    assert_non_null(fv.w);
+    assert_float_equal(fv.u[3], 3.0, 1e-6);
+    assert_float_equal(fv.v[3], -4.0, 1e-6);
+    assert_float_equal(fv.w[3], 12.0, 1e-6);
+    assert_float_equal(fv.u[7], 0.0, 1e-9);
+    assert_float_equal(fv.wind[3], 13.0, 1e-5);
+    struct probe_sample ps;
+    double at[3] = {3.5 * fv.grid.spacing[0], 0.5 * fv.grid.spacing[1],
+                    fv.grid.origin[2] + 0.5 * fv.grid.spacing[2]};
+    assert_true(probe_sample_fields(&fv, at, &ps));
+    assert_true(ps.has_wind && ps.has_w);
+    double speed, from;
+    probe_wind(ps.u, ps.v, &speed, &from);
+    assert_float_equal(speed, 5.0, 1e-5);
+    assert_float_equal(from, 323.130, 1e-3); /* from the north-west: atan2(-3, 4) */
+    assert_float_equal(ps.w, 12.0, 1e-5);
+    field_volume_finish(&fv);
+    double per_array = (double)N * sizeof(float) / 1048576.0;
+    comp.memory_mb = per_array * (SPECIES_COUNT + 2 + 3 + 0.5);
+    assert_false(isabel_read_step(&comp, 0, &fv, NULL));
+    comp.wind_components = false;
+    assert_true(isabel_read_step(&comp, 0, &fv, NULL));
     field_volume_finish(&fv);
 
     /* The budget: refused before reading, naming data.memory. */
