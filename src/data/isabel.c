@@ -21,11 +21,23 @@ const char *const isabel_fields[ISABEL_FIELD_COUNT] = {
 static void resolve(const struct isabel_desc *d, int n[3], double extent[3])
 {
     static const int def_n[3] = {500, 500, 100};
-    static const double def_extent[3] = {2000e3, 2000e3, 20e3};
+    static const double def_extent[3] = {2000e3, 2000e3, 19.8e3};
     for (int a = 0; a < 3; a++) {
         n[a] = d->n[a] > 0 ? d->n[a] : def_n[a];
         extent[a] = d->extent_m[a] > 0 ? d->extent_m[a] : def_extent[a];
     }
+}
+
+void isabel_grid(const struct isabel_desc *d, struct grid3 *out)
+{
+    double extent[3];
+    resolve(d, out->n, extent);
+    for (int a = 0; a < 2; a++) {
+        out->spacing[a] = extent[a] / out->n[a];
+        out->origin[a] = 0.0;
+    }
+    out->spacing[2] = extent[2] / (out->n[2] > 1 ? out->n[2] - 1 : 1);
+    out->origin[2] = ISABEL_BOTTOM_M - 0.5 * out->spacing[2];
 }
 
 void isabel_brick_path(const struct isabel_desc *d, const char *field, int step, char *buf,
@@ -289,14 +301,8 @@ bool isabel_read_step(const struct isabel_desc *d, int step, struct field_volume
     if (!stats)
         stats = &local;
     memset(stats, 0, sizeof(*stats));
-    int n[3];
-    double extent[3];
-    resolve(d, n, extent);
-    for (int a = 0; a < 3; a++) {
-        out->grid.n[a] = n[a];
-        out->grid.spacing[a] = extent[a] / n[a];
-        out->grid.origin[a] = 0.0;
-    }
+    isabel_grid(d, &out->grid);
+    const int *n = out->grid.n;
     size_t count = grid3_count(&out->grid);
     /* What the step allocates, judged before reading: the species, vapour, temperature, and
      * for the wind its three components (one kept as the speed, or all three kept and the
