@@ -225,12 +225,17 @@ static int info_isabel(const char *dir, const int size[3], const double extent_k
     int n[3] = {size[0] ? size[0] : 500, size[1] ? size[1] : 500, size[2] ? size[2] : 100};
     double e[3] = {extent_km[0] > 0 ? extent_km[0] : 2000.0,
                    extent_km[1] > 0 ? extent_km[1] : 2000.0,
-                   extent_km[2] > 0 ? extent_km[2] : 20.0};
+                   extent_km[2] > 0 ? extent_km[2] : 19.8};
+    struct grid3 g;
+    isabel_grid(&d, &g);
     printf("%s: Isabel bricks (IEEE Visualization 2004 contest)\n", dir);
     printf("  grid        %d x %d x %d points (--isabel-size, data.isabel_size)\n", n[0], n[1],
            n[2]);
     printf("  extent      %.4g x %.4g x %.4g km (--isabel-extent, data.isabel_extent)\n", e[0],
            e[1], e[2]);
+    printf("  heights     %.0f to %.0f m, every %.0f m (the levels; the lowest as published)\n",
+           g.origin[2] + 0.5 * g.spacing[2], g.origin[2] + (g.n[2] - 0.5) * g.spacing[2],
+           g.spacing[2]);
     printf("  lat/lon     %.1f to %.1f N, %.1f to %.1f E (the contest's published box)\n",
            ISABEL_LAT_SOUTH, ISABEL_LAT_NORTH, ISABEL_LON_WEST, ISABEL_LON_EAST);
     printf("  time steps  %d\n", steps);

@@ -179,7 +179,7 @@ static const struct config_field settings[] = {
     INT3("data.isabel_size", data.isabel_size, 1, 4096, 500, 500, 100,
          "voxels [nx, ny, nz] of an Isabel brick"),
     DBL3("data.isabel_extent", data.isabel_extent_km, 0, 1e5, F_MIN_OPEN, 2000.0, 2000.0, 19.8,
-         "physical size [x, y, z] of the Isabel grid, km"),
+         "physical size [x, y, z] of the Isabel grid, km; z from the lowest level (0.035 km) to the highest"),
 
     OPTICS("optics.radius_mm.*", optics.params.radius_m, 0, 100, F_MIN_OPEN | F_SPECIES, 1e-3,
            "mean particle radius, mm"),

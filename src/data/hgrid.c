@@ -904,6 +904,8 @@ size_t hgrid_step_bytes(const struct hgrid *h, const struct hgrid_desc *d)
         outputs += has(m, (enum hgrid_var)f);
     outputs += want_density(m, d) + (d->qvapor && has(m, HGRID_VAPOR)) +
                want_temperature(m, d) + want_wind(m, d);
+    if (want_wind(m, d) && d->wind_components)
+        outputs += 2 + has(m, HGRID_W);
     /* Scratch: the raw read (staggered: one more point each way), two mass-level arrays and a
      * third for wind, and one column each way. */
     double raw = (double)(m->nx + 1) * (m->ny + 1) * (m->nz + 1);
@@ -1180,13 +1182,18 @@ bool hgrid_read_step(struct hgrid *h, int step, const struct hgrid_desc *d,
         out->wind = malloc(cells * sizeof(float));
         ok = ml[2] && out->wind;
         static const enum hgrid_var comp[3] = {HGRID_U, HGRID_V, HGRID_W};
+        float **keep[3] = {&out->u, &out->v, &out->w};
         for (int c = 0; c < 3 && ok; c++) {
             if (!has(m, comp[c]))
                 continue;
             ok = read_raw(&r, comp[c], counts);
+            if (ok && d->wind_components)
+                ok = (*keep[c] = malloc(cells * sizeof(float))) != NULL;
             if (!ok)
                 break;
             to_mass_levels(m, r.raw, r.f->lay.field[comp[c]].stagger, 0.0f, ml[0]);
+            if (*keep[c])
+                resample(&r, ml[0], *keep[c]);
             for (size_t i = 0; i < cells; i++)
                 ml[2][i] = (c ? ml[2][i] : 0.0f) + ml[0][i] * ml[0][i];
         }

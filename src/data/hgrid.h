@@ -125,6 +125,7 @@ const char *hgrid_step_path(const struct hgrid *h, int step);
 struct hgrid_desc {
     double memory_mb; /* refuse a step whose arrays need more; 0 = no limit */
     bool qvapor, temperature, wind;
+    bool wind_components; /* with WIND: also keep u, v and w (field_volume u, v, w) */
     bool no_density;
 };
 
@@ -138,7 +139,7 @@ size_t hgrid_step_bytes(const struct hgrid *h, const struct hgrid_desc *d);
 /* Reads STEP into OUT (initialised here; finish with field_volume_finish): the species the
  * files hold (others NULL: zero), density (from the file's density, else from pressure and
  * temperature or potential temperature, else NULL: the standard atmosphere), and as D asks
- * vapour, temperature and wind speed.  The grid: nx x ny columns of dx x dy from (0, 0), nz
+ * vapour, temperature and wind speed (and its components).  The grid: nx x ny columns of dx x dy from (0, 0), nz
  * even levels from the lowest to the highest cell face.  Bad values as the WRF reader treats
  * them; a quantity all bad in the step is an error.  False after one log_error. */
 bool hgrid_read_step(struct hgrid *h, int step, const struct hgrid_desc *d,

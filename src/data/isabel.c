@@ -21,11 +21,23 @@ const char *const isabel_fields[ISABEL_FIELD_COUNT] = {
 static void resolve(const struct isabel_desc *d, int n[3], double extent[3])
 {
     static const int def_n[3] = {500, 500, 100};
-    static const double def_extent[3] = {2000e3, 2000e3, 20e3};
+    static const double def_extent[3] = {2000e3, 2000e3, 19.8e3};
     for (int a = 0; a < 3; a++) {
         n[a] = d->n[a] > 0 ? d->n[a] : def_n[a];
         extent[a] = d->extent_m[a] > 0 ? d->extent_m[a] : def_extent[a];
     }
+}
+
+void isabel_grid(const struct isabel_desc *d, struct grid3 *out)
+{
+    double extent[3];
+    resolve(d, out->n, extent);
+    for (int a = 0; a < 2; a++) {
+        out->spacing[a] = extent[a] / out->n[a];
+        out->origin[a] = 0.0;
+    }
+    out->spacing[2] = extent[2] / (out->n[2] > 1 ? out->n[2] - 1 : 1);
+    out->origin[2] = ISABEL_BOTTOM_M - 0.5 * out->spacing[2];
 }
 
 void isabel_brick_path(const struct isabel_desc *d, const char *field, int step, char *buf,
@@ -196,11 +208,24 @@ static bool read_extras(const struct isabel_desc *d, int step, const struct grid
         for (int k = 0; k < 3 && !failed; k++)
             c[k] = read_signed(d, comp[k], step, count, &miss[k], &failed);
         if (!failed && c[0] && c[1]) {
-            out->wind = c[0];
-            for (size_t i = 0; i < count; i++) {
-                float u = isnan(c[0][i]) ? 0.0f : c[0][i], v = isnan(c[1][i]) ? 0.0f : c[1][i];
-                float w = c[2] && !isnan(c[2][i]) ? c[2][i] : 0.0f;
+            /* Kept components: land is zero in them too; else U's array becomes the speed. */
+            out->wind = d->wind_components ? malloc(count * sizeof(float)) : c[0];
+            if (!out->wind) {
+                log_error("%s: out of memory for the wind speed", d->dir ? d->dir : ".");
+                failed = true;
+            }
+            for (size_t i = 0; out->wind && i < count; i++) {
+                for (int k = 0; k < 3; k++)
+                    if (c[k] && isnan(c[k][i]))
+                        c[k][i] = 0.0f;
+                float u = c[0][i], v = c[1][i], w = c[2] ? c[2][i] : 0.0f;
                 out->wind[i] = sqrtf(u * u + v * v + w * w);
+            }
+            if (!failed && d->wind_components) {
+                out->u = c[0];
+                out->v = c[1];
+                out->w = c[2];
+                c[1] = c[2] = NULL;
             }
             c[0] = NULL;
         } else if (!failed) {
@@ -276,18 +301,14 @@ bool isabel_read_step(const struct isabel_desc *d, int step, struct field_volume
     if (!stats)
         stats = &local;
     memset(stats, 0, sizeof(*stats));
-    int n[3];
-    double extent[3];
-    resolve(d, n, extent);
-    for (int a = 0; a < 3; a++) {
-        out->grid.n[a] = n[a];
-        out->grid.spacing[a] = extent[a] / n[a];
-        out->grid.origin[a] = 0.0;
-    }
+    isabel_grid(d, &out->grid);
+    const int *n = out->grid.n;
     size_t count = grid3_count(&out->grid);
     /* What the step allocates, judged before reading: the species, vapour, temperature, and
-     * for the wind its three components (one kept as the speed). */
-    int arrays = SPECIES_COUNT + d->qvapor + d->temperature + 3 * d->wind;
+     * for the wind its three components (one kept as the speed, or all three kept and the
+     * speed beside them). */
+    int arrays = SPECIES_COUNT + d->qvapor + d->temperature + 3 * d->wind +
+                 (d->wind && d->wind_components);
     double bytes = (double)count * sizeof(float) * arrays;
     if (d->memory_mb > 0 && bytes > d->memory_mb * 1048576.0) {
         log_error("%s: a step of %d x %d x %d points needs %.0f MiB, above the budget "

@@ -32,10 +32,13 @@
 struct isabel_desc {
     const char *dir;    /* folder holding the bricks */
     int n[3];           /* voxels; 0 = 500 x 500 x 100 */
-    double extent_m[3]; /* box size, m; 0 = 2000 km x 2000 km x 20 km */
+    double extent_m[3]; /* x, y: box size, m; z: from the lowest level's height to the
+                           highest's, m (the published 19.8 km); 0 = 2000 km x 2000 km x
+                           19.8 km */
     bool qvapor;        /* also read QVAPOR */
     bool temperature;   /* also read TC into field_volume.temperature (K) */
     bool wind;          /* also read U, V, W into field_volume.wind (speed, m/s) */
+    bool wind_components; /* with WIND: also keep U, V, W as field_volume u, v, w */
     double memory_mb;   /* refuse a step whose arrays need more (data.memory); 0 = no limit */
 };
 
@@ -44,6 +47,16 @@ struct isabel_desc {
 #define ISABEL_LAT_NORTH 41.7
 #define ISABEL_LON_WEST (-83.0)
 #define ISABEL_LON_EAST (-62.0)
+
+/* The published height of the lowest level, m: the levels lie at ISABEL_BOTTOM_M + k dz,
+ * dz = extent_m[2] / (nz - 1), so the default 19.8 km puts the highest at 19835 m. */
+#define ISABEL_BOTTOM_M 35.0
+
+/* The grid the bricks are read onto: the box of extent_m in x and y from (0, 0); in z the
+ * voxel centres at the levels' heights (above), so the box runs from half a level below the
+ * lowest to half a level above the highest (one level: a layer extent_m[2] thick around
+ * ISABEL_BOTTOM_M). */
+void isabel_grid(const struct isabel_desc *d, struct grid3 *out);
 
 /* Every field the contest distributed, the five species first (enum species order). */
 #define ISABEL_FIELD_COUNT 13

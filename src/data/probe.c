@@ -118,6 +118,14 @@ bool probe_sample_fields(const struct field_volume *fv, const double p[3],
     out->temperature_k = fv->temperature ? trilinear(&fv->grid, fv->temperature, 1, i0, t) : t_std;
     out->pressure_from = PROBE_STANDARD;
     out->pressure_pa = p_std;
+    /* The readers' components are east and north (CF's eastward_wind, CM1's and Isabel's x
+     * and y, which the frame takes as east and north). */
+    out->has_wind = fv->u && fv->v;
+    out->wind_earth_relative = out->has_wind;
+    out->has_w = out->has_wind && fv->w;
+    out->u = out->has_wind ? trilinear(&fv->grid, fv->u, 1, i0, t) : 0.0;
+    out->v = out->has_wind ? trilinear(&fv->grid, fv->v, 1, i0, t) : 0.0;
+    out->w = out->has_w ? trilinear(&fv->grid, fv->w, 1, i0, t) : 0.0;
     return true;
 }
 

@@ -49,7 +49,8 @@ void probe_sample_from_wrf(const struct wrf_point *p, double z, struct probe_sam
 
 /* FV's values at P (metres in FV's frame), trilinear between voxel centres and clamped to the
  * edge voxels inside the box: its species and QVAPOR, its temperature or else the standard
- * atmosphere's, and the standard atmosphere's pressure (field volumes hold none).  False when
+ * atmosphere's, the standard atmosphere's pressure (field volumes hold none), and the wind
+ * where FV holds its components (u and v; w too where present).  False when
  * P lies outside the box. */
 bool probe_sample_fields(const struct field_volume *fv, const double p[3],
                          struct probe_sample *out);

@@ -154,6 +154,7 @@ static bool load_fields(struct data_source *s, int step, bool temperature, bool 
                                 .qvapor = s->desc.wrf.qvapor,
                                 .temperature = temperature || s->desc.wrf.temperature,
                                 .wind = wind || s->desc.wrf.wind,
+                                .wind_components = s->desc.wind_components,
                                 .no_density = s->desc.wrf.no_density};
         return hgrid_read_step(s->hg, step, &hd, out, NULL);
     }
@@ -172,6 +173,7 @@ static bool load_fields(struct data_source *s, int step, bool temperature, bool 
     id.qvapor = id.qvapor || s->desc.wrf.qvapor;
     id.temperature = id.temperature || temperature;
     id.wind = id.wind || wind;
+    id.wind_components = id.wind_components || s->desc.wind_components;
     return isabel_read_step(&id, step, out, NULL);
 }
 

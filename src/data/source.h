@@ -36,6 +36,9 @@ struct data_source_desc {
     struct species_select select; /* per-species toggles and scales (the same) */
     struct detail_desc detail;    /* procedural detail (zero: off) */
     double height_scale;          /* height exaggeration (ext_volume_stretch_height); 0 = 1 */
+    bool wind_components;         /* CM1, CF, Isabel: where the wind is read, also keep its
+                                     components (field_volume u, v, w: the probe's direction);
+                                     WRF's probe reads its points itself (wrf_read_point) */
 };
 
 struct data_source;

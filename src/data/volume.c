@@ -17,6 +17,9 @@ void field_volume_finish(struct field_volume *v)
     free(v->qvapor);
     free(v->temperature);
     free(v->wind);
+    free(v->u);
+    free(v->v);
+    free(v->w);
     free(v->rho_air);
     memset(v, 0, sizeof(*v));
 }

@@ -52,6 +52,9 @@ struct field_volume {
     float *qvapor;           /* kg/kg or NULL */
     float *temperature;      /* absolute air temperature, K, or NULL */
     float *wind;             /* wind speed |(U, V, W)| at the mass points, m/s, or NULL */
+    float *u, *v, *w;        /* the wind's components at the mass points, m/s: u east, v north,
+                                w up; NULL unless asked for (the probe's direction) and in the
+                                data (w: NULL where the data has no vertical wind) */
     float *rho_air;          /* kg/m^3 or NULL */
 };
 

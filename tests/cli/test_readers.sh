@@ -82,6 +82,19 @@ else
     fail=1
 fi
 
+# The probe's wind from CM1's staggered u, v, w and CF's eastward_wind, northward_wind and
+# upward_air_velocity: the same storm, so the same speed and direction.
+placed="--set map.use_origin=true --set map.origin=[30.0,-75.0]"
+for f in c f; do
+    fmt=$(case $f in c) echo cm1 ;; f) echo cf ;; esac)
+    expect_exit 0 "probe $fmt" "$anvil" probe --set scene.kind=data --set data.format=$fmt \
+        --set "data.files=[\"$tmp/$f.nc\"]" $placed --at 30.05,-74.95,3000 --quiet
+    check "$fmt: the wind's speed and direction" stdout_has "wind           [0-9.]* m/s from [0-9]* deg$"
+    check "$fmt: the vertical wind" stdout_has "vertical wind  [-+][0-9.]* m/s"
+    grep "wind" "$tmp/out" >"$tmp/wind.$fmt"
+done
+check "CM1 and CF: the same wind" cmp "$tmp/wind.cm1" "$tmp/wind.cf"
+
 # Bad input: a unit that is not one, heights that turn back.
 cdl() { # UNITS_OF_RAIN HEIGHTS
     cat <<EOF
@@ -148,6 +161,7 @@ expect_exit 0 "info on an Isabel folder" "$anvil" info --isabel-size 8x6x4 "$tmp
 check "Isabel" stdout_has "Isabel bricks"
 check "2 steps" stdout_has "time steps  2"
 check "the published box" stdout_has "23.7 to 41.7 N, -83.0 to -62.0 E"
+check "the published heights" stdout_has "heights     35 to 19835 m, every 6600 m"
 for b in QCLOUD QRAIN QICE QSNOW QGRAUP QVAPOR CLOUD PRECIP P TC U V W; do
     check "brick $b" stdout_has "    $b "
 done
@@ -171,7 +185,17 @@ expect_exit 0 "probe an Isabel point by lat/lon, TC as temperature" "$anvil" pro
     --set data.isabel_size=[8,6,4] --set data.isabel_extent=[2000.0,2000.0,19.8] \
     --at 30,-75,2475 --quiet
 check "placed" stdout_has "30.000 N, 75.000 W"
-check "TC read" stdout_has "temperature    20.0 C"
+check "TC read" stdout_has "temperature    18.2 C"
 check "QVAPOR read" stdout_has "vapour         0.00 g/kg"
+check "the wind from U and V" stdout_has "wind           5.0 m/s from 323 deg$"
+check "the vertical wind from W" stdout_has "vertical wind  +0.50 m/s"
+# The levels at their published heights: 35 m, then every 19.8 km / 3 up to 19835 m.
+for at in 35:20.0 6635:15.0 19835:5.0; do
+    expect_exit 0 "probe Isabel's level at ${at%%:*} m" "$anvil" probe \
+        --set scene.kind=data --set data.format=isabel --set "data.files=[\"$tmp/isabel\"]" \
+        --set data.isabel_size=[8,6,4] --set data.isabel_extent=[2000.0,2000.0,19.8] \
+        --at "30,-75,${at%%:*}" --quiet
+    check "TC of that level" stdout_has "temperature    ${at##*:} C"
+done
 
 finish

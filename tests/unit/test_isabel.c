@@ -11,6 +11,7 @@
 #include "common/log.h"
 #include "data/geo.h"
 #include "data/isabel.h"
+#include "data/probe.h"
 #include "data/source.h"
 #include "data/wrf_write.h"
 
@@ -66,7 +67,12 @@ static void test_read(void **state)
     assert_int_equal(fv.grid.n[0], NX);
     assert_int_equal(fv.grid.n[2], NZ);
     assert_float_equal(fv.grid.spacing[0], 10e3, 1e-9);
-    assert_float_equal(fv.grid.spacing[2], 500.0, 1e-9);
+    /* 2 km from the lowest level (35 m) to the highest over NZ levels: the voxel centres at the
+     * levels' heights. */
+    assert_float_equal(fv.grid.spacing[2], 2e3 / (NZ - 1), 1e-3);
+    assert_float_equal(fv.grid.origin[2] + 0.5 * fv.grid.spacing[2], 35.0, 1e-3);
+    assert_float_equal(fv.grid.origin[2] + (NZ - 0.5) * fv.grid.spacing[2], 2035.0, 1e-3);
+    assert_float_equal(fv.grid.origin[0], 0.0, 0.0);
     assert_non_null(fv.q[SPECIES_CLOUD]);
     assert_non_null(fv.q[SPECIES_SNOW]);
     assert_null(fv.q[SPECIES_RAIN]);
@@ -153,11 +159,43 @@ static void test_every_brick(void **state)
                        1e-4);
     /* A land point's temperature is the standard atmosphere's at its height. */
     double t, p;
-    wrf_std_atmosphere(0.5 * fv.grid.spacing[2], &t, &p);
+    wrf_std_atmosphere(ISABEL_BOTTOM_M, &t, &p);
     assert_float_equal(fv.temperature[7], t, 1e-3);
     assert_non_null(fv.wind);
     assert_float_equal(fv.wind[3], 13.0, 1e-5); /* |(3, -4, 12)| */
     assert_float_equal(fv.wind[7], 0.0, 1e-9);  /* land */
+    assert_null(fv.u); /* the components only when asked for */
+    field_volume_finish(&fv);
+
+    /* Asked for: U, V, W kept beside the speed, land zero in each, and counted in the budget
+     * (four arrays for the wind rather than three). */
+    struct isabel_desc comp = d;
+    comp.wind_components = true;
+    assert_true(isabel_read_step(&comp, 0, &fv, NULL));
+    assert_non_null(fv.u);
+    assert_non_null(fv.v);
+    assert_non_null(fv.w);
+    assert_float_equal(fv.u[3], 3.0, 1e-6);
+    assert_float_equal(fv.v[3], -4.0, 1e-6);
+    assert_float_equal(fv.w[3], 12.0, 1e-6);
+    assert_float_equal(fv.u[7], 0.0, 1e-9);
+    assert_float_equal(fv.wind[3], 13.0, 1e-5);
+    struct probe_sample ps;
+    double at[3] = {3.5 * fv.grid.spacing[0], 0.5 * fv.grid.spacing[1],
+                    fv.grid.origin[2] + 0.5 * fv.grid.spacing[2]};
+    assert_true(probe_sample_fields(&fv, at, &ps));
+    assert_true(ps.has_wind && ps.has_w);
+    double speed, from;
+    probe_wind(ps.u, ps.v, &speed, &from);
+    assert_float_equal(speed, 5.0, 1e-5);
+    assert_float_equal(from, 323.130, 1e-3); /* from the north-west: atan2(-3, 4) */
+    assert_float_equal(ps.w, 12.0, 1e-5);
+    field_volume_finish(&fv);
+    double per_array = (double)N * sizeof(float) / 1048576.0;
+    comp.memory_mb = per_array * (SPECIES_COUNT + 2 + 3 + 0.5);
+    assert_false(isabel_read_step(&comp, 0, &fv, NULL));
+    comp.wind_components = false;
+    assert_true(isabel_read_step(&comp, 0, &fv, NULL));
     field_volume_finish(&fv);
 
     /* The budget: refused before reading, naming data.memory. */
@@ -252,6 +290,26 @@ static void test_geo_default(void **state)
     geo_map_finish(&g);
 }
 
+/* The contest's published heights (0.035 km to 19.835 km on 100 levels): the default grid's
+ * voxel centres lie on them, 200 m apart. */
+static void test_heights_default(void **state)
+{
+    struct isabel_desc d = {.dir = "."};
+    struct grid3 g;
+    isabel_grid(&d, &g);
+    assert_int_equal(g.n[2], 100);
+    assert_float_equal(g.spacing[2], 200.0, 1e-9);
+    assert_float_equal(g.origin[2] + 0.5 * g.spacing[2], 35.0, 1e-3);
+    assert_float_equal(g.origin[2] + 99.5 * g.spacing[2], 19835.0, 1e-2);
+    assert_float_equal(g.spacing[0], 4e3, 1e-9);
+    /* One level: a layer of the extent's thickness around the published lowest height. */
+    d.n[2] = 1;
+    d.extent_m[2] = 500.0;
+    isabel_grid(&d, &g);
+    assert_float_equal(g.spacing[2], 500.0, 1e-9);
+    assert_float_equal(g.origin[2], 35.0 - 250.0, 1e-3);
+}
+
 int main(void)
 {
     log_set_level(LOG_ERROR);
@@ -260,6 +318,7 @@ int main(void)
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_every_brick),
         cmocka_unit_test(test_geo_default),
+        cmocka_unit_test(test_heights_default),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

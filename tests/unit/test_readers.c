@@ -16,6 +16,7 @@
 #include "data/cm1.h"
 #include "data/geo.h"
 #include "data/hgrid_write.h"
+#include "data/probe.h"
 #include "data/source.h"
 #include "data/synth.h"
 #include "data/wrf_write.h"
@@ -186,8 +187,84 @@ static void test_cm1_temperature_wind(void **state)
     double speed = sqrt(u * u + v * v + w * w);
     assert_true(speed > 1.0);
     assert_float_equal(fv.wind[grid3_index(g, i, j, k)], speed, 1e-4 * speed);
+    assert_null(fv.u); /* the components only when asked for */
+    assert_null(fv.v);
+    assert_null(fv.w);
+    field_volume_finish(&fv);
+
+    /* Asked for: u, v, w on the mass points, and the probe's speed and direction from them. */
+    hd.wind_components = true;
+    assert_true(hgrid_read_step(h, 0, &hd, &fv, NULL));
+    assert_non_null(fv.u);
+    assert_non_null(fv.v);
+    assert_non_null(fv.w);
+    size_t idx = grid3_index(g, i, j, k);
+    assert_float_equal(fv.u[idx], u, 1e-4 * speed);
+    assert_float_equal(fv.v[idx], v, 1e-4 * speed);
+    assert_float_equal(fv.w[idx], w, 1e-4 * speed + 1e-6);
+    assert_float_equal(fv.wind[idx], speed, 1e-4 * speed);
+    struct probe_sample ps;
+    double at[3] = {xc, yc, zc}, s, from, s_want, from_want;
+    assert_true(probe_sample_fields(&fv, at, &ps));
+    assert_true(ps.has_wind);
+    assert_true(ps.wind_earth_relative);
+    assert_true(ps.has_w);
+    probe_wind(ps.u, ps.v, &s, &from);
+    probe_wind(u, v, &s_want, &from_want);
+    assert_float_equal(s, s_want, 1e-4 * speed);
+    assert_float_equal(from, from_want, 0.01);
+    assert_float_equal(ps.w, w, 1e-4 * speed + 1e-6);
     field_volume_finish(&fv);
     hgrid_close(h);
+}
+
+/* CF's eastward_wind, northward_wind and upward_air_velocity through the data source: kept
+ * only when the description asks (the probe), read as the speed alone otherwise. */
+static void test_cf_wind_components(void **state)
+{
+    struct hgrid_write_desc d = {.kind = HGRID_CF};
+    const char *p = write_hgrid("wc.cf.nc", &d, 1, 0.0);
+    struct data_source_desc sd;
+    memset(&sd, 0, sizeof(sd));
+    sd.format = DATA_SOURCE_CF;
+    sd.files = &p;
+    sd.file_count = 1;
+    wrf_desc_defaults(&sd.wrf);
+    struct data_source *src = data_source_open(&sd);
+    assert_non_null(src);
+    struct field_volume fv;
+    assert_true(data_source_load_fields_extra(src, 0, false, true, &fv));
+    assert_non_null(fv.wind);
+    assert_null(fv.u);
+    field_volume_finish(&fv);
+    data_source_close(src);
+
+    sd.wind_components = true;
+    src = data_source_open(&sd);
+    assert_non_null(src);
+    assert_true(data_source_load_fields_extra(src, 0, false, true, &fv));
+    assert_non_null(fv.u);
+    assert_non_null(fv.v);
+    assert_non_null(fv.w);
+    const struct grid3 *g = &fv.grid;
+    int i = 6, j = 9, k = 3;
+    double xc = (i + 0.5) * g->spacing[0], yc = (j + 0.5) * g->spacing[1],
+           zc = (k + 0.5) * g->spacing[2], u, v, w;
+    wrf_synth_wind(g, xc, yc, zc, &u, &v, &w); /* CF's wind is on the mass points */
+    size_t idx = grid3_index(g, i, j, k);
+    assert_true(hypot(u, v) > 1.0);
+    assert_float_equal(fv.u[idx], u, 1e-4);
+    assert_float_equal(fv.v[idx], v, 1e-4);
+    assert_float_equal(fv.w[idx], w, 1e-4);
+    double speed = sqrt(u * u + v * v + w * w);
+    assert_float_equal(fv.wind[idx], speed, 1e-4 * speed);
+    field_volume_finish(&fv);
+    /* Temperature alone: no wind read, so no components either. */
+    assert_true(data_source_load_fields_extra(src, 0, true, false, &fv));
+    assert_null(fv.wind);
+    assert_null(fv.u);
+    field_volume_finish(&fv);
+    data_source_close(src);
 }
 
 /* Steps from several files are ordered by time; the same time twice is an error. */
@@ -446,7 +523,7 @@ int main(void)
         cmocka_unit_test(test_times),        cmocka_unit_test(test_cf_variants),
         cmocka_unit_test(test_missing_species), cmocka_unit_test(test_errors),
         cmocka_unit_test(test_probes),       cmocka_unit_test(test_cf_latlon),
-        cmocka_unit_test(test_units_table),
+        cmocka_unit_test(test_units_table),  cmocka_unit_test(test_cf_wind_components),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
