@@ -13,6 +13,7 @@
 #include "common/log.h"
 #include "common/progress.h"
 #include "data/extfile.h"
+#include "data/isabel.h"
 #include "data/synth.h"
 #include "data/wrf.h"
 #include "data/wrf_write.h"
@@ -74,9 +75,9 @@ static int info_extinction(const char *path, double memory_mb)
     return rc;
 }
 
-static int info_wrf(char **paths, int count, double memory_mb)
+static int info_wrf(const char *const *paths, int count, double memory_mb)
 {
-    struct wrf *w = wrf_open((const char *const *)paths, count, memory_mb);
+    struct wrf *w = wrf_open(paths, count, memory_mb);
     if (!w)
         return EXIT_BAD_INPUT;
     const struct wrf_meta *m = wrf_get_meta(w);
@@ -134,6 +135,33 @@ static int info_wrf(char **paths, int count, double memory_mb)
     return rc;
 }
 
+/* An Isabel folder: its grid (the defaults of data.isabel_size and data.isabel_extent), its
+ * steps and which species' bricks the first holds. */
+static int info_isabel(const char *dir)
+{
+    struct isabel_desc d = {.dir = dir};
+    int steps = isabel_step_count(&d);
+    if (steps == 0)
+        return EXIT_BAD_INPUT;
+    struct grid3 g;
+    isabel_grid(&d, &g);
+    printf("%s: Isabel bricks (big-endian float32)\n", dir);
+    printf("  grid        %d x %d x %d voxels of %.4g x %.4g x %.4g m (data.isabel_size, "
+           "data.isabel_extent: the files do not say)\n",
+           g.n[0], g.n[1], g.n[2], g.spacing[0], g.spacing[1], g.spacing[2]);
+    printf("  extent      %.4g x %.4g x %.4g km\n", g.n[0] * g.spacing[0] / 1e3,
+           g.n[1] * g.spacing[1] / 1e3, g.n[2] * g.spacing[2] / 1e3);
+    printf("  species     step 1 has:");
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        char path[4096];
+        isabel_brick_path(&d, species_wrf_name((enum species)f), 0, path, sizeof(path));
+        if (access(path, R_OK) == 0)
+            printf(" %s", species_wrf_name((enum species)f));
+    }
+    printf("\n  time steps  %d\n", steps);
+    return EXIT_OK;
+}
+
 int cmd_info(int argc, char **argv)
 {
     double memory_mb = INFO_MEMORY_MB;
@@ -146,16 +174,32 @@ int cmd_info(int argc, char **argv)
     if (argc <= first || !strcmp(argv[first], "--help") || !strcmp(argv[first], "-h")) {
         FILE *out = argc <= first ? stderr : stdout;
         fprintf(out, "usage: anvil info [--memory MIB] FILE...\n"
-                     "  Describes WRF output (one series: several files are ordered by Times)\n"
-                     "  or an extinction file: dimensions, species present and absent, time\n"
+                     "  Describes WRF output (one series: several files or a quoted pattern,\n"
+                     "  ordered by Times), an extinction file or an Isabel folder, each known\n"
+                     "  by its content: dimensions, species present and absent, time\n"
                      "  steps and dates, extent, lat/lon box, value ranges, bad-value counts.\n"
                      "  --memory: what opening the files and reading one step may take (default\n"
                      "  4096 MiB, as data.memory).\n");
         return argc <= first ? EXIT_USAGE : EXIT_OK;
     }
-    if (argc == first + 1 && extfile_probe(argv[first]))
-        return info_extinction(argv[first], memory_mb);
-    return info_wrf(argv + first, argc - first, memory_mb);
+    struct app_inputs in;
+    if (!app_inputs_collect("info", argv + first, argc - first, &in))
+        return EXIT_BAD_INPUT;
+    int rc;
+    if (in.config) {
+        log_error("info: %s is a text file (a scene config): info describes data files (WRF "
+                  "output, an extinction file, an Isabel folder)",
+                  in.config);
+        rc = EXIT_BAD_INPUT;
+    } else if (in.kind == DATA_KIND_EXTINCTION) {
+        rc = info_extinction(in.files[0], memory_mb);
+    } else if (in.kind == DATA_KIND_ISABEL) {
+        rc = info_isabel(in.files[0]);
+    } else {
+        rc = info_wrf(in.files, in.count, memory_mb);
+    }
+    app_inputs_finish(&in);
+    return rc;
 }
 
 /* ---- anvil synth ------------------------------------------------------------------------ */

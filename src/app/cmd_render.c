@@ -23,7 +23,10 @@
 #include "session/session.h"
 
 struct render_options {
-    const char *config;
+    const char *config;    /* the config among ARGS (after load_configs), or NULL */
+    const char *command;   /* "render" or "run" */
+    char **args;           /* CONFIG, FILES...: a config first, then data files (app_load_scene) */
+    int n_args;
     const char *output;
     const char *stats;
     char *sets[64];
@@ -68,6 +71,7 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         {NULL, 0, NULL, 0},
     };
     memset(o, 0, sizeof(*o));
+    o->command = need_output ? "render" : "run";
     optind = 1;
     int c;
     while ((c = getopt_long(argc, argv, "o:qh", longopts, NULL)) != -1) {
@@ -152,13 +156,8 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
             return EXIT_USAGE;
         }
     }
-    if (optind < argc)
-        o->config = argv[optind++];
-    if (optind < argc) {
-        log_error("%s: unexpected argument \"%s\" (one config file at most)", argv[0],
-                  argv[optind]);
-        return EXIT_USAGE;
-    }
+    o->args = argv + optind;
+    o->n_args = argc - optind;
     if (need_output && !o->output && !(o->display && strcmp(o->display, "help") == 0)) {
         log_error(o->display ? "render: missing -o FOLDER/ (one image per view goes there)"
                              : "render: missing -o FILE.png or -o FILE.pfm");
@@ -345,10 +344,12 @@ static int load_configs(struct render_options *o, struct config *cfg,
     int n_display_sets = 0;
     if (!app_route_sets(o->sets, &o->n_sets, o->display, display_sets, &n_display_sets))
         return EXIT_USAGE;
-    if (!config_load_overrides(o->config, o->sets, o->n_sets, cfg))
+    if (app_load_scene(o->command, o->args, o->n_args, o->sets, o->n_sets,
+                       cfg, &o->config) != EXIT_OK)
         return EXIT_BAD_INPUT;
     if (o->display) {
-        if (!app_load_display_config(o->display, display_sets, n_display_sets, dcfg))
+        if (!app_load_display_config(o->display, display_sets, n_display_sets, dcfg) ||
+            !app_frame_navigation(cfg, dcfg))
             return EXIT_BAD_INPUT;
         if (!display_type_available(dcfg->type)) {
             log_error("%s: display.type = \"%s\": this anvil was built without that backend%s",

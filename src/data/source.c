@@ -168,3 +168,23 @@ bool data_file_is_netcdf(const char *path)
             (head[3] == 1 || head[3] == 2 || head[3] == 5)) ||
            (n == 8 && memcmp(head, hdf5, 8) == 0);
 }
+
+bool data_source_grid(const struct data_source *s, struct grid3 *out)
+{
+    switch (s->desc.format) {
+    case DATA_SOURCE_WRF:
+        if (!wrf_grid(s->wrf, &s->desc.wrf, out))
+            return false;
+        break;
+    case DATA_SOURCE_ISABEL:
+        isabel_grid(&s->desc.isabel, out);
+        break;
+    case DATA_SOURCE_EXTINCTION:
+        *out = *extfile_grid(s->ext);
+        break;
+    }
+    double k = s->desc.height_scale > 0.0 ? s->desc.height_scale : 1.0;
+    out->origin[2] *= k; /* as ext_volume_stretch_height */
+    out->spacing[2] *= k;
+    return true;
+}

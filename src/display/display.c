@@ -412,6 +412,11 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
         push_button(d, INPUT_BUTTON_RESET, false);
         return;
     }
+    if (key == GLFW_KEY_F && (mods & GLFW_MOD_SHIFT)) { /* F alone moves down */
+        if (action == GLFW_PRESS)
+            push(d, &(struct input_event){.type = INPUT_KEY, .key = INPUT_KEY_FRAME});
+        return;
+    }
     for (int i = 0; i < KEY_COUNT; i++) {
         if (keys[i].glfw == key && (action == GLFW_PRESS || keys[i].repeats)) {
             push(d, &(struct input_event){.type = INPUT_KEY, .key = keys[i].key});

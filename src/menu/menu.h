@@ -85,6 +85,7 @@ enum {
     MENU_CHANGE_VISIBLE = 1u << 9,  /* shown or hidden */
     MENU_CHANGE_PROBE = 1u << 10,   /* on/off, mode, threshold, distance */
     MENU_ACTION_SAVE_VIEW = 1u << 11, /* "Save view": the view and look as a scene file */
+    MENU_ACTION_FRAME = 1u << 12,     /* "Frame": the view framing the whole domain again */
 };
 
 struct menu_desc {

@@ -51,6 +51,10 @@ struct session {
     struct playback playback;
     struct display_navigation nav, nav_home;
     struct display_camera camera, camera_home;
+    /* The views framing the whole domain (Shift+F, the menu's Frame): the orbit camera's and
+     * a tracked display's navigation fitting it to the room. */
+    struct display_camera camera_frame;
+    struct display_navigation nav_frame;
     bool quit;
     unsigned requests; /* SESSION_REQUEST_*, for the caller (session_take_requests) */
 
@@ -253,6 +257,30 @@ static bool create_menu(struct session *s)
     return s->menu_view != NULL;
 }
 
+/* The framing views of the volume's box G; they are the views the session starts with where
+ * the scene gives no camera (data) or a tracked display no navigation. */
+static void frame_views(struct session *s, const struct grid3 *g)
+{
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = g->origin[a];
+        hi[a] = g->origin[a] + g->n[a] * g->spacing[a];
+    }
+    const struct config_camera *c = &s->cfg.camera;
+    scene_frame_camera(lo, hi, c->fov_deg, (double)s->cfg.render.width / s->cfg.render.height,
+                       c->near_m, &s->camera_frame);
+    s->nav_frame = s->nav;
+    enum display_type t = s->display.type;
+    bool room = t == DISPLAY_TYPE_CAVE || t == DISPLAY_TYPE_HMD || t == DISPLAY_TYPE_OPENXR;
+    if (room)
+        scene_frame_navigation(lo, hi, &s->display, &s->nav_frame);
+    if (!c->given && s->cfg.scene.kind == SCENE_DATA)
+        s->camera = s->camera_home = s->camera_frame;
+    if (room && !s->display.navigation.given)
+        s->nav = s->nav_home = s->nav_frame;
+    s->nav.given = s->nav_home.given = s->nav_frame.given = false; /* not frame state */
+}
+
 struct session *session_create(const struct config *cfg, const struct session_desc *d, int *rc)
 {
     *rc = 4;
@@ -299,6 +327,7 @@ struct session *session_create(const struct config *cfg, const struct session_de
              vol.grid.n[1], vol.grid.n[2], vol.grid.n[0] * vol.grid.spacing[0] / 1000.0,
              vol.grid.n[1] * vol.grid.spacing[1] / 1000.0,
              vol.grid.n[2] * vol.grid.spacing[2] / 1000.0, s->stats.volume_ms);
+    frame_views(s, &vol.grid);
     if (!decide_effects(s, &vol)) {
         ext_volume_finish(&vol);
         *rc = 1;
@@ -653,6 +682,14 @@ void session_reset_view(struct session *s)
     s->camera = s->camera_home;
 }
 
+void session_frame_view(struct session *s)
+{
+    if (s->tracker)
+        s->nav = s->nav_frame;
+    else
+        s->camera = s->camera_frame;
+}
+
 /* ---- the menu's changes --------------------------------------------------------------- */
 
 static void transfer_path(const struct session *s, int slot, char *buf, size_t size)
@@ -726,6 +763,8 @@ static void apply_changes(struct session *s, unsigned ch)
     }
     if (ch & MENU_ACTION_RESET_VIEW)
         session_reset_view(s);
+    if (ch & MENU_ACTION_FRAME)
+        session_frame_view(s);
     if (ch & MENU_ACTION_SAVE_VIEW)
         s->requests |= SESSION_REQUEST_BOOKMARK;
 }
@@ -1018,6 +1057,8 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
             path_add_key(s);
         else if (e.key == INPUT_KEY_PATH_PLAY)
             path_toggle(s);
+        else if (e.key == INPUT_KEY_FRAME)
+            session_frame_view(s);
         else if (!navigation_key(s, e.key) && !sun_key(s, e.key) && !s->menu)
             seen = false;
         break;
@@ -1632,6 +1673,8 @@ static const struct {
     {INPUT_KEY_PATH_KEY, "the current view becomes the camera path's next key (3 s on)"},
     {INPUT_KEY_PATH_PLAY, "fly the camera path from its start (again: stop)"},
     {INPUT_KEY_PROBE, "the probe on / off: the values where the pointer meets the clouds"},
+    {INPUT_KEY_FRAME, "frame: the whole domain in view again (the orbit camera from the "
+                      "south-west; a tracked display: fitted to the room)"},
     {INPUT_KEY_QUIT, "quit"},
 };
 
@@ -1653,6 +1696,8 @@ void session_list_keys(void (*print)(const char *keys, const char *what, void *u
 {
     struct key_print kp = {print, user};
     display_list_keys(print_key, &kp);
+    print("Shift+F", "frame: the whole domain in view again (the orbit camera from the "
+                     "south-west; a tracked display: fitted to the room)", user);
     print("Home", "reset the view", user);
     print("mouse", "left: choose in the menu, or drag to turn; middle: grab (tracked "
                    "displays); wheel: zoom",

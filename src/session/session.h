@@ -125,6 +125,10 @@ void session_set_navigation(struct session *s, const struct display_navigation *
 void session_set_camera(struct session *s, const struct display_camera *camera);
 /* Navigation and camera back to where they started. */
 void session_reset_view(struct session *s);
+/* The view framing the whole domain (the Shift+F key, the menu's Frame): the orbit camera from
+ * the south-west (scene_frame_camera), a tracked display's navigation fitted to its room
+ * (scene_frame_navigation).  It travels in the frame state like any navigation. */
+void session_frame_view(struct session *s);
 
 /* The camera path that the path keys add to and fly (P NULL: an empty one), saved to FILE
  * (NULL: nowhere) at every new key.  False (logged) out of memory. */

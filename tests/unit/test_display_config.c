@@ -686,6 +686,11 @@ static void test_reference(void **state)
         memcpy(&before, &cfg, sizeof(cfg));
         if (!display_config_set(&cfg, assignment))
             fail_msg("%s: %s", assignment, log_last_error());
+        if (strncmp(path, "navigation.", 11) == 0) {
+            /* Given, even at its default: the display places the world itself. */
+            assert_true(cfg.navigation.given);
+            cfg.navigation.given = false;
+        }
         assert_memory_equal(&cfg, &before, sizeof(cfg));
         set_back++;
     }
