@@ -380,9 +380,9 @@ void scene_frame_navigation(const double lo[3], const double hi[3],
             }
         }
     } else {
-        rlo[0] = head[0] - 1.0, rhi[0] = head[0] + 1.0;
+        rlo[0] = head[0] - 1.5, rhi[0] = head[0] + 1.5;
         rlo[1] = 0.0, rhi[1] = fmax(head[1], 1.0);
-        rlo[2] = head[2] - 2.5, rhi[2] = head[2];
+        rlo[2] = head[2] - 3.7, rhi[2] = head[2];
     }
     /* The footprint: 80 % of the room's width, from the front wall to 0.2 m before the head
      * (the whole room's depth where the head stands outside it). */

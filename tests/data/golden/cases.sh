@@ -7,7 +7,7 @@
 # Reinhard tone mapping (they had been made for an older 1 - exp(-x) one), and when the menu
 # gained its Probe page and Save view button, and again when the Time page gained its Frame
 # button.  The data cases keep the cameras they were made with (a scene of data without a
-# camera is framed).
+# camera is framed), the tracked displays their navigation.
 #   sh tests/data/golden/cases.sh ANVIL_BINARY SOURCE_DIR OUT_DIR
 set -e
 anvil=$1
@@ -19,10 +19,16 @@ small="--set render.width=64 --set render.height=48"
 "$anvil" render -q "$src/configs/katrina.cfg" $small --set 'camera.position=[-60,-120,90]' \
     --set 'camera.target=[240,240,0]' --set camera.fov=45 --set camera.far=5000 \
     -o "$out/katrina.pfm"
+# The tracked displays keep the navigation they were made with (without one the domain is fitted
+# to the room).
 "$anvil" render -q "$src/configs/default.cfg" --set render.height=32 \
-    --display "$src/displays/cave4.cfg" --format pfm -o "$out/cave4"
+    --display "$src/displays/cave4.cfg" --set navigation.scale=1e-4 \
+    --set 'navigation.origin=[30,30,0]' --set 'navigation.position=[0,0,-2]' \
+    --format pfm -o "$out/cave4"
 "$anvil" render -q "$src/configs/default.cfg" --set render.height=32 \
-    --display "$src/displays/hmd.cfg" --format pfm -o "$out/hmd"
+    --display "$src/displays/hmd.cfg" --set navigation.scale=1e-4 \
+    --set 'navigation.origin=[30,30,0]' --set 'navigation.position=[0,0,-3.5]' \
+    --format pfm -o "$out/hmd"
 "$anvil" render -q "$src/configs/default.cfg" --set render.height=32 \
     --display "$src/displays/desktop-stereo.cfg" --format pfm -o "$out/stereo"
 # The menu in the world (a still render with the menu shown).
