@@ -1,5 +1,6 @@
 #include "data/source.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -87,10 +88,37 @@ struct wrf *data_source_wrf(struct data_source *s)
     return s->wrf;
 }
 
+/* A WRF step that holds no condensate and some fill values is most likely a step the model
+ * never wrote (a run that stopped, a file cut and padded): said, naming the step, since it
+ * renders as clear sky.  (A variable all of whose values are fill is refused by the reader.) */
+static void warn_empty_step(const struct data_source *s, int step, const struct wrf_stats *st)
+{
+    size_t fill = 0, count = 0;
+    double top = 0.0;
+    for (int v = 0; v < SPECIES_COUNT; v++) {
+        const struct wrf_var_stats *vs = &st->var[v];
+        if (!vs->read)
+            continue;
+        fill += vs->fill;
+        count += vs->count;
+        top = fmax(top, vs->max);
+    }
+    if (fill == 0 || top > 0.0)
+        return;
+    log_warn("%s: time step %d (%s): no condensate: of the species' %zu values %zu are fill "
+             "values and the rest zero (a step the model did not write?): it shows clear sky",
+             wrf_step_path(s->wrf, step), step, wrf_step_date(s->wrf, step), count, fill);
+}
+
 bool data_source_load_fields(struct data_source *s, int step, struct field_volume *out)
 {
-    if (s->wrf)
-        return wrf_read_step(s->wrf, step, &s->desc.wrf, out, NULL);
+    if (s->wrf) {
+        struct wrf_stats st;
+        if (!wrf_read_step(s->wrf, step, &s->desc.wrf, out, &st))
+            return false;
+        warn_empty_step(s, step, &st);
+        return true;
+    }
     if (s->ext) {
         memset(out, 0, sizeof(*out));
         log_error("%s: an extinction file has no mass ratios", s->desc.files[0]);
@@ -113,7 +141,11 @@ bool data_source_load_fields_extra(struct data_source *s, int step, bool tempera
     struct wrf_desc d = s->desc.wrf;
     d.temperature = d.temperature || temperature;
     d.wind = d.wind || wind;
-    return wrf_read_step(s->wrf, step, &d, out, NULL);
+    struct wrf_stats st;
+    if (!wrf_read_step(s->wrf, step, &d, out, &st))
+        return false;
+    warn_empty_step(s, step, &st);
+    return true;
 }
 
 bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,

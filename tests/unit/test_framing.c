@@ -25,7 +25,9 @@
 #include "config/display_config.h"
 #include "data/detect.h"
 #include "data/source.h"
+#include "data/synth.h"
 #include "data/wrf.h"
+#include "data/wrf_write.h"
 #include "display/display.h"
 #include "render/camera.h"
 #include "session/scene.h"
@@ -259,6 +261,63 @@ static void test_cave_fits_katrina(void **state)
     assert_true(dc.navigation.scale == 1e-4 && dc.navigation.position[2] == -2.0);
 }
 
+/* ---- integrity -------------------------------------------------------------------------- */
+
+static void test_step_of_fill(void **state)
+{
+    (void)state;
+    /* Three steps of the synthetic storm: whole; only fill values and zeros (a step the model
+     * did not write); every value fill. */
+    char path[512];
+    snprintf(path, sizeof(path), "%s", test_tmp_path("gaps.nc"));
+    struct synth_desc sd = {.kind = SYNTH_STORM, .n = {16, 16, 8}, .extent_m = {30e3, 30e3, 12e3},
+                            .seed = 3, .time = 0.5};
+    struct wrf_writer *w = NULL;
+    for (int step = 0; step < 3; step++) {
+        struct field_volume fv;
+        assert_true(synth_storm_fields(&sd, &fv));
+        size_t n = grid3_count(&fv.grid);
+        for (int f = 0; step > 0 && f < SPECIES_COUNT; f++) {
+            for (size_t i = 0; fv.q[f] && i < n; i++)
+                fv.q[f][i] = step == 2 || i % 2 ? NC_FILL_FLOAT : 0.0f;
+        }
+        if (!w)
+            w = wrf_writer_create(path, &fv.grid, NULL);
+        assert_non_null(w);
+        char date[32];
+        snprintf(date, sizeof(date), "2000-01-01_0%d:00:00", step);
+        assert_true(wrf_writer_add(w, &fv, date));
+        field_volume_finish(&fv);
+    }
+    assert_true(wrf_writer_finish(w));
+    const char *files[1] = {path};
+    struct data_source_desc dd = {.format = DATA_SOURCE_WRF, .files = files, .file_count = 1};
+    wrf_desc_defaults(&dd.wrf);
+    optics_params_defaults(&dd.optics);
+    species_select_defaults(&dd.select);
+    struct data_source *src = data_source_open(&dd);
+    assert_non_null(src);
+    struct field_volume fv;
+    unsigned warnings = log_warn_count();
+    assert_true(data_source_load_fields(src, 0, &fv));
+    field_volume_finish(&fv);
+    assert_int_equal(log_warn_count(), warnings);
+    /* Fill and zeros: loaded (clear sky), with a warning naming the file and the step. */
+    assert_true(data_source_load_fields(src, 1, &fv));
+    field_volume_finish(&fv);
+    assert_true(log_warn_count() > warnings);
+    const char *msg = log_last_warning();
+    assert_non_null(strstr(msg, path));
+    assert_non_null(strstr(msg, "time step 1 (2000-01-01_01:00:00)"));
+    assert_non_null(strstr(msg, "no condensate"));
+    /* Every value fill: refused, naming the step. */
+    unsigned errors = log_error_count();
+    assert_false(data_source_load_fields(src, 2, &fv));
+    assert_true(log_error_count() > errors);
+    assert_non_null(strstr(log_last_error(), "2000-01-01_02:00:00"));
+    data_source_close(src);
+}
+
 int main(void)
 {
     log_set_level(LOG_NONE);
@@ -267,6 +326,7 @@ int main(void)
         cmocka_unit_test(test_frame_katrina),
         cmocka_unit_test(test_frame_lambert),
         cmocka_unit_test(test_cave_fits_katrina),
+        cmocka_unit_test(test_step_of_fill),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
