@@ -597,6 +597,7 @@ static int command(int argc, char **argv, bool run)
         .time = o.time,
         .frames = frames_env ? strtol(frames_env, NULL, 10) : -1,
         .config_path = o.config,
+        .data_from_args = o.n_args > (o.config ? 1 : 0),
         .display_path = o.display,
         .check_sync = o.check_sync,
         .recorder = recorder,

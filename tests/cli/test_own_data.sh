@@ -105,4 +105,15 @@ check "cave4: the keys moved the world" \
     bash -c "! cmp -s '$tmp/c0/front-left.pfm' '$tmp/c1/front-left.pfm'"
 check "cave4: key frame fits it to the room again" \
     cmp -s "$tmp/c0/front-left.pfm" "$tmp/c2/front-left.pfm"
+
+# A bookmark of a session on files names them (after the config it includes).
+printf '0 key bookmark\n' >"$tmp/mark.txt"
+(cd "$tmp" && "$anvil" render --quiet look.cfg 'wrfout_d01_*' $small --input mark.txt \
+    -o mark.pfm >/dev/null)
+check "the bookmark was written" test -f "$tmp/bookmark-1.cfg"
+check "it includes the config" grep -q "^@include \"$tmp/look.cfg\"" "$tmp/bookmark-1.cfg"
+check "it names the files" grep -q "files = \[\"$tmp/wrfout_d01_\*\"\]" "$tmp/bookmark-1.cfg"
+expect_exit 0 "the bookmark renders from elsewhere" "$anvil" render "$tmp/bookmark-1.cfg" \
+    $small -o "$tmp/mark2.pfm"
+check "it reads the files" stderr_has "time step 0 (2000-01-01_00:00:00)"
 finish
