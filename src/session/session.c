@@ -554,21 +554,31 @@ void session_view_text(const struct session *s, char *buf, size_t size)
 {
     const struct display_camera *c = &s->camera;
     const struct display_navigation *n = &s->nav;
-    if (s->tracker)
+    if (s->tracker) {
         snprintf(buf, size,
                  "navigation = {\n    scale = %.9g;\n    origin = [%.6f, %.6f, %.6f];\n"
                  "    position = [%.6f, %.6f, %.6f];\n    orientation = [%.6f, %.6f, %.6f];\n};\n",
                  n->scale, n->origin_km[0], n->origin_km[1], n->origin_km[2], n->position[0],
                  n->position[1], n->position[2], n->orientation_deg[0], n->orientation_deg[1],
                  n->orientation_deg[2]);
-    else
+    } else {
+        /* Every digit (a framed camera's numbers are not round, and the bookmark must render
+         * the same picture), each a real number to libconfig. */
+        const double v[12] = {c->eye[0] / 1000.0,    c->eye[1] / 1000.0,    c->eye[2] / 1000.0,
+                              c->target[0] / 1000.0, c->target[1] / 1000.0, c->target[2] / 1000.0,
+                              c->up[0],              c->up[1],              c->up[2],
+                              c->fov_deg,            c->near_m,             c->far_m / 1000.0};
+        char t[12][32];
+        for (int i = 0; i < 12; i++) {
+            snprintf(t[i], sizeof(t[i]), "%.17g", v[i]);
+            if (!strpbrk(t[i], ".eEn"))
+                strcat(t[i], ".0");
+        }
         snprintf(buf, size,
-                 "camera = {\n    position = [%.6f, %.6f, %.6f];\n"
-                 "    target = [%.6f, %.6f, %.6f];\n    up = [%.6f, %.6f, %.6f];\n"
-                 "    fov = %.6f;\n};\n",
-                 c->eye[0] / 1000.0, c->eye[1] / 1000.0, c->eye[2] / 1000.0,
-                 c->target[0] / 1000.0, c->target[1] / 1000.0, c->target[2] / 1000.0, c->up[0],
-                 c->up[1], c->up[2], c->fov_deg);
+                 "camera = {\n    position = [%s, %s, %s];\n    target = [%s, %s, %s];\n"
+                 "    up = [%s, %s, %s];\n    fov = %s;\n    near = %s;\n    far = %s;\n};\n",
+                 t[0], t[1], t[2], t[3], t[4], t[5], t[6], t[7], t[8], t[9], t[10], t[11]);
+    }
 }
 
 void session_look_text(const struct session *s, char *buf, size_t size)
