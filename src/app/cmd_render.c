@@ -294,7 +294,7 @@ static int usage(FILE *out, bool run)
 {
     if (run)
         fprintf(out,
-                "usage: anvil run [CONFIG] [--display DISPLAY.cfg] [--set PATH=VALUE]...\n"
+                "usage: anvil run [CONFIG] [FILE...] [--display DISPLAY.cfg] [--set PATH=VALUE]...\n"
                 "                 [--input SCRIPT] [--wand NAME] [--transfers DIR] [--time S]\n"
                 "                 [--path CAMERA-PATH.cfg] [--record FILE] [--stats FILE.json]\n"
                 "                 [--quiet]\n"
@@ -302,11 +302,14 @@ static int usage(FILE *out, bool run)
                 "  replays it (docs/menu.md, \"Recordings\").\n"
                 "  Under mpirun each rank draws some walls of --display (docs/displays.md,\n"
                 "  \"Running a CAVE on a cluster\"); --check-sync checks every frame on every rank.\n"
-                "  Without --display: one window of the scene's camera (camera.*), orbiting\n"
-                "  its target.  The keys mean the same on every display:\n");
+                "  FILE...: data files, folders or quoted patterns ('wrfout_d01_*'), known by\n"
+                "  their content, after an optional config for the rest (docs/data.md).\n"
+                "  Without --display: one window of the scene's camera (camera.*; data without\n"
+                "  one: framing the domain), orbiting its target.  The keys mean the same on\n"
+                "  every display:\n");
     else
         fprintf(out,
-                "usage: anvil render [CONFIG] -o FILE.png|FILE.pfm [--set PATH=VALUE]...\n"
+                "usage: anvil render [CONFIG] [FILE...] -o FILE.png|FILE.pfm [--set PATH=VALUE]...\n"
                 "                    [--input SCRIPT] [--menu] [--stats FILE.json] [--quiet]\n"
                 "       anvil render [CONFIG] --display DISPLAY.cfg [--time SECONDS] "
                 "-o FOLDER/ [--format png|pfm] [...]\n"
@@ -315,6 +318,8 @@ static int usage(FILE *out, bool run)
                 "                    -o out/frame-%%05d.png | -o storm.mp4 [--codec NAME]\n"
                 "       anvil render [CONFIG] --path CAMERA-PATH.cfg [--fps N] -o fly.mp4\n"
                 "       anvil render --display help\n"
+                "  FILE...: data files, folders or quoted patterns ('wrfout_d01_*'), known by\n"
+                "  their content, after an optional config for the rest (docs/data.md).\n"
                 "  An animation writes every frame: the time steps FIRST..LAST (with --fps above\n"
                 "  playback.speed and effects.temporal, blended frames between them), a camera\n"
                 "  path, or a script's frames (--input).  Movie encoders here: %s\n"

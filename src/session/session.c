@@ -1683,8 +1683,6 @@ static const struct {
     {INPUT_KEY_PATH_KEY, "the current view becomes the camera path's next key (3 s on)"},
     {INPUT_KEY_PATH_PLAY, "fly the camera path from its start (again: stop)"},
     {INPUT_KEY_PROBE, "the probe on / off: the values where the pointer meets the clouds"},
-    {INPUT_KEY_FRAME, "frame: the whole domain in view again (the orbit camera from the "
-                      "south-west; a tracked display: fitted to the room)"},
     {INPUT_KEY_QUIT, "quit"},
 };
 
