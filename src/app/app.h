@@ -82,8 +82,12 @@ int app_load_scene(const char *command, char **args, int n, char **sets, int n_s
 bool app_frame_camera(struct config *cfg);
 
 /* A tracked display (cave, hmd, openxr) without a navigation.* setting gets the navigation
- * fitting CFG's domain to its room (scene_frame_navigation), logged at info level. */
-bool app_frame_navigation(const struct config *cfg, struct display_config *dcfg);
+ * fitting CFG's domain to its room (scene_frame_navigation), logged at info level.  FITTED
+ * (may be NULL) receives that fit whether or not the display gives a navigation (what the
+ * frame key brings back; DCFG's own navigation for other displays).  False (logged) when
+ * the data cannot be opened. */
+bool app_frame_navigation(const struct config *cfg, struct display_config *dcfg,
+                          struct display_navigation *fitted);
 
 int cmd_render(int argc, char **argv);
 int cmd_run(int argc, char **argv);

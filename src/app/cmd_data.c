@@ -380,26 +380,12 @@ int cmd_synth(int argc, char **argv)
 
 static void convert_usage(FILE *out)
 {
-    fprintf(out, "usage: anvil convert CONFIG -o OUT.nc [--set PATH=VALUE]...\n"
-                 "       anvil convert WRF-FILE... -o OUT.nc\n"
+    fprintf(out, "usage: anvil convert [CONFIG] [FILE...] -o OUT.nc [--set PATH=VALUE]...\n"
                  "  Precomputes per time step the ice-phase (ice + snow + graupel) and the\n"
                  "  water-phase (cloud + rain) extinction into a CF NetCDF file that the\n"
-                 "  renderer loads with data.format = \"extinction\".  With a config, its data.*\n"
-                 "  settings, optics and species toggles apply; with files, the defaults.\n");
-}
-
-/* NetCDF files start with "CDF" (classic) or the HDF5 signature. */
-static bool is_netcdf(const char *path)
-{
-    char why[160];
-    int fd = file_open_regular(path, why, sizeof(why));
-    if (fd < 0)
-        return false;
-    unsigned char b[8] = {0};
-    ssize_t n = read(fd, b, sizeof(b));
-    close(fd);
-    return n >= 4 && ((b[0] == 'C' && b[1] == 'D' && b[2] == 'F') ||
-                      (b[0] == 0x89 && b[1] == 'H' && b[2] == 'D' && b[3] == 'F'));
+                 "  renderer loads with data.format = \"extinction\".  FILE...: WRF output or an\n"
+                 "  Isabel folder (or quoted patterns), known by content; a config first (or\n"
+                 "  alone) gives its data.* settings, optics and species toggles.\n");
 }
 
 int cmd_convert(int argc, char **argv)
@@ -445,26 +431,17 @@ int cmd_convert(int argc, char **argv)
         log_error("convert: out of memory");
         return EXIT_FAILED;
     }
-    bool from_config = n_inputs == 1 && !is_netcdf(inputs[0]);
-    if (from_config) {
-        if (!config_load_overrides(inputs[0], sets, n_sets, cfg)) {
-            free(cfg);
-            return EXIT_BAD_INPUT;
-        }
-        if (cfg->data.file_count == 0) {
-            log_error("%s: data.files: no input files to convert", inputs[0]);
-            free(cfg);
-            return EXIT_BAD_INPUT;
-        }
-    } else {
-        if (!config_load_overrides(NULL, sets, n_sets, cfg)) {
-            free(cfg);
-            return EXIT_BAD_INPUT;
-        }
-        cfg->data.format = DATA_WRF;
-        cfg->data.file_count = n_inputs;
-        for (int i = 0; i < n_inputs; i++)
-            snprintf(cfg->data.files[i], CONFIG_PATH_MAX, "%s", inputs[i]);
+    /* A config, or data files known by their content (a config first for the rest). */
+    const char *config_path = NULL;
+    if (app_load_scene("convert", inputs, n_inputs, sets, n_sets, cfg, &config_path) !=
+        EXIT_OK) {
+        free(cfg);
+        return EXIT_BAD_INPUT;
+    }
+    if (cfg->scene.kind != SCENE_DATA || cfg->data.file_count == 0) {
+        log_error("%s: data.files: no input files to convert", inputs[0]);
+        free(cfg);
+        return EXIT_BAD_INPUT;
     }
     if (cfg->data.format == DATA_EXTINCTION) {
         log_error("convert: the input is already an extinction file (data.format)");

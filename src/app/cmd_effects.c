@@ -76,7 +76,7 @@ int cmd_effects(int argc, char **argv)
         return EXIT_BAD_INPUT;
     struct display_config dcfg;
     if (display && (!app_load_display_config(display, display_sets, n_display_sets, &dcfg) ||
-                    !app_frame_navigation(&cfg, &dcfg)))
+                    !app_frame_navigation(&cfg, &dcfg, NULL)))
         return EXIT_BAD_INPUT;
     struct effects_report rep;
     struct effects_report_desc d = {

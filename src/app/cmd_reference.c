@@ -28,8 +28,9 @@ struct reference_options {
 
 static int usage(FILE *out)
 {
-    fprintf(out, "usage: anvil reference [CONFIG] [FILE...] -o FILE.pfm --spp N [--threads N] [--seed S]\n"
-                 "                       [--albedo A] [--jitter] [--set PATH=VALUE]... [--quiet]\n"
+    fprintf(out, "usage: anvil reference [CONFIG] [FILE...] -o FILE.pfm --spp N [--threads N]\n"
+                 "                       [--seed S] [--albedo A] [--jitter] [--set PATH=VALUE]...\n"
+                 "                       [--quiet]\n"
                  "Path-traces the config's view (Monte Carlo: all orders of scattering, sun and\n"
                  "sky) and writes the mean radiance to FILE.pfm and the standard error of each\n"
                  "pixel to FILE.stderr.pfm (docs/reference.md).\n"

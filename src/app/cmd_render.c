@@ -294,7 +294,8 @@ static int usage(FILE *out, bool run)
 {
     if (run)
         fprintf(out,
-                "usage: anvil run [CONFIG] [FILE...] [--display DISPLAY.cfg] [--set PATH=VALUE]...\n"
+                "usage: anvil run [CONFIG] [FILE...] [--display DISPLAY.cfg]\n"
+                "                 [--set PATH=VALUE]...\n"
                 "                 [--input SCRIPT] [--wand NAME] [--transfers DIR] [--time S]\n"
                 "                 [--path CAMERA-PATH.cfg] [--record FILE] [--stats FILE.json]\n"
                 "                 [--quiet]\n"
@@ -309,7 +310,8 @@ static int usage(FILE *out, bool run)
                 "  every display:\n");
     else
         fprintf(out,
-                "usage: anvil render [CONFIG] [FILE...] -o FILE.png|FILE.pfm [--set PATH=VALUE]...\n"
+                "usage: anvil render [CONFIG] [FILE...] -o FILE.png|FILE.pfm\n"
+                "                    [--set PATH=VALUE]...\n"
                 "                    [--input SCRIPT] [--menu] [--stats FILE.json] [--quiet]\n"
                 "       anvil render [CONFIG] --display DISPLAY.cfg [--time SECONDS] "
                 "-o FOLDER/ [--format png|pfm] [...]\n"
@@ -343,7 +345,7 @@ static void print_backend(const char *name, const char *what, void *user)
 /* Loads the scene config and the display config (or makes the orbit display's) with the
  * --set overrides: those naming display settings go to the display. */
 static int load_configs(struct render_options *o, struct config *cfg,
-                        struct display_config *dcfg)
+                        struct display_config *dcfg, struct display_navigation *room)
 {
     char *display_sets[64];
     int n_display_sets = 0;
@@ -354,7 +356,7 @@ static int load_configs(struct render_options *o, struct config *cfg,
         return EXIT_BAD_INPUT;
     if (o->display) {
         if (!app_load_display_config(o->display, display_sets, n_display_sets, dcfg) ||
-            !app_frame_navigation(cfg, dcfg))
+            !app_frame_navigation(cfg, dcfg, room))
             return EXIT_BAD_INPUT;
         if (!display_type_available(dcfg->type)) {
             log_error("%s: display.type = \"%s\": this anvil was built without that backend%s",
@@ -493,7 +495,9 @@ static int command(int argc, char **argv, bool run)
         goto done;
     }
     struct replay replay;
-    if ((rc = load_configs(&o, cfg, dcfg)) != EXIT_OK || (rc = apply_wand_option(&o, dcfg)) ||
+    /* The room's fit is made before a cluster's rank keeps its own walls. */
+    struct display_navigation room = {0};
+    if ((rc = load_configs(&o, cfg, dcfg, &room)) != EXIT_OK || (rc = apply_wand_option(&o, dcfg)) ||
         (rc = inspect_input(&o, dcfg, &replay)))
         goto done;
     /* Under mpirun: this rank's walls (the effects are decided from all of them). */
@@ -559,6 +563,7 @@ static int command(int argc, char **argv, bool run)
                        &(struct session_desc){
                            .command = run ? "run" : "render",
                            .display = dcfg,
+                           .room_navigation = o.display ? &room : NULL,
                            .views = views_move ? NULL : views,
                            .view_count = views_move ? 0 : n,
                            .views_move = views_move,

@@ -207,16 +207,25 @@ bool app_frame_camera(struct config *cfg)
     return true;
 }
 
-bool app_frame_navigation(const struct config *cfg, struct display_config *dcfg)
+bool app_frame_navigation(const struct config *cfg, struct display_config *dcfg,
+                          struct display_navigation *fitted)
 {
-    if (dcfg->navigation.given ||
-        !(dcfg->type == DISPLAY_TYPE_CAVE || dcfg->type == DISPLAY_TYPE_HMD ||
-          dcfg->type == DISPLAY_TYPE_OPENXR))
+    if (fitted)
+        *fitted = dcfg->navigation;
+    if (!(dcfg->type == DISPLAY_TYPE_CAVE || dcfg->type == DISPLAY_TYPE_HMD ||
+          dcfg->type == DISPLAY_TYPE_OPENXR) ||
+        (dcfg->navigation.given && !fitted))
         return true;
     double lo[3], hi[3];
     if (!scene_domain_box(cfg, lo, hi))
         return false;
-    scene_frame_navigation(lo, hi, dcfg, &dcfg->navigation);
+    struct display_navigation fit;
+    scene_frame_navigation(lo, hi, dcfg, &fit);
+    if (fitted)
+        *fitted = fit;
+    if (dcfg->navigation.given)
+        return true;
+    dcfg->navigation = fit;
     const struct display_navigation *nv = &dcfg->navigation;
     log_info("navigation fitting the domain to the room: scale %.3g (%.2f x %.2f x %.2f m), "
              "origin [%.3f, %.3f, %.3f] km at [%.2f, %.2f, %.2f] m",

@@ -74,9 +74,9 @@ void scene_camera_to_config(const struct display_camera *c, struct config_camera
 
 /* The navigation that fits the box LO..HI into the room of the tracked display CFG (cave:
  * its walls' bounding box; hmd, openxr: 3 m wide and 3.5 m deep ahead of head.position, the
- * floor at y = 0): north away from the viewer, the ground on the floor, the centre straight ahead of
- * head.position, the footprint within 80 % of the room's width and the room's depth from the
- * front wall to 0.2 m before the head, the top at least 0.3 m below the eyes. */
+ * floor at y = 0): north away from the viewer, the ground on the floor, the centre straight
+ * ahead of head.position, the footprint within 80 % of the room's width and the room's depth
+ * from the front wall to 0.2 m before the head, the top at least 0.3 m below the eyes. */
 void scene_frame_navigation(const double lo[3], const double hi[3],
                             const struct display_config *cfg, struct display_navigation *out);
 

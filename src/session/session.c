@@ -272,7 +272,9 @@ static void frame_views(struct session *s, const struct grid3 *g)
     s->nav_frame = s->nav;
     enum display_type t = s->display.type;
     bool room = t == DISPLAY_TYPE_CAVE || t == DISPLAY_TYPE_HMD || t == DISPLAY_TYPE_OPENXR;
-    if (room)
+    if (room && s->desc.room_navigation)
+        s->nav_frame = *s->desc.room_navigation;
+    else if (room)
         scene_frame_navigation(lo, hi, &s->display, &s->nav_frame);
     if (!c->given && s->cfg.scene.kind == SCENE_DATA)
         s->camera = s->camera_home = s->camera_frame;
@@ -1683,6 +1685,8 @@ static const struct {
     {INPUT_KEY_PATH_KEY, "the current view becomes the camera path's next key (3 s on)"},
     {INPUT_KEY_PATH_PLAY, "fly the camera path from its start (again: stop)"},
     {INPUT_KEY_PROBE, "the probe on / off: the values where the pointer meets the clouds"},
+    {INPUT_KEY_FRAME, "frame: the whole domain in view again (the orbit camera from the "
+                      "south-west; a tracked display: fitted to the room)"},
     {INPUT_KEY_QUIT, "quit"},
 };
 
@@ -1704,8 +1708,6 @@ void session_list_keys(void (*print)(const char *keys, const char *what, void *u
 {
     struct key_print kp = {print, user};
     display_list_keys(print_key, &kp);
-    print("Shift+F", "frame: the whole domain in view again (the orbit camera from the "
-                     "south-west; a tracked display: fitted to the room)", user);
     print("Home", "reset the view", user);
     print("mouse", "left: choose in the menu, or drag to turn; middle: grab (tracked "
                    "displays); wheel: zoom",

@@ -45,6 +45,9 @@ struct session_desc {
     const char *command;                  /* "render", "run": --stats and the log */
     const struct display_config *display; /* the display's config (copied); NULL: the orbit
                                              display of the scene's own camera */
+    /* The navigation fitting the domain to the whole room (scene_frame_navigation over every
+     * wall: a cluster's rank has only its own walls in DISPLAY); NULL: fitted to DISPLAY's. */
+    const struct display_navigation *room_navigation;
     /* The display's first views (for the effects: does any see the ground?); NULL with
      * views_move: the views change while the session runs. */
     const struct render_view *views;

@@ -214,7 +214,9 @@ static void test_cave_fits_katrina(void **state)
     static struct display_config dc;
     assert_true(display_config_load(ANVIL_SOURCE_DIR "/displays/cave4.cfg", &dc));
     assert_false(dc.navigation.given);
-    assert_true(app_frame_navigation(&cfg, &dc));
+    struct display_navigation fit;
+    assert_true(app_frame_navigation(&cfg, &dc, &fit));
+    assert_memory_equal(&fit, &dc.navigation, sizeof(fit));
     double lo[3], hi[3];
     assert_true(scene_domain_box(&cfg, lo, hi));
     float m[16];
@@ -253,12 +255,14 @@ static void test_cave_fits_katrina(void **state)
     double far_corner = m[0] * hi[0] + m[12];
     assert_true(far_corner > 1.5);
 
-    /* A navigation given is kept. */
+    /* A navigation given is kept; the fit (what the frame key brings) is still made. */
     assert_true(display_config_set(&dc, "navigation.scale=1e-4"));
     assert_true(dc.navigation.given);
     dc.navigation.position[2] = -2.0;
-    assert_true(app_frame_navigation(&cfg, &dc));
+    struct display_navigation again;
+    assert_true(app_frame_navigation(&cfg, &dc, &again));
     assert_true(dc.navigation.scale == 1e-4 && dc.navigation.position[2] == -2.0);
+    assert_true(again.scale == fit.scale && again.position[2] == fit.position[2]);
 }
 
 /* ---- integrity -------------------------------------------------------------------------- */
