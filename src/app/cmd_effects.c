@@ -84,7 +84,10 @@ int cmd_effects(int argc, char **argv)
     if (!effects_report_make(&cfg, &d, &rep))
         return EXIT_BAD_INPUT;
     const struct effects *e = &rep.effects;
-    printf("effects of %s%s%s:\n", config ? config : "the built-in default scene",
+    const char *what = config                                ? config
+                       : argc > optind && cfg.data.file_count > 0 ? cfg.data.files[0]
+                                                                  : "the built-in default scene";
+    printf("effects of %s%s%s%s:\n", what, !config && cfg.data.file_count > 1 ? " ..." : "",
            display ? " on " : "", display ? display : "");
     for (int i = 0; i < EFFECT_COUNT; i++) {
         const char *mode = cfg.effects.mode[i] == EFFECT_AUTO ? "auto"

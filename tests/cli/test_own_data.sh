@@ -57,6 +57,8 @@ expect_exit 0 "probe on a pattern" "$anvil" probe --quiet "$tmp/wrfout_d01_*" --
 check "probe reads the data" stdout_has "condensate"
 expect_exit 0 "effects with a config first" "$anvil" effects --quiet "$tmp/look.cfg" "$tmp/wrfout_d01_a"
 check "it names the config" stdout_has "effects of $tmp/look.cfg"
+expect_exit 0 "effects of files alone" "$anvil" effects --quiet "$tmp/wrfout_d01_*"
+check "it names the data, not the built-in scene" stdout_has "effects of $tmp/wrfout_d01_\*:"
 
 require_gl
 # A config then files: the config's settings (light.elevation 20), these files.
