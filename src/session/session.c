@@ -257,8 +257,9 @@ static bool create_menu(struct session *s)
     return s->menu_view != NULL;
 }
 
-/* The framing views of the volume's box G; they are the views the session starts with where
- * the scene gives no camera (data) or a tracked display no navigation. */
+/* The framing views of the volume's box G, for the frame key.  The views the session starts
+ * with are the config's and the display's: where those give none, the command line put the
+ * same framing there (app_frame_camera, app_frame_navigation). */
 static void frame_views(struct session *s, const struct grid3 *g)
 {
     double lo[3], hi[3];
@@ -276,10 +277,6 @@ static void frame_views(struct session *s, const struct grid3 *g)
         s->nav_frame = *s->desc.room_navigation;
     else if (room)
         scene_frame_navigation(lo, hi, &s->display, &s->nav_frame);
-    if (!c->given && s->cfg.scene.kind == SCENE_DATA)
-        s->camera = s->camera_home = s->camera_frame;
-    if (room && !s->display.navigation.given)
-        s->nav = s->nav_home = s->nav_frame;
     s->nav.given = s->nav_home.given = s->nav_frame.given = false; /* not frame state */
 }
 
