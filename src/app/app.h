@@ -9,7 +9,9 @@
 
 #include <stdbool.h>
 
+#include "config/config.h"
 #include "config/display_config.h"
+#include "data/detect.h"
 
 /* Exit codes of the program (documented in docs/user-guide.md). */
 enum {
@@ -42,6 +44,50 @@ bool app_route_sets(char **sets, int *n_sets, bool have_display, char **display_
  * and validates the result. */
 bool app_load_display_config(const char *path, char *const *sets, int n_sets,
                              struct display_config *cfg);
+
+/* ---- the scene a command line names (app/scene_args.c, docs/data.md) ---------------------- */
+
+#define APP_INPUTS_MAX_OWNED CONFIG_MAX_FILES
+
+/* What the positional arguments of a command are: a config (only first), then data files,
+ * folders and glob patterns of one kind, each known by its content (data_detect).  A pattern
+ * that names no file itself is expanded here (glob(3), sorted): no match is an error naming
+ * it; a WRF series keeps the pattern (the reader expands it alike, any number of files), an
+ * extinction file or Isabel folder its one path. */
+struct app_inputs {
+    const char *config;                     /* the config, or NULL */
+    const char *files[CONFIG_MAX_FILES];    /* paths and patterns, into the arguments or OWNED */
+    int count;
+    enum data_kind kind;                    /* of the files; DATA_KIND_UNREADABLE: none */
+    char *owned[APP_INPUTS_MAX_OWNED];
+    int n_owned;
+};
+
+/* Fills OUT from the N arguments ARGS of COMMAND.  False after one log_error (the file, what
+ * it is, what was expected).  Free with app_inputs_finish. */
+bool app_inputs_collect(const char *command, char **args, int n, struct app_inputs *out);
+void app_inputs_finish(struct app_inputs *in);
+
+/* The scene of the N arguments ARGS: the config (or the defaults) read, the files (if any)
+ * as its data (scene.kind "data", data.format of their kind, data.files), the --set
+ * overrides SETS applied, validated, and without a camera.* setting a camera that frames the
+ * data (app_frame_camera).  *CONFIG_PATH (may be NULL) receives the config's path or NULL.
+ * EXIT_OK, or EXIT_BAD_INPUT after one log_error. */
+int app_load_scene(const char *command, char **args, int n, char **sets, int n_sets,
+                   struct config *cfg, const char **config_path);
+
+/* A scene of data without a camera.* setting gets the camera framing its domain
+ * (scene_frame_camera, at render.width / render.height): written into CFG->camera, logged at
+ * info level.  False (logged) when the data cannot be opened. */
+bool app_frame_camera(struct config *cfg);
+
+/* A tracked display (cave, hmd, openxr) without a navigation.* setting gets the navigation
+ * fitting CFG's domain to its room (scene_frame_navigation), logged at info level.  FITTED
+ * (may be NULL) receives that fit whether or not the display gives a navigation (what the
+ * frame key brings back; DCFG's own navigation for other displays).  False (logged) when
+ * the data cannot be opened. */
+bool app_frame_navigation(const struct config *cfg, struct display_config *dcfg,
+                          struct display_navigation *fitted);
 
 int cmd_render(int argc, char **argv);
 int cmd_run(int argc, char **argv);

@@ -85,9 +85,9 @@ static int info_extinction(const char *path, double memory_mb)
     return rc;
 }
 
-static int info_wrf(char **paths, int count, double memory_mb)
+static int info_wrf(const char *const *paths, int count, double memory_mb)
 {
-    struct wrf *w = wrf_open((const char *const *)paths, count, memory_mb);
+    struct wrf *w = wrf_open(paths, count, memory_mb);
     if (!w)
         return EXIT_BAD_INPUT;
     const struct wrf_meta *m = wrf_get_meta(w);
@@ -145,10 +145,10 @@ static int info_wrf(char **paths, int count, double memory_mb)
     return rc;
 }
 
-static int info_hgrid(enum hgrid_kind kind, char **paths, int count, double memory_mb)
+static int info_hgrid(enum hgrid_kind kind, const char *const *paths, int count,
+                      double memory_mb)
 {
-    struct hgrid *h = (kind == HGRID_CM1 ? cm1_open : cf_open)((const char *const *)paths,
-                                                              count, memory_mb);
+    struct hgrid *h = (kind == HGRID_CM1 ? cm1_open : cf_open)(paths, count, memory_mb);
     if (!h)
         return EXIT_BAD_INPUT;
     const struct hgrid_meta *m = hgrid_get_meta(h);
@@ -204,12 +204,6 @@ static int info_hgrid(enum hgrid_kind kind, char **paths, int count, double memo
     }
     hgrid_close(h);
     return rc;
-}
-
-static bool is_directory(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
 static int info_isabel(const char *dir, const int size[3], const double extent_km[3])
@@ -325,32 +319,37 @@ int cmd_info(int argc, char **argv)
         FILE *out = argc <= first ? stderr : stdout;
         fprintf(out, "usage: anvil info [--memory MIB] FILE...\n"
                      "       anvil info [--isabel-size NXxNYxNZ] [--isabel-extent XxYxZ] FOLDER\n"
-                     "  Describes WRF output (one series: several files are ordered by Times),\n"
-                     "  CM1 output, CF NetCDF on height levels (ordered by time), an extinction\n"
-                     "  file or a folder of Isabel bricks: dimensions, species present and\n"
-                     "  absent, time steps and dates, extent, lat/lon box, value ranges,\n"
-                     "  bad-value counts.  --memory: what opening the files and reading one step\n"
-                     "  may take (default 4096 MiB, as data.memory).  --isabel-size and\n"
-                     "  --isabel-extent (km) as data.isabel_size and data.isabel_extent.\n");
+                     "  Describes WRF output (one series: several files or a quoted pattern,\n"
+                     "  ordered by Times), CM1 output, CF NetCDF on height levels (ordered by\n"
+                     "  time), an extinction file or a folder of Isabel bricks, each known by its\n"
+                     "  content: dimensions, species present and absent, time steps and dates,\n"
+                     "  extent, lat/lon box, value ranges, bad-value counts.  --memory: what\n"
+                     "  opening the files and reading one step may take (default 4096 MiB, as\n"
+                     "  data.memory).  --isabel-size and --isabel-extent (km) as\n"
+                     "  data.isabel_size and data.isabel_extent.\n");
         return argc <= first ? EXIT_USAGE : EXIT_OK;
     }
-    if (argc == first + 1 && is_directory(argv[first]))
-        return info_isabel(argv[first], isabel_size, isabel_extent);
-    if (argc == first + 1 && extfile_probe(argv[first]))
-        return info_extinction(argv[first], memory_mb);
-    /* The kind from the first file (a pattern's first match). */
-    char probe_path[4096];
-    snprintf(probe_path, sizeof(probe_path), "%s", argv[first]);
-    glob_t g;
-    if (strpbrk(argv[first], "*?[") && glob(argv[first], 0, NULL, &g) == 0) {
-        snprintf(probe_path, sizeof(probe_path), "%s", g.gl_pathv[0]);
-        globfree(&g);
+    struct app_inputs in;
+    if (!app_inputs_collect("info", argv + first, argc - first, &in))
+        return EXIT_BAD_INPUT;
+    int rc;
+    if (in.config) {
+        log_error("info: %s is a text file (a scene config): info describes data files (WRF, "
+                  "CM1 or CF output, an extinction file, an Isabel folder)",
+                  in.config);
+        rc = EXIT_BAD_INPUT;
+    } else if (in.kind == DATA_KIND_EXTINCTION) {
+        rc = info_extinction(in.files[0], memory_mb);
+    } else if (in.kind == DATA_KIND_ISABEL) {
+        rc = info_isabel(in.files[0], isabel_size, isabel_extent);
+    } else if (in.kind == DATA_KIND_CM1 || in.kind == DATA_KIND_CF) {
+        rc = info_hgrid(in.kind == DATA_KIND_CM1 ? HGRID_CM1 : HGRID_CF, in.files, in.count,
+                        memory_mb);
+    } else {
+        rc = info_wrf(in.files, in.count, memory_mb);
     }
-    if (cm1_probe(probe_path))
-        return info_hgrid(HGRID_CM1, argv + first, argc - first, memory_mb);
-    if (cf_probe(probe_path))
-        return info_hgrid(HGRID_CF, argv + first, argc - first, memory_mb);
-    return info_wrf(argv + first, argc - first, memory_mb);
+    app_inputs_finish(&in);
+    return rc;
 }
 
 /* ---- anvil synth ------------------------------------------------------------------------ */
@@ -578,26 +577,12 @@ int cmd_synth(int argc, char **argv)
 
 static void convert_usage(FILE *out)
 {
-    fprintf(out, "usage: anvil convert CONFIG -o OUT.nc [--set PATH=VALUE]...\n"
-                 "       anvil convert WRF-FILE... -o OUT.nc\n"
+    fprintf(out, "usage: anvil convert [CONFIG] [FILE...] -o OUT.nc [--set PATH=VALUE]...\n"
                  "  Precomputes per time step the ice-phase (ice + snow + graupel) and the\n"
                  "  water-phase (cloud + rain) extinction into a CF NetCDF file that the\n"
-                 "  renderer loads with data.format = \"extinction\".  With a config, its data.*\n"
-                 "  settings, optics and species toggles apply; with files, the defaults.\n");
-}
-
-/* NetCDF files start with "CDF" (classic) or the HDF5 signature. */
-static bool is_netcdf(const char *path)
-{
-    char why[160];
-    int fd = file_open_regular(path, why, sizeof(why));
-    if (fd < 0)
-        return false;
-    unsigned char b[8] = {0};
-    ssize_t n = read(fd, b, sizeof(b));
-    close(fd);
-    return n >= 4 && ((b[0] == 'C' && b[1] == 'D' && b[2] == 'F') ||
-                      (b[0] == 0x89 && b[1] == 'H' && b[2] == 'D' && b[3] == 'F'));
+                 "  renderer loads with data.format = \"extinction\".  FILE...: WRF output or an\n"
+                 "  Isabel folder (or quoted patterns), known by content; a config first (or\n"
+                 "  alone) gives its data.* settings, optics and species toggles.\n");
 }
 
 int cmd_convert(int argc, char **argv)
@@ -643,26 +628,17 @@ int cmd_convert(int argc, char **argv)
         log_error("convert: out of memory");
         return EXIT_FAILED;
     }
-    bool from_config = n_inputs == 1 && !is_netcdf(inputs[0]);
-    if (from_config) {
-        if (!config_load_overrides(inputs[0], sets, n_sets, cfg)) {
-            free(cfg);
-            return EXIT_BAD_INPUT;
-        }
-        if (cfg->data.file_count == 0) {
-            log_error("%s: data.files: no input files to convert", inputs[0]);
-            free(cfg);
-            return EXIT_BAD_INPUT;
-        }
-    } else {
-        if (!config_load_overrides(NULL, sets, n_sets, cfg)) {
-            free(cfg);
-            return EXIT_BAD_INPUT;
-        }
-        cfg->data.format = DATA_WRF;
-        cfg->data.file_count = n_inputs;
-        for (int i = 0; i < n_inputs; i++)
-            snprintf(cfg->data.files[i], CONFIG_PATH_MAX, "%s", inputs[i]);
+    /* A config, or data files known by their content (a config first for the rest). */
+    const char *config_path = NULL;
+    if (app_load_scene("convert", inputs, n_inputs, sets, n_sets, cfg, &config_path) !=
+        EXIT_OK) {
+        free(cfg);
+        return EXIT_BAD_INPUT;
+    }
+    if (cfg->scene.kind != SCENE_DATA || cfg->data.file_count == 0) {
+        log_error("%s: data.files: no input files to convert", inputs[0]);
+        free(cfg);
+        return EXIT_BAD_INPUT;
     }
     if (cfg->data.format == DATA_EXTINCTION) {
         log_error("convert: the input is already an extinction file (data.format)");

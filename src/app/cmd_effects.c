@@ -12,7 +12,7 @@
 
 static int usage(FILE *out)
 {
-    fprintf(out, "usage: anvil effects [CONFIG] [--display DISPLAY.cfg] [--run] "
+    fprintf(out, "usage: anvil effects [CONFIG] [FILE...] [--display DISPLAY.cfg] [--run] "
                  "[--input SCRIPT] [--set PATH=VALUE]... [--quiet]\n"
                  "Prints each effect (effects.* in the config) as on or off with the reason,\n"
                  "decided from the scene as anvil render would (docs/effects.md).\n"
@@ -65,20 +65,18 @@ int cmd_effects(int argc, char **argv)
             return usage(stderr);
         }
     }
-    const char *config = optind < argc ? argv[optind++] : NULL;
-    if (optind < argc) {
-        log_error("effects: unexpected argument \"%s\" (one config file at most)", argv[optind]);
-        return usage(stderr);
-    }
+    const char *config = NULL;
     char *display_sets[MAX_SETS];
     int n_display_sets;
     if (!app_route_sets(sets, &n_sets, display, display_sets, &n_display_sets))
         return EXIT_USAGE;
     struct config cfg;
-    if (!config_load_overrides(config, sets, n_sets, &cfg))
+    if (app_load_scene("effects", argv + optind, argc - optind, sets, n_sets, &cfg, &config) !=
+        EXIT_OK)
         return EXIT_BAD_INPUT;
     struct display_config dcfg;
-    if (display && !app_load_display_config(display, display_sets, n_display_sets, &dcfg))
+    if (display && (!app_load_display_config(display, display_sets, n_display_sets, &dcfg) ||
+                    !app_frame_navigation(&cfg, &dcfg, NULL)))
         return EXIT_BAD_INPUT;
     struct effects_report rep;
     struct effects_report_desc d = {
@@ -86,7 +84,10 @@ int cmd_effects(int argc, char **argv)
     if (!effects_report_make(&cfg, &d, &rep))
         return EXIT_BAD_INPUT;
     const struct effects *e = &rep.effects;
-    printf("effects of %s%s%s:\n", config ? config : "the built-in default scene",
+    const char *what = config                                ? config
+                       : argc > optind && cfg.data.file_count > 0 ? cfg.data.files[0]
+                                                                  : "the built-in default scene";
+    printf("effects of %s%s%s%s:\n", what, !config && cfg.data.file_count > 1 ? " ..." : "",
            display ? " on " : "", display ? display : "");
     for (int i = 0; i < EFFECT_COUNT; i++) {
         const char *mode = cfg.effects.mode[i] == EFFECT_AUTO ? "auto"

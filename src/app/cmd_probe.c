@@ -8,7 +8,6 @@
 #include "app/app.h"
 #include "common/log.h"
 #include "config/config.h"
-#include "data/extfile.h"
 #include "data/probe.h"
 #include "data/source.h"
 #include "light/light.h"
@@ -23,14 +22,15 @@
 static int usage(FILE *out)
 {
     fprintf(out,
-            "usage: anvil probe [CONFIG | FILE...] --at LAT,LON,HEIGHT_M [--step N] [--json]\n"
+            "usage: anvil probe [CONFIG] [FILE...] --at LAT,LON,HEIGHT_M [--step N] [--json]\n"
             "                   [--set PATH=VALUE]... [--quiet]\n"
             "  The values at one point of a scene's data (docs/analysis.md): where it is,\n"
             "  every species' mass ratio (g/kg), the condensate, temperature (C), pressure\n"
             "  (hPa), the wind (speed, the direction it blows from, vertical), the extinction\n"
             "  of the volume anvil render would draw there (1/km) and its light map's value.\n"
-            "  CONFIG is a scene file; FILE... are WRF (or extinction) NetCDF files read with\n"
-            "  the defaults.  LAT, LON in degrees (north, east), HEIGHT_M metres above sea\n"
+            "  CONFIG is a scene file; FILE... are data files or quoted patterns (WRF, an\n"
+            "  extinction file, an Isabel folder), read with CONFIG's settings or the\n"
+            "  defaults.  LAT, LON in degrees (north, east), HEIGHT_M metres above sea\n"
             "  level.  --step N: the time step (default data.step); --json: one JSON object.\n");
     return out == stdout ? EXIT_OK : EXIT_USAGE;
 }
@@ -62,35 +62,6 @@ bad:
               "degrees east, metres above sea level), e.g. --at 27.5,-88.4,3000",
               s);
     return false;
-}
-
-/* The scene: a config file, or data files read with the defaults. */
-static bool load_scene(char **names, int n, char **sets, int n_sets, struct config *cfg)
-{
-    if (n == 1 && !data_file_is_netcdf(names[0]))
-        return config_load_overrides(names[0], sets, n_sets, cfg);
-    config_defaults(cfg);
-    if (n > 0) {
-        if (n > CONFIG_MAX_FILES) {
-            log_error("probe: at most %d data files, got %d", CONFIG_MAX_FILES, n);
-            return false;
-        }
-        cfg->scene.kind = SCENE_DATA;
-        cfg->data.format = n == 1 && extfile_probe(names[0]) ? DATA_EXTINCTION : DATA_WRF;
-        for (int i = 0; i < n; i++) {
-            if (strlen(names[i]) >= CONFIG_PATH_MAX) {
-                log_error("%s: path too long", names[i]);
-                return false;
-            }
-            snprintf(cfg->data.files[i], CONFIG_PATH_MAX, "%s", names[i]);
-        }
-        cfg->data.file_count = n;
-    }
-    for (int i = 0; i < n_sets; i++) {
-        if (!config_set(cfg, sets[i]))
-            return false;
-    }
-    return config_validate(cfg);
 }
 
 /* The light map anvil render would build for CFG's still picture (the CPU reference, which the
@@ -190,7 +161,8 @@ int cmd_probe(int argc, char **argv)
         log_error("out of memory");
         return EXIT_FAILED;
     }
-    if (!load_scene(argv + optind, argc - optind, sets, n_sets, cfg))
+    if (app_load_scene("probe", argv + optind, argc - optind, sets, n_sets, cfg, NULL) !=
+        EXIT_OK)
         goto done;
     if (!(pr = probe_create(cfg)))
         goto done;

@@ -15,6 +15,8 @@
 
 struct reference_options {
     const char *config;
+    char **args; /* CONFIG, FILES... (app_load_scene) */
+    int n_args;
     const char *output;
     char *sets[MAX_SETS];
     int n_sets;
@@ -26,8 +28,9 @@ struct reference_options {
 
 static int usage(FILE *out)
 {
-    fprintf(out, "usage: anvil reference [CONFIG] -o FILE.pfm --spp N [--threads N] [--seed S]\n"
-                 "                       [--albedo A] [--jitter] [--set PATH=VALUE]... [--quiet]\n"
+    fprintf(out, "usage: anvil reference [CONFIG] [FILE...] -o FILE.pfm --spp N [--threads N]\n"
+                 "                       [--seed S] [--albedo A] [--jitter] [--set PATH=VALUE]...\n"
+                 "                       [--quiet]\n"
                  "Path-traces the config's view (Monte Carlo: all orders of scattering, sun and\n"
                  "sky) and writes the mean radiance to FILE.pfm and the standard error of each\n"
                  "pixel to FILE.stderr.pfm (docs/reference.md).\n"
@@ -98,12 +101,8 @@ static int parse_options(int argc, char **argv, struct reference_options *o)
             return EXIT_USAGE;
         }
     }
-    if (optind < argc)
-        o->config = argv[optind++];
-    if (optind < argc) {
-        log_error("reference: unexpected argument \"%s\" (one config file at most)", argv[optind]);
-        return EXIT_USAGE;
-    }
+    o->args = argv + optind;
+    o->n_args = argc - optind;
     if (!o->output) {
         log_error("reference: missing -o FILE.pfm");
         return EXIT_USAGE;
@@ -139,7 +138,8 @@ int cmd_reference(int argc, char **argv)
         return rc;
 
     struct config cfg;
-    if (!config_load_overrides(o.config, o.sets, o.n_sets, &cfg))
+    if (app_load_scene("reference", o.args, o.n_args, o.sets, o.n_sets, &cfg, &o.config) !=
+        EXIT_OK)
         return EXIT_BAD_INPUT;
     double start = time_now_ms();
     struct ext_volume vol = {0};

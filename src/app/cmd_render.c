@@ -23,7 +23,10 @@
 #include "session/session.h"
 
 struct render_options {
-    const char *config;
+    const char *config;    /* the config among ARGS (after load_configs), or NULL */
+    const char *command;   /* "render" or "run" */
+    char **args;           /* CONFIG, FILES...: a config first, then data files (app_load_scene) */
+    int n_args;
     const char *output;
     const char *stats;
     char *sets[64];
@@ -68,6 +71,7 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         {NULL, 0, NULL, 0},
     };
     memset(o, 0, sizeof(*o));
+    o->command = need_output ? "render" : "run";
     optind = 1;
     int c;
     while ((c = getopt_long(argc, argv, "o:qh", longopts, NULL)) != -1) {
@@ -152,13 +156,8 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
             return EXIT_USAGE;
         }
     }
-    if (optind < argc)
-        o->config = argv[optind++];
-    if (optind < argc) {
-        log_error("%s: unexpected argument \"%s\" (one config file at most)", argv[0],
-                  argv[optind]);
-        return EXIT_USAGE;
-    }
+    o->args = argv + optind;
+    o->n_args = argc - optind;
     if (need_output && !o->output && !(o->display && strcmp(o->display, "help") == 0)) {
         log_error(o->display ? "render: missing -o FOLDER/ (one image per view goes there)"
                              : "render: missing -o FILE.png or -o FILE.pfm");
@@ -295,7 +294,8 @@ static int usage(FILE *out, bool run)
 {
     if (run)
         fprintf(out,
-                "usage: anvil run [CONFIG] [--display DISPLAY.cfg] [--set PATH=VALUE]...\n"
+                "usage: anvil run [CONFIG] [FILE...] [--display DISPLAY.cfg]\n"
+                "                 [--set PATH=VALUE]...\n"
                 "                 [--input SCRIPT] [--wand NAME] [--transfers DIR] [--time S]\n"
                 "                 [--path CAMERA-PATH.cfg] [--record FILE] [--stats FILE.json]\n"
                 "                 [--quiet]\n"
@@ -303,11 +303,15 @@ static int usage(FILE *out, bool run)
                 "  replays it (docs/menu.md, \"Recordings\").\n"
                 "  Under mpirun each rank draws some walls of --display (docs/displays.md,\n"
                 "  \"Running a CAVE on a cluster\"); --check-sync checks every frame on every rank.\n"
-                "  Without --display: one window of the scene's camera (camera.*), orbiting\n"
-                "  its target.  The keys mean the same on every display:\n");
+                "  FILE...: data files, folders or quoted patterns ('wrfout_d01_*'), known by\n"
+                "  their content, after an optional config for the rest (docs/data.md).\n"
+                "  Without --display: one window of the scene's camera (camera.*; data without\n"
+                "  one: framing the domain), orbiting its target.  The keys mean the same on\n"
+                "  every display:\n");
     else
         fprintf(out,
-                "usage: anvil render [CONFIG] -o FILE.png|FILE.pfm [--set PATH=VALUE]...\n"
+                "usage: anvil render [CONFIG] [FILE...] -o FILE.png|FILE.pfm\n"
+                "                    [--set PATH=VALUE]...\n"
                 "                    [--input SCRIPT] [--menu] [--stats FILE.json] [--quiet]\n"
                 "       anvil render [CONFIG] --display DISPLAY.cfg [--time SECONDS] "
                 "-o FOLDER/ [--format png|pfm] [...]\n"
@@ -316,6 +320,8 @@ static int usage(FILE *out, bool run)
                 "                    -o out/frame-%%05d.png | -o storm.mp4 [--codec NAME]\n"
                 "       anvil render [CONFIG] --path CAMERA-PATH.cfg [--fps N] -o fly.mp4\n"
                 "       anvil render --display help\n"
+                "  FILE...: data files, folders or quoted patterns ('wrfout_d01_*'), known by\n"
+                "  their content, after an optional config for the rest (docs/data.md).\n"
                 "  An animation writes every frame: the time steps FIRST..LAST (with --fps above\n"
                 "  playback.speed and effects.temporal, blended frames between them), a camera\n"
                 "  path, or a script's frames (--input).  Movie encoders here: %s\n"
@@ -339,16 +345,18 @@ static void print_backend(const char *name, const char *what, void *user)
 /* Loads the scene config and the display config (or makes the orbit display's) with the
  * --set overrides: those naming display settings go to the display. */
 static int load_configs(struct render_options *o, struct config *cfg,
-                        struct display_config *dcfg)
+                        struct display_config *dcfg, struct display_navigation *room)
 {
     char *display_sets[64];
     int n_display_sets = 0;
     if (!app_route_sets(o->sets, &o->n_sets, o->display, display_sets, &n_display_sets))
         return EXIT_USAGE;
-    if (!config_load_overrides(o->config, o->sets, o->n_sets, cfg))
+    if (app_load_scene(o->command, o->args, o->n_args, o->sets, o->n_sets,
+                       cfg, &o->config) != EXIT_OK)
         return EXIT_BAD_INPUT;
     if (o->display) {
-        if (!app_load_display_config(o->display, display_sets, n_display_sets, dcfg))
+        if (!app_load_display_config(o->display, display_sets, n_display_sets, dcfg) ||
+            !app_frame_navigation(cfg, dcfg, room))
             return EXIT_BAD_INPUT;
         if (!display_type_available(dcfg->type)) {
             log_error("%s: display.type = \"%s\": this anvil was built without that backend%s",
@@ -487,7 +495,9 @@ static int command(int argc, char **argv, bool run)
         goto done;
     }
     struct replay replay;
-    if ((rc = load_configs(&o, cfg, dcfg)) != EXIT_OK || (rc = apply_wand_option(&o, dcfg)) ||
+    /* The room's fit is made before a cluster's rank keeps its own walls. */
+    struct display_navigation room = {0};
+    if ((rc = load_configs(&o, cfg, dcfg, &room)) != EXIT_OK || (rc = apply_wand_option(&o, dcfg)) ||
         (rc = inspect_input(&o, dcfg, &replay)))
         goto done;
     /* Under mpirun: this rank's walls (the effects are decided from all of them). */
@@ -553,6 +563,7 @@ static int command(int argc, char **argv, bool run)
                        &(struct session_desc){
                            .command = run ? "run" : "render",
                            .display = dcfg,
+                           .room_navigation = o.display ? &room : NULL,
                            .views = views_move ? NULL : views,
                            .view_count = views_move ? 0 : n,
                            .views_move = views_move,
@@ -596,6 +607,7 @@ static int command(int argc, char **argv, bool run)
         .time = o.time,
         .frames = frames_env ? strtol(frames_env, NULL, 10) : -1,
         .config_path = o.config,
+        .data_from_args = o.n_args > (o.config ? 1 : 0),
         .display_path = o.display,
         .check_sync = o.check_sync,
         .recorder = recorder,

@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <sys/stat.h>
 #include <time.h>
 
@@ -391,6 +392,45 @@ static void screenshot(struct display *d, struct session *s)
         log_warn("screenshot: not written (see above)");
 }
 
+/* The data named on the command line as scene-file settings, after the included config so that
+ * they replace its data.files: scene.kind, and data.format and data.files put first into the
+ * look's data group (LOOK, SIZE bytes: the look text of session_look_text, which has one). */
+static void data_into_look(const struct config *cfg, char *look, size_t size)
+{
+    static const char *const formats[] = {"wrf", "isabel", "extinction"};
+    char fields[CONFIG_MAX_FILES * 64 + 256];
+    size_t at = (size_t)snprintf(fields, sizeof(fields), "format = \"%s\"; files = [",
+                                 formats[cfg->data.format]);
+    for (int i = 0; i < cfg->data.file_count && at < sizeof(fields); i++) {
+        char full[PATH_MAX], cwd[PATH_MAX];
+        const char *f = cfg->data.files[i];
+        if (!strpbrk(f, "*?[") && realpath(f, full))
+            f = full;
+        else if (f[0] != '/' && getcwd(cwd, sizeof(cwd)) &&
+                 snprintf(full, sizeof(full), "%s/%s", cwd, f) < (int)sizeof(full))
+            f = full; /* a pattern, from the folder it was given in */
+        at += (size_t)snprintf(fields + at, sizeof(fields) - at, "%s\"%s\"", i ? ", " : "", f);
+    }
+    if (at >= sizeof(fields) - 4) {
+        log_warn("bookmark: the data files do not fit: it names the config's");
+        return;
+    }
+    snprintf(fields + at, sizeof(fields) - at, "]; ");
+    static const char group[] = "data = { ";
+    char *d = strstr(look, group);
+    size_t len = strlen(look), add = strlen(fields);
+    static const char scene[] = "scene = { kind = \"data\"; };\n";
+    if (!d || len + add + sizeof(scene) >= size) {
+        log_warn("bookmark: no room for the data files: it names the config's");
+        return;
+    }
+    d += sizeof(group) - 1;
+    memmove(d + add, d, strlen(d) + 1);
+    memcpy(d, fields, add);
+    memmove(look + sizeof(scene) - 1, look, strlen(look) + 1);
+    memcpy(look, scene, sizeof(scene) - 1);
+}
+
 /* C and the menu's Save view: the view as a block to paste, and a bookmark file that renders
  * what the session shows again (the view, the sun, the time step, the look, the quality the
  * menu changed). */
@@ -423,6 +463,8 @@ static void bookmark(struct session *s, const struct loop_desc *ld)
                      : "a view of a scene (anvil render THIS -o view.png)",
              full[0] ? "@include \"" : "", full, full[0] ? "\"\n" : "", view, tracker ? "" : sun);
     if (!tracker) {
+        if (ld->data_from_args)
+            data_into_look(session_config(s), look, LOOK_MAX);
         strncat(text, look, LOOK_MAX + 4096 - strlen(text) - 1);
     } else {
         strncat(text, "# the scene's look and time, for its scene file:\n",

@@ -39,6 +39,7 @@ struct loop_desc {
     /* run: where screenshots and bookmarks go ("" the working folder), and the files the
      * bookmarks include (the scene's config; the display's, on a tracked display). */
     const char *config_path, *display_path;
+    bool data_from_args; /* the scene's data came as arguments: a bookmark names them */
     bool check_sync; /* a cluster: every frame, every rank's frame checked against rank 0's */
     struct input_recorder *recorder; /* --record: every frame goes there (NULL: none) */
 };

@@ -18,6 +18,7 @@ static pthread_mutex_t log_lock = PTHREAD_MUTEX_INITIALIZER;
 static enum log_level current_level = LOG_INFO;
 static unsigned errors, warnings;
 static char last_error[1024];
+static char last_warning[1024];
 static char who[32] = "anvil"; /* the program's name in each line (log_set_name) */
 static char status[256]; /* the status line on a terminal (log_status), or "" */
 static int status_tty = -1; /* whether stderr is a terminal: -1 not asked yet */
@@ -55,6 +56,7 @@ void log_msg(enum log_level level, const char *fmt, ...)
         snprintf(last_error, sizeof(last_error), "%s", line);
     } else if (level == LOG_WARN) {
         warnings++;
+        snprintf(last_warning, sizeof(last_warning), "%s", line);
     }
     if ((int)level <= (int)current_level) {
         const char *tag = level == LOG_ERROR ? "error: " : level == LOG_WARN ? "warning: " : "";
@@ -109,6 +111,11 @@ unsigned log_warn_count(void)
 const char *log_last_error(void)
 {
     return last_error;
+}
+
+const char *log_last_warning(void)
+{
+    return last_warning;
 }
 
 int file_open_regular(const char *path, char *why, size_t why_size)

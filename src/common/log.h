@@ -45,6 +45,8 @@ unsigned log_warn_count(void);
 /* Keeps the last error message logged, for tests to check wording.  Valid until the next
  * log_msg call from any thread. */
 const char *log_last_error(void);
+/* The same for the last warning. */
+const char *log_last_warning(void);
 
 #define log_error(...) log_msg(LOG_ERROR, __VA_ARGS__)
 #define log_warn(...) log_msg(LOG_WARN, __VA_ARGS__)

@@ -129,6 +129,13 @@ static const struct config_table slice_table = {
      .flags = fl, .def = {d0, d1, d2}, .help = h}
 #define ENUM(p, m, nm, d, h) \
     {.path = p, .type = T_ENUM, .n = 1, .offset = OFF(m), .names = nm, .def = {d}, .help = h}
+/* camera.*: any of them given means the scene has a camera (else one framing the data). */
+#define CAM(p, m, lo, hi, fl, d, h)                                                          \
+    {.path = p, .type = T_DOUBLE, .n = 1, .offset = OFF(m), .min = lo, .max = hi,           \
+     .flags = (fl) | F_GIVEN, .given = OFF(camera.given), .def = {d}, .help = h}
+#define CAM3(p, m, lo, hi, fl, d0, d1, d2, h)                                                \
+    {.path = p, .type = T_DOUBLE, .n = 3, .offset = OFF(m), .min = lo, .max = hi,           \
+     .flags = (fl) | F_GIVEN, .given = OFF(camera.given), .def = {d0, d1, d2}, .help = h}
 #define EFFECT(p, e, h)                                                                      \
     {.path = p, .type = T_ENUM, .n = 1, .offset = OFF(effects.mode[e]),                      \
      .names = effect_mode_names, .def = {EFFECT_AUTO}, .help = h}
@@ -207,16 +214,16 @@ static const struct config_field settings[] = {
     BOOL("light.atmosphere", light.atmosphere, 0,
          "redden the sun by the air it crosses (Rayleigh, approximate; docs/terrain.md)"),
 
-    DBL3("camera.position", camera.position_km, -1e5, 1e5, 0, 2.0, -14.0, 4.0,
+    CAM3("camera.position", camera.position_km, -1e5, 1e5, 0, 2.0, -14.0, 4.0,
          "eye position [x, y, z], km"),
-    DBL3("camera.target", camera.target_km, -1e5, 1e5, 0, 30.0, 30.0, 7.0,
+    CAM3("camera.target", camera.target_km, -1e5, 1e5, 0, 30.0, 30.0, 7.0,
          "point looked at [x, y, z], km"),
-    DBL3("camera.up", camera.up, -1e6, 1e6, 0, 0.0, 0.0, 1.0,
+    CAM3("camera.up", camera.up, -1e6, 1e6, 0, 0.0, 0.0, 1.0,
          "up direction; any length, not parallel to the view"),
-    DBL("camera.fov", camera.fov_deg, 1, 179, F_MIN_OPEN | F_MAX_OPEN, 50.0,
+    CAM("camera.fov", camera.fov_deg, 1, 179, F_MIN_OPEN | F_MAX_OPEN, 50.0,
         "vertical field of view, degrees"),
-    DBL("camera.near", camera.near_m, 0, 1e6, F_MIN_OPEN, 10.0, "near plane distance, m"),
-    DBL("camera.far", camera.far_km, 0, 1e6, F_MIN_OPEN, 2000.0, "far plane distance, km"),
+    CAM("camera.near", camera.near_m, 0, 1e6, F_MIN_OPEN, 10.0, "near plane distance, m"),
+    CAM("camera.far", camera.far_km, 0, 1e6, F_MIN_OPEN, 2000.0, "far plane distance, km"),
 
     INT("render.width", render.width, 1, 16384, 640, "image width, pixels"),
     INT("render.height", render.height, 1, 16384, 480, "image height, pixels"),

@@ -109,6 +109,8 @@ struct config_camera {
     double fov_deg;        /* camera.fov: vertical field of view */
     double near_m;         /* camera.near: near plane distance, metres */
     double far_km;         /* camera.far */
+    bool given;            /* a camera.* setting was given (file or --set); else a scene of
+                              data gets a camera framing its domain (scene_frame_camera) */
 };
 
 struct config_render {

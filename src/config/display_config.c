@@ -76,6 +76,11 @@ const char *display_wand_source_name(enum display_wand_source s)
 #define NUM(ty, p, at, nn, lo, hi, fl, h, ...)                                               \
     {.path = p, .type = ty, .n = nn, .offset = at, .min = lo, .max = hi, .flags = fl,       \
      .def = {__VA_ARGS__}, .help = h}
+/* navigation.*: any of them given means the display places the world itself (else a tracked
+ * display fits the domain to its room, scene_frame_navigation). */
+#define NAV(p, at, nn, lo, hi, fl, h, ...)                                                   \
+    {.path = p, .type = T_DOUBLE, .n = nn, .offset = at, .min = lo, .max = hi,              \
+     .flags = (fl) | F_GIVEN, .given = DC(navigation.given), .def = {__VA_ARGS__}, .help = h}
 #define ENUM(p, at, nm, d, h) \
     {.path = p, .type = T_ENUM, .n = 1, .offset = at, .names = nm, .def = {d}, .help = h}
 #define SIZEOF(m) sizeof(((struct display_config *)0)->m)
@@ -193,13 +198,13 @@ static const struct config_field display_fields[] = {
            "OpenHMD device (source = openhmd): product name or \"null\""),
     TRACKING("head", head.tracking),
 
-    NUM(T_DOUBLE, "navigation.scale", DC(navigation.scale), 1, 0, 1e6, F_MIN_OPEN,
+    NAV("navigation.scale", DC(navigation.scale), 1, 0, 1e6, F_MIN_OPEN,
         "tracker metres per world metre (60 km shown 3 m wide: 5e-5)", 1e-5),
-    NUM(T_DOUBLE, "navigation.origin", DC(navigation.origin_km), 3, -1e5, 1e5, 0,
+    NAV("navigation.origin", DC(navigation.origin_km), 3, -1e5, 1e5, 0,
         "world point [x, y, z] (km) that is placed at position", 30.0, 30.0, 0.0),
-    NUM(T_DOUBLE, "navigation.position", DC(navigation.position), 3, -1e6, 1e6, 0,
+    NAV("navigation.position", DC(navigation.position), 3, -1e6, 1e6, 0,
         "where origin lands in the room, tracker m", 0.0, -0.16, -0.45),
-    NUM(T_DOUBLE, "navigation.orientation", DC(navigation.orientation_deg), 3, -360, 360, 0,
+    NAV("navigation.orientation", DC(navigation.orientation_deg), 3, -360, 360, 0,
         "heading, pitch, roll of the world in the room, degrees (0: north along -z)", 0),
 
     STRING("hmd.device", hmd.device, "null",

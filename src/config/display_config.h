@@ -152,6 +152,8 @@ struct display_navigation {
     double origin_km[3];       /* navigation.origin: world point (km) placed at position */
     double position[3];        /* navigation.position: tracker metres */
     double orientation_deg[3]; /* navigation.orientation: heading, pitch, roll, degrees */
+    bool given;                /* a navigation.* setting was given; else a tracked display
+                                  (cave, hmd, openxr) fits the domain to its room */
 };
 
 struct display_hmd {

@@ -1049,6 +1049,19 @@ static void resample(struct reader *r, const float *ml, float *out)
     }
 }
 
+void hgrid_grid(const struct hgrid *h, struct grid3 *out)
+{
+    const struct hgrid_meta *m = &h->meta;
+    memset(out, 0, sizeof(*out));
+    out->n[0] = m->nx;
+    out->n[1] = m->ny;
+    out->n[2] = m->nz;
+    out->spacing[0] = m->dx;
+    out->spacing[1] = m->dy;
+    out->spacing[2] = (m->top_m - m->bottom_m) / m->nz;
+    out->origin[2] = m->bottom_m;
+}
+
 bool hgrid_read_step(struct hgrid *h, int step, const struct hgrid_desc *d,
                      struct field_volume *out, struct hgrid_stats *stats)
 {
@@ -1075,13 +1088,7 @@ bool hgrid_read_step(struct hgrid *h, int step, const struct hgrid_desc *d,
                        .index = h->steps[step].index, .stats = stats};
     if (!data_nc_still_whole(r.f->path, &r.f->layout))
         return false;
-    out->grid.n[0] = m->nx;
-    out->grid.n[1] = m->ny;
-    out->grid.n[2] = m->nz;
-    out->grid.spacing[0] = m->dx;
-    out->grid.spacing[1] = m->dy;
-    out->grid.spacing[2] = (m->top_m - m->bottom_m) / m->nz;
-    out->grid.origin[2] = m->bottom_m;
+    hgrid_grid(h, &out->grid);
     size_t cells = grid3_count(&out->grid);
     size_t raw_n = (size_t)(m->nx + 1) * (m->ny + 1) * (m->nz + 1);
     r.raw = malloc(raw_n * sizeof(float));

@@ -136,12 +136,17 @@ struct hgrid_stats {
 /* Bytes a step read with D allocates (outputs and scratch). */
 size_t hgrid_step_bytes(const struct hgrid *h, const struct hgrid_desc *d);
 
+/* The grid hgrid_read_step puts every step on, from the files' coordinates (no step read):
+ * nx x ny columns of dx x dy from (0, 0), nz even levels from the lowest to the highest cell
+ * face. */
+void hgrid_grid(const struct hgrid *h, struct grid3 *out);
+
 /* Reads STEP into OUT (initialised here; finish with field_volume_finish): the species the
  * files hold (others NULL: zero), density (from the file's density, else from pressure and
  * temperature or potential temperature, else NULL: the standard atmosphere), and as D asks
- * vapour, temperature and wind speed (and its components).  The grid: nx x ny columns of dx x dy from (0, 0), nz
- * even levels from the lowest to the highest cell face.  Bad values as the WRF reader treats
- * them; a quantity all bad in the step is an error.  False after one log_error. */
+ * vapour, temperature and wind speed (and its components), on hgrid_grid's grid.  Bad values
+ * as the WRF reader treats them; a quantity all bad in the step is an error.  False after one
+ * log_error. */
 bool hgrid_read_step(struct hgrid *h, int step, const struct hgrid_desc *d,
                      struct field_volume *out, struct hgrid_stats *stats);
 

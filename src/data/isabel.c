@@ -350,3 +350,18 @@ error:
     field_volume_finish(out);
     return false;
 }
+
+bool isabel_probe(const char *dir)
+{
+    struct stat st;
+    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode))
+        return false;
+    struct isabel_desc d = {.dir = dir};
+    char path[4096];
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        isabel_brick_path(&d, species_wrf_name((enum species)f), 0, path, sizeof(path));
+        if (is_regular_file(path))
+            return true;
+    }
+    return false;
+}

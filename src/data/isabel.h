@@ -79,6 +79,11 @@ struct isabel_stats {
  * none (logged as an error naming the folder). */
 int isabel_step_count(const struct isabel_desc *d);
 
+/* Whether DIR is a folder holding the first step's brick of at least one species
+ * (QCLOUDf01.bin, ...).  Logs nothing. */
+bool isabel_probe(const char *dir);
+
+
 /* Path of FIELD's brick for STEP (0-based: step 0 is f01) into BUF of SIZE bytes. */
 void isabel_brick_path(const struct isabel_desc *d, const char *field, int step, char *buf,
                        size_t size);

@@ -365,20 +365,25 @@ static bool check(struct cursor *c, uint64_t *need)
             last = header; /* no records yet: the data may begin at the end of the file */
         }
         if (overflow || last > c->size) {
+            /* The file, the variable and how many bytes are missing. */
+            char missing[64] = "";
+            if (!overflow)
+                snprintf(missing, sizeof(missing), " (%llu bytes missing)",
+                         (unsigned long long)(last - c->size));
             if (v->record)
                 ok = failf(c,
                            "variable %s: %llu records need the file to reach byte %s%llu, "
-                           "it has %llu bytes: truncated or damaged",
+                           "it has %llu bytes%s: truncated or damaged",
                            v->name, (unsigned long long)numrecs, overflow ? "beyond " : "",
                            (unsigned long long)(overflow ? UINT64_MAX : last),
-                           (unsigned long long)c->size);
+                           (unsigned long long)c->size, missing);
             else
                 ok = failf(c,
                            "variable %s: its data needs the file to reach byte %s%llu, it has "
-                           "%llu bytes: truncated or damaged",
+                           "%llu bytes%s: truncated or damaged",
                            v->name, overflow ? "beyond " : "",
                            (unsigned long long)(overflow ? UINT64_MAX : last),
-                           (unsigned long long)c->size);
+                           (unsigned long long)c->size, missing);
         }
         if (last > end)
             end = last;
@@ -491,8 +496,9 @@ bool data_nc_still_whole(const char *path, const struct data_nc_layout *layout)
         return true;
     if ((uint64_t)st.st_size >= layout->need)
         return true;
-    log_error("%s: the file has %lld bytes now, its header says %llu: it was cut short after it "
-              "was opened (missing data would read as zeros)",
-              path, (long long)st.st_size, (unsigned long long)layout->need);
+    log_error("%s: the file has %lld bytes now, its header says %llu (%llu bytes missing): it was "
+              "cut short after it was opened (missing data would read as zeros)",
+              path, (long long)st.st_size, (unsigned long long)layout->need,
+              (unsigned long long)(layout->need - (uint64_t)st.st_size));
     return false;
 }

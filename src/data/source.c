@@ -1,5 +1,6 @@
 #include "data/source.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -144,14 +145,47 @@ bool data_source_geo(struct data_source *s, struct geo_map *out)
     return false;
 }
 
-static bool load_fields(struct data_source *s, int step, bool temperature, bool wind,
-                        struct field_volume *out)
+/* A WRF step that holds no condensate and some fill values is most likely a step the model
+ * never wrote (a run that stopped, a file cut and padded): said, naming the step, since it
+ * renders as clear sky.  (A variable all of whose values are fill is refused by the reader.) */
+static void warn_empty_step(const struct data_source *s, int step, const struct wrf_stats *st)
 {
-    if (s->wrf)
-        return wrf_read_step(s->wrf, step, &s->desc.wrf, out, NULL);
+    size_t fill = 0, count = 0;
+    double top = 0.0;
+    for (int v = 0; v < SPECIES_COUNT; v++) {
+        const struct wrf_var_stats *vs = &st->var[v];
+        if (!vs->read)
+            continue;
+        fill += vs->fill;
+        count += vs->count;
+        top = fmax(top, vs->max);
+    }
+    if (fill == 0 || top > 0.0)
+        return;
+    log_warn("%s: time step %d (%s): no condensate: of the species' %zu values %zu are fill "
+             "values and the rest zero (a step the model did not write?): it shows clear sky",
+             wrf_step_path(s->wrf, step), step, wrf_step_date(s->wrf, step), count, fill);
+}
+
+/* A step's mass ratios and air density, with vapour, temperature and wind where asked for
+ * (or where the source's description asks for them). */
+static bool load_fields(struct data_source *s, int step, bool qvapor, bool temperature,
+                        bool wind, struct field_volume *out)
+{
+    if (s->wrf) {
+        struct wrf_desc d = s->desc.wrf;
+        d.qvapor = d.qvapor || qvapor;
+        d.temperature = d.temperature || temperature;
+        d.wind = d.wind || wind;
+        struct wrf_stats st;
+        if (!wrf_read_step(s->wrf, step, &d, out, &st))
+            return false;
+        warn_empty_step(s, step, &st);
+        return true;
+    }
     if (s->hg) {
         struct hgrid_desc hd = {.memory_mb = s->desc.wrf.memory_mb,
-                                .qvapor = s->desc.wrf.qvapor,
+                                .qvapor = qvapor || s->desc.wrf.qvapor,
                                 .temperature = temperature || s->desc.wrf.temperature,
                                 .wind = wind || s->desc.wrf.wind,
                                 .wind_components = s->desc.wind_components,
@@ -170,7 +204,7 @@ static bool load_fields(struct data_source *s, int step, bool temperature, bool 
         return false;
     }
     struct isabel_desc id = s->desc.isabel;
-    id.qvapor = id.qvapor || s->desc.wrf.qvapor;
+    id.qvapor = id.qvapor || qvapor || s->desc.wrf.qvapor;
     id.temperature = id.temperature || temperature;
     id.wind = id.wind || wind;
     id.wind_components = id.wind_components || s->desc.wind_components;
@@ -179,30 +213,19 @@ static bool load_fields(struct data_source *s, int step, bool temperature, bool 
 
 bool data_source_load_fields(struct data_source *s, int step, struct field_volume *out)
 {
-    return load_fields(s, step, false, false, out);
+    return load_fields(s, step, false, false, false, out);
 }
 
 bool data_source_load_fields_extra(struct data_source *s, int step, bool temperature, bool wind,
                                    struct field_volume *out)
 {
-    if (!s->wrf)
-        return load_fields(s, step, temperature, wind, out);
-    struct wrf_desc d = s->desc.wrf;
-    d.temperature = d.temperature || temperature;
-    d.wind = d.wind || wind;
-    return wrf_read_step(s->wrf, step, &d, out, NULL);
+    return load_fields(s, step, false, temperature, wind, out);
 }
 
 bool data_source_load_fields_want(struct data_source *s, int step,
                                   const struct data_fields_want *want, struct field_volume *out)
 {
-    if (!s->wrf)
-        return data_source_load_fields(s, step, out);
-    struct wrf_desc d = s->desc.wrf;
-    d.qvapor = d.qvapor || want->qvapor;
-    d.temperature = d.temperature || want->temperature;
-    d.wind = d.wind || want->wind;
-    return wrf_read_step(s->wrf, step, &d, out, NULL);
+    return load_fields(s, step, want->qvapor, want->temperature, want->wind, out);
 }
 
 bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,
@@ -256,4 +279,28 @@ bool data_file_is_netcdf(const char *path)
     return (n >= 4 && head[0] == 'C' && head[1] == 'D' && head[2] == 'F' &&
             (head[3] == 1 || head[3] == 2 || head[3] == 5)) ||
            (n == 8 && memcmp(head, hdf5, 8) == 0);
+}
+
+bool data_source_grid(const struct data_source *s, struct grid3 *out)
+{
+    switch (s->desc.format) {
+    case DATA_SOURCE_WRF:
+        if (!wrf_grid(s->wrf, &s->desc.wrf, out))
+            return false;
+        break;
+    case DATA_SOURCE_ISABEL:
+        isabel_grid(&s->desc.isabel, out);
+        break;
+    case DATA_SOURCE_EXTINCTION:
+        *out = *extfile_grid(s->ext);
+        break;
+    case DATA_SOURCE_CM1:
+    case DATA_SOURCE_CF:
+        hgrid_grid(s->hg, out);
+        break;
+    }
+    double k = s->desc.height_scale > 0.0 ? s->desc.height_scale : 1.0;
+    out->origin[2] *= k; /* as ext_volume_stretch_height */
+    out->spacing[2] *= k;
+    return true;
 }

@@ -51,6 +51,10 @@ void data_source_close(struct data_source *s); /* NULL is fine */
 int data_source_step_count(const struct data_source *s);
 const char *data_source_step_date(const struct data_source *s, int step); /* "" if unknown */
 
+/* The grid a step loads onto (data_source_load), the height scale applied, without reading a
+ * step.  False (logged) when the description selects nothing. */
+bool data_source_grid(const struct data_source *s, struct grid3 *out);
+
 /* Loads STEP as extinction into OUT, with the description's detail and height scale applied (initialised here; the caller finishes it).  LOAD_MS and
  * CONVERT_MS (may be NULL) receive the milliseconds spent reading and converting.  Not to be
  * called from two threads at once on one source. */

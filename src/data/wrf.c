@@ -1939,3 +1939,51 @@ done:
     free(b.one);
     return result;
 }
+
+/* ---- what a file is, and the grid without reading --------------------------------------- */
+
+bool wrf_probe(const char *path)
+{
+    static const char *const dims[] = {"west_east", "south_north", "bottom_top",
+                                       "bottom_top_stag"};
+    static const char *const vars[] = {"PH", "PHB"};
+    int nc, id;
+    char why[512];
+    data_nc_lock_file(path, "reading", false);
+    bool yes = data_nc_open(path, &nc, NULL, why, sizeof(why));
+    if (yes) {
+        for (size_t i = 0; yes && i < sizeof(dims) / sizeof(dims[0]); i++)
+            yes = nc_inq_dimid(nc, dims[i], &id) == NC_NOERR;
+        for (size_t i = 0; yes && i < sizeof(vars) / sizeof(vars[0]); i++)
+            yes = nc_inq_varid(nc, vars[i], &id) == NC_NOERR;
+        nc_close(nc);
+    }
+    data_nc_unlock();
+    return yes;
+}
+
+bool wrf_grid(const struct wrf *w, const struct wrf_desc *d, struct grid3 *out)
+{
+    /* The grid wrf_read_step puts the step on (its "output grid"), from the same selection. */
+    struct selection s;
+    if (!make_selection(w, d, &s))
+        return false;
+    double bottom = d->bottom_m;
+    double top = d->top_m > 0 ? d->top_m : w->auto_top;
+    if (!(top > bottom)) {
+        log_error("%s: height grid top %.0f m is not above its bottom %.0f m",
+                  w->files[w->steps[0].file].path, top, bottom);
+        return false;
+    }
+    double dzf = (top - bottom) / s.levels;
+    out->n[0] = s.nx;
+    out->n[1] = s.ny;
+    out->n[2] = s.nz;
+    out->spacing[0] = w->meta.dx * s.sx;
+    out->spacing[1] = w->meta.dy * s.sy;
+    out->spacing[2] = dzf * s.sz;
+    out->origin[0] = (s.x0 + 0.5) * w->meta.dx - 0.5 * out->spacing[0];
+    out->origin[1] = (s.y0 + 0.5) * w->meta.dy - 0.5 * out->spacing[1];
+    out->origin[2] = bottom + (s.z0 + 0.5) * dzf - 0.5 * out->spacing[2];
+    return true;
+}

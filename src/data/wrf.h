@@ -138,6 +138,14 @@ const char *wrf_step_path(const struct wrf *w, int step);
  * logs when D selects nothing. */
 size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d);
 
+/* The grid wrf_read_step puts a step read with D on, without reading a step (a camera framing
+ * the data needs only this).  False (logged) when D selects nothing. */
+bool wrf_grid(const struct wrf *w, const struct wrf_desc *d, struct grid3 *out);
+
+/* Whether PATH is WRF output: a NetCDF file with the dimensions west_east, south_north,
+ * bottom_top and bottom_top_stag and the variables PH and PHB.  Logs nothing. */
+bool wrf_probe(const char *path);
+
 /* Reads STEP into OUT (initialised here; the caller frees it with field_volume_finish).  STATS
  * (may be NULL) receives the bad-value counts; each bad count is also reported with one
  * log_warn per variable.  On failure OUT is zeroed, one log_error names the file and variable,

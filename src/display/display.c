@@ -326,6 +326,10 @@ bool display_show_window(struct display *d, struct renderer *r, const struct gpu
 
 /* ---- windows: the one key table, and window events as input events -------------------- */
 
+/* A key held with Shift (SHIFTED(GLFW_KEY_F)): an entry of its own; without one the key means
+ * what it means alone. */
+#define SHIFTED(k) ((k) | 0x10000)
+
 /* A window key, what it means everywhere, and whether holding it repeats. */
 static const struct {
     int glfw;
@@ -367,6 +371,7 @@ static const struct {
     {GLFW_KEY_LEFT_BRACKET, INPUT_KEY_PAGE_PREV, false, "["},
     {GLFW_KEY_ESCAPE, INPUT_KEY_QUIT, false, "Esc"},
     {GLFW_KEY_Q, INPUT_KEY_QUIT, false, "Q"},
+    {SHIFTED(GLFW_KEY_F), INPUT_KEY_FRAME, false, "Shift+F"},
 };
 
 #define KEY_COUNT ((int)(sizeof(keys) / sizeof(keys[0])))
@@ -412,8 +417,13 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
         push_button(d, INPUT_BUTTON_RESET, false);
         return;
     }
+    int shifted = SHIFTED(key);
+    bool has_shifted = false;
+    for (int i = 0; i < KEY_COUNT; i++)
+        has_shifted = has_shifted || keys[i].glfw == shifted;
+    int code = (mods & GLFW_MOD_SHIFT) && has_shifted ? shifted : key;
     for (int i = 0; i < KEY_COUNT; i++) {
-        if (keys[i].glfw == key && (action == GLFW_PRESS || keys[i].repeats)) {
+        if (keys[i].glfw == code && (action == GLFW_PRESS || keys[i].repeats)) {
             push(d, &(struct input_event){.type = INPUT_KEY, .key = keys[i].key});
             return;
         }

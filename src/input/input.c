@@ -44,6 +44,7 @@ static const struct {
     {"path-key", INPUT_KEY_PATH_KEY},
     {"path-play", INPUT_KEY_PATH_PLAY},
     {"probe", INPUT_KEY_PROBE},
+    {"frame", INPUT_KEY_FRAME},
 };
 
 void input_queue_clear(struct input_queue *q)

@@ -70,6 +70,7 @@ enum input_key {
     INPUT_KEY_PATH_KEY,     /* n: the current view becomes the camera path's next key */
     INPUT_KEY_PATH_PLAY,    /* g: fly the camera path (again: stop) */
     INPUT_KEY_PROBE,        /* v: the probe on or off (the values at the wand or pointer) */
+    INPUT_KEY_FRAME,        /* Shift+F: the view framing the whole domain again */
     INPUT_KEY_COUNT
 };
 

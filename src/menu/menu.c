@@ -28,7 +28,7 @@ enum id {
     ID_TF_MODE, ID_TF_FIELD, ID_CHANNEL, ID_CANVAS, ID_DELETE, ID_SLOT, ID_SAVE, ID_LOAD,
     ID_AZIMUTH, ID_ELEVATION,
     ID_RAY_STEP, ID_RESOLUTION, ID_EPSILON, ID_DIFFUSE,
-    ID_SAVE_VIEW, ID_PROBE_ON, ID_PROBE_MODE, ID_PROBE_THRESHOLD, ID_PROBE_DISTANCE,
+    ID_SAVE_VIEW, ID_FRAME, ID_PROBE_ON, ID_PROBE_MODE, ID_PROBE_THRESHOLD, ID_PROBE_DISTANCE,
     ID_LAYER_ADD, ID_LAYER_ON, ID_LAYER_FIELD, ID_LAYER_MODE, ID_LAYER_EDIT, ID_LAYER_REMOVE,
     ID_LAYER_OPACITY,
     ID_SLICE_ADD, ID_SLICE_ON, ID_SLICE_FIELD, ID_SLICE_AXIS, ID_SLICE_SELECT, ID_SLICE_REMOVE,
@@ -316,6 +316,8 @@ static void layout(struct menu *m)
         struct widget *wd = add(m, W_TOGGLE, ID_LOOP, 0, "time.loop", 16, y, 200, 36, "Loop");
         if (wd)
             wd->selected = md->loop;
+        /* The whole domain in view again (the Shift+F key). */
+        add(m, W_BUTTON, ID_FRAME, 0, "time.frame", 16 + 200 + 12, y, 140, 36, "Frame");
         /* The view, the time and the look as a scene file (the C key's bookmark). */
         add(m, W_BUTTON, ID_SAVE_VIEW, 0, "time.save", m->w - 16 - 180, y, 180, 36, "Save view");
         break;
@@ -1281,6 +1283,9 @@ static void activate(struct menu *m, const struct widget *wd)
         break;
     case ID_SAVE_VIEW:
         m->changes |= MENU_ACTION_SAVE_VIEW;
+        break;
+    case ID_FRAME:
+        m->changes |= MENU_ACTION_FRAME;
         break;
     case ID_PROBE_ON:
         md->probe_on = !md->probe_on;

@@ -111,6 +111,7 @@ enum {
     MENU_CHANGE_PROBE = 1u << 10,   /* on/off, mode, threshold, distance */
     MENU_ACTION_SAVE_VIEW = 1u << 11, /* "Save view": the view and look as a scene file */
     MENU_CHANGE_SLICES = 1u << 12,  /* a slice added, removed, moved, tilted or changed */
+    MENU_ACTION_FRAME = 1u << 13,   /* "Frame": the view framing the whole domain again */
 };
 
 struct menu_desc {

@@ -258,3 +258,155 @@ void scene_detail_desc(const struct config *cfg, struct detail_desc *out)
     out->seed = cfg->detail.seed;
 }
 
+
+/* ---- framing -------------------------------------------------------------------------- */
+
+bool scene_domain_box(const struct config *cfg, double lo[3], double hi[3])
+{
+    struct grid3 g;
+    if (cfg->scene.kind == SCENE_DATA) {
+        const char *files[CONFIG_MAX_FILES];
+        struct data_source_desc desc;
+        scene_source_desc(cfg, files, &desc);
+        struct data_source *src = data_source_open(&desc);
+        if (!src)
+            return false;
+        bool ok = data_source_grid(src, &g);
+        data_source_close(src);
+        if (!ok)
+            return false;
+    } else {
+        struct synth_desc d;
+        if (!scene_synth_desc(cfg, &d))
+            return false;
+        double k = cfg->scene.height_exaggeration > 0.0 ? cfg->scene.height_exaggeration : 1.0;
+        for (int a = 0; a < 3; a++) {
+            g.n[a] = d.n[a];
+            g.spacing[a] = d.extent_m[a] / d.n[a] * (a == 2 ? k : 1.0);
+            g.origin[a] = 0.0;
+        }
+    }
+    for (int a = 0; a < 3; a++) {
+        lo[a] = g.origin[a];
+        hi[a] = g.origin[a] + g.n[a] * g.spacing[a];
+    }
+    return true;
+}
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void cross3(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static void normalize3(double v[3])
+{
+    double n = sqrt(dot3(v, v));
+    for (int i = 0; i < 3; i++)
+        v[i] /= n;
+}
+
+void scene_frame_camera(const double lo[3], const double hi[3], double fov_deg, double aspect,
+                        double near_m, struct display_camera *out)
+{
+    const double azimuth = 225.0, elevation = 30.0, margin = 0.9;
+    double centre[3], toward_eye[3], forward[3], right[3], up[3];
+    const double z_up[3] = {0.0, 0.0, 1.0};
+    for (int i = 0; i < 3; i++)
+        centre[i] = 0.5 * (lo[i] + hi[i]);
+    camera_direction(azimuth, elevation, toward_eye);
+    for (int i = 0; i < 3; i++)
+        forward[i] = -toward_eye[i];
+    cross3(forward, z_up, right);
+    normalize3(right);
+    cross3(right, forward, up);
+    /* A corner at q from the centre lies at depth D + q.forward from an eye at distance D,
+     * q.right across and q.up above the axis; it is inside the image's middle part when both
+     * are within margin * tan(half angle) * depth. */
+    double tan_v = margin * tan(0.5 * fov_deg * M_PI / 180.0), tan_h = tan_v * aspect;
+    double distance = 0.0, diagonal = 0.0;
+    for (int c = 0; c < 8; c++) {
+        double q[3] = {(c & 1 ? hi[0] : lo[0]) - centre[0], (c & 2 ? hi[1] : lo[1]) - centre[1],
+                       (c & 4 ? hi[2] : lo[2]) - centre[2]};
+        double along = dot3(q, forward);
+        distance = fmax(distance, fabs(dot3(q, right)) / tan_h - along);
+        distance = fmax(distance, fabs(dot3(q, up)) / tan_v - along);
+        distance = fmax(distance, 2.0 * near_m - along);
+        diagonal = fmax(diagonal, sqrt(dot3(q, q)));
+    }
+    for (int i = 0; i < 3; i++) {
+        out->eye[i] = centre[i] + distance * toward_eye[i];
+        out->target[i] = centre[i];
+        out->up[i] = z_up[i];
+    }
+    out->fov_deg = fov_deg;
+    out->near_m = near_m;
+    out->far_m = fmax(2.0 * (distance + diagonal), 2000e3);
+}
+
+void scene_camera_to_config(const struct display_camera *c, struct config_camera *out)
+{
+    for (int i = 0; i < 3; i++) {
+        out->position_km[i] = c->eye[i] / 1000.0;
+        out->target_km[i] = c->target[i] / 1000.0;
+        out->up[i] = c->up[i];
+    }
+    out->fov_deg = c->fov_deg;
+    out->near_m = c->near_m;
+    out->far_km = c->far_m / 1000.0;
+}
+
+void scene_frame_navigation(const double lo[3], const double hi[3],
+                            const struct display_config *cfg, struct display_navigation *out)
+{
+    const double *head = cfg->head.position;
+    /* The room in tracker metres (x right, y up, z toward the back). */
+    double rlo[3], rhi[3];
+    if (cfg->type == DISPLAY_TYPE_CAVE && cfg->wall_count > 0) {
+        for (int i = 0; i < 3; i++)
+            rlo[i] = INFINITY, rhi[i] = -INFINITY;
+        for (int w = 0; w < cfg->wall_count; w++) {
+            const struct display_wall *wall = &cfg->walls[w];
+            for (int i = 0; i < 3; i++) {
+                double c[4] = {wall->lower_left[i], wall->lower_right[i], wall->upper_left[i],
+                               wall->lower_right[i] + wall->upper_left[i] - wall->lower_left[i]};
+                for (int k = 0; k < 4; k++) {
+                    rlo[i] = fmin(rlo[i], c[k]);
+                    rhi[i] = fmax(rhi[i], c[k]);
+                }
+            }
+        }
+    } else {
+        rlo[0] = head[0] - 1.5, rhi[0] = head[0] + 1.5;
+        rlo[1] = 0.0, rhi[1] = fmax(head[1], 1.0);
+        rlo[2] = head[2] - 3.7, rhi[2] = head[2];
+    }
+    /* The footprint: 80 % of the room's width, from the front wall to 0.2 m before the head
+     * (the whole room's depth where the head stands outside it). */
+    double front = rlo[2], back = fmin(rhi[2], head[2] - 0.2);
+    if (!(back - front > 0.5))
+        front = rlo[2], back = rhi[2];
+    double width = 0.8 * (rhi[0] - rlo[0]), depth = back - front;
+    /* The top at least 0.3 m below the eyes (and 1 m tall at most where the eyes are low). */
+    double floor = rlo[1], tall = head[1] - floor - 0.3;
+    if (!(tall > 0.3))
+        tall = 1.0;
+    double w = hi[0] - lo[0], d = hi[1] - lo[1], h = hi[2] - lo[2];
+    double scale = fmin(fmin(width / w, depth / d), tall / h);
+    memset(out, 0, sizeof(*out));
+    out->scale = scale;
+    out->origin_km[0] = 0.5 * (lo[0] + hi[0]) / 1000.0;
+    out->origin_km[1] = 0.5 * (lo[1] + hi[1]) / 1000.0;
+    out->origin_km[2] = lo[2] / 1000.0;
+    /* Straight ahead of the head (north along -z), its southern edge at the back of the
+     * footprint. */
+    out->position[0] = head[0];
+    out->position[1] = floor;
+    out->position[2] = back - 0.5 * d * scale;
+}

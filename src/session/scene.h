@@ -55,6 +55,31 @@ void scene_camera(const struct config *cfg, struct display_camera *out);
 /* The config's camera at WIDTH x HEIGHT. */
 void scene_camera_view(const struct config *cfg, int width, int height, struct render_view *view);
 
+/* ---- framing: a view of the whole domain when the scene gives none (docs/data.md) ------ */
+
+/* The box the scene's volume fills, world metres (LO, HI corners, the height exaggeration
+ * applied), without reading a time step: the data's grid (data_source_grid) or the synthetic
+ * scene's.  False (logged) when the data cannot be opened. */
+bool scene_domain_box(const struct config *cfg, double lo[3], double hi[3]);
+
+/* A camera that frames the box LO..HI: looking at its centre from the south-west at 30
+ * degrees elevation, every corner inside the middle 90 % of an image of ASPECT (width /
+ * height) with the vertical field of view FOV_DEG and the near plane NEAR_M; the far plane
+ * beyond the farthest corner. */
+void scene_frame_camera(const double lo[3], const double hi[3], double fov_deg, double aspect,
+                        double near_m, struct display_camera *out);
+
+/* CFG's camera.* (km) from C (metres), camera.given left as it was. */
+void scene_camera_to_config(const struct display_camera *c, struct config_camera *out);
+
+/* The navigation that fits the box LO..HI into the room of the tracked display CFG (cave:
+ * its walls' bounding box; hmd, openxr: 3 m wide and 3.5 m deep ahead of head.position, the
+ * floor at y = 0): north away from the viewer, the ground on the floor, the centre straight
+ * ahead of head.position, the footprint within 80 % of the room's width and the room's depth
+ * from the front wall to 0.2 m before the head, the top at least 0.3 m below the eyes. */
+void scene_frame_navigation(const double lo[3], const double hi[3],
+                            const struct display_config *cfg, struct display_navigation *out);
+
 /* Fills OUT from CFG: format, files (pointers into CFG, which must outlive OUT), WRF reading
  * (data.levels, data.top, data.stride, data.crop, data.memory), Isabel sizes, optics, the
  * species toggles, procedural detail and the height exaggeration. */

@@ -51,6 +51,10 @@ struct session {
     struct playback playback;
     struct display_navigation nav, nav_home;
     struct display_camera camera, camera_home;
+    /* The views framing the whole domain (Shift+F, the menu's Frame): the orbit camera's and
+     * a tracked display's navigation fitting it to the room. */
+    struct display_camera camera_frame;
+    struct display_navigation nav_frame;
     bool quit;
     unsigned requests; /* SESSION_REQUEST_*, for the caller (session_take_requests) */
 
@@ -267,6 +271,29 @@ static bool create_menu(struct session *s)
     return s->menu_view != NULL;
 }
 
+/* The framing views of the volume's box G, for the frame key.  The views the session starts
+ * with are the config's and the display's: where those give none, the command line put the
+ * same framing there (app_frame_camera, app_frame_navigation). */
+static void frame_views(struct session *s, const struct grid3 *g)
+{
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = g->origin[a];
+        hi[a] = g->origin[a] + g->n[a] * g->spacing[a];
+    }
+    const struct config_camera *c = &s->cfg.camera;
+    scene_frame_camera(lo, hi, c->fov_deg, (double)s->cfg.render.width / s->cfg.render.height,
+                       c->near_m, &s->camera_frame);
+    s->nav_frame = s->nav;
+    enum display_type t = s->display.type;
+    bool room = t == DISPLAY_TYPE_CAVE || t == DISPLAY_TYPE_HMD || t == DISPLAY_TYPE_OPENXR;
+    if (room && s->desc.room_navigation)
+        s->nav_frame = *s->desc.room_navigation;
+    else if (room)
+        scene_frame_navigation(lo, hi, &s->display, &s->nav_frame);
+    s->nav.given = s->nav_home.given = s->nav_frame.given = false; /* not frame state */
+}
+
 struct session *session_create(const struct config *cfg, const struct session_desc *d, int *rc)
 {
     *rc = 4;
@@ -314,6 +341,7 @@ struct session *session_create(const struct config *cfg, const struct session_de
              vol.grid.n[1], vol.grid.n[2], vol.grid.n[0] * vol.grid.spacing[0] / 1000.0,
              vol.grid.n[1] * vol.grid.spacing[1] / 1000.0,
              vol.grid.n[2] * vol.grid.spacing[2] / 1000.0, s->stats.volume_ms);
+    frame_views(s, &vol.grid);
     if (!decide_effects(s, &vol)) {
         ext_volume_finish(&vol);
         *rc = 1;
@@ -540,21 +568,31 @@ void session_view_text(const struct session *s, char *buf, size_t size)
 {
     const struct display_camera *c = &s->camera;
     const struct display_navigation *n = &s->nav;
-    if (s->tracker)
+    if (s->tracker) {
         snprintf(buf, size,
                  "navigation = {\n    scale = %.9g;\n    origin = [%.6f, %.6f, %.6f];\n"
                  "    position = [%.6f, %.6f, %.6f];\n    orientation = [%.6f, %.6f, %.6f];\n};\n",
                  n->scale, n->origin_km[0], n->origin_km[1], n->origin_km[2], n->position[0],
                  n->position[1], n->position[2], n->orientation_deg[0], n->orientation_deg[1],
                  n->orientation_deg[2]);
-    else
+    } else {
+        /* Every digit (a framed camera's numbers are not round, and the bookmark must render
+         * the same picture), each a real number to libconfig. */
+        const double v[12] = {c->eye[0] / 1000.0,    c->eye[1] / 1000.0,    c->eye[2] / 1000.0,
+                              c->target[0] / 1000.0, c->target[1] / 1000.0, c->target[2] / 1000.0,
+                              c->up[0],              c->up[1],              c->up[2],
+                              c->fov_deg,            c->near_m,             c->far_m / 1000.0};
+        char t[12][32];
+        for (int i = 0; i < 12; i++) {
+            snprintf(t[i], sizeof(t[i]), "%.17g", v[i]);
+            if (!strpbrk(t[i], ".eEn"))
+                strcat(t[i], ".0");
+        }
         snprintf(buf, size,
-                 "camera = {\n    position = [%.6f, %.6f, %.6f];\n"
-                 "    target = [%.6f, %.6f, %.6f];\n    up = [%.6f, %.6f, %.6f];\n"
-                 "    fov = %.6f;\n};\n",
-                 c->eye[0] / 1000.0, c->eye[1] / 1000.0, c->eye[2] / 1000.0,
-                 c->target[0] / 1000.0, c->target[1] / 1000.0, c->target[2] / 1000.0, c->up[0],
-                 c->up[1], c->up[2], c->fov_deg);
+                 "camera = {\n    position = [%s, %s, %s];\n    target = [%s, %s, %s];\n"
+                 "    up = [%s, %s, %s];\n    fov = %s;\n    near = %s;\n    far = %s;\n};\n",
+                 t[0], t[1], t[2], t[3], t[4], t[5], t[6], t[7], t[8], t[9], t[10], t[11]);
+    }
 }
 
 void session_look_text(const struct session *s, char *buf, size_t size)
@@ -686,6 +724,14 @@ void session_reset_view(struct session *s)
     s->camera = s->camera_home;
 }
 
+void session_frame_view(struct session *s)
+{
+    if (s->tracker)
+        s->nav = s->nav_frame;
+    else
+        s->camera = s->camera_frame;
+}
+
 /* ---- the menu's changes --------------------------------------------------------------- */
 
 static void transfer_path(const struct session *s, int slot, char *buf, size_t size)
@@ -794,6 +840,8 @@ static void apply_changes(struct session *s, unsigned ch)
     }
     if (ch & MENU_ACTION_RESET_VIEW)
         session_reset_view(s);
+    if (ch & MENU_ACTION_FRAME)
+        session_frame_view(s);
     if (ch & MENU_ACTION_SAVE_VIEW)
         s->requests |= SESSION_REQUEST_BOOKMARK;
 }
@@ -1106,6 +1154,8 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
             path_add_key(s);
         else if (e.key == INPUT_KEY_PATH_PLAY)
             path_toggle(s);
+        else if (e.key == INPUT_KEY_FRAME)
+            session_frame_view(s);
         else if (!navigation_key(s, e.key) && !sun_key(s, e.key) && !s->menu)
             seen = false;
         break;
@@ -1753,6 +1803,8 @@ static const struct {
     {INPUT_KEY_PATH_KEY, "the current view becomes the camera path's next key (3 s on)"},
     {INPUT_KEY_PATH_PLAY, "fly the camera path from its start (again: stop)"},
     {INPUT_KEY_PROBE, "the probe on / off: the values where the pointer meets the clouds"},
+    {INPUT_KEY_FRAME, "frame: the whole domain in view again (the orbit camera from the "
+                      "south-west; a tracked display: fitted to the room)"},
     {INPUT_KEY_QUIT, "quit"},
 };
 

@@ -45,6 +45,9 @@ struct session_desc {
     const char *command;                  /* "render", "run": --stats and the log */
     const struct display_config *display; /* the display's config (copied); NULL: the orbit
                                              display of the scene's own camera */
+    /* The navigation fitting the domain to the whole room (scene_frame_navigation over every
+     * wall: a cluster's rank has only its own walls in DISPLAY); NULL: fitted to DISPLAY's. */
+    const struct display_navigation *room_navigation;
     /* The display's first views (for the effects: does any see the ground?); NULL with
      * views_move: the views change while the session runs. */
     const struct render_view *views;
@@ -125,6 +128,10 @@ void session_set_navigation(struct session *s, const struct display_navigation *
 void session_set_camera(struct session *s, const struct display_camera *camera);
 /* Navigation and camera back to where they started. */
 void session_reset_view(struct session *s);
+/* The view framing the whole domain (the Shift+F key, the menu's Frame): the orbit camera from
+ * the south-west (scene_frame_camera), a tracked display's navigation fitted to its room
+ * (scene_frame_navigation).  It travels in the frame state like any navigation. */
+void session_frame_view(struct session *s);
 
 /* The camera path that the path keys add to and fly (P NULL: an empty one), saved to FILE
  * (NULL: nowhere) at every new key.  False (logged) out of memory. */

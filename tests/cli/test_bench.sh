@@ -35,7 +35,10 @@ if [ -f "$data/wrf/katrina_2005_mercator_wsm3.nc" ]; then
     check "katrina: four time steps" stdout_has "4 steps"
 fi
 expect_exit 1 "bad effect value" "$anvil" effects --set effects.forward=maybe
-expect_exit 2 "effects: two configs" "$anvil" effects a.cfg b.cfg
+printf 'light = { elevation = 20.0; };\n' >"$tmp/a.cfg"
+cp "$tmp/a.cfg" "$tmp/b.cfg"
+expect_exit 1 "effects: two configs" "$anvil" effects "$tmp/a.cfg" "$tmp/b.cfg"
+check "effects: the second is no data" stderr_has "b.cfg is a text file (a scene config) among data files"
 
 expect_exit 0 "bench --help" "$anvil" bench --help
 expect_exit 2 "bench: --load-only excludes --scale-only" "$anvil" bench --load-only --scale-only

@@ -90,7 +90,8 @@ cat >"$tmp/layers.txt" <<'SCRIPT'
 24 button trigger up
 25 key menu
 SCRIPT
-# The Slices page: a temperature slice added, moved down, tilted, with contours, saved.
+# The Slices page: a temperature slice added, moved down, tilted, with contours, saved (each
+# drag starts inside its slider: a slider's very edge may fall a pixel outside it).
 cat >"$tmp/slices.txt" <<'SCRIPT'
 0 key menu
 0 aim tab.slices
@@ -107,7 +108,7 @@ cat >"$tmp/slices.txt" <<'SCRIPT'
 11 button trigger down
 12 aim slices.tilt 0.7 0.5
 13 button trigger up
-14 aim slices.contours 0.0 0.5
+14 aim slices.contours 0.05 0.5
 15 button trigger down
 16 aim slices.contours 0.5 0.5
 17 button trigger up

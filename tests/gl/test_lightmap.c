@@ -717,9 +717,12 @@ static void katrina_picture(double step_m, struct image *img)
     char path[1024], step[48];
     snprintf(path, sizeof(path), "%s/configs/katrina.cfg", ANVIL_SOURCE_DIR);
     snprintf(step, sizeof(step), "render.step=%g", step_m);
+    /* The low camera this was measured with (shallow rays), not the framing of the data. */
     const char *sets[] = {"map.terrain=false", "map.coastlines=false", "render.sky=[0,0,0]",
-                          "render.ground_on=false", "render.width=64", "render.height=48", step};
-    render_file_sets(path, sets, 7, img);
+                          "render.ground_on=false", "render.width=64", "render.height=48", step,
+                          "camera.position=[-60,-120,90]", "camera.target=[240,240,0]",
+                          "camera.fov=45", "camera.far=5000"};
+    render_file_sets(path, sets, 11, img);
 }
 
 static void test_automatic_step_resolves_cloud_tops(void **state)

@@ -96,10 +96,14 @@ static void test_point_travels_in_the_frame_state(void **state)
     if (access(test_shared_data("wrf/katrina_2005_mercator_wsm3.nc"), R_OK) != 0)
         skip();
     struct config cfg;
+    /* A camera of its own (the one pixel_ray follows; not the framing of the data). */
     test_config_file(&cfg, ANVIL_SOURCE_DIR "/configs/katrina.cfg",
                      (const char *[]){"render.width=160", "render.height=120",
-                                      "lightmap.resolution=[32,32,32]", "probe.on=true"},
-                     4);
+                                      "lightmap.resolution=[32,32,32]", "probe.on=true",
+                                      "camera.position=[-60,-120,90]",
+                                      "camera.target=[240,240,0]", "camera.fov=45",
+                                      "camera.far=5000"},
+                     8);
     /* The pointer on the cloud in the middle of Katrina's picture (docs/analysis.md). */
     double o[3], d[3];
     pixel_ray(&cfg, 90.0, 75.0, o, d);

@@ -143,7 +143,9 @@ static void test_cave_pair(void **state)
 {
     struct display_config dcfg;
     assert_true(display_config_load(ANVIL_SOURCE_DIR "/displays/cave4.cfg", &dcfg));
-    dcfg.navigation.origin_km[0] = dcfg.navigation.origin_km[1] = 8.0; /* the small series */
+    /* The placement cave4.cfg used to give, about the small series' centre. */
+    dcfg.navigation = (struct display_navigation){
+        .scale = 1e-4, .origin_km = {8.0, 8.0, 0.0}, .position = {0.0, 0.0, -2.0}, .given = true};
     assert_true(run_pair(&dcfg, script_text) >= 6);
 }
 

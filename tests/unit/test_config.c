@@ -567,6 +567,10 @@ static void test_shipped_configs(void **state)
         file.optics.params.radius_m[f] = def.optics.params.radius_m[f];
     }
     memset(file.path, 0, sizeof(file.path));
+    /* It names the camera: the scene has one (no framing of the data). */
+    assert_true(file.camera.given);
+    assert_false(def.camera.given);
+    file.camera.given = false;
     assert_memory_equal(&file, &def, sizeof(file));
 
     /* The slab: 10 x 10 x 1 km, tau 2, looked at straight down from above its centre. */
@@ -636,6 +640,11 @@ static void test_reference(void **state)
         config_defaults(&cfg);
         memcpy(&before, &cfg, sizeof(cfg));
         assert_true(config_set(&cfg, assignment));
+        if (strncmp(path, "camera.", 7) == 0) {
+            /* Given, even at its default: the scene has a camera (no framing). */
+            assert_true(cfg.camera.given);
+            cfg.camera.given = false;
+        }
         if (strncmp(path, "optics.radius_mm.", 17) != 0) /* mm to m may round differently */
             assert_memory_equal(&cfg, &before, sizeof(cfg));
     }

@@ -5,7 +5,9 @@
 # the file's own history names).  Made before the session and the one frame loop replaced the
 # four loops of old; menu.pfm again when panels came to show their own sRGB colours under the
 # Reinhard tone mapping (they had been made for an older 1 - exp(-x) one), and when the menu
-# gained its Probe page and Save view button, and its Layers and Slices pages.
+# gained its Probe page and Save view button, its Layers and Slices pages, and the Time page's
+# Frame button.  The data cases keep the cameras they were made with (a scene of data without
+# a camera is framed), the tracked displays their navigation.
 #   sh tests/data/golden/cases.sh ANVIL_BINARY SOURCE_DIR OUT_DIR
 set -e
 anvil=$1
@@ -14,11 +16,19 @@ out=$3
 mkdir -p "$out"
 small="--set render.width=64 --set render.height=48"
 "$anvil" render -q "$src/configs/default.cfg" $small -o "$out/default.pfm"
-"$anvil" render -q "$src/configs/katrina.cfg" $small -o "$out/katrina.pfm"
+"$anvil" render -q "$src/configs/katrina.cfg" $small --set 'camera.position=[-60,-120,90]' \
+    --set 'camera.target=[240,240,0]' --set camera.fov=45 --set camera.far=5000 \
+    -o "$out/katrina.pfm"
+# The tracked displays keep the navigation they were made with (without one the domain is fitted
+# to the room).
 "$anvil" render -q "$src/configs/default.cfg" --set render.height=32 \
-    --display "$src/displays/cave4.cfg" --format pfm -o "$out/cave4"
+    --display "$src/displays/cave4.cfg" --set navigation.scale=1e-4 \
+    --set 'navigation.origin=[30,30,0]' --set 'navigation.position=[0,0,-2]' \
+    --format pfm -o "$out/cave4"
 "$anvil" render -q "$src/configs/default.cfg" --set render.height=32 \
-    --display "$src/displays/hmd.cfg" --format pfm -o "$out/hmd"
+    --display "$src/displays/hmd.cfg" --set navigation.scale=1e-4 \
+    --set 'navigation.origin=[30,30,0]' --set 'navigation.position=[0,0,-3.5]' \
+    --format pfm -o "$out/hmd"
 "$anvil" render -q "$src/configs/default.cfg" --set render.height=32 \
     --display "$src/displays/desktop-stereo.cfg" --format pfm -o "$out/stereo"
 # The menu in the world (a still render with the menu shown).
@@ -28,7 +38,7 @@ small="--set render.width=64 --set render.height=48"
 # Scripted playback of a WRF-convention series with temporal blending: the script pauses
 # between two steps, so the picture is a blend of two volumes and two light maps.
 "$anvil" --quiet synth -o "$out/series.nc" --steps 4 --size 16x16x8 >/dev/null
-printf 'scene = { kind = "data"; };\ndata = { format = "wrf"; files = ["series.nc"]; };\nplayback = { speed = 1.0; loop = false; };\n' \
+printf 'scene = { kind = "data"; };\ncamera = { fov = 50.0; };\ndata = { format = "wrf"; files = ["series.nc"]; };\nplayback = { speed = 1.0; loop = false; };\n' \
     >"$out/series.cfg"
 printf 'fps 10\n0 key play\n14 key play\n' >"$out/play.txt"
 "$anvil" render -q "$out/series.cfg" $small --set 'lightmap.resolution=[32,32,32]' \

@@ -1,0 +1,238 @@
+/* The scene a command line names (app.h): an optional config, then data files, folders and
+ * glob patterns, each known by its content (data/detect.h). */
+#include <glob.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "app/app.h"
+#include "common/log.h"
+#include "config/config.h"
+#include "data/detect.h"
+#include "session/scene.h"
+
+static bool is_pattern(const char *s)
+{
+    return strpbrk(s, "*?[") != NULL;
+}
+
+static bool exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+/* The data format of a kind. */
+static enum data_format format_of(enum data_kind k)
+{
+    return k == DATA_KIND_EXTINCTION ? DATA_EXTINCTION
+           : k == DATA_KIND_ISABEL   ? DATA_ISABEL
+           : k == DATA_KIND_CM1      ? DATA_CM1
+           : k == DATA_KIND_CF       ? DATA_CF
+                                     : DATA_WRF;
+}
+
+/* Adds ENTRY (a path or a pattern as given) to OUT. */
+static bool add_entry(const char *command, const char *entry, struct app_inputs *out)
+{
+    if (out->count == CONFIG_MAX_FILES) {
+        log_error("%s: more than %d data files: name a series by a quoted pattern "
+                  "('wrfout_d01_*'), which anvil expands itself",
+                  command, CONFIG_MAX_FILES);
+        return false;
+    }
+    if (strlen(entry) >= CONFIG_PATH_MAX) {
+        log_error("%s: path too long (at most %d bytes)", entry, CONFIG_PATH_MAX - 1);
+        return false;
+    }
+    out->files[out->count++] = entry;
+    return true;
+}
+
+/* The kind of PATH, checked against what came before (OUT->kind); false (logged) when it is not
+ * data or does not go with the others. */
+static bool take_kind(const char *command, const char *path, bool first, struct app_inputs *out)
+{
+    char why[2048];
+    enum data_kind k = data_detect(path, why, sizeof(why));
+    if (k == DATA_KIND_CONFIG) {
+        if (first && !out->config && out->count == 0) {
+            out->config = path;
+            return true;
+        }
+        log_error("%s: %s is a text file (a scene config) among data files: the config comes "
+                  "first, the data after it (anvil %s look.cfg wrfout_d01_* ...)",
+                  command, path, command);
+        return false;
+    }
+    if (!data_kind_is_data(k)) {
+        log_error("%s", why);
+        return false;
+    }
+    if (out->kind != DATA_KIND_UNREADABLE && out->kind != k) {
+        log_error("%s: %s is %s, the files before it %s: one scene reads one format", command,
+                  path, data_kind_name(k), data_kind_name(out->kind));
+        return false;
+    }
+    if (out->kind == k && !data_kind_is_series(k)) {
+        log_error("%s: %s: %s holds a whole series: name one (%s came first)", command, path,
+                  data_kind_name(k), out->files[0]);
+        return false;
+    }
+    out->kind = k;
+    return true;
+}
+
+bool app_inputs_collect(const char *command, char **args, int n, struct app_inputs *out)
+{
+    memset(out, 0, sizeof(*out));
+    out->kind = DATA_KIND_UNREADABLE; /* none yet */
+    for (int i = 0; i < n; i++) {
+        const char *a = args[i];
+        if (!is_pattern(a) || exists(a)) {
+            bool was_config = out->config != NULL;
+            if (!take_kind(command, a, i == 0, out))
+                goto error;
+            if (out->config != NULL && !was_config)
+                continue; /* the config */
+            if (!add_entry(command, a, out))
+                goto error;
+            continue;
+        }
+        /* A pattern anvil expands (sorted, as the WRF reader does); every match must be data
+         * of one kind.  A WRF, CM1 or CF series keeps the pattern itself (any number of files). */
+        glob_t g;
+        int rc = glob(a, 0, NULL, &g);
+        if (rc == GLOB_NOMATCH || (rc == 0 && g.gl_pathc == 0)) {
+            log_error("%s: no file matches the pattern %s", command, a);
+            globfree(&g);
+            goto error;
+        }
+        if (rc != 0) {
+            log_error("%s: the pattern %s cannot be expanded (out of memory or a folder that "
+                      "cannot be read)",
+                      command, a);
+            globfree(&g);
+            goto error;
+        }
+        bool ok = true;
+        for (size_t m = 0; ok && m < g.gl_pathc; m++)
+            ok = take_kind(command, g.gl_pathv[m], false, out);
+        if (ok && !data_kind_is_series(out->kind)) {
+            /* Extinction files and Isabel folders: one, named by its path. */
+            char *one = strdup(g.gl_pathv[0]);
+            ok = one && out->n_owned < APP_INPUTS_MAX_OWNED;
+            if (ok) {
+                out->owned[out->n_owned++] = one;
+                ok = add_entry(command, one, out);
+            } else {
+                free(one);
+                log_error("%s: out of memory", command);
+            }
+        } else if (ok) {
+            ok = add_entry(command, a, out);
+        }
+        globfree(&g);
+        if (!ok)
+            goto error;
+    }
+    return true;
+error:
+    app_inputs_finish(out);
+    return false;
+}
+
+void app_inputs_finish(struct app_inputs *in)
+{
+    for (int i = 0; i < in->n_owned; i++)
+        free(in->owned[i]);
+    in->n_owned = 0;
+}
+
+int app_load_scene(const char *command, char **args, int n, char **sets, int n_sets,
+                   struct config *cfg, const char **config_path)
+{
+    struct app_inputs in;
+    if (config_path)
+        *config_path = NULL;
+    if (!app_inputs_collect(command, args, n, &in))
+        return EXIT_BAD_INPUT;
+    int rc = EXIT_BAD_INPUT;
+    if (in.config) {
+        if (!config_load(in.config, cfg))
+            goto done;
+        if (config_path)
+            *config_path = in.config;
+    } else {
+        config_defaults(cfg);
+    }
+    if (in.count > 0) {
+        /* The files replace the config's data.files; its other data.* settings stay. */
+        cfg->scene.kind = SCENE_DATA;
+        cfg->data.format = format_of(in.kind);
+        for (int i = 0; i < in.count; i++)
+            snprintf(cfg->data.files[i], CONFIG_PATH_MAX, "%s", in.files[i]);
+        cfg->data.file_count = in.count;
+    }
+    for (int i = 0; i < n_sets; i++) {
+        if (!config_set(cfg, sets[i]))
+            goto done;
+    }
+    if (!config_validate(cfg))
+        goto done;
+    if (!app_frame_camera(cfg))
+        goto done;
+    rc = EXIT_OK;
+done:
+    app_inputs_finish(&in);
+    return rc;
+}
+
+bool app_frame_camera(struct config *cfg)
+{
+    if (cfg->camera.given || cfg->scene.kind != SCENE_DATA)
+        return true;
+    double lo[3], hi[3];
+    if (!scene_domain_box(cfg, lo, hi))
+        return false;
+    struct display_camera c;
+    scene_frame_camera(lo, hi, cfg->camera.fov_deg,
+                       (double)cfg->render.width / cfg->render.height, cfg->camera.near_m, &c);
+    scene_camera_to_config(&c, &cfg->camera);
+    log_info("camera framing the data (%.0f x %.0f x %.1f km): position [%.3f, %.3f, %.3f] km, "
+             "target [%.3f, %.3f, %.3f] km, fov %g",
+             (hi[0] - lo[0]) / 1e3, (hi[1] - lo[1]) / 1e3, (hi[2] - lo[2]) / 1e3,
+             cfg->camera.position_km[0], cfg->camera.position_km[1], cfg->camera.position_km[2],
+             cfg->camera.target_km[0], cfg->camera.target_km[1], cfg->camera.target_km[2],
+             cfg->camera.fov_deg);
+    return true;
+}
+
+bool app_frame_navigation(const struct config *cfg, struct display_config *dcfg,
+                          struct display_navigation *fitted)
+{
+    if (fitted)
+        *fitted = dcfg->navigation;
+    if (!(dcfg->type == DISPLAY_TYPE_CAVE || dcfg->type == DISPLAY_TYPE_HMD ||
+          dcfg->type == DISPLAY_TYPE_OPENXR) ||
+        (dcfg->navigation.given && !fitted))
+        return true;
+    double lo[3], hi[3];
+    if (!scene_domain_box(cfg, lo, hi))
+        return false;
+    struct display_navigation fit;
+    scene_frame_navigation(lo, hi, dcfg, &fit);
+    if (fitted)
+        *fitted = fit;
+    if (dcfg->navigation.given)
+        return true;
+    dcfg->navigation = fit;
+    const struct display_navigation *nv = &dcfg->navigation;
+    log_info("navigation fitting the domain to the room: scale %.3g (%.2f x %.2f x %.2f m), "
+             "origin [%.3f, %.3f, %.3f] km at [%.2f, %.2f, %.2f] m",
+             nv->scale, (hi[0] - lo[0]) * nv->scale, (hi[1] - lo[1]) * nv->scale,
+             (hi[2] - lo[2]) * nv->scale, nv->origin_km[0], nv->origin_km[1], nv->origin_km[2],
+             nv->position[0], nv->position[1], nv->position[2]);
+    return true;
+}
