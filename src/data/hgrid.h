@@ -44,7 +44,7 @@ enum hgrid_var {
 /* What a front end found for one quantity of one file. */
 struct hgrid_field {
     int varid;            /* -1: the file does not hold it */
-    char name[64];        /* the variable's name in the file */
+    char name[257];       /* the variable's name in the file (NC_MAX_NAME + 1) */
     double scale, offset; /* value in SI = raw * scale + offset */
     int stagger;          /* -1 on the mass points; 0, 1, 2: one more point along x, y, z */
 };
@@ -65,7 +65,7 @@ struct hgrid_meta {
     double lon0, lat0, dlon, dlat; /* latlon: the south-west mass point and the spacing,
                                       degrees */
     struct hgrid_field field[HGRID_VAR_COUNT];
-    char axis_names[3][64]; /* the coordinate variables of x, y, z */
+    char axis_names[3][257]; /* the coordinate variables of x, y, z (NC_MAX_NAME + 1) */
     char x_units[64], z_units[64];
 };
 
