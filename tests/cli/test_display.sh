@@ -71,7 +71,8 @@ printf 'fps 10\n0 key play\n3 key sun-left\n' >"$tmp/keys.txt"
 for d in hmd cave4; do
     for placement in fitted close; do
         nav=
-        [ "$placement" = close ] && nav="--set navigation.scale=2e-5 --set navigation.position=[0,1.2,-0.5]"
+        [ "$placement" = close ] &&
+            nav="--set navigation.scale=2e-5 --set navigation.position=[0,1.2,-0.5]"
         out=$tmp/rr-$d-$placement
         expect_exit 0 "$d, $placement: a render of a turned head recorded" "$anvil" render -q \
             "$src/configs/default.cfg" $small $nav --display "$src/displays/$d.cfg" \

@@ -54,7 +54,8 @@ replay() { # replay NAME SETTINGS...: record with the moving headset, replay wit
     shift
     expect_exit 0 "$name: a render recorded with a moving headset" \
         env ANVIL_XR_TEST_SCRIPT="$tmp/moving.txt" "$anvil" render --quiet --display "$display" \
-        $small "$@" --input "$tmp/keys.txt" --record "$tmp/$name.txt" --format pfm -o "$tmp/$name-rec/"
+        $small "$@" --input "$tmp/keys.txt" --record "$tmp/$name.txt" --format pfm \
+        -o "$tmp/$name-rec/"
     check "$name: the recording holds the moving head" grep -q '^[5-9] head -0.2' "$tmp/$name.txt"
     check "$name: ... and the runtime's eyes beside it" grep -q '^[5-9] eyes -0.03' "$tmp/$name.txt"
     expect_exit 0 "$name: its replay through a still headset" \
