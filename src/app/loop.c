@@ -183,7 +183,8 @@ static bool produce(struct loop *l, struct frame_state *f, uint32_t *flags, int 
 }
 
 /* --record (rank 0): the frame's events, clock, head (when drawn, and only a head that moves:
- * a fixed one is the display's) and cursor. */
+ * a fixed one is the display's), the eyes relative to it where the display's runtime gave them
+ * (a replay through another runtime, or the same one standing still, draws these) and cursor. */
 static void record(const struct loop *l, const struct frame_state *f, bool drawn)
 {
     if (!l->ld->recorder || !l->root)
@@ -196,6 +197,12 @@ static void record(const struct loop *l, const struct frame_state *f, bool drawn
     };
     memcpy(r.head_position, f->head.position, sizeof(r.head_position));
     memcpy(r.head_rotation, f->head.rotation, sizeof(r.head_rotation));
+    struct display_pose eyes[2];
+    r.have_eyes = r.have_head && display_eyes_in_head(l->d, eyes);
+    for (int e = 0; r.have_eyes && e < 2; e++) {
+        memcpy(r.eye_position[e], eyes[e].position, sizeof(r.eye_position[e]));
+        memcpy(r.eye_rotation[e], eyes[e].rotation, sizeof(r.eye_rotation[e]));
+    }
     session_cursor(l->s, &r.step, &r.step_acc, &r.playing);
     input_recorder_frame(l->ld->recorder, &r, session_events(l->s));
 }
@@ -325,6 +332,7 @@ static bool consume(struct loop *l, struct shared_frame *sf, struct frame_state 
         t = time_now_ms();
         cluster_broadcast(&f->head, sizeof(f->head));
         synced(l, t);
+        display_give_eyes(l->d, session_eyes_given(l->s)); /* a recording's, with its head */
         ok = ok && session_draw(l->s, l->d, f);
         if (ok && (sf->flags & SF_WRITE))
             ok = frame_output_add(l->ld->output, l->d, sf->number);

@@ -151,6 +151,17 @@ bool display_paces_frames(const struct display *d)
     return d->impl->sample_head != NULL;
 }
 
+bool display_eyes_in_head(const struct display *d, struct display_pose out[2])
+{
+    return d->impl->eyes_in_head && d->impl->eyes_in_head(d, out);
+}
+
+void display_give_eyes(struct display *d, const struct display_pose eyes[2])
+{
+    if (d->impl->give_eyes)
+        d->impl->give_eyes(d, eyes);
+}
+
 bool display_head_moves(const struct display *d)
 {
     return d->cfg.head.source != DISPLAY_HEAD_FIXED || d->impl->sample_head != NULL;

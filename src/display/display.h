@@ -229,6 +229,18 @@ struct gpu_context *display_context(struct display *d);
  * the device fails. */
 bool display_sample_head(struct display *d, double t, struct display_pose *head);
 
+/* The eyes (left, right) relative to the head that the last display_layout drew, into OUT, for a
+ * display whose runtime gives them every frame (OpenXR's xrLocateViews): what a recording keeps
+ * beside the head so that its replay draws the same eyes, bit for bit, whatever the replaying
+ * runtime's own offsets are.  False (OUT untouched) for a display whose eyes follow from the
+ * head and its config alone (every other one). */
+bool display_eyes_in_head(const struct display *d, struct display_pose out[2]);
+
+/* The eyes relative to the head (left, right; copied) that the following display_layout calls
+ * draw in place of the runtime's (a replay's recorded eyes); NULL: the runtime's again.  A
+ * display whose eyes follow from the head ignores it. */
+void display_give_eyes(struct display *d, const struct display_pose eyes[2]);
+
 /* Places every view for HEAD, the navigation NAV (tracker displays) and CAMERA (the orbit
  * display), each taken as given: the caller owns them. */
 bool display_layout(struct display *d, const struct display_pose *head,

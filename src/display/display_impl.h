@@ -27,6 +27,11 @@ struct display_impl {
     /* Optional, for a display with a head of its own (a runtime's headset): the head pose
      * at time T, in place of the head tracker's (NULL: the head tracker). */
     bool (*sample_head)(struct display *d, double t, struct display_pose *head);
+    /* Optional, for a display whose runtime gives the eyes relative to the head every frame:
+     * those the last layout drew (display_eyes_in_head), and the eyes to draw instead
+     * (display_give_eyes, NULL: the runtime's). */
+    bool (*eyes_in_head)(const struct display *d, struct display_pose out[2]);
+    void (*give_eyes)(struct display *d, const struct display_pose eyes[2]);
     /* Optional: appends the display's own devices' events (a runtime's controllers, its
      * session ending) to Q, before the windows' events. */
     void (*poll_input)(struct display *d, double timeout_s, struct input_queue *q);

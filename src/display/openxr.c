@@ -11,8 +11,9 @@
  *   sample_head   xrWaitFrame, xrBeginFrame, then the head (the VIEW space in the room space)
  *                 and each eye relative to the head (xrLocateViews in the VIEW space) at the
  *                 predicted display time; the head pose goes into the frame state
- *   layout        the eyes placed from the frame state's head, each with the runtime's
- *                 asymmetric field of view as its projection
+ *   layout        the eyes placed from the frame state's head and the runtime's eyes
+ *                 relative to it (a replay's recorded ones instead: eyes_in_head and
+ *                 give_eyes), each with the runtime's asymmetric field of view as its projection
  *   present       each eye tone-mapped and copied into its swapchain's image, one projection
  *                 layer carrying the poses and fields of view the eyes were drawn with
  *
@@ -142,6 +143,10 @@ struct openxr {
     bool views_valid;
     struct display_pose head;        /* the last head located, room frame */
     struct display_pose drawn[EYES]; /* the eyes as laid out: the projection layer's poses */
+    struct display_pose laid[EYES];  /* ... relative to the head they were laid out from */
+    bool laid_valid;
+    bool given_valid;                /* a replay's eyes relative to the head, drawn instead */
+    struct display_pose given[EYES]; /* of the runtime's eye_in_head */
     /* Controllers. */
     XrActionSet action_set;
     XrAction action[ACT_COUNT];
@@ -924,8 +929,10 @@ static bool openxr_layout(struct display *d, const struct display_pose *head,
         v->visible = draw;
         v->rv.width = o->eyes[e].size[0];
         v->rv.height = o->eyes[e].size[1];
-        /* The eye from the frame state's head: what a replay of the frame state draws. */
-        display_pose_compose(head, &o->eye_in_head[e], &o->drawn[e]);
+        /* The eye from the frame state's head and the eye relative to it (the runtime's, or a
+         * recording's): a recording keeps both, and its replay draws the same eye. */
+        o->laid[e] = o->given_valid ? o->given[e] : o->eye_in_head[e];
+        display_pose_compose(head, &o->laid[e], &o->drawn[e]);
         memcpy(v->eye_tracker, o->drawn[e].position, sizeof(v->eye_tracker));
         display_pose_view(&o->drawn[e], nav_m, v->rv.view);
         const XrFovf *f = &o->fov[e];
@@ -933,7 +940,25 @@ static bool openxr_layout(struct display *d, const struct display_pose *head,
                                (float)d->cfg.near_m, (float)d->cfg.far_m, v->rv.proj);
     }
     d->set.count = EYES;
+    o->laid_valid = true;
     return true;
+}
+
+static bool openxr_eyes_in_head(const struct display *d, struct display_pose out[2])
+{
+    const struct openxr *o = (const struct openxr *)d;
+    if (!o->laid_valid)
+        return false;
+    memcpy(out, o->laid, sizeof(o->laid));
+    return true;
+}
+
+static void openxr_give_eyes(struct display *d, const struct display_pose eyes[2])
+{
+    struct openxr *o = (struct openxr *)d;
+    o->given_valid = eyes != NULL;
+    if (eyes)
+        memcpy(o->given, eyes, sizeof(o->given));
 }
 
 /* Copies eye E's tone-mapped image into its swapchain's next image. */
@@ -1148,5 +1173,7 @@ const struct display_impl display_openxr_impl = {
     .layout = openxr_layout,
     .present = openxr_present,
     .sample_head = openxr_sample_head,
+    .eyes_in_head = openxr_eyes_in_head,
+    .give_eyes = openxr_give_eyes,
     .poll_input = openxr_poll_input,
 };

@@ -315,6 +315,25 @@ static const char *parse_frame_line(char **tok, int n, struct input_script_frame
         info->have_head = true;
         return NULL;
     }
+    if (strcmp(kind, "eyes") == 0) {
+        bool ok = n == 15;
+        for (int e = 0; ok && e < 2; e++) {
+            float len = 0.0f;
+            for (int i = 0; ok && i < 3; i++)
+                ok = parse_float(tok[1 + 7 * e + i], &info->eye_position[e][i]) &&
+                     fabsf(info->eye_position[e][i]) <= 1.0f;
+            for (int i = 0; ok && i < 4; i++) {
+                ok = parse_float(tok[4 + 7 * e + i], &info->eye_rotation[e][i]);
+                len += info->eye_rotation[e][i] * info->eye_rotation[e][i];
+            }
+            ok = ok && fabsf(sqrtf(len) - 1.0f) <= 1e-3f;
+        }
+        if (!ok)
+            return "\"eyes X Y Z QX QY QZ QW X Y Z QX QY QZ QW\" (the left and right eye in the "
+                   "head's frame: metres within 1 m, unit quaternions)";
+        info->have_eyes = true;
+        return NULL;
+    }
     if (strcmp(kind, "cursor") == 0) {
         char *end;
         errno = 0;
@@ -383,10 +402,11 @@ struct input_source *input_script_open(const char *path)
         char *hash = strchr(line, '#');
         if (hash)
             *hash = '\0';
-        char *tok[10];
+        /* The longest line is a frame's eyes (16 words); one word more makes any line wrong. */
+        char *tok[17];
         int n = 0;
         char *ts = NULL;
-        for (char *t = strtok_r(line, " \t\r", &ts); t && n < 10; t = strtok_r(NULL, " \t\r", &ts))
+        for (char *t = strtok_r(line, " \t\r", &ts); t && n < 17; t = strtok_r(NULL, " \t\r", &ts))
             tok[n++] = t;
         if (n == 0)
             continue;
@@ -529,7 +549,7 @@ bool input_script_frame(const struct input_source *s, long frame, struct input_s
     if (lo >= sc->frame_count || sc->frames[lo].frame != frame)
         return false;
     *out = sc->frames[lo].info;
-    return out->have_time || out->have_head || out->have_cursor;
+    return out->have_time || out->have_head || out->have_eyes || out->have_cursor;
 }
 
 bool input_script_has_head(const struct input_source *s)

@@ -145,14 +145,17 @@ double input_script_fps(const struct input_source *s);
 long input_script_last_frame(const struct input_source *s);
 
 /* What a recording (input_recorder) says about one frame besides its events: its clock, the
- * head pose it was drawn with (room metres), the playback cursor after it.  Scripts may
- * write these lines by hand too ("12 time T DT", "12 head X Y Z QX QY QZ QW",
- * "12 cursor STEP FRACTION PLAYING"). */
+ * head pose it was drawn with (room metres), the eyes relative to that head where a runtime
+ * gave them (OpenXR), the playback cursor after it.  Scripts may write these lines by hand too
+ * ("12 time T DT", "12 head X Y Z QX QY QZ QW", "12 eyes X Y Z QX QY QZ QW X Y Z QX QY QZ QW",
+ * left eye first, "12 cursor STEP FRACTION PLAYING"). */
 struct input_script_frame {
     bool have_time;
     double time_s, dt_s;
     bool have_head;
     float head_position[3], head_rotation[4]; /* x, y, z, w */
+    bool have_eyes;
+    float eye_position[2][3], eye_rotation[2][4]; /* left, right; in the head's frame */
     bool have_cursor;
     int step;
     double step_acc;
@@ -181,6 +184,8 @@ struct input_record_frame {
     double time_s, dt_s;
     bool have_head; /* the frame was drawn: this is its head */
     float head_position[3], head_rotation[4];
+    bool have_eyes; /* with the head: the eyes a runtime gave, relative to it (left, right) */
+    float eye_position[2][3], eye_rotation[2][4];
     int step;
     double step_acc;
     bool playing;

@@ -110,6 +110,14 @@ void input_recorder_frame(struct input_recorder *r, const struct input_record_fr
         fprintf(out, "%ld head %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", f->frame, f->head_position[0],
                 f->head_position[1], f->head_position[2], f->head_rotation[0], f->head_rotation[1],
                 f->head_rotation[2], f->head_rotation[3]);
+    if (f->have_head && f->have_eyes) {
+        fprintf(out, "%ld eyes", f->frame);
+        for (int e = 0; e < 2; e++)
+            fprintf(out, " %.9g %.9g %.9g %.9g %.9g %.9g %.9g", f->eye_position[e][0],
+                    f->eye_position[e][1], f->eye_position[e][2], f->eye_rotation[e][0],
+                    f->eye_rotation[e][1], f->eye_rotation[e][2], f->eye_rotation[e][3]);
+        fputc('\n', out);
+    }
     fprintf(out, "%ld cursor %d %.17g %d\n", f->frame, f->step, f->step_acc, f->playing);
     r->frames++;
     if (ferror(out)) {

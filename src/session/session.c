@@ -116,6 +116,8 @@ struct session {
     /* A recording's head (input_script_frame): the frame states carry it, not the display's. */
     bool head_given;
     struct display_pose head;
+    bool eyes_given; /* a recording's eyes relative to its head (a runtime's, OpenXR) */
+    struct display_pose eyes[2];
 };
 
 /* ---- creation ------------------------------------------------------------------------- */
@@ -1221,6 +1223,17 @@ bool session_update(struct session *s, const struct input_queue *window_events, 
             s->head = head;
             s->head_given = true;
         }
+        if (rec.have_eyes) {
+            struct display_pose eyes[2];
+            for (int e = 0; e < 2; e++) {
+                memcpy(eyes[e].position, rec.eye_position[e], sizeof(eyes[e].position));
+                memcpy(eyes[e].rotation, rec.eye_rotation[e], sizeof(eyes[e].rotation));
+            }
+            if (!s->eyes_given || memcmp(eyes, s->eyes, sizeof(eyes)) != 0)
+                *redraw = true;
+            memcpy(s->eyes, eyes, sizeof(eyes));
+            s->eyes_given = true;
+        }
     }
     bool head_moved = *redraw;
     s->frame++;
@@ -1653,6 +1666,11 @@ double session_script_dt(const struct session *s)
 bool session_head_given(const struct session *s)
 {
     return s->head_given;
+}
+
+const struct display_pose *session_eyes_given(const struct session *s)
+{
+    return s->eyes_given ? s->eyes : NULL;
 }
 
 const struct input_queue *session_events(const struct session *s)

@@ -173,6 +173,10 @@ bool session_settle(struct session *s);
  * of a tracked display): the frame states then carry it, and the frame loop does not sample
  * the display's head. */
 bool session_head_given(const struct session *s);
+/* The eyes relative to the head (left, right) that the script gave with it (a recording of a
+ * display whose runtime gives the eyes: display_eyes_in_head), valid until the next
+ * session_apply; NULL when it gave none. */
+const struct display_pose *session_eyes_given(const struct session *s);
 /* The events the last session_update handled, in order (window events, then the script's and
  * the wand's).  Valid until the next session_update. */
 const struct input_queue *session_events(const struct session *s);

@@ -17,9 +17,6 @@ report() { # report KEY: the value after "KEY " in the runtime's report
     sed -n "s/^$1 //p" "$tmp/report.txt"
 }
 small="--set scene.size=[32,32,16] --set lightmap.resolution=[24,24,24]"
-# The storm where these checks were made, 3.5 m ahead (without a navigation the domain is
-# fitted to the room, 1.4 m ahead, where the replay's eyes show the recorded head's turn).
-small="$small --set navigation.scale=1e-4 --set navigation.position=[0,0,-3.5]"
 display=$src/displays/openxr.cfg
 
 # --- A run the runtime ends: the session stops at frame 20, the run exits 0.
@@ -44,25 +41,49 @@ check "the render's frame was submitted" test "$(report layers)" -ge 1
 check "the render found no fault" test "$(report faults)" = 0
 
 # --- Record and replay: a session recorded while the headset moved, replayed through a
-# runtime whose headset stands still, draws the same eyes bit for bit (the recording's head;
-# the runtime's frame loop still runs, and its eye offsets and fields of view are the same).
+# runtime whose headset stands still, draws the same eyes bit for bit: the recording's head and
+# the eyes relative to it that the recording's runtime gave (this runtime's VIEW-space eyes carry
+# the rounding of its head's turn, as a real runtime's may carry anything), with the runtime's
+# frame loop still running.  At the domain fitted to the room (no navigation), at the storm
+# 3.5 m ahead, and close, 0.5 m ahead, where the smallest difference in an eye shows.
 printf 'size 48 40\n2 head 0.3 1.5 -0.2 20 -10 0\n5 head -0.2 1.7 0.1 -30 5 0\n' >"$tmp/moving.txt"
 printf 'fps 10\n0 key play\n3 key sun-left\n7 key sun-up\n' >"$tmp/keys.txt"
-expect_exit 0 "a render recorded with a moving headset" env ANVIL_XR_TEST_SCRIPT="$tmp/moving.txt" \
-    "$anvil" render --quiet --display "$display" $small --input "$tmp/keys.txt" \
-    --record "$tmp/xr-rec.txt" --format pfm -o "$tmp/rec/"
-check "the recording holds the moving head" grep -q '^[5-9] head -0.2' "$tmp/xr-rec.txt"
 printf 'size 48 40\n' >"$tmp/still.txt"
-expect_exit 0 "its replay through a still headset" env ANVIL_XR_TEST_SCRIPT="$tmp/still.txt" \
-    ANVIL_XR_TEST_REPORT="$tmp/report.txt" "$anvil" render --quiet --display "$display" \
-    $small --input "$tmp/xr-rec.txt" --format pfm -o "$tmp/rep/"
-check "the replay's left eye is the recorded one" cmp -s "$tmp/rec/left.pfm" "$tmp/rep/left.pfm"
-check "the replay's right eye is the recorded one" cmp -s "$tmp/rec/right.pfm" "$tmp/rep/right.pfm"
-check "the replay found no fault" test "$(report faults)" = 0
-expect_exit 0 "the still headset without the recording" env ANVIL_XR_TEST_SCRIPT="$tmp/still.txt" \
-    "$anvil" render --quiet --display "$display" $small --input "$tmp/keys.txt" --format pfm \
-    -o "$tmp/still/"
-check "... draws other eyes (the test can fail)" bash -c "! cmp -s '$tmp/rec/left.pfm' '$tmp/still/left.pfm'"
+replay() { # replay NAME SETTINGS...: record with the moving headset, replay with the still one
+    local name=$1
+    shift
+    expect_exit 0 "$name: a render recorded with a moving headset" \
+        env ANVIL_XR_TEST_SCRIPT="$tmp/moving.txt" "$anvil" render --quiet --display "$display" \
+        $small "$@" --input "$tmp/keys.txt" --record "$tmp/$name.txt" --format pfm \
+        -o "$tmp/$name-rec/"
+    check "$name: the recording holds the moving head" grep -q '^[5-9] head -0.2' "$tmp/$name.txt"
+    check "$name: ... and the runtime's eyes beside it" grep -q '^[5-9] eyes -0.03' "$tmp/$name.txt"
+    expect_exit 0 "$name: its replay through a still headset" \
+        env ANVIL_XR_TEST_SCRIPT="$tmp/still.txt" ANVIL_XR_TEST_REPORT="$tmp/report.txt" \
+        "$anvil" render --quiet --display "$display" $small "$@" --input "$tmp/$name.txt" \
+        --format pfm -o "$tmp/$name-rep/"
+    check "$name: the replay's left eye is the recorded one" \
+        cmp -s "$tmp/$name-rec/left.pfm" "$tmp/$name-rep/left.pfm"
+    check "$name: the replay's right eye is the recorded one" \
+        cmp -s "$tmp/$name-rec/right.pfm" "$tmp/$name-rep/right.pfm"
+    check "$name: the replay found no fault" test "$(report faults)" = 0
+    expect_exit 0 "$name: the still headset without the recording" \
+        env ANVIL_XR_TEST_SCRIPT="$tmp/still.txt" "$anvil" render --quiet --display "$display" \
+        $small "$@" --input "$tmp/keys.txt" --format pfm -o "$tmp/$name-still/"
+    check "$name: ... draws other eyes (the test can fail)" \
+        bash -c "! cmp -s '$tmp/$name-rec/left.pfm' '$tmp/$name-still/left.pfm'"
+}
+replay fitted
+replay far --set navigation.scale=1e-4 --set navigation.position=[0,0,-3.5]
+replay close --set navigation.scale=2e-5 --set navigation.position=[0,1.2,-0.5]
+# The recording's head with the still runtime's own eyes (its eyes lines taken out) is not the
+# recorded picture at the fitted placement: the eyes lines are what makes the replay exact.
+grep -v '^[0-9]* eyes ' "$tmp/fitted.txt" >"$tmp/no-eyes.txt"
+expect_exit 0 "a replay without the eyes lines" env ANVIL_XR_TEST_SCRIPT="$tmp/still.txt" \
+    "$anvil" render --quiet --display "$display" $small --input "$tmp/no-eyes.txt" --format pfm \
+    -o "$tmp/no-eyes/"
+check "... differs from the recording (the runtime's eyes are not the recorded ones)" \
+    bash -c "! cmp -s '$tmp/fitted-rec/left.pfm' '$tmp/no-eyes/left.pfm'"
 
 # --- The effects: the runtime warps, anvil does not.
 expect_exit 0 "anvil effects for the openxr display" "$anvil" effects --quiet --display "$display"

@@ -82,6 +82,12 @@ static void test_round_trip(void **state)
     struct input_queue *q = calloc(1, sizeof(*q));
     const double times[3] = {12.000123456789, 12.016789, 12.05};
     const float quat[4] = {0.0f, 0.38268343f, 0.0f, 0.92387953f};
+    /* A runtime's eyes relative to the head, with the rounding a turned head leaves in them:
+     * the smallest numbers and a rotation a hair from identity must come back bit for bit. */
+    const float eye_p[2][3] = {{-0.0319999754f, 1.1920929e-07f, 0.0f},
+                               {0.0320000052f, 0.0f, -1.49011612e-08f}};
+    const float eye_q[2][4] = {{0.0f, 5.00585884e-09f, 0.0f, 1.0f},
+                               {-2.32830671e-10f, -2.88127944e-09f, 0.0f, 1.0f}};
     for (int f = 0; f < 3; f++) {
         input_queue_clear(q);
         for (int i = 0; i < EVENT_COUNT && f == 1; i++)
@@ -95,6 +101,9 @@ static void test_round_trip(void **state)
                                         .step_acc = 1.0 / 3.0,
                                         .playing = f == 2};
         memcpy(fr.head_rotation, quat, sizeof(quat));
+        fr.have_eyes = f == 2; /* frame 1: a head without eyes (a CAVE's, an HMD's) */
+        memcpy(fr.eye_position, eye_p, sizeof(eye_p));
+        memcpy(fr.eye_rotation, eye_q, sizeof(eye_q));
         input_recorder_frame(r, &fr, q);
     }
     assert_int_equal(temporaries(test_tmp_path("rec.txt.tmp*")), 1); /* written beside it */
@@ -128,6 +137,11 @@ static void test_round_trip(void **state)
             float p[3] = {0.1f * f, 1.6f, 0.5f - 0.1f * f};
             assert_memory_equal(info.head_position, p, sizeof(p));
             assert_memory_equal(info.head_rotation, quat, sizeof(quat));
+        }
+        assert_int_equal(info.have_eyes, f == 2);
+        if (f == 2) {
+            assert_memory_equal(info.eye_position, eye_p, sizeof(eye_p));
+            assert_memory_equal(info.eye_rotation, eye_q, sizeof(eye_q));
         }
         double acc = 1.0 / 3.0;
         assert_int_equal(info.step, f);
@@ -168,6 +182,14 @@ static void test_bad_lines(void **state)
                         "q.txt:3: expected \"head X Y Z QX QY QZ QW\"");
     expect_script_error("far.txt", "0 head 1e5 0 0 0 0 0 1\n", "far.txt:1: expected \"head");
     expect_script_error("t.txt", "0 time 1 -0.5\n", "t.txt:1: expected \"time SECONDS DT\"");
+    expect_script_error("e.txt", "0 eyes -0.03 0 0 0 0 0 1 0.03 0 0 0 0 0\n",
+                        "e.txt:1: expected \"eyes X Y Z QX QY QZ QW X Y Z");
+    expect_script_error("e2.txt", "0 eyes -0.03 0 0 0 0 0 1 0.03 0 0 0 0 0 0.5\n",
+                        "e2.txt:1: expected \"eyes"); /* not a unit quaternion */
+    expect_script_error("e3.txt", "0 eyes -3 0 0 0 0 0 1 0.03 0 0 0 0 0 1\n",
+                        "e3.txt:1: expected \"eyes"); /* 3 m from the head */
+    expect_script_error("e4.txt", "0 eyes -0.03 0 0 0 0 0 1 0.03 0 0 0 0 0 1 2\n",
+                        "e4.txt:1: expected \"eyes"); /* a word too many */
     expect_script_error("c.txt", "0 cursor 2 1.5 1\n", "c.txt:1: expected \"cursor STEP");
     expect_script_error("c2.txt", "0 cursor 2 0.5 yes\n", "c2.txt:1: expected \"cursor STEP");
     expect_script_error("r.txt", "recorded today\n", "r.txt:1: expected \"recorded run\"");
