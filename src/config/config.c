@@ -39,8 +39,8 @@ static const char *const coast_res_names[] = {"crude", "low", "intermediate", NU
 static const char *const overlay_when_names[] = {"run", "always", "never", NULL};
 static const char *const probe_mode_names[] = {"first_visible", "distance", NULL};
 
-static const char *const layer_field_names[] = {"qvapor", "condensate", "temperature", "wind",
-                                                "theta",  "rh",         NULL};
+static const char *const layer_field_names[] = {
+    "qvapor", "condensate", "temperature", "wind", "theta", "rh", "w", "vorticity", NULL};
 static_assert(sizeof(layer_field_names) / sizeof(layer_field_names[0]) ==
                   TRANSFER_FIELD_COUNT + 1,
               "a name per transfer field");
@@ -52,7 +52,8 @@ static const struct config_field layer_fields[] = {
     {.path = "field", .type = T_ENUM, .n = 1, .offset = LOFF(field), .names = layer_field_names,
      .flags = F_GIVEN, .given = LOFF(has_field),
      .help = "the field shown: qvapor, condensate, temperature, wind (speed), theta (potential "
-             "temperature) or rh (relative humidity); default: the transfer function's"},
+             "temperature), rh (relative humidity), w (vertical velocity, m/s) or vorticity "
+             "(vertical, 1/s); default: the transfer function's"},
     {.path = "transfer", .type = T_TRANSFER, .n = 1, .offset = LOFF(transfer), .flags = F_GIVEN,
      .given = LOFF(has_transfer),
      .help = "its colour map: a transfer function file's name or its group in place "

@@ -20,6 +20,7 @@ void field_volume_finish(struct field_volume *v)
     free(v->u);
     free(v->v);
     free(v->w);
+    free(v->vorticity);
     free(v->rho_air);
     memset(v, 0, sizeof(*v));
 }

@@ -54,7 +54,10 @@ struct field_volume {
     float *wind;             /* wind speed |(U, V, W)| at the mass points, m/s, or NULL */
     float *u, *v, *w;        /* the wind's components at the mass points, m/s: u east, v north,
                                 w up; NULL unless asked for (the probe's direction) and in the
-                                data (w: NULL where the data has no vertical wind) */
+                                data (w: NULL where the data has no vertical wind); WRF's are
+                                grid-relative (along the map's x and y) */
+    float *vorticity;        /* vertical vorticity dv/dx - du/dy, 1/s, or NULL: WRF's, from its
+                                staggered U and V on the model levels (data/derived.h) */
     float *rho_air;          /* kg/m^3 or NULL */
 };
 

@@ -266,7 +266,7 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
     case PLAYER_FIELDS: {
         /* The fields the layers and slices show, and the transfer editor's (read while the
          * menu is there: its histogram shows it). */
-        bool qvapor = false, temperature = false, wind = false;
+        bool qvapor = false, temperature = false, wind = false, components = false;
         struct transfer_function edited;
         look_edited_transfer(look, &edited);
         for (int i = p->histogram ? -1 : 0; i < look->layer_count + look->slice_count; i++) {
@@ -279,10 +279,12 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
             temperature |= f == TRANSFER_FIELD_TEMPERATURE || f == TRANSFER_FIELD_THETA ||
                            f == TRANSFER_FIELD_RH;
             wind |= f == TRANSFER_FIELD_WIND;
+            components |= f == TRANSFER_FIELD_W || f == TRANSFER_FIELD_VORTICITY;
         }
         ok = data_source_load_fields_want(
             p->src, step,
-            &(struct data_fields_want){.qvapor = qvapor, .temperature = temperature, .wind = wind},
+            &(struct data_fields_want){.qvapor = qvapor, .temperature = temperature, .wind = wind,
+                                       .wind_components = components},
             &fv);
         break;
     }
