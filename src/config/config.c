@@ -101,6 +101,11 @@ static const struct config_field slice_fields[] = {
     {.path = "contour_every", .type = T_DOUBLE, .n = 1, .offset = SOFF(contour_every), .min = 0,
      .max = 1e9, .def = {0.0},
      .help = "contour lines at every multiple of this many field units (0: none)"},
+    {.path = "level", .type = T_INT, .n = 1, .offset = SOFF(level), .min = 0, .max = 9999,
+     .def = {0},
+     .help = "K >= 1: a horizontal slice following the model's mass level K (1 the lowest; "
+             "terrain following on WRF data, the grid's level K on height-level data) in "
+             "place of axis, position, point and normal; 0: the plane they give"},
     {.path = "enabled", .type = T_BOOL, .n = 1, .offset = SOFF(enabled), .max = 1, .def = {1},
      .help = "shown (false: kept)"},
 };

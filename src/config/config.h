@@ -199,6 +199,7 @@ struct config_slice {
     double normal[3];                  /* .normal (axis = "plane") */
     double opacity;                    /* .opacity */
     double contour_every;              /* .contour_every: field units, 0 none */
+    int level;                         /* .level: the model level followed (1 the lowest), 0 none */
     bool enabled;                      /* .enabled */
 };
 

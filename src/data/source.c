@@ -170,7 +170,7 @@ static void warn_empty_step(const struct data_source *s, int step, const struct 
 /* A step's mass ratios and air density, with vapour, temperature and wind where asked for
  * (or where the source's description asks for them). */
 static bool load_fields(struct data_source *s, int step, bool qvapor, bool temperature,
-                        bool wind, bool components, struct field_volume *out)
+                        bool wind, bool components, bool levels, struct field_volume *out)
 {
     /* The description's components come with the wind when it is read; asked for here, they
      * bring the wind. */
@@ -181,6 +181,7 @@ static bool load_fields(struct data_source *s, int step, bool qvapor, bool tempe
         d.temperature = d.temperature || temperature;
         d.wind = d.wind || wind;
         d.wind_components = d.wind_components || components;
+        d.level_heights = d.level_heights || levels;
         struct wrf_stats st;
         if (!wrf_read_step(s->wrf, step, &d, out, &st))
             return false;
@@ -217,20 +218,20 @@ static bool load_fields(struct data_source *s, int step, bool qvapor, bool tempe
 
 bool data_source_load_fields(struct data_source *s, int step, struct field_volume *out)
 {
-    return load_fields(s, step, false, false, false, false, out);
+    return load_fields(s, step, false, false, false, false, false, out);
 }
 
 bool data_source_load_fields_extra(struct data_source *s, int step, bool temperature, bool wind,
                                    struct field_volume *out)
 {
-    return load_fields(s, step, false, temperature, wind, false, out);
+    return load_fields(s, step, false, temperature, wind, false, false, out);
 }
 
 bool data_source_load_fields_want(struct data_source *s, int step,
                                   const struct data_fields_want *want, struct field_volume *out)
 {
     return load_fields(s, step, want->qvapor, want->temperature, want->wind,
-                       want->wind_components, out);
+                       want->wind_components, want->level_heights, out);
 }
 
 bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,

@@ -1488,6 +1488,18 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         goto unlock;
     }
 
+    if (d->level_heights) {
+        /* The mass levels' heights, half way between their staggered levels. */
+        out->level_z = malloc(c.cols * (size_t)c.nz * sizeof(float));
+        if (!out->level_z) {
+            log_error("%s: out of memory for the model levels' heights", path);
+            goto unlock;
+        }
+        for (size_t i = 0; i < c.cols * (size_t)c.nz; i++)
+            out->level_z[i] = 0.5f * (c.zw[i] + c.zw[i + c.cols]);
+        out->level_count = c.nz;
+    }
+
     /* The output grid. */
     double bottom = d->bottom_m;
     double top = d->top_m > 0 ? d->top_m : w->auto_top;

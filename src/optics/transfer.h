@@ -78,6 +78,9 @@ struct transfer_slice {
     double normal[3];    /* unit */
     double opacity;      /* [0, 1] */
     double contour_every; /* field units; 0: no lines */
+    int level;            /* >= 1: the surface of the model's mass level LEVEL, 1 the lowest
+                             (terrain following; ext_volume.slice_surface), in place of the
+                             plane; 0: the plane */
     struct transfer_function tf;
 };
 

@@ -273,8 +273,17 @@ static void test_vorticity_solid_body(void **state)
         assert_null(out.vorticity); /* not asked */
         assert_false(derived_field_available(&out, TRANSFER_FIELD_VORTICITY));
         field_volume_finish(&out);
+        assert_null(out.level_z);
         d.wind_components = true;
+        d.level_heights = true;
         assert_true(wrf_read_step(w, 0, &d, &out, NULL));
+        /* The mass levels' heights per kept column: the synthetic file's levels are flat, at
+         * the voxel centres. */
+        assert_non_null(out.level_z);
+        assert_int_equal(out.level_count, g->n[2]);
+        for (int k = 0; k < g->n[2]; k++)
+            assert_float_equal(out.level_z[grid3_index(&out.grid, 3, 5, k)],
+                               g->origin[2] + (k + 0.5) * g->spacing[2], 0.05);
         assert_non_null(out.vorticity);
         assert_non_null(out.w);
         assert_non_null(out.wind);
