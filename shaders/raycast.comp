@@ -185,6 +185,8 @@ uniform vec4 slice_lo, slice_scale, slice_opacity; // opacity 0: off
 uniform vec4 slice_contour;   // a line at every multiple of this many field units; 0: none
 uniform int slice_row;        // the colour map of slice i is row slice_row + i
 uniform vec4 slice_follow;    // 1: slice i is its level surface z = h(x, y), not its plane
+uniform vec4 slice_values[6]; // component i of entry k: slice i's k-th contour value ...
+uniform vec4 slice_value_count; // ... of this many
 layout(binding = BIND_EYE_TEX_SLICE_SURFACES) uniform sampler2D slice_surface_tex; // channel i
 
 // The height of slice I's surface above the point P's column (bilinear between the columns'
@@ -245,7 +247,16 @@ void slice_composite(int i, vec3 p, float t, inout vec3 radiance, inout float tr
         return;
     vec3 c = colour_map(slice_row + i,
                         clamp((s - slice_lo[i]) * slice_scale[i], 0.0, 1.0)).rgb;
+    // Field units to the nearest line: a multiple of slice_contour, or a given value.
+    float off = 1e30;
     if (slice_contour[i] > 0.0) {
+        float v = s / slice_contour[i];
+        off = abs(v - round(v)) * slice_contour[i];
+    }
+    for (int k = 0; k < 6; k++)
+        if (float(k) < slice_value_count[i])
+            off = min(off, abs(s - slice_values[k][i]));
+    if (off < 1e30) {
         vec3 h = voxel_size / box_size;
         vec3 g = vec3(texture(slice_tex, u + vec3(h.x, 0, 0))[i] -
                           texture(slice_tex, u - vec3(h.x, 0, 0))[i],
@@ -262,8 +273,6 @@ void slice_composite(int i, vec3 p, float t, inout vec3 radiance, inout float tr
             n = normalize(vec3(-dh, 1.0));
         }
         float grad = length(g - n * dot(n, g));
-        float v = s / slice_contour[i];
-        float off = abs(v - round(v)) * slice_contour[i]; // field units to the nearest line
         float width = pixel_footprint.x + pixel_footprint.y * t; // a pixel there, metres
         if (grad > 0.0 && off < width * grad)
             c = vec3(0.02);

@@ -101,6 +101,10 @@ static const struct config_field slice_fields[] = {
     {.path = "contour_every", .type = T_DOUBLE, .n = 1, .offset = SOFF(contour_every), .min = 0,
      .max = 1e9, .def = {0.0},
      .help = "contour lines at every multiple of this many field units (0: none)"},
+    {.path = "contours", .type = T_DOUBLE, .n = TRANSFER_CONTOUR_MAX, .offset = SOFF(contours),
+     .flags = F_UP_TO, .count_offset = SOFF(contour_count), .min = -1e9, .max = 1e9,
+     .help = "contour lines at these field values too (up to 6, e.g. [273.15] for the "
+             "freezing level on a temperature slice), beside contour_every"},
     {.path = "level", .type = T_INT, .n = 1, .offset = SOFF(level), .min = 0, .max = 9999,
      .def = {0},
      .help = "K >= 1: a horizontal slice following the model's mass level K (1 the lowest; "

@@ -68,9 +68,10 @@ struct transfer_layer {
 
 /* A slice (docs/analysis.md): the plane NORMAL . p = NORMAL . POINT (world metres) through the
  * field TF.field, coloured by TF's red, green and blue (its alpha is not used) at OPACITY, with
- * contour lines every CONTOUR_EVERY field units (0: none), composited with the clouds where
+ * contour lines every CONTOUR_EVERY field units (0: none) and at the CONTOUR_VALUES, composited with the clouds where
  * the ray crosses it. */
 #define TRANSFER_SLICE_MAX 4
+#define TRANSFER_CONTOUR_MAX 6 /* contour lines at given values, per slice */
 
 struct transfer_slice {
     bool enabled;
@@ -78,6 +79,8 @@ struct transfer_slice {
     double normal[3];    /* unit */
     double opacity;      /* [0, 1] */
     double contour_every; /* field units; 0: no lines */
+    double contour_values[TRANSFER_CONTOUR_MAX]; /* lines also at these field values ... */
+    int contour_count;                           /* ... the first this many */
     int level;            /* >= 1: the surface of the model's mass level LEVEL, 1 the lowest
                              (terrain following; ext_volume.slice_surface), in place of the
                              plane; 0: the plane */

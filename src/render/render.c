@@ -359,6 +359,9 @@ void render_slice_from_transfer(const struct transfer_slice *sl, float exposure,
     out->hi = (float)tf->hi;
     out->opacity = (float)sl->opacity;
     out->contour_every = (float)sl->contour_every;
+    out->contour_count = sl->contour_count;
+    for (int k = 0; k < sl->contour_count && k < TRANSFER_CONTOUR_MAX; k++)
+        out->contour_values[k] = (float)sl->contour_values[k];
     out->surface = sl->level > 0;
     for (int i = 0; i < RENDER_LAYER_LUT; i++)
         for (int c = 0; c < TRANSFER_CHANNELS; c++) {
@@ -415,12 +418,15 @@ static void slice_uniforms(const struct renderer *r, const struct gpu_program *p
                           view->proj[15] != 0.0f ? 0.0f : foot};
     gpu_uniform_vec2(prog, "pixel_footprint", footprint);
     float planes[4][4] = {{0}}, lo[4] = {0}, scale[4] = {0}, opacity[4] = {0}, every[4] = {0};
-    float follow[4] = {0};
+    float follow[4] = {0}, values[TRANSFER_CONTOUR_MAX][4] = {{0}}, value_count[4] = {0};
     for (int i = 0; i < n; i++) {
         const struct render_slice *sl = &r->slices[i];
         if (!slice_drawn(r, i))
             continue;
         follow[i] = sl->surface ? 1.0f : 0.0f;
+        value_count[i] = (float)sl->contour_count;
+        for (int k = 0; k < sl->contour_count; k++)
+            values[k][i] = sl->contour_values[k];
         memcpy(planes[i], sl->normal, sizeof(sl->normal));
         planes[i][3] = sl->offset;
         lo[i] = sl->lo;
@@ -437,6 +443,13 @@ static void slice_uniforms(const struct renderer *r, const struct gpu_program *p
     gpu_uniform_vec4(prog, "slice_opacity", opacity);
     gpu_uniform_vec4(prog, "slice_contour", every);
     gpu_uniform_vec4(prog, "slice_follow", follow);
+    static_assert(TRANSFER_CONTOUR_MAX == 6, "raycast.comp's slice_values");
+    static const char *const value_names[TRANSFER_CONTOUR_MAX] = {
+        "slice_values[0]", "slice_values[1]", "slice_values[2]",
+        "slice_values[3]", "slice_values[4]", "slice_values[5]"};
+    for (int k = 0; k < TRANSFER_CONTOUR_MAX; k++)
+        gpu_uniform_vec4(prog, value_names[k], values[k]);
+    gpu_uniform_vec4(prog, "slice_value_count", value_count);
     gpu_uniform_int(prog, "slice_row", TRANSFER_LAYER_MAX); /* put_luts */
 }
 

@@ -133,6 +133,9 @@ void look_from_config(const struct config *cfg, struct look *look)
         sl->opacity = c->opacity;
         sl->contour_every = c->contour_every;
         sl->level = c->level;
+        sl->contour_count = c->contour_count;
+        for (int k = 0; k < c->contour_count; k++)
+            sl->contour_values[k] = c->contours[k];
         double n[3] = {0.0, 0.0, 0.0}, len = 0.0;
         if (c->axis < 3) {
             n[c->axis] = 1.0;

@@ -656,10 +656,19 @@ void session_look_text(const struct session *s, char *buf, size_t size)
                    "            point = [%.17e, %.17e, %.17e];\n"
                    "            normal = [%.17e, %.17e, %.17e];\n"
                    "            opacity = %.17e;\n            contour_every = %.17e;\n"
-                   "            enabled = %s;\n        }",
+                   "            enabled = %s;\n",
                 sl->point[0] / 1000.0, sl->point[1] / 1000.0, sl->point[2] / 1000.0,
                 sl->normal[0], sl->normal[1], sl->normal[2], sl->opacity, sl->contour_every,
                 sl->enabled ? "true" : "false");
+        if (sl->level > 0)
+            fprintf(f, "            level = %d;\n", sl->level);
+        if (sl->contour_count > 0) {
+            fprintf(f, "            contours = [");
+            for (int k = 0; k < sl->contour_count; k++)
+                fprintf(f, "%s%.17e", k ? ", " : "", sl->contour_values[k]);
+            fprintf(f, "];\n");
+        }
+        fprintf(f, "        }");
     }
     fprintf(f, "%s);\n};\n", look->slice_count ? "\n    " : "");
     if (set->probe.on)
