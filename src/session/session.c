@@ -112,6 +112,10 @@ struct session {
     double grab_position[3];
     float wand_pos[3], wand_dir[3];
     bool have_wand;
+    /* A tracked wand dragging the selected slice (trigger held off the menu on the Slices
+     * page): the wand's world position and the slice's position along its axis at the press. */
+    bool slice_wand;
+    double slice_wand_from[3], slice_wand_position;
     float axis[INPUT_AXIS_COUNT];
     /* A recording's head (input_script_frame): the frame states carry it, not the display's. */
     bool head_given;
@@ -1119,6 +1123,50 @@ static void drag_slice(struct session *s, float du, float dv)
     apply_changes(s, MENU_CHANGE_SLICES);
 }
 
+/* Whether a drag outside the menu now moves a slice: the Slices page shows one. */
+static bool slices_shown(const struct session *s)
+{
+    return s->menu && menu_visible(s->menu) && menu_page(s->menu) == MENU_PAGE_SLICES &&
+           menu_model(s->menu)->slice_count > 0;
+}
+
+/* The tracker-space point P in world metres. */
+static void wand_world(mat4 from_world, const float p[3], double out[3])
+{
+    mat4 to_world;
+    glm_mat4_inv(from_world, to_world);
+    vec4 pt = {p[0], p[1], p[2], 1.0f}, pw;
+    glm_mat4_mulv(to_world, pt, pw);
+    for (int i = 0; i < 3; i++)
+        out[i] = pw[i] / pw[3];
+}
+
+/* A tracked wand's drag of the selected slice: the plane moves along its normal by the wand's
+ * world displacement along it since the press (along the slice's axis by that over the
+ * normal's share of the axis), kept in the box; the change goes to the settings as the page's
+ * sliders send it, so every rank draws the same plane. */
+static void wand_drag_slice(struct session *s, mat4 from_world)
+{
+    struct menu_model *m = menu_model(s->menu);
+    struct menu_slice *sl = &m->slices[m->slice_selected];
+    double w[3], along = 0.0, c[3];
+    wand_world(from_world, s->wand_pos, w);
+    for (int k = 0; k < 3; k++)
+        along += (w[k] - s->slice_wand_from[k]) * sl->slice.normal[k];
+    int a = sl->axis;
+    double share = fabs(sl->slice.normal[a]) > 0.1 ? sl->slice.normal[a] : 1.0;
+    double lo = m->box_min_m[a], hi = m->box_max_m[a];
+    double pos = fmin(hi, fmax(lo, s->slice_wand_position + along / share));
+    if (pos == sl->position_m)
+        return;
+    sl->position_m = pos;
+    for (int k = 0; k < 3; k++)
+        c[k] = 0.5 * (m->box_min_m[k] + m->box_max_m[k]);
+    menu_slice_plane(sl, c);
+    menu_model_changed(s->menu);
+    apply_changes(s, MENU_CHANGE_SLICES);
+}
+
 /* One event: the menu's, navigation's or the session's own. */
 static bool handle(struct session *s, mat4 from_world, struct input_event e)
 {
@@ -1135,6 +1183,8 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
         memcpy(s->wand_pos, e.position, sizeof(s->wand_pos));
         memcpy(s->wand_dir, e.direction, sizeof(s->wand_dir));
         s->have_wand = true;
+        if (s->slice_wand && slices_shown(s))
+            wand_drag_slice(s, from_world);
         break;
     case INPUT_AXIS:
         if (e.axis < INPUT_AXIS_COUNT)
@@ -1148,6 +1198,15 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
         } else if (e.button == INPUT_BUTTON_TRIGGER && e.down) {
             /* A press the menu takes is not a drag of the view. */
             s->drag_blocked = s->menu && menu_captures(s->menu);
+            /* A tracked wand's press off the menu on the Slices page takes the slice. */
+            s->slice_wand = s->tracker && s->have_wand && !s->drag_blocked && slices_shown(s);
+            if (s->slice_wand) {
+                const struct menu_model *m = menu_model(s->menu);
+                wand_world(from_world, s->wand_pos, s->slice_wand_from);
+                s->slice_wand_position = m->slices[m->slice_selected].position_m;
+            }
+        } else if (e.button == INPUT_BUTTON_TRIGGER) {
+            s->slice_wand = false;
         } else if (e.button == INPUT_BUTTON_RESET && e.down && !s->menu) {
             session_reset_view(s);
         }
@@ -1171,8 +1230,7 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
     case INPUT_DRAG:
         if (s->drag_blocked)
             break;
-        if (s->menu && menu_visible(s->menu) && menu_page(s->menu) == MENU_PAGE_SLICES &&
-            menu_model(s->menu)->slice_count > 0) {
+        if (slices_shown(s)) {
             drag_slice(s, e.u, e.v);
             break;
         }
