@@ -115,7 +115,9 @@ struct session {
     /* A tracked wand dragging the selected slice (trigger held off the menu on the Slices
      * page): the wand's world position and the slice's position along its axis at the press. */
     bool slice_wand;
-    double slice_wand_from[3], slice_wand_position;
+    double slice_wand_from[3], slice_wand_position, slice_wand_tilt;
+    float wand_up[3], slice_wand_up[3]; /* the wand's up (tracker space), now and at the press */
+    bool have_up, slice_wand_has_up;
     float axis[INPUT_AXIS_COUNT];
     /* A recording's head (input_script_frame): the frame states carry it, not the display's. */
     bool head_given;
@@ -1016,9 +1018,13 @@ static void to_menu_space(const struct session *s, mat4 from_world, struct input
     glm_mat4_mulv(from_world, p, pt);
     glm_mat4_mulv(from_world, d, dt);
     float len = sqrtf(dt[0] * dt[0] + dt[1] * dt[1] + dt[2] * dt[2]);
+    vec4 u = {e->up[0], e->up[1], e->up[2], 0.0f}, ut;
+    glm_mat4_mulv(from_world, u, ut);
+    float ulen = sqrtf(ut[0] * ut[0] + ut[1] * ut[1] + ut[2] * ut[2]);
     for (int i = 0; i < 3; i++) {
         e->position[i] = pt[i];
         e->direction[i] = len > 0.0f ? dt[i] / len : 0.0f;
+        e->up[i] = ulen > 0.0f ? ut[i] / ulen : 0.0f;
     }
     e->space = INPUT_SPACE_TRACKER;
 }
@@ -1141,9 +1147,33 @@ static void wand_world(mat4 from_world, const float p[3], double out[3])
         out[i] = pw[i] / pw[3];
 }
 
+/* The wand's roll since the press, degrees: the angle from the press's up to the wand's up
+ * about the wand's ray (right-handed about the ray, so clockwise as the holder sees it), both
+ * taken across the ray; 0 when the source gives no up. */
+static double wand_roll_deg(const struct session *s)
+{
+    if (!s->have_up || !s->slice_wand_has_up)
+        return 0.0;
+    const float *d = s->wand_dir, *b = s->wand_up;
+    double a[3], dot = 0.0, cr[3], sn = 0.0, cs = 0.0;
+    for (int k = 0; k < 3; k++)
+        dot += s->slice_wand_up[k] * d[k];
+    for (int k = 0; k < 3; k++)
+        a[k] = s->slice_wand_up[k] - dot * d[k];
+    cr[0] = a[1] * b[2] - a[2] * b[1];
+    cr[1] = a[2] * b[0] - a[0] * b[2];
+    cr[2] = a[0] * b[1] - a[1] * b[0];
+    for (int k = 0; k < 3; k++) {
+        sn += cr[k] * d[k];
+        cs += a[k] * b[k];
+    }
+    return atan2(sn, cs) * 180.0 / M_PI;
+}
+
 /* A tracked wand's drag of the selected slice: the plane moves along its normal by the wand's
  * world displacement along it since the press (along the slice's axis by that over the
- * normal's share of the axis), kept in the box; the change goes to the settings as the page's
+ * normal's share of the axis), kept in the box, and tilts by the wand's roll since the press
+ * (within the sliders' -60 to 60 degrees); the change goes to the settings as the page's
  * sliders send it, so every rank draws the same plane. */
 static void wand_drag_slice(struct session *s, mat4 from_world)
 {
@@ -1157,9 +1187,11 @@ static void wand_drag_slice(struct session *s, mat4 from_world)
     double share = fabs(sl->slice.normal[a]) > 0.1 ? sl->slice.normal[a] : 1.0;
     double lo = m->box_min_m[a], hi = m->box_max_m[a];
     double pos = fmin(hi, fmax(lo, s->slice_wand_position + along / share));
-    if (pos == sl->position_m)
+    double tilt = fmin(60.0, fmax(-60.0, s->slice_wand_tilt + wand_roll_deg(s)));
+    if (pos == sl->position_m && tilt == sl->tilt_deg)
         return;
     sl->position_m = pos;
+    sl->tilt_deg = tilt;
     for (int k = 0; k < 3; k++)
         c[k] = 0.5 * (m->box_min_m[k] + m->box_max_m[k]);
     menu_slice_plane(sl, c);
@@ -1183,6 +1215,9 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
         memcpy(s->wand_pos, e.position, sizeof(s->wand_pos));
         memcpy(s->wand_dir, e.direction, sizeof(s->wand_dir));
         s->have_wand = true;
+        s->have_up = e.has_up;
+        if (e.has_up)
+            memcpy(s->wand_up, e.up, sizeof(s->wand_up));
         if (s->slice_wand && slices_shown(s))
             wand_drag_slice(s, from_world);
         break;
@@ -1204,6 +1239,9 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
                 const struct menu_model *m = menu_model(s->menu);
                 wand_world(from_world, s->wand_pos, s->slice_wand_from);
                 s->slice_wand_position = m->slices[m->slice_selected].position_m;
+                s->slice_wand_tilt = m->slices[m->slice_selected].tilt_deg;
+                memcpy(s->slice_wand_up, s->wand_up, sizeof(s->slice_wand_up));
+                s->slice_wand_has_up = s->have_up;
             }
         } else if (e.button == INPUT_BUTTON_TRIGGER) {
             s->slice_wand = false;

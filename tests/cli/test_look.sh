@@ -236,6 +236,20 @@ done
 wand_z() { sed -n 's/^# *point = \[[^,]*, [^,]*, \(.*\)\];/\1/p' "$1"; }
 check "wand: the slice went 0.8 km up" awk -v a="$(wand_z "$tmp/wand/bookmark-1.cfg")" \
     -v b="$(wand_z "$tmp/wand-still/bookmark-1.cfg")" 'BEGIN { d = a - b; exit !(d > 0.79 && d < 0.81) }'
+# Rolled 20 degrees clockwise about its ray (the up (0, 1, 0) turned right-handed about the
+# ray (0, 0, 1)) while held: the slice tilts 20 degrees, its normal's z cos 20 = 0.9397.
+mkdir -p "$tmp/roll"
+sed -e 's/^6 pose tracker 0 1.2 0 0 0 1$/6 pose tracker 0 1.2 0 0 0 1 0 1 0/' \
+    -e 's/^8 pose tracker .*$/8 pose tracker 0 1.2 0 0 0 1 -0.342020143 0.939692621 0/' \
+    "$tmp/wand-still/in.txt" >"$tmp/roll/in.txt"
+(cd "$tmp/roll" && "$anvil" render --quiet "$cfg" $small --display "$src/displays/cave4.cfg" \
+    --menu --input in.txt -o out/ >/dev/null)
+check "roll: the CAVE session exits 0" test $? -eq 0
+wand_nz() { sed -n 's/^# *normal = \[[^,]*, [^,]*, \(.*\)\];/\1/p' "$1"; }
+check "roll: the slice tilted 20 degrees" awk -v n="$(wand_nz "$tmp/roll/bookmark-1.cfg")" \
+    'BEGIN { exit !(n > 0.9392 && n < 0.9402) }'
+check "roll: and did not move" awk -v a="$(wand_z "$tmp/roll/bookmark-1.cfg")" \
+    -v b="$(wand_z "$tmp/wand-still/bookmark-1.cfg")" 'BEGIN { d = a - b; exit !(d > -0.01 && d < 0.01) }'
 
 # Wrong types: one message with file:line, exit 1.
 printf 'look = {\n  layers = (\n    { field = "temperature";\n      mode = "glow"; }\n  );\n};\n' \

@@ -328,7 +328,8 @@ static void test_slice_contours_and_level(void **state)
     assert_true(cfg.look.slices[1].contours[1] == -2.0);
 
     const char *many = test_write_file(
-        "contours7.cfg", "look = { slices = (\n  { contours = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]; } ); };\n");
+        "contours7.cfg",
+        "look = { slices = (\n  { contours = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]; } ); };\n");
     unsigned before = log_error_count();
     assert_false(config_load(many, &cfg));
     check_error(before, "contours7.cfg:2:", "contours", "0 to 6", NULL);
