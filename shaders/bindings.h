@@ -42,6 +42,8 @@
 #define BIND_EYE_TEX_LAYER_LUT 12       /* LAYERS or SLICES > 0: RGBA32F 2D colour maps, row i
                                            layer i's, row 4 + i slice i's */
 #define BIND_EYE_TEX_SLICES 13          /* SLICES > 0: RGBA32F 3D, slice i's field in channel i */
+#define BIND_EYE_TEX_SLICE_SURFACES 14  /* SLICES > 0: RGBA32F 2D, slice i's level surface (world
+                                           z at each column) in channel i */
 #define BIND_EYE_IMG_OUT 0              /* RGBA32F radiance and transmittance */
 #define BIND_EYE_BUF_CELLS 4            /* SKIP 1: the macro-cell pyramid (cells.glsl) */
 #define BIND_EYE_BUF_COUNTERS 5         /* COUNT 1: what the rays did */

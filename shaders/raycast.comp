@@ -184,6 +184,55 @@ uniform vec4 slice_plane[4];  // normal . p = w, world metres
 uniform vec4 slice_lo, slice_scale, slice_opacity; // opacity 0: off
 uniform vec4 slice_contour;   // a line at every multiple of this many field units; 0: none
 uniform int slice_row;        // the colour map of slice i is row slice_row + i
+uniform vec4 slice_follow;    // 1: slice i is its level surface z = h(x, y), not its plane
+uniform vec4 slice_values[6]; // component i of entry k: slice i's k-th contour value ...
+uniform vec4 slice_value_count; // ... of this many
+layout(binding = BIND_EYE_TEX_SLICE_SURFACES) uniform sampler2D slice_surface_tex; // channel i
+
+// The height of slice I's surface above the point P's column (bilinear between the columns'
+// centres, clamped at the edges).
+float surface_z(int i, vec3 p)
+{
+    return texture(slice_surface_tex, (p.xy - box_min.xy) / box_size.xy)[i];
+}
+
+// Where the ray ORIGIN + t DIR first crosses slice I's surface in [T0, T1), or 1e30: the sign
+// of g(t) = z(t) - h(x(t), y(t)) watched in steps of a quarter of the horizontal voxel (h is
+// bilinear between columns, so g is smooth within a step), the crossing then halved down to
+// a millionth of a step (docs/analysis.md).
+float surface_crossing(int i, vec3 origin, vec3 dir, float t0, float t1)
+{
+    float horiz = length(dir.xy);
+    float ds = 0.25 * min(voxel_size.x, voxel_size.y) / max(horiz, 0.25);
+    int steps = int(min(ceil((t1 - t0) / ds), 16384.0));
+    float ta = t0;
+    vec3 pa = origin + dir * ta;
+    float ga = pa.z - surface_z(i, pa);
+    if (ga == 0.0)
+        return ta;
+    for (int n = 1; n <= steps; n++) {
+        float tb = min(t0 + float(n) * ds, t1);
+        vec3 pb = origin + dir * tb;
+        float gb = pb.z - surface_z(i, pb);
+        if (sign(gb) != sign(ga)) {
+            for (int k = 0; k < 20; k++) {
+                float tm = 0.5 * (ta + tb);
+                vec3 pm = origin + dir * tm;
+                float gm = pm.z - surface_z(i, pm);
+                if (sign(gm) == sign(ga)) {
+                    ta = tm;
+                    ga = gm;
+                } else {
+                    tb = tm;
+                }
+            }
+            return tb < t1 ? 0.5 * (ta + tb) : 1e30;
+        }
+        ta = tb;
+        ga = gb;
+    }
+    return 1e30;
+}
 uniform vec2 pixel_footprint; // a pixel's width at ray parameter t: x + y t, metres
 float slice_t[4];             // where this ray crosses each slice (1e30: not in the box)
 
@@ -198,7 +247,16 @@ void slice_composite(int i, vec3 p, float t, inout vec3 radiance, inout float tr
         return;
     vec3 c = colour_map(slice_row + i,
                         clamp((s - slice_lo[i]) * slice_scale[i], 0.0, 1.0)).rgb;
+    // Field units to the nearest line: a multiple of slice_contour, or a given value.
+    float off = 1e30;
     if (slice_contour[i] > 0.0) {
+        float v = s / slice_contour[i];
+        off = abs(v - round(v)) * slice_contour[i];
+    }
+    for (int k = 0; k < 6; k++)
+        if (float(k) < slice_value_count[i])
+            off = min(off, abs(s - slice_values[k][i]));
+    if (off < 1e30) {
         vec3 h = voxel_size / box_size;
         vec3 g = vec3(texture(slice_tex, u + vec3(h.x, 0, 0))[i] -
                           texture(slice_tex, u - vec3(h.x, 0, 0))[i],
@@ -207,9 +265,14 @@ void slice_composite(int i, vec3 p, float t, inout vec3 radiance, inout float tr
                       texture(slice_tex, u + vec3(0, 0, h.z))[i] -
                           texture(slice_tex, u - vec3(0, 0, h.z))[i]) / (2.0 * voxel_size);
         vec3 n = slice_plane[i].xyz;
+        if (slice_follow[i] > 0.0) { // the surface's normal, from its slopes
+            vec2 e = voxel_size.xy;
+            vec2 dh = vec2(surface_z(i, p + vec3(e.x, 0, 0)) - surface_z(i, p - vec3(e.x, 0, 0)),
+                           surface_z(i, p + vec3(0, e.y, 0)) - surface_z(i, p - vec3(0, e.y, 0))) /
+                      (2.0 * e);
+            n = normalize(vec3(-dh, 1.0));
+        }
         float grad = length(g - n * dot(n, g));
-        float v = s / slice_contour[i];
-        float off = abs(v - round(v)) * slice_contour[i]; // field units to the nearest line
         float width = pixel_footprint.x + pixel_footprint.y * t; // a pixel there, metres
         if (grad > 0.0 && off < width * grad)
             c = vec3(0.02);
@@ -433,7 +496,10 @@ void main()
     for (int i = 0; i < SLICES; i++) {
         float nd = dot(slice_plane[i].xyz, dir);
         slice_t[i] = 1e30;
-        if (slice_opacity[i] > 0.0 && abs(nd) > 1e-12) {
+        if (slice_opacity[i] > 0.0 && slice_follow[i] > 0.0) {
+            if (t1 > t0)
+                slice_t[i] = surface_crossing(i, origin, dir, t0, t1);
+        } else if (slice_opacity[i] > 0.0 && abs(nd) > 1e-12) {
             float ts = (slice_plane[i].w - dot(slice_plane[i].xyz, origin)) / nd;
             if (ts >= t0 && ts < t1)
                 slice_t[i] = ts;

@@ -39,8 +39,8 @@ static const char *const coast_res_names[] = {"crude", "low", "intermediate", NU
 static const char *const overlay_when_names[] = {"run", "always", "never", NULL};
 static const char *const probe_mode_names[] = {"first_visible", "distance", NULL};
 
-static const char *const layer_field_names[] = {"qvapor", "condensate", "temperature", "wind",
-                                                "theta",  "rh",         NULL};
+static const char *const layer_field_names[] = {
+    "qvapor", "condensate", "temperature", "wind", "theta", "rh", "w", "vorticity", NULL};
 static_assert(sizeof(layer_field_names) / sizeof(layer_field_names[0]) ==
                   TRANSFER_FIELD_COUNT + 1,
               "a name per transfer field");
@@ -52,7 +52,8 @@ static const struct config_field layer_fields[] = {
     {.path = "field", .type = T_ENUM, .n = 1, .offset = LOFF(field), .names = layer_field_names,
      .flags = F_GIVEN, .given = LOFF(has_field),
      .help = "the field shown: qvapor, condensate, temperature, wind (speed), theta (potential "
-             "temperature) or rh (relative humidity); default: the transfer function's"},
+             "temperature), rh (relative humidity), w (vertical velocity, m/s) or vorticity "
+             "(vertical, 1/s); default: the transfer function's"},
     {.path = "transfer", .type = T_TRANSFER, .n = 1, .offset = LOFF(transfer), .flags = F_GIVEN,
      .given = LOFF(has_transfer),
      .help = "its colour map: a transfer function file's name or its group in place "
@@ -100,6 +101,15 @@ static const struct config_field slice_fields[] = {
     {.path = "contour_every", .type = T_DOUBLE, .n = 1, .offset = SOFF(contour_every), .min = 0,
      .max = 1e9, .def = {0.0},
      .help = "contour lines at every multiple of this many field units (0: none)"},
+    {.path = "contours", .type = T_DOUBLE, .n = TRANSFER_CONTOUR_MAX, .offset = SOFF(contours),
+     .flags = F_UP_TO, .count_offset = SOFF(contour_count), .min = -1e9, .max = 1e9,
+     .help = "contour lines at these field values too (up to 6, e.g. [273.15] for the "
+             "freezing level on a temperature slice), beside contour_every"},
+    {.path = "level", .type = T_INT, .n = 1, .offset = SOFF(level), .min = 0, .max = 9999,
+     .def = {0},
+     .help = "K >= 1: a horizontal slice following the model's mass level K (1 the lowest; "
+             "terrain following on WRF data, the grid's level K on height-level data) in "
+             "place of axis, position, point and normal; 0: the plane they give"},
     {.path = "enabled", .type = T_BOOL, .n = 1, .offset = SOFF(enabled), .max = 1, .def = {1},
      .help = "shown (false: kept)"},
 };

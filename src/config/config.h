@@ -199,6 +199,9 @@ struct config_slice {
     double normal[3];                  /* .normal (axis = "plane") */
     double opacity;                    /* .opacity */
     double contour_every;              /* .contour_every: field units, 0 none */
+    double contours[TRANSFER_CONTOUR_MAX]; /* .contours: lines at these values ... */
+    int contour_count;                 /* ... this many */
+    int level;                         /* .level: the model level followed (1 the lowest), 0 none */
     bool enabled;                      /* .enabled */
 };
 

@@ -676,7 +676,15 @@ static bool apply(const struct config_table *t, const struct config_field *s, in
         }
         char expect[256], got[NAME_MAX_LEN + 8];
         expectation(s, true, expect, sizeof(expect));
-        if (!val->is_list || val->count != s->n) {
+        bool up_to = (s->flags & F_UP_TO) != 0;
+        int count = val->is_list ? val->count : 0;
+        if (up_to && (!val->is_list || count > s->n)) {
+            describe_value(val, got, sizeof(got));
+            report(&val->one.where, path, "expected an array of 0 to %d %s, got %s", s->n,
+                   expect, got);
+            break;
+        }
+        if (!up_to && (!val->is_list || val->count != s->n)) {
             if (t->whole_vectors) {
                 report_vector(s, val, &val->one.where, path);
             } else if (!val->is_list) {
@@ -689,21 +697,24 @@ static bool apply(const struct config_table *t, const struct config_field *s, in
             }
             break;
         }
+        int want = up_to ? count : s->n;
         int k = 0;
-        for (; k < s->n; k++) {
+        for (; k < want; k++) {
             char elem_path[NAME_MAX_LEN + 16];
             snprintf(elem_path, sizeof(elem_path), "%s[%d]", path, k);
             if (t->whole_vectors ? !check_number(s, &val->elems[k], &v[k])
                                  : !convert(s, &val->elems[k], elem_path, &v[k]))
                 break;
         }
-        if (k < s->n) {
+        if (k < want) {
             if (t->whole_vectors)
                 report_vector(s, val, &val->elems[k].where, path);
             break;
         }
         for (k = 0; k < s->n; k++)
-            store(s, sp, k, v[k], base);
+            store(s, sp, k, k < want ? v[k] : 0.0, base);
+        if (up_to)
+            *(int *)member(base, s->count_offset) = want;
         ok = true;
     }
     if (ok)
@@ -1834,7 +1845,8 @@ static void format_value(const struct config_field *s, int sp, const void *base,
     buf[0] = '\0';
     if (s->n > 1)
         strncat(buf, "[", size - 1);
-    for (int k = 0; k < s->n; k++) {
+    int shown = (s->flags & F_UP_TO) ? *(const int *)member((void *)base, s->count_offset) : s->n;
+    for (int k = 0; k < shown; k++) {
         char num[64];
         double v = fetch(s, sp, k, base);
         if (s->type == T_DOUBLE)
@@ -1871,7 +1883,9 @@ static void write_rows(const struct config_table *t, const void *defaults, const
     for (int i = 0; i < t->count; i++) {
         const struct config_field *s = &t->fields[i];
         char type[32], range[160], value[1024];
-        if (s->n > 1)
+        if (s->flags & F_UP_TO)
+            snprintf(type, sizeof(type), "%s[0 to %d]", type_names[s->type], s->n);
+        else if (s->n > 1)
             snprintf(type, sizeof(type), "%s[%d]", type_names[s->type], s->n);
         else
             snprintf(type, sizeof(type), "%s", type_names[s->type]);

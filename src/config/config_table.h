@@ -42,6 +42,8 @@ enum {
     F_OPTICS_DEFAULT = 1 << 3, /* the default is not in the table: the caller fills it */
     F_REQUIRED = 1 << 4,       /* in an element table: every element of the list must set it */
     F_GIVEN = 1 << 5,          /* the bool at GIVEN is set true when a file or --set gives it */
+    F_UP_TO = 1 << 6,          /* T_DOUBLE with N > 1: an array of 0 to N numbers, how many
+                                  in the int at COUNT_OFFSET */
 };
 
 struct config_table;
@@ -60,7 +62,7 @@ struct config_field {
     const char *def_text;             /* T_STRING, T_PATH: the default (NULL: "") */
     size_t size;                      /* T_STRING, T_PATH: bytes of the buffer */
     size_t given;                     /* F_GIVEN: offset of the bool */
-    size_t count_offset;              /* T_FILES, T_GROUPS: offset of the int count */
+    size_t count_offset;              /* T_FILES, T_GROUPS, F_UP_TO: offset of the int count */
     const struct config_table *elems; /* T_GROUPS: the table of one element */
     const void *def_elems;            /* T_GROUPS: the default elements ... */
     int def_count;                    /* ... and how many */

@@ -1,6 +1,7 @@
 #include "data/derived.h"
 
 #include <math.h>
+#include <string.h>
 
 #include "data/wrf_write.h"
 
@@ -34,6 +35,24 @@ double derived_rh(double t, double p, double q)
     return 100.0 * e / es;
 }
 
+void derived_vorticity_plane(const float *u, const float *v, int nx, int ny, double dx,
+                             double dy, float *out)
+{
+    for (int j = 0; j < ny; j++) {
+        int j0 = j > 0 ? j - 1 : 0, j1 = j < ny - 1 ? j + 1 : ny - 1;
+        for (int i = 0; i < nx; i++) {
+            int i0 = i > 0 ? i - 1 : 0, i1 = i < nx - 1 ? i + 1 : nx - 1;
+            double dvdx = i1 > i0 ? ((double)v[(size_t)j * nx + i1] - v[(size_t)j * nx + i0]) /
+                                        ((i1 - i0) * dx)
+                                  : 0.0;
+            double dudy = j1 > j0 ? ((double)u[(size_t)j1 * nx + i] - u[(size_t)j0 * nx + i]) /
+                                        ((j1 - j0) * dy)
+                                  : 0.0;
+            out[(size_t)j * nx + i] = (float)(dvdx - dudy);
+        }
+    }
+}
+
 bool derived_field_available(const struct field_volume *fv, enum transfer_field field)
 {
     switch (field) {
@@ -43,6 +62,10 @@ bool derived_field_available(const struct field_volume *fv, enum transfer_field 
         return fv->temperature != NULL;
     case TRANSFER_FIELD_WIND:
         return fv->wind != NULL;
+    case TRANSFER_FIELD_W:
+        return fv->w != NULL;
+    case TRANSFER_FIELD_VORTICITY:
+        return fv->vorticity != NULL || (fv->u && fv->v);
     case TRANSFER_FIELD_THETA:
         return fv->temperature && fv->rho_air;
     case TRANSFER_FIELD_RH:
@@ -55,6 +78,20 @@ bool derived_field_available(const struct field_volume *fv, enum transfer_field 
 void derived_field(const struct field_volume *fv, enum transfer_field field, float *out)
 {
     const struct grid3 *g = &fv->grid;
+    if (field == TRANSFER_FIELD_VORTICITY || field == TRANSFER_FIELD_W) {
+        const float *have = field == TRANSFER_FIELD_W ? fv->w : fv->vorticity;
+        size_t n = grid3_count(g), plane = (size_t)g->n[0] * (size_t)g->n[1];
+        if (have) {
+            memcpy(out, have, n * sizeof(float));
+        } else if (field == TRANSFER_FIELD_VORTICITY && fv->u && fv->v) {
+            for (int k = 0; k < g->n[2]; k++)
+                derived_vorticity_plane(fv->u + k * plane, fv->v + k * plane, g->n[0], g->n[1],
+                                        g->spacing[0], g->spacing[1], out + k * plane);
+        } else {
+            memset(out, 0, n * sizeof(float));
+        }
+        return;
+    }
     size_t idx = 0, layer = (size_t)g->n[0] * (size_t)g->n[1];
     for (int k = 0; k < g->n[2]; k++) {
         double z = g->origin[2] + (k + 0.5) * g->spacing[2];

@@ -24,12 +24,23 @@ double derived_theta(double t_k, double p_pa);
  * (T - 29.65)) hPa (Bolton 1980, eq. 10).  NAN for bad input. */
 double derived_rh(double t_k, double p_pa, double q_kg_kg);
 
+/* Vertical vorticity zeta = dv/dx - du/dy, 1/s, on one horizontal plane of NX x NY points
+ * (x fastest) spaced DX, DY metres, from U and V at the same points into OUT: centred
+ * differences (v[i+1] - v[i-1]) / 2dx - (u[j+1] - u[j-1]) / 2dy inside, one-sided at the edges,
+ * zero along an axis of one point.  With U and V the means of an Arakawa C grid's face winds
+ * (WRF's staggered U and V), the centred form equals the mean of the four vorticities at the
+ * cell's corners, where the C grid defines them (Arakawa and Lamb 1977). */
+void derived_vorticity_plane(const float *u, const float *v, int nx, int ny, double dx,
+                             double dy, float *out);
+
 /* Whether FV holds what FIELD is computed from (else derived_field uses the stand-ins below). */
 bool derived_field_available(const struct field_volume *fv, enum transfer_field field);
 
 /* FIELD on FV's grid into OUT (grid3_count values, the caller's).  What FV lacks is replaced:
  * QVAPOR by 10 g/kg at the ground falling with a 2.5 km scale height, temperature and pressure
- * by the 1976 standard atmosphere at the voxel centre's height, the wind by zero. */
+ * by the 1976 standard atmosphere at the voxel centre's height, the wind by zero.  The vertical
+ * vorticity is FV's own (the reader's, on its model levels) where it has one, else
+ * derived_vorticity_plane over FV's u and v on each level of the grid. */
 void derived_field(const struct field_volume *fv, enum transfer_field field, float *out);
 
 #endif

@@ -170,13 +170,18 @@ static void warn_empty_step(const struct data_source *s, int step, const struct 
 /* A step's mass ratios and air density, with vapour, temperature and wind where asked for
  * (or where the source's description asks for them). */
 static bool load_fields(struct data_source *s, int step, bool qvapor, bool temperature,
-                        bool wind, struct field_volume *out)
+                        bool wind, bool components, bool levels, struct field_volume *out)
 {
+    /* The description's components come with the wind when it is read; asked for here, they
+     * bring the wind. */
+    components = components || (s->desc.wind_components && (wind || s->desc.wrf.wind));
     if (s->wrf) {
         struct wrf_desc d = s->desc.wrf;
         d.qvapor = d.qvapor || qvapor;
         d.temperature = d.temperature || temperature;
         d.wind = d.wind || wind;
+        d.wind_components = d.wind_components || components;
+        d.level_heights = d.level_heights || levels;
         struct wrf_stats st;
         if (!wrf_read_step(s->wrf, step, &d, out, &st))
             return false;
@@ -187,8 +192,8 @@ static bool load_fields(struct data_source *s, int step, bool qvapor, bool tempe
         struct hgrid_desc hd = {.memory_mb = s->desc.wrf.memory_mb,
                                 .qvapor = qvapor || s->desc.wrf.qvapor,
                                 .temperature = temperature || s->desc.wrf.temperature,
-                                .wind = wind || s->desc.wrf.wind,
-                                .wind_components = s->desc.wind_components,
+                                .wind = wind || components || s->desc.wrf.wind,
+                                .wind_components = components,
                                 .no_density = s->desc.wrf.no_density};
         return hgrid_read_step(s->hg, step, &hd, out, NULL);
     }
@@ -206,26 +211,27 @@ static bool load_fields(struct data_source *s, int step, bool qvapor, bool tempe
     struct isabel_desc id = s->desc.isabel;
     id.qvapor = id.qvapor || qvapor || s->desc.wrf.qvapor;
     id.temperature = id.temperature || temperature;
-    id.wind = id.wind || wind;
-    id.wind_components = id.wind_components || s->desc.wind_components;
+    id.wind = id.wind || wind || components;
+    id.wind_components = id.wind_components || components;
     return isabel_read_step(&id, step, out, NULL);
 }
 
 bool data_source_load_fields(struct data_source *s, int step, struct field_volume *out)
 {
-    return load_fields(s, step, false, false, false, out);
+    return load_fields(s, step, false, false, false, false, false, out);
 }
 
 bool data_source_load_fields_extra(struct data_source *s, int step, bool temperature, bool wind,
                                    struct field_volume *out)
 {
-    return load_fields(s, step, false, temperature, wind, out);
+    return load_fields(s, step, false, temperature, wind, false, false, out);
 }
 
 bool data_source_load_fields_want(struct data_source *s, int step,
                                   const struct data_fields_want *want, struct field_volume *out)
 {
-    return load_fields(s, step, want->qvapor, want->temperature, want->wind, out);
+    return load_fields(s, step, want->qvapor, want->temperature, want->wind,
+                       want->wind_components, want->level_heights, out);
 }
 
 bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,

@@ -74,6 +74,9 @@ bool data_source_load_fields_extra(struct data_source *s, int step, bool tempera
  * (WRF; other formats leave them NULL). */
 struct data_fields_want {
     bool qvapor, temperature, wind;
+    bool wind_components; /* u, v, w and (WRF) the vertical vorticity, where the data has the
+                             wind (implies wind; every format) */
+    bool level_heights;   /* WRF: each column's mass-level heights (field_volume level_z) */
 };
 /* As data_source_load_fields_extra, QVAPOR read only when WANT asks (or the description's
  * wrf.qvapor does). */

@@ -20,6 +20,8 @@ void field_volume_finish(struct field_volume *v)
     free(v->u);
     free(v->v);
     free(v->w);
+    free(v->vorticity);
+    free(v->level_z);
     free(v->rho_air);
     memset(v, 0, sizeof(*v));
 }
@@ -32,8 +34,10 @@ void ext_volume_finish(struct ext_volume *v)
     free(v->tint);
     for (int i = 0; i < TRANSFER_LAYER_MAX; i++)
         free(v->layer[i]);
-    for (int i = 0; i < TRANSFER_SLICE_MAX; i++)
+    for (int i = 0; i < TRANSFER_SLICE_MAX; i++) {
         free(v->slice[i]);
+        free(v->slice_surface[i]);
+    }
     free(v->histogram);
     memset(v, 0, sizeof(*v));
 }
@@ -214,6 +218,10 @@ void ext_volume_stretch_height(struct ext_volume *v, double k)
         return;
     v->grid.origin[2] *= k;
     v->grid.spacing[2] *= k;
+    size_t plane = (size_t)v->grid.n[0] * (size_t)v->grid.n[1];
+    for (int s = 0; s < TRANSFER_SLICE_MAX; s++)
+        for (size_t i = 0; v->slice_surface[s] && i < plane; i++)
+            v->slice_surface[s][i] *= (float)k;
     float inv = (float)(1.0 / k);
     size_t n = 2 * grid3_count(&v->grid);
     for (size_t i = 0; i < n; i++)

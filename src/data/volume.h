@@ -54,8 +54,17 @@ struct field_volume {
     float *wind;             /* wind speed |(U, V, W)| at the mass points, m/s, or NULL */
     float *u, *v, *w;        /* the wind's components at the mass points, m/s: u east, v north,
                                 w up; NULL unless asked for (the probe's direction) and in the
-                                data (w: NULL where the data has no vertical wind) */
+                                data (w: NULL where the data has no vertical wind); WRF's are
+                                grid-relative (along the map's x and y) */
+    float *vorticity;        /* vertical vorticity dv/dx - du/dy, 1/s, or NULL: WRF's, from its
+                                staggered U and V on the model levels (data/derived.h) */
     float *rho_air;          /* kg/m^3 or NULL */
+    /* The model's own levels where it has terrain-following ones (WRF): the height above sea
+     * level of mass level k (0 the lowest) at column (i, j), level_z[i + n0 (j + n1 k)], m,
+     * for k < LEVEL_COUNT; NULL unless asked for.  On height-level data the grid's levels are
+     * the model's. */
+    float *level_z;
+    int level_count;
 };
 
 /* Extinction per phase: beta[2 i] scatters with the ice phase (ice + snow + graupel),
@@ -72,6 +81,9 @@ struct ext_volume {
     /* The look's slices' fields, likewise. */
     float *slice[TRANSFER_SLICE_MAX];
     enum transfer_field slice_field[TRANSFER_SLICE_MAX];
+    /* A slice that follows a model level (transfer_slice.level): that level's height at each
+     * column, n[0] * n[1] values (world z, metres, x fastest), or NULL. */
+    float *slice_surface[TRANSFER_SLICE_MAX];
     struct transfer_histogram *histogram; /* NULL, or owned: the values of the look's transfer
                                              field of the step it was made from */
 };
@@ -112,7 +124,8 @@ bool ext_volume_tint_from_fields(const struct field_volume *in,
                                  const struct species_select *sel,
                                  const struct species_tint *tint, struct ext_volume *out);
 
-/* Height exaggeration (Nes §5.5.2): multiplies the z origin and spacing by K (> 0) and divides
+/* Height exaggeration (Nes §5.5.2): multiplies the z origin and spacing (and the slices'
+ * surfaces) by K (> 0) and divides
  * the extinction by K, so the volume is K times taller and every vertical column keeps its
  * optical depth (the stretch moves the medium, it does not add any).  K = 1 leaves V as is. */
 void ext_volume_stretch_height(struct ext_volume *v, double k);

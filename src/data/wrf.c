@@ -14,6 +14,7 @@
 
 #include "common/log.h"
 #include "common/parallel.h"
+#include "data/derived.h"
 #include "data/extfile.h"
 #include "data/nclock.h"
 #include "data/ncopen.h"
@@ -802,7 +803,10 @@ static size_t arrays_out(const struct wrf *w, const struct wrf_desc *d)
     if (!d->no_density)
         n++;
     n += d->temperature;
-    n += d->wind && w->meta.has_wind;
+    bool wind = (d->wind || d->wind_components) && w->meta.has_wind;
+    n += wind;
+    if (wind && d->wind_components) /* u, v, vorticity and w */
+        n += 3 + w->meta.has_w;
     return n;
 }
 
@@ -819,10 +823,13 @@ size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d)
     double scratch = cols * (2.0 * w->nzs + w->meta.nz) * sizeof(float) +
                      cols * s.nz * (sizeof(uint16_t) + sizeof(float));
     /* Temperature and wind speed: a third mass-level buffer; W on its staggered levels. */
-    if (d->temperature || (d->wind && w->meta.has_wind))
+    bool wind = (d->wind || d->wind_components) && w->meta.has_wind;
+    if (d->temperature || wind)
         scratch += cols * w->meta.nz * sizeof(float);
-    if (d->wind && w->meta.has_w)
+    if (wind && w->meta.has_w)
         scratch += cols * w->nzs * sizeof(float);
+    if (wind && d->wind_components) /* the components and vorticity on the model levels */
+        scratch += 4.0 * cols * w->meta.nz * sizeof(float);
     double total = out + scratch;
     return total >= (double)SIZE_MAX ? SIZE_MAX : (size_t)total;
 }
@@ -1331,9 +1338,13 @@ static bool read_faces(const struct wrf *w, int step, enum wrf_var v, const stru
 
 /* Wind speed on the mass levels into SPEED (c->cols * c->nz): U averaged over its two
  * west_east_stag faces, V over its south_north_stag faces, W (when the file has it) over its
- * bottom_top_stag levels, using BUF and BUF2 as scratch. */
+ * bottom_top_stag levels, using BUF and BUF2 as scratch.  With COMP (three arrays of
+ * c->cols * c->nz, the caller's), the components at the mass points go there too, and with
+ * VORT the vertical vorticity on each model level (derived_vorticity_plane, spacing DX, DY);
+ * COMP[2] stays untouched when the file has no W. */
 static bool wind_speed(const struct wrf *w, int step, const struct selection *s,
                        const struct columns *c, float *buf, float *buf2, float *speed,
+                       float *const *comp, float *vort, double dx, double dy,
                        struct wrf_stats *stats)
 {
     size_t n = c->cols * (size_t)c->nz;
@@ -1341,10 +1352,18 @@ static bool wind_speed(const struct wrf *w, int step, const struct selection *s,
         return false;
     for (size_t i = 0; i < n; i++)
         speed[i] = buf[i] * buf[i];
+    if (comp)
+        memcpy(comp[0], buf, n * sizeof(float));
     if (!read_faces(w, step, WRF_V, s, c->nz, 0, 1, buf, buf2, n, &stats->var[WRF_V]))
         return false;
     for (size_t i = 0; i < n; i++)
         speed[i] += buf[i] * buf[i];
+    if (comp) {
+        memcpy(comp[1], buf, n * sizeof(float));
+        for (int k = 0; vort && k < c->nz; k++)
+            derived_vorticity_plane(comp[0] + k * c->cols, comp[1] + k * c->cols, s->nx, s->ny,
+                                    dx, dy, vort + k * c->cols);
+    }
     if (w->files[w->steps[step].file].varid[WRF_W] >= 0) {
         float *ws = malloc(c->cols * (size_t)c->nzs * sizeof(float));
         if (!ws) {
@@ -1359,6 +1378,8 @@ static bool wind_speed(const struct wrf *w, int step, const struct selection *s,
         for (size_t i = 0; ok && i < n; i++) {
             float m = 0.5f * (ws[i] + ws[i + c->cols]);
             speed[i] += m * m;
+            if (comp)
+                comp[2][i] = m;
         }
         free(ws);
         if (!ok)
@@ -1401,8 +1422,9 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     float *buf = NULL, *buf2 = NULL, *buf3 = NULL, *fill = NULL;
     bool ok = false;
     const struct wrf_file *sf = &w->files[w->steps[step].file];
-    bool want_wind = d->wind && sf->varid[WRF_U] >= 0 && sf->varid[WRF_V] >= 0;
-    if (d->wind && !want_wind)
+    bool ask_wind = d->wind || d->wind_components;
+    bool want_wind = ask_wind && sf->varid[WRF_U] >= 0 && sf->varid[WRF_V] >= 0;
+    if (ask_wind && !want_wind)
         log_warn("%s: no usable U and V (the staggered wind): wind speed unavailable", path);
     c.zw = malloc(c.cols * (size_t)c.nzs * sizeof(float));
     /* BUF holds PHB on the staggered levels first, then mass-level variables. */
@@ -1466,6 +1488,18 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         goto unlock;
     }
 
+    if (d->level_heights) {
+        /* The mass levels' heights, half way between their staggered levels. */
+        out->level_z = malloc(c.cols * (size_t)c.nz * sizeof(float));
+        if (!out->level_z) {
+            log_error("%s: out of memory for the model levels' heights", path);
+            goto unlock;
+        }
+        for (size_t i = 0; i < c.cols * (size_t)c.nz; i++)
+            out->level_z[i] = 0.5f * (c.zw[i] + c.zw[i + c.cols]);
+        out->level_count = c.nz;
+    }
+
     /* The output grid. */
     double bottom = d->bottom_m;
     double top = d->top_m > 0 ? d->top_m : w->auto_top;
@@ -1521,9 +1555,42 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
             log_error("%s: out of memory for wind speed", path);
             goto unlock;
         }
-        if (!wind_speed(w, step, &s, &c, buf, buf2, buf3, stats))
+        float *comp[3] = {NULL, NULL, NULL}, *vort = NULL;
+        bool has_w = sf->varid[WRF_W] >= 0, cok = true;
+        size_t nm = c.cols * (size_t)c.nz;
+        if (d->wind_components) {
+            for (int i = 0; i < 4; i++) {
+                float **dst = i < 3 ? &comp[i] : &vort;
+                *dst = malloc(nm * sizeof(float));
+                cok = cok && *dst;
+            }
+            out->u = malloc(nout * sizeof(float));
+            out->v = malloc(nout * sizeof(float));
+            out->w = has_w ? malloc(nout * sizeof(float)) : NULL;
+            out->vorticity = malloc(nout * sizeof(float));
+            cok = cok && out->u && out->v && (out->w || !has_w) && out->vorticity;
+        }
+        if (!cok)
+            log_error("%s: out of memory for the wind's components", path);
+        /* S's columns are S.sx and S.sy mass columns apart. */
+        cok = cok && wind_speed(w, step, &s, &c, buf, buf2, buf3,
+                                d->wind_components ? comp : NULL, vort, w->meta.dx * s.sx,
+                                w->meta.dy * s.sy, stats);
+        if (cok) {
+            resample_var(&plan, buf3, 0.0f, NULL, out->wind);
+            if (d->wind_components) {
+                resample_var(&plan, comp[0], 0.0f, NULL, out->u);
+                resample_var(&plan, comp[1], 0.0f, NULL, out->v);
+                if (has_w)
+                    resample_var(&plan, comp[2], 0.0f, NULL, out->w);
+                resample_var(&plan, vort, 0.0f, NULL, out->vorticity);
+            }
+        }
+        for (int i = 0; i < 3; i++)
+            free(comp[i]);
+        free(vort);
+        if (!cok)
             goto unlock;
-        resample_var(&plan, buf3, 0.0f, NULL, out->wind);
     }
 
     /* Below the ground, above the top, or where P/PB/T were bad: the standard atmosphere,

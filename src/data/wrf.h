@@ -47,6 +47,10 @@ struct wrf_desc {
     bool wind;        /* also compute the wind speed from U, V (and W when present), averaged
                          from their staggered points to the mass points; left NULL with one
                          log_warn when the file has no U or V */
+    bool wind_components; /* also keep the wind's grid-relative components u, v, w at the mass
+                             points and the vertical vorticity (field_volume u, v, w and
+                             vorticity; implies wind) */
+    bool level_heights; /* also keep each column's mass-level heights (field_volume level_z) */
     bool no_density;  /* leave rho_air NULL (standard atmosphere) instead of reading P/PB/T */
 };
 

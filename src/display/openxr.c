@@ -1090,9 +1090,12 @@ static void push_aim(struct openxr *o, int h, struct input_queue *q)
     vec3 dir;
     memcpy(qr, p.rotation, sizeof(qr));
     glm_quat_rotatev(qr, (vec3){0.0f, 0.0f, -1.0f}, dir); /* the aim pose points along -z */
-    struct input_event e = {.type = INPUT_POSE, .space = INPUT_SPACE_TRACKER};
+    vec3 up;
+    glm_quat_rotatev(qr, (vec3){0.0f, 1.0f, 0.0f}, up);
+    struct input_event e = {.type = INPUT_POSE, .space = INPUT_SPACE_TRACKER, .has_up = true};
     memcpy(e.position, p.position, sizeof(e.position));
     memcpy(e.direction, dir, sizeof(e.direction));
+    memcpy(e.up, up, sizeof(e.up));
     input_queue_push(q, &e);
 }
 

@@ -242,8 +242,9 @@ static const char *parse_event(char **tok, int n, struct input_event *e)
     }
     if (strcmp(kind, "pose") == 0) {
         e->type = INPUT_POSE;
-        if (n != 8 || (strcmp(tok[1], "tracker") != 0 && strcmp(tok[1], "world") != 0))
-            return "\"pose tracker|world X Y Z DX DY DZ\"";
+        if ((n != 8 && n != 11) ||
+            (strcmp(tok[1], "tracker") != 0 && strcmp(tok[1], "world") != 0))
+            return "\"pose tracker|world X Y Z DX DY DZ [UX UY UZ]\"";
         e->space = strcmp(tok[1], "world") == 0 ? INPUT_SPACE_WORLD : INPUT_SPACE_TRACKER;
         for (int i = 0; i < 3; i++) {
             if (!parse_float(tok[2 + i], &e->position[i]) ||
@@ -257,6 +258,22 @@ static const char *parse_event(char **tok, int n, struct input_event *e)
         /* A unit direction (as a recording writes it) is kept to the bit. */
         for (int i = 0; i < 3 && fabsf(len - 1.0f) > 1e-5f; i++)
             e->direction[i] /= len;
+        if (n == 11) {
+            /* The wand's up: made unit and across the direction. */
+            for (int i = 0; i < 3; i++)
+                if (!parse_float(tok[8 + i], &e->up[i]))
+                    return "\"pose tracker|world X Y Z DX DY DZ UX UY UZ\" (numbers)";
+            float d = e->up[0] * e->direction[0] + e->up[1] * e->direction[1] +
+                      e->up[2] * e->direction[2];
+            for (int i = 0; i < 3; i++)
+                e->up[i] -= d * e->direction[i];
+            float ul = sqrtf(e->up[0] * e->up[0] + e->up[1] * e->up[1] + e->up[2] * e->up[2]);
+            if (!(ul > 1e-6f))
+                return "an up UX UY UZ that is not zero nor along the direction";
+            for (int i = 0; i < 3 && fabsf(ul - 1.0f) > 1e-5f; i++)
+                e->up[i] /= ul;
+            e->has_up = true;
+        }
         return NULL;
     }
     if (strcmp(kind, "drag") == 0) {

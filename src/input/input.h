@@ -83,6 +83,9 @@ struct input_event {
     enum input_space space;   /* INPUT_POSE */
     float position[3];        /* INPUT_POSE: ray origin */
     float direction[3];       /* INPUT_POSE: unit ray direction */
+    float up[3];              /* INPUT_POSE with HAS_UP: the wand's up, unit and across the
+                                 direction (its roll about the ray) */
+    bool has_up;              /* INPUT_POSE: the source knows the wand's roll */
     enum input_axis axis;     /* INPUT_AXIS */
     float value;              /* INPUT_AXIS */
     enum input_key key;       /* INPUT_KEY */

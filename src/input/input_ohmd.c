@@ -17,7 +17,7 @@ struct ohmd_input {
     int control_count;
     int hints[CONTROLS_MAX];
     bool pressed[CONTROLS_MAX];
-    float last_pose[6];
+    float last_pose[9];
 };
 
 /* The wand button an OpenHMD control hint stands for, or -1. */
@@ -51,6 +51,15 @@ static void forward_of(const float q[4], float out[3])
     out[2] = -(1.0f - 2.0f * (x * x + y * y));
 }
 
+/* Rotates (0, 1, 0) (the controller's up) by the quaternion Q (x, y, z, w). */
+static void up_of(const float q[4], float out[3])
+{
+    float x = q[0], y = q[1], z = q[2], w = q[3];
+    out[0] = 2.0f * (x * y - w * z);
+    out[1] = 1.0f - 2.0f * (x * x + z * z);
+    out[2] = 2.0f * (y * z + w * x);
+}
+
 static bool ohmd_poll(struct input_source *s, const struct input_frame *frame,
                       struct input_queue *q)
 {
@@ -59,12 +68,14 @@ static bool ohmd_poll(struct input_source *s, const struct input_frame *frame,
     float rot[4] = {0, 0, 0, 1}, pos[3] = {0, 0, 0};
     ohmd_device_getf(h->device, OHMD_ROTATION_QUAT, rot);
     ohmd_device_getf(h->device, OHMD_POSITION_VECTOR, pos);
-    struct input_event e = {.type = INPUT_POSE, .space = INPUT_SPACE_TRACKER};
+    struct input_event e = {.type = INPUT_POSE, .space = INPUT_SPACE_TRACKER, .has_up = true};
     forward_of(rot, e.direction);
+    up_of(rot, e.up);
     for (int i = 0; i < 3; i++)
         e.position[i] = pos[i] + (float)h->offset[i];
-    float pose[6] = {e.position[0], e.position[1], e.position[2],
-                     e.direction[0], e.direction[1], e.direction[2]};
+    float pose[9] = {e.position[0],  e.position[1],  e.position[2],
+                     e.direction[0], e.direction[1], e.direction[2],
+                     e.up[0],        e.up[1],        e.up[2]};
     if (memcmp(pose, h->last_pose, sizeof(pose)) != 0 || frame->frame == 0) {
         memcpy(h->last_pose, pose, sizeof(pose));
         input_queue_push(q, &e);

@@ -72,9 +72,12 @@ static void event_line(FILE *f, long frame, const struct input_event *e)
                 e->down ? "down" : "up");
         return;
     case INPUT_POSE:
-        fprintf(f, "%ld pose %s %.9g %.9g %.9g %.9g %.9g %.9g\n", frame,
+        fprintf(f, "%ld pose %s %.9g %.9g %.9g %.9g %.9g %.9g", frame,
                 e->space == INPUT_SPACE_WORLD ? "world" : "tracker", e->position[0], e->position[1],
                 e->position[2], e->direction[0], e->direction[1], e->direction[2]);
+        if (e->has_up)
+            fprintf(f, " %.9g %.9g %.9g", e->up[0], e->up[1], e->up[2]);
+        fprintf(f, "\n");
         return;
     case INPUT_AXIS:
         if (e->axis >= 0 && e->axis < INPUT_AXIS_COUNT)

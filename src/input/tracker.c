@@ -995,7 +995,7 @@ struct wand {
     struct tracker *tracker;
     struct tracker_wand_desc desc;
     bool have_pose;
-    float pose[6];
+    float pose[9];
     bool pressed[INPUT_BUTTON_COUNT];
     float axes[INPUT_AXIS_COUNT];
 };
@@ -1010,13 +1010,18 @@ static bool wand_poll(struct input_source *s, const struct input_frame *frame,
         const double *r = smp.rotation;
         double dir[3] = {-2.0 * (r[0] * r[2] + r[3] * r[1]), -2.0 * (r[1] * r[2] - r[3] * r[0]),
                          -(1.0 - 2.0 * (r[0] * r[0] + r[1] * r[1]))};
-        struct input_event e = {.type = INPUT_POSE, .space = INPUT_SPACE_TRACKER};
+        /* The wand's up: the rotation of (0, 1, 0). */
+        double up[3] = {2.0 * (r[0] * r[1] - r[3] * r[2]), 1.0 - 2.0 * (r[0] * r[0] + r[2] * r[2]),
+                        2.0 * (r[1] * r[2] + r[3] * r[0])};
+        struct input_event e = {.type = INPUT_POSE, .space = INPUT_SPACE_TRACKER, .has_up = true};
         for (int i = 0; i < 3; i++) {
             e.position[i] = (float)smp.position[i];
             e.direction[i] = (float)dir[i];
+            e.up[i] = (float)up[i];
         }
-        float pose[6] = {e.position[0],  e.position[1],  e.position[2],
-                         e.direction[0], e.direction[1], e.direction[2]};
+        float pose[9] = {e.position[0],  e.position[1],  e.position[2],
+                         e.direction[0], e.direction[1], e.direction[2],
+                         e.up[0],        e.up[1],        e.up[2]};
         if (!w->have_pose || memcmp(pose, w->pose, sizeof(pose)) != 0) {
             memcpy(w->pose, pose, sizeof(pose));
             w->have_pose = true;

@@ -595,9 +595,10 @@ static double shown_value(enum transfer_field f, double v)
 {
     if (f == TRANSFER_FIELD_TEMPERATURE)
         return v - 273.15;
-    if (f == TRANSFER_FIELD_WIND || f == TRANSFER_FIELD_THETA || f == TRANSFER_FIELD_RH)
+    if (f == TRANSFER_FIELD_WIND || f == TRANSFER_FIELD_THETA || f == TRANSFER_FIELD_RH ||
+        f == TRANSFER_FIELD_W)
         return v;
-    return v * 1e3;
+    return v * 1e3; /* g/kg; vorticity in 1e-3/s */
 }
 
 static const char *shown_unit(enum transfer_field f)
@@ -611,6 +612,10 @@ static const char *shown_unit(enum transfer_field f)
         return "K";
     case TRANSFER_FIELD_RH:
         return "%";
+    case TRANSFER_FIELD_W:
+        return "m/s";
+    case TRANSFER_FIELD_VORTICITY:
+        return "1e-3/s";
     default:
         return "g/kg";
     }
@@ -629,6 +634,10 @@ static const char *field_title(enum transfer_field f)
         return "potential temperature";
     case TRANSFER_FIELD_RH:
         return "relative humidity";
+    case TRANSFER_FIELD_W:
+        return "vertical velocity";
+    case TRANSFER_FIELD_VORTICITY:
+        return "vertical vorticity";
     default:
         return "wind speed";
     }

@@ -90,6 +90,12 @@ void overlay_value_text(enum transfer_field field, double v, char *buf, int size
     case TRANSFER_FIELD_RH:
         snprintf(buf, (size_t)size, "%.3g %%", v);
         break;
+    case TRANSFER_FIELD_W:
+        snprintf(buf, (size_t)size, "%.3g m/s", v);
+        break;
+    case TRANSFER_FIELD_VORTICITY:
+        snprintf(buf, (size_t)size, "%.3g e-3/s", v * 1e3);
+        break;
     default:
         snprintf(buf, (size_t)size, "%.3g", v);
         break;
@@ -111,6 +117,10 @@ static const char *field_title(enum transfer_field f)
         return "potential temperature";
     case TRANSFER_FIELD_RH:
         return "relative humidity";
+    case TRANSFER_FIELD_W:
+        return "vertical velocity";
+    case TRANSFER_FIELD_VORTICITY:
+        return "vertical vorticity";
     default:
         return "field";
     }

@@ -5,12 +5,12 @@
 #include <string.h>
 
 static const char *const field_names[TRANSFER_FIELD_COUNT] = {
-    "qvapor", "condensate", "temperature", "wind", "theta", "rh"};
+    "qvapor", "condensate", "temperature", "wind", "theta", "rh", "w", "vorticity"};
 static const char *const field_labels[TRANSFER_FIELD_COUNT] = {
     "QVAPOR", "condensate", "temperature", "wind speed", "potential temperature",
-    "relative humidity"};
-static const char *const field_units[TRANSFER_FIELD_COUNT] = {"kg/kg", "kg/kg", "K",
-                                                              "m/s",   "K",     "%"};
+    "relative humidity", "vertical velocity", "vorticity"};
+static const char *const field_units[TRANSFER_FIELD_COUNT] = {
+    "kg/kg", "kg/kg", "K", "m/s", "K", "%", "m/s", "1/s"};
 static const char *const channel_names[TRANSFER_CHANNELS] = {"red", "green", "blue", "alpha"};
 
 const char *transfer_field_name(enum transfer_field f)
@@ -44,6 +44,12 @@ void transfer_format_value(enum transfer_field f, double v, char *buf, int size)
         break;
     case TRANSFER_FIELD_RH:
         snprintf(buf, (size_t)size, "%.0f %%", v);
+        break;
+    case TRANSFER_FIELD_W:
+        snprintf(buf, (size_t)size, "%.2g m/s", v);
+        break;
+    case TRANSFER_FIELD_VORTICITY:
+        snprintf(buf, (size_t)size, "%.2ge-3/s", v * 1e3);
         break;
     default:
         snprintf(buf, (size_t)size, "%.3g g/kg", v * 1000.0);
@@ -99,6 +105,12 @@ void transfer_defaults(struct transfer_function *tf, enum transfer_field field)
     } else if (field == TRANSFER_FIELD_RH) {
         tf->lo = 0.0;
         tf->hi = 100.0; /* %: saturation */
+    } else if (field == TRANSFER_FIELD_W) {
+        tf->lo = -10.0; /* m/s: a convective downdraft */
+        tf->hi = 10.0;  /* a thunderstorm's updraft */
+    } else if (field == TRANSFER_FIELD_VORTICITY) {
+        tf->lo = -2e-3; /* 1/s: twenty times f = 2 Omega sin 45 deg = 1.03e-4 */
+        tf->hi = 2e-3;
     } else {
         tf->lo = 0.0;
         tf->hi = 0.005;

@@ -31,6 +31,10 @@ enum transfer_field {
                                    U and V) */
     TRANSFER_FIELD_THETA,       /* potential temperature, K (data/derived.h) */
     TRANSFER_FIELD_RH,          /* relative humidity over liquid water, % (data/derived.h) */
+    TRANSFER_FIELD_W,           /* vertical velocity W, m/s, positive up (zero where the data
+                                   has none) */
+    TRANSFER_FIELD_VORTICITY,   /* vertical vorticity dv/dx - du/dy, 1/s (data/derived.h; zero
+                                   where the data has no U and V) */
     TRANSFER_FIELD_COUNT
 };
 
@@ -64,9 +68,10 @@ struct transfer_layer {
 
 /* A slice (docs/analysis.md): the plane NORMAL . p = NORMAL . POINT (world metres) through the
  * field TF.field, coloured by TF's red, green and blue (its alpha is not used) at OPACITY, with
- * contour lines every CONTOUR_EVERY field units (0: none), composited with the clouds where
+ * contour lines every CONTOUR_EVERY field units (0: none) and at the CONTOUR_VALUES, composited with the clouds where
  * the ray crosses it. */
 #define TRANSFER_SLICE_MAX 4
+#define TRANSFER_CONTOUR_MAX 6 /* contour lines at given values, per slice */
 
 struct transfer_slice {
     bool enabled;
@@ -74,6 +79,11 @@ struct transfer_slice {
     double normal[3];    /* unit */
     double opacity;      /* [0, 1] */
     double contour_every; /* field units; 0: no lines */
+    double contour_values[TRANSFER_CONTOUR_MAX]; /* lines also at these field values ... */
+    int contour_count;                           /* ... the first this many */
+    int level;            /* >= 1: the surface of the model's mass level LEVEL, 1 the lowest
+                             (terrain following; ext_volume.slice_surface), in place of the
+                             plane; 0: the plane */
     struct transfer_function tf;
 };
 
@@ -83,18 +93,20 @@ const char *transfer_layer_mode_name(int mode);
 /* A default for FIELD: a grey ramp with alpha rising over the upper half of the range. */
 void transfer_defaults(struct transfer_function *tf, enum transfer_field field);
 
-/* "qvapor", "condensate", "temperature", "wind", "theta", "rh"; transfer_field_from_name
+/* "qvapor", "condensate", "temperature", "wind", "theta", "rh", "w", "vorticity";
+ * transfer_field_from_name
  * returns false for an unknown name. */
 const char *transfer_field_name(enum transfer_field f);
 bool transfer_field_from_name(const char *name, enum transfer_field *out);
 /* What the menu shows: "QVAPOR", "condensate", "temperature", "wind speed", "potential
- * temperature", "relative humidity". */
+ * temperature", "relative humidity", "vertical velocity", "vorticity". */
 const char *transfer_field_label(enum transfer_field f);
-/* The unit of the field's values ("kg/kg", "K", "m/s", "%"). */
+/* The unit of the field's values ("kg/kg", "K", "m/s", "%", "1/s"). */
 const char *transfer_field_unit(enum transfer_field f);
 /* A value of field F as a label, ASCII: mixing ratios in g/kg ("12 g/kg"), temperature in
  * degrees Celsius ("-73.2 C"), wind speed in m/s ("60 m/s"), potential temperature in K ("300 K"),
- * relative humidity in per cent ("85 %"). */
+ * relative humidity in per cent ("85 %"), vertical velocity in m/s ("-1.5 m/s"), vorticity in
+ * units of 1e-3/s ("2.5e-3/s"). */
 void transfer_format_value(enum transfer_field f, double v, char *buf, int size);
 const char *transfer_channel_name(enum transfer_channel c); /* "red", ... "alpha" */
 

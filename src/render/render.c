@@ -41,6 +41,8 @@ struct renderer {
     struct render_layer layers[TRANSFER_LAYER_MAX];
     int layer_count;
     struct gpu_texture slice_fields; /* RGBA32F 3D: the volume's slices' fields (SLICES) */
+    struct gpu_texture slice_surfaces; /* RGBA32F 2D: the slices' level surfaces, world z */
+    bool surface_held[TRANSFER_SLICE_MAX];
     enum transfer_field slice_field[TRANSFER_SLICE_MAX];
     bool slice_held[TRANSFER_SLICE_MAX];
     struct render_slice slices[TRANSFER_SLICE_MAX];
@@ -141,6 +143,7 @@ void renderer_destroy(struct renderer *r)
     gpu_texture_finish(&r->tint);
     gpu_texture_finish(&r->layer_fields);
     gpu_texture_finish(&r->slice_fields);
+    gpu_texture_finish(&r->slice_surfaces);
     gpu_texture_finish(&r->layer_lut);
     gpu_texture_finish(&r->phase);
     gpu_program_finish(&r->tonemap);
@@ -233,6 +236,35 @@ static bool put_fields(struct gpu_texture *tex, const int n[3], float *const fie
     return true;
 }
 
+/* Four surfaces (NULL: none) of N[0] x N[1] heights into one RGBA32F 2-D texture TEX, a
+ * surface per channel (none at all: the texture goes). */
+static bool put_surfaces(struct gpu_texture *tex, const int n[3], float *const surf[4])
+{
+    if (!surf[0] && !surf[1] && !surf[2] && !surf[3]) {
+        gpu_texture_finish(tex);
+        return true;
+    }
+    const int size[3] = {n[0], n[1], 1};
+    size_t plane = (size_t)n[0] * n[1];
+    float *tmp = malloc(plane * 4 * sizeof(float));
+    if (!tmp) {
+        log_error("out of memory uploading the slices' surfaces");
+        return false;
+    }
+    for (size_t c = 0; c < plane; c++)
+        for (int i = 0; i < 4; i++)
+            tmp[4 * c + i] = surf[i] ? surf[i][c] : 0.0f;
+    bool ok = true;
+    if (tex->id && tex->size[0] == n[0] && tex->size[1] == n[1]) {
+        gpu_texture_upload(tex, tmp);
+    } else {
+        gpu_texture_finish(tex);
+        ok = gpu_texture_init(tex, 2, size, GPU_RGBA32F, tmp);
+    }
+    free(tmp);
+    return ok;
+}
+
 /* The layers' and the slices' fields of VOL. */
 static bool put_layer_fields(struct renderer *r, const struct ext_volume *vol)
 {
@@ -242,9 +274,11 @@ static bool put_layer_fields(struct renderer *r, const struct ext_volume *vol)
         r->layer_field[i] = vol->layer_field[i];
         r->slice_held[i] = vol->slice[i] != NULL;
         r->slice_field[i] = vol->slice_field[i];
+        r->surface_held[i] = vol->slice_surface[i] != NULL;
     }
     return put_fields(&r->layer_fields, vol->grid.n, vol->layer) &&
-           put_fields(&r->slice_fields, vol->grid.n, vol->slice);
+           put_fields(&r->slice_fields, vol->grid.n, vol->slice) &&
+           put_surfaces(&r->slice_surfaces, vol->grid.n, vol->slice_surface);
 }
 
 float render_display_to_radiance(float c, float exposure)
@@ -325,6 +359,10 @@ void render_slice_from_transfer(const struct transfer_slice *sl, float exposure,
     out->hi = (float)tf->hi;
     out->opacity = (float)sl->opacity;
     out->contour_every = (float)sl->contour_every;
+    out->contour_count = sl->contour_count;
+    for (int k = 0; k < sl->contour_count && k < TRANSFER_CONTOUR_MAX; k++)
+        out->contour_values[k] = (float)sl->contour_values[k];
+    out->surface = sl->level > 0;
     for (int i = 0; i < RENDER_LAYER_LUT; i++)
         for (int c = 0; c < TRANSFER_CHANNELS; c++) {
             float x = (float)i / (RENDER_LAYER_LUT - 1);
@@ -347,17 +385,24 @@ bool renderer_set_slices(struct renderer *r, const struct render_slice *slices, 
     return true;
 }
 
+/* Whether slice I is drawn: on, over the field the volume holds, and over its surface where
+ * it follows one. */
+static bool slice_drawn(const struct renderer *r, int i)
+{
+    const struct render_slice *sl = &r->slices[i];
+    return sl->on && r->slice_held[i] && r->slice_field[i] == sl->field &&
+           (!sl->surface || (r->surface_held[i] && r->slice_surfaces.id));
+}
+
 /* How many of the first slices the next draw reads (the SLICES define). */
 static int slices_shown(const struct renderer *r)
 {
     int n = 0;
     if (!r->slice_fields.id)
         return 0;
-    for (int i = 0; i < r->slice_count; i++) {
-        const struct render_slice *sl = &r->slices[i];
-        if (sl->on && r->slice_held[i] && r->slice_field[i] == sl->field)
+    for (int i = 0; i < r->slice_count; i++)
+        if (slice_drawn(r, i))
             n = i + 1;
-    }
     return n;
 }
 
@@ -373,10 +418,15 @@ static void slice_uniforms(const struct renderer *r, const struct gpu_program *p
                           view->proj[15] != 0.0f ? 0.0f : foot};
     gpu_uniform_vec2(prog, "pixel_footprint", footprint);
     float planes[4][4] = {{0}}, lo[4] = {0}, scale[4] = {0}, opacity[4] = {0}, every[4] = {0};
+    float follow[4] = {0}, values[TRANSFER_CONTOUR_MAX][4] = {{0}}, value_count[4] = {0};
     for (int i = 0; i < n; i++) {
         const struct render_slice *sl = &r->slices[i];
-        if (!(sl->on && r->slice_held[i] && r->slice_field[i] == sl->field))
+        if (!slice_drawn(r, i))
             continue;
+        follow[i] = sl->surface ? 1.0f : 0.0f;
+        value_count[i] = (float)sl->contour_count;
+        for (int k = 0; k < sl->contour_count; k++)
+            values[k][i] = sl->contour_values[k];
         memcpy(planes[i], sl->normal, sizeof(sl->normal));
         planes[i][3] = sl->offset;
         lo[i] = sl->lo;
@@ -392,6 +442,14 @@ static void slice_uniforms(const struct renderer *r, const struct gpu_program *p
     gpu_uniform_vec4(prog, "slice_scale", scale);
     gpu_uniform_vec4(prog, "slice_opacity", opacity);
     gpu_uniform_vec4(prog, "slice_contour", every);
+    gpu_uniform_vec4(prog, "slice_follow", follow);
+    static_assert(TRANSFER_CONTOUR_MAX == 6, "raycast.comp's slice_values");
+    static const char *const value_names[TRANSFER_CONTOUR_MAX] = {
+        "slice_values[0]", "slice_values[1]", "slice_values[2]",
+        "slice_values[3]", "slice_values[4]", "slice_values[5]"};
+    for (int k = 0; k < TRANSFER_CONTOUR_MAX; k++)
+        gpu_uniform_vec4(prog, value_names[k], values[k]);
+    gpu_uniform_vec4(prog, "slice_value_count", value_count);
     gpu_uniform_int(prog, "slice_row", TRANSFER_LAYER_MAX); /* put_luts */
 }
 
@@ -735,8 +793,11 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     }
     if (layers > 0)
         gpu_texture_bind(&r->layer_fields, BIND_EYE_TEX_LAYERS);
-    if (slices > 0)
+    if (slices > 0) {
         gpu_texture_bind(&r->slice_fields, BIND_EYE_TEX_SLICES);
+        if (r->slice_surfaces.id)
+            gpu_texture_bind(&r->slice_surfaces, BIND_EYE_TEX_SLICE_SURFACES);
+    }
     if (layers > 0 || slices > 0)
         gpu_texture_bind(&r->layer_lut, BIND_EYE_TEX_LAYER_LUT);
     gpu_texture_bind(&r->beta, BIND_EYE_TEX_BETA);

@@ -159,6 +159,10 @@ struct render_slice {
     float lo, hi;
     float opacity;                  /* [0, 1] */
     float contour_every;            /* field units; 0: none */
+    float contour_values[TRANSFER_CONTOUR_MAX]; /* lines also at these values ... */
+    int contour_count;                          /* ... the first this many */
+    bool surface;                   /* the volume's slice surface i (a model level) in place
+                                       of the plane; drawn only while the volume holds one */
     float lut[RENDER_LAYER_LUT][4]; /* as render_layer's (alpha unused) */
 };
 

@@ -132,6 +132,10 @@ void look_from_config(const struct config *cfg, struct look *look)
         sl->enabled = c->enabled;
         sl->opacity = c->opacity;
         sl->contour_every = c->contour_every;
+        sl->level = c->level;
+        sl->contour_count = c->contour_count;
+        for (int k = 0; k < c->contour_count; k++)
+            sl->contour_values[k] = c->contours[k];
         double n[3] = {0.0, 0.0, 0.0}, len = 0.0;
         if (c->axis < 3) {
             n[c->axis] = 1.0;
@@ -222,6 +226,28 @@ static bool convert(struct player *p, struct field_volume *fv, const struct look
         }
         derived_field(fv, f, out->slice[i]);
         out->slice_field[i] = f;
+        int level = look->slices[i].level;
+        if (level > 0) {
+            /* The surface of mass level LEVEL: the reader's heights per column (WRF), else the
+             * grid's own level (height-level data), the top one for a level above them. */
+            const struct grid3 *g = &fv->grid;
+            size_t plane = (size_t)g->n[0] * (size_t)g->n[1];
+            out->slice_surface[i] = malloc(plane * sizeof(float));
+            if (!out->slice_surface[i]) {
+                log_error("out of memory for slice %d's surface", i + 1);
+                ok = false;
+                break;
+            }
+            if (fv->level_z && fv->level_count > 0) {
+                int k = level <= fv->level_count ? level - 1 : fv->level_count - 1;
+                memcpy(out->slice_surface[i], fv->level_z + (size_t)k * plane,
+                       plane * sizeof(float));
+            } else {
+                int k = level <= g->n[2] ? level - 1 : g->n[2] - 1;
+                for (size_t c = 0; c < plane; c++)
+                    out->slice_surface[i][c] = (float)(g->origin[2] + (k + 0.5) * g->spacing[2]);
+            }
+        }
     }
     if (ok && ld->height_k > 0.0)
         ext_volume_stretch_height(out, ld->height_k);
@@ -266,7 +292,7 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
     case PLAYER_FIELDS: {
         /* The fields the layers and slices show, and the transfer editor's (read while the
          * menu is there: its histogram shows it). */
-        bool qvapor = false, temperature = false, wind = false;
+        bool qvapor = false, temperature = false, wind = false, components = false;
         struct transfer_function edited;
         look_edited_transfer(look, &edited);
         for (int i = p->histogram ? -1 : 0; i < look->layer_count + look->slice_count; i++) {
@@ -279,10 +305,16 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
             temperature |= f == TRANSFER_FIELD_TEMPERATURE || f == TRANSFER_FIELD_THETA ||
                            f == TRANSFER_FIELD_RH;
             wind |= f == TRANSFER_FIELD_WIND;
+            components |= f == TRANSFER_FIELD_W || f == TRANSFER_FIELD_VORTICITY;
         }
+        bool levels = false;
+        for (int i = 0; i < look->slice_count; i++)
+            levels |= look->slices[i].level > 0;
         ok = data_source_load_fields_want(
             p->src, step,
-            &(struct data_fields_want){.qvapor = qvapor, .temperature = temperature, .wind = wind},
+            &(struct data_fields_want){.qvapor = qvapor, .temperature = temperature, .wind = wind,
+                                       .wind_components = components,
+                                       .level_heights = levels},
             &fv);
         break;
     }

@@ -112,6 +112,12 @@ struct session {
     double grab_position[3];
     float wand_pos[3], wand_dir[3];
     bool have_wand;
+    /* A tracked wand dragging the selected slice (trigger held off the menu on the Slices
+     * page): the wand's world position and the slice's position along its axis at the press. */
+    bool slice_wand;
+    double slice_wand_from[3], slice_wand_position, slice_wand_tilt;
+    float wand_up[3], slice_wand_up[3]; /* the wand's up (tracker space), now and at the press */
+    bool have_up, slice_wand_has_up;
     float axis[INPUT_AXIS_COUNT];
     /* A recording's head (input_script_frame): the frame states carry it, not the display's. */
     bool head_given;
@@ -658,10 +664,19 @@ void session_look_text(const struct session *s, char *buf, size_t size)
                    "            point = [%.17e, %.17e, %.17e];\n"
                    "            normal = [%.17e, %.17e, %.17e];\n"
                    "            opacity = %.17e;\n            contour_every = %.17e;\n"
-                   "            enabled = %s;\n        }",
+                   "            enabled = %s;\n",
                 sl->point[0] / 1000.0, sl->point[1] / 1000.0, sl->point[2] / 1000.0,
                 sl->normal[0], sl->normal[1], sl->normal[2], sl->opacity, sl->contour_every,
                 sl->enabled ? "true" : "false");
+        if (sl->level > 0)
+            fprintf(f, "            level = %d;\n", sl->level);
+        if (sl->contour_count > 0) {
+            fprintf(f, "            contours = [");
+            for (int k = 0; k < sl->contour_count; k++)
+                fprintf(f, "%s%.17e", k ? ", " : "", sl->contour_values[k]);
+            fprintf(f, "];\n");
+        }
+        fprintf(f, "        }");
     }
     fprintf(f, "%s);\n};\n", look->slice_count ? "\n    " : "");
     if (set->probe.on)
@@ -1005,9 +1020,13 @@ static void to_menu_space(const struct session *s, mat4 from_world, struct input
     glm_mat4_mulv(from_world, p, pt);
     glm_mat4_mulv(from_world, d, dt);
     float len = sqrtf(dt[0] * dt[0] + dt[1] * dt[1] + dt[2] * dt[2]);
+    vec4 u = {e->up[0], e->up[1], e->up[2], 0.0f}, ut;
+    glm_mat4_mulv(from_world, u, ut);
+    float ulen = sqrtf(ut[0] * ut[0] + ut[1] * ut[1] + ut[2] * ut[2]);
     for (int i = 0; i < 3; i++) {
         e->position[i] = pt[i];
         e->direction[i] = len > 0.0f ? dt[i] / len : 0.0f;
+        e->up[i] = ulen > 0.0f ? ut[i] / ulen : 0.0f;
     }
     e->space = INPUT_SPACE_TRACKER;
 }
@@ -1112,6 +1131,76 @@ static void drag_slice(struct session *s, float du, float dv)
     apply_changes(s, MENU_CHANGE_SLICES);
 }
 
+/* Whether a drag outside the menu now moves a slice: the Slices page shows one. */
+static bool slices_shown(const struct session *s)
+{
+    return s->menu && menu_visible(s->menu) && menu_page(s->menu) == MENU_PAGE_SLICES &&
+           menu_model(s->menu)->slice_count > 0;
+}
+
+/* The tracker-space point P in world metres. */
+static void wand_world(mat4 from_world, const float p[3], double out[3])
+{
+    mat4 to_world;
+    glm_mat4_inv(from_world, to_world);
+    vec4 pt = {p[0], p[1], p[2], 1.0f}, pw;
+    glm_mat4_mulv(to_world, pt, pw);
+    for (int i = 0; i < 3; i++)
+        out[i] = pw[i] / pw[3];
+}
+
+/* The wand's roll since the press, degrees: the angle from the press's up to the wand's up
+ * about the wand's ray (right-handed about the ray, so clockwise as the holder sees it), both
+ * taken across the ray; 0 when the source gives no up. */
+static double wand_roll_deg(const struct session *s)
+{
+    if (!s->have_up || !s->slice_wand_has_up)
+        return 0.0;
+    const float *d = s->wand_dir, *b = s->wand_up;
+    double a[3], dot = 0.0, cr[3], sn = 0.0, cs = 0.0;
+    for (int k = 0; k < 3; k++)
+        dot += s->slice_wand_up[k] * d[k];
+    for (int k = 0; k < 3; k++)
+        a[k] = s->slice_wand_up[k] - dot * d[k];
+    cr[0] = a[1] * b[2] - a[2] * b[1];
+    cr[1] = a[2] * b[0] - a[0] * b[2];
+    cr[2] = a[0] * b[1] - a[1] * b[0];
+    for (int k = 0; k < 3; k++) {
+        sn += cr[k] * d[k];
+        cs += a[k] * b[k];
+    }
+    return atan2(sn, cs) * 180.0 / M_PI;
+}
+
+/* A tracked wand's drag of the selected slice: the plane moves along its normal by the wand's
+ * world displacement along it since the press (along the slice's axis by that over the
+ * normal's share of the axis), kept in the box, and tilts by the wand's roll since the press
+ * (within the sliders' -60 to 60 degrees); the change goes to the settings as the page's
+ * sliders send it, so every rank draws the same plane. */
+static void wand_drag_slice(struct session *s, mat4 from_world)
+{
+    struct menu_model *m = menu_model(s->menu);
+    struct menu_slice *sl = &m->slices[m->slice_selected];
+    double w[3], along = 0.0, c[3];
+    wand_world(from_world, s->wand_pos, w);
+    for (int k = 0; k < 3; k++)
+        along += (w[k] - s->slice_wand_from[k]) * sl->slice.normal[k];
+    int a = sl->axis;
+    double share = fabs(sl->slice.normal[a]) > 0.1 ? sl->slice.normal[a] : 1.0;
+    double lo = m->box_min_m[a], hi = m->box_max_m[a];
+    double pos = fmin(hi, fmax(lo, s->slice_wand_position + along / share));
+    double tilt = fmin(60.0, fmax(-60.0, s->slice_wand_tilt + wand_roll_deg(s)));
+    if (pos == sl->position_m && tilt == sl->tilt_deg)
+        return;
+    sl->position_m = pos;
+    sl->tilt_deg = tilt;
+    for (int k = 0; k < 3; k++)
+        c[k] = 0.5 * (m->box_min_m[k] + m->box_max_m[k]);
+    menu_slice_plane(sl, c);
+    menu_model_changed(s->menu);
+    apply_changes(s, MENU_CHANGE_SLICES);
+}
+
 /* One event: the menu's, navigation's or the session's own. */
 static bool handle(struct session *s, mat4 from_world, struct input_event e)
 {
@@ -1128,6 +1217,11 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
         memcpy(s->wand_pos, e.position, sizeof(s->wand_pos));
         memcpy(s->wand_dir, e.direction, sizeof(s->wand_dir));
         s->have_wand = true;
+        s->have_up = e.has_up;
+        if (e.has_up)
+            memcpy(s->wand_up, e.up, sizeof(s->wand_up));
+        if (s->slice_wand && slices_shown(s))
+            wand_drag_slice(s, from_world);
         break;
     case INPUT_AXIS:
         if (e.axis < INPUT_AXIS_COUNT)
@@ -1141,6 +1235,18 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
         } else if (e.button == INPUT_BUTTON_TRIGGER && e.down) {
             /* A press the menu takes is not a drag of the view. */
             s->drag_blocked = s->menu && menu_captures(s->menu);
+            /* A tracked wand's press off the menu on the Slices page takes the slice. */
+            s->slice_wand = s->tracker && s->have_wand && !s->drag_blocked && slices_shown(s);
+            if (s->slice_wand) {
+                const struct menu_model *m = menu_model(s->menu);
+                wand_world(from_world, s->wand_pos, s->slice_wand_from);
+                s->slice_wand_position = m->slices[m->slice_selected].position_m;
+                s->slice_wand_tilt = m->slices[m->slice_selected].tilt_deg;
+                memcpy(s->slice_wand_up, s->wand_up, sizeof(s->slice_wand_up));
+                s->slice_wand_has_up = s->have_up;
+            }
+        } else if (e.button == INPUT_BUTTON_TRIGGER) {
+            s->slice_wand = false;
         } else if (e.button == INPUT_BUTTON_RESET && e.down && !s->menu) {
             session_reset_view(s);
         }
@@ -1164,8 +1270,7 @@ static bool handle(struct session *s, mat4 from_world, struct input_event e)
     case INPUT_DRAG:
         if (s->drag_blocked)
             break;
-        if (s->menu && menu_visible(s->menu) && menu_page(s->menu) == MENU_PAGE_SLICES &&
-            menu_model(s->menu)->slice_count > 0) {
+        if (slices_shown(s)) {
             drag_slice(s, e.u, e.v);
             break;
         }

@@ -215,6 +215,42 @@ check "drag: the slice went up" awk -v a="$(slice_z "$tmp/drag/bookmark-1.cfg")"
 check "drag: and tilted" bash -c "! grep -q 'normal = \[0.0*e+00, 0.0*e+00, 1.0*e+00\]' '$tmp/drag/bookmark-1.cfg'"
 check "no drag: level" grep -q 'normal = \[0.0*e+00, 0.0*e+00, 1.0*e+00\]' "$tmp/still/bookmark-1.cfg"
 
+# In the CAVE: the trigger held with the wand off the menu while the Slices page shows moves
+# the slice along its normal by the wand's displacement along it: 3 mm up in the room at
+# cave4's navigation scale (3.75e-6) is 800 m up in the world; the wand held still leaves it.
+wand_script() {
+    printf '0 aim tab.slices\n1 button trigger down\n2 button trigger up\n'
+    printf '3 aim slices.add\n4 button trigger down\n5 button trigger up\n'
+    printf '6 pose tracker 0 1.2 0 0 0 1\n7 button trigger down\n8 pose tracker 0 %s 0 0 0 1\n' "$1"
+    printf '9 button trigger up\n10 aim tab.time\n11 button trigger down\n12 button trigger up\n'
+    printf '13 aim time.save\n14 button trigger down\n15 button trigger up\n'
+}
+mkdir -p "$tmp/wand" "$tmp/wand-still"
+wand_script 1.203 >"$tmp/wand/in.txt"
+wand_script 1.2 >"$tmp/wand-still/in.txt"
+for d in wand wand-still; do
+    (cd "$tmp/$d" && "$anvil" render --quiet "$cfg" $small --display "$src/displays/cave4.cfg" \
+        --menu --input in.txt -o out/ >/dev/null)
+    check "$d: the CAVE session exits 0" test $? -eq 0
+done
+wand_z() { sed -n 's/^# *point = \[[^,]*, [^,]*, \(.*\)\];/\1/p' "$1"; }
+check "wand: the slice went 0.8 km up" awk -v a="$(wand_z "$tmp/wand/bookmark-1.cfg")" \
+    -v b="$(wand_z "$tmp/wand-still/bookmark-1.cfg")" 'BEGIN { d = a - b; exit !(d > 0.79 && d < 0.81) }'
+# Rolled 20 degrees clockwise about its ray (the up (0, 1, 0) turned right-handed about the
+# ray (0, 0, 1)) while held: the slice tilts 20 degrees, its normal's z cos 20 = 0.9397.
+mkdir -p "$tmp/roll"
+sed -e 's/^6 pose tracker 0 1.2 0 0 0 1$/6 pose tracker 0 1.2 0 0 0 1 0 1 0/' \
+    -e 's/^8 pose tracker .*$/8 pose tracker 0 1.2 0 0 0 1 -0.342020143 0.939692621 0/' \
+    "$tmp/wand-still/in.txt" >"$tmp/roll/in.txt"
+(cd "$tmp/roll" && "$anvil" render --quiet "$cfg" $small --display "$src/displays/cave4.cfg" \
+    --menu --input in.txt -o out/ >/dev/null)
+check "roll: the CAVE session exits 0" test $? -eq 0
+wand_nz() { sed -n 's/^# *normal = \[[^,]*, [^,]*, \(.*\)\];/\1/p' "$1"; }
+check "roll: the slice tilted 20 degrees" awk -v n="$(wand_nz "$tmp/roll/bookmark-1.cfg")" \
+    'BEGIN { exit !(n > 0.9392 && n < 0.9402) }'
+check "roll: and did not move" awk -v a="$(wand_z "$tmp/roll/bookmark-1.cfg")" \
+    -v b="$(wand_z "$tmp/wand-still/bookmark-1.cfg")" 'BEGIN { d = a - b; exit !(d > -0.01 && d < 0.01) }'
+
 # Wrong types: one message with file:line, exit 1.
 printf 'look = {\n  layers = (\n    { field = "temperature";\n      mode = "glow"; }\n  );\n};\n' \
     >"$tmp/glow.cfg"

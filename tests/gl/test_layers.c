@@ -337,6 +337,137 @@ static void test_slice_colours(void **state)
     }
 }
 
+/* Contours at given values (transfer_slice.contour_values) on test_slice_colours' slice:
+ * lines at s = 1.5 and 5.25 only (no contour_every): dark within a pixel's width (0.125 units)
+ * of them, the map's colour elsewhere. */
+static void test_slice_contour_values(void **state)
+{
+    (void)state;
+    float field[NX];
+    for (int i = 0; i < NX; i++)
+        field[i] = (float)i;
+    struct ext_volume v = {0};
+    make_volume(&v, 0.0f, field);
+    v.slice[0] = v.layer[0];
+    v.layer[0] = NULL;
+    v.slice_field[0] = TRANSFER_FIELD_TEMPERATURE;
+    struct transfer_slice sl = {.enabled = true,
+                                .point = {0, 0, 1000.0},
+                                .normal = {0, 0, 1},
+                                .opacity = 1.0,
+                                .contour_values = {1.5, 5.25},
+                                .contour_count = 2};
+    transfer_defaults(&sl.tf, TRANSFER_FIELD_TEMPERATURE);
+    sl.tf.lo = 0.0;
+    sl.tf.hi = 7.0;
+    struct transfer_function *tf = &sl.tf;
+    tf->count[TRANSFER_RED] = 2;
+    tf->points[TRANSFER_RED][0] = (struct transfer_point){0.0f, 0.0f};
+    tf->points[TRANSFER_RED][1] = (struct transfer_point){1.0f, 1.0f};
+    tf->count[TRANSFER_GREEN] = 1;
+    tf->points[TRANSFER_GREEN][0] = (struct transfer_point){0.0f, 1.0f};
+    tf->count[TRANSFER_BLUE] = 1;
+    tf->points[TRANSFER_BLUE][0] = (struct transfer_point){0.0f, 0.5f};
+    struct render_slice rs;
+    render_slice_from_transfer(&sl, 1.0f, &rs);
+    assert_true(renderer_set_slices(renderer, &rs, 1));
+    struct image img = {0};
+    draw(&v, NULL, false, &img);
+    assert_true(renderer_set_slices(renderer, NULL, 0));
+    int dark[2] = {0, 0};
+    for (int p = 8; p < W - 8; p++) {
+        double sv = (p + 0.5) * NX * 1000.0 / W / 1000.0 - 0.5;
+        const float *px = &img.rgba[4 * ((size_t)1 * W + p)];
+        double off[2] = {fabs(sv - 1.5), fabs(sv - 5.25)};
+        if (off[0] < 0.125 || off[1] < 0.125) {
+            assert_float_equal(px[0], 0.02, 1e-4);
+            dark[off[1] < 0.125]++;
+            continue;
+        }
+        if (off[0] < 0.2 || off[1] < 0.2)
+            continue; /* the line's edge */
+        assert_true(abs(image_tonemap(px[0], 1.0f) - (int)lround(sv / 7.0 * 255.0)) <= 1);
+        assert_true(abs(image_tonemap(px[1], 1.0f) - 255) <= 1);
+    }
+    assert_int_equal(dark[0], 2);
+    assert_int_equal(dark[1], 2);
+    image_finish(&img);
+    ext_volume_finish(&v);
+}
+
+/* A slice following a model level whose height rises linearly with x, h(x) = 600 m + 0.1 x,
+ * through a field that rises one unit a voxel along x and three along z, s = (x - 500 m) /
+ * 1 km + 3 (z - 500 m) / 1 km (linear, so trilinear interpolation keeps it): straight down,
+ * each pixel between the outer voxel centres shows the map's colour at s(x, h(x)) within
+ * 1/255, the colour of the field on that level; a plane at the level's mean height would be up
+ * to 0.9 units (23/255) off. */
+static void test_slice_follows_level(void **state)
+{
+    (void)state;
+    struct ext_volume v = {0};
+    float zero[NX] = {0};
+    make_volume(&v, 0.0f, zero);
+    free(v.layer[0]);
+    v.layer[0] = NULL;
+    size_t n = grid3_count(&v.grid), plane = (size_t)v.grid.n[0] * v.grid.n[1];
+    v.slice[0] = malloc(n * sizeof(float));
+    v.slice_surface[0] = malloc(plane * sizeof(float));
+    assert_non_null(v.slice[0]);
+    assert_non_null(v.slice_surface[0]);
+    for (int k = 0; k < 2; k++)
+        for (int j = 0; j < 2; j++)
+            for (int i = 0; i < NX; i++)
+                v.slice[0][grid3_index(&v.grid, i, j, k)] = (float)(i + 3 * k);
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < NX; i++)
+            v.slice_surface[0][(size_t)j * NX + i] = (float)(600.0 + 0.1 * (i + 0.5) * 1000.0);
+    v.slice_field[0] = TRANSFER_FIELD_W;
+    struct transfer_slice sl = {.enabled = true,
+                                .point = {0, 0, 1000.0},
+                                .normal = {0, 0, 1},
+                                .opacity = 1.0,
+                                .level = 3};
+    transfer_defaults(&sl.tf, TRANSFER_FIELD_W);
+    sl.tf.lo = 0.0;
+    sl.tf.hi = 10.0;
+    struct transfer_function *tf = &sl.tf;
+    tf->count[TRANSFER_RED] = 2;
+    tf->points[TRANSFER_RED][0] = (struct transfer_point){0.0f, 0.0f};
+    tf->points[TRANSFER_RED][1] = (struct transfer_point){1.0f, 1.0f};
+    tf->count[TRANSFER_GREEN] = 2;
+    tf->points[TRANSFER_GREEN][0] = (struct transfer_point){0.0f, 1.0f};
+    tf->points[TRANSFER_GREEN][1] = (struct transfer_point){1.0f, 0.0f};
+    tf->count[TRANSFER_BLUE] = 1;
+    tf->points[TRANSFER_BLUE][0] = (struct transfer_point){0.0f, 0.5f};
+    struct render_slice rs;
+    render_slice_from_transfer(&sl, 1.0f, &rs);
+    assert_true(renderer_set_slices(renderer, &rs, 1));
+    struct image img = {0};
+    draw(&v, NULL, false, &img);
+    assert_true(renderer_set_slices(renderer, NULL, 0));
+    for (int p = 8; p < W - 8; p++) {
+        double x = (p + 0.5) * NX * 1000.0 / W, h = 600.0 + 0.1 * x;
+        double sv = (x - 500.0) / 1000.0 + 3.0 * (h - 500.0) / 1000.0;
+        const float *px = &img.rgba[4 * ((size_t)1 * W + p)];
+        const double want[3] = {sv / 10.0, 1.0 - sv / 10.0, 0.5};
+        for (int c = 0; c < 3; c++) {
+            int got = image_tonemap(px[c], 1.0f);
+            assert_true(abs(got - (int)lround(want[c] * 255.0)) <= 1);
+        }
+        assert_float_equal(px[3], 0.0, 1e-6);
+    }
+    image_finish(&img);
+    /* Without its surface the slice is not drawn (not a plane in its place). */
+    free(v.slice_surface[0]);
+    v.slice_surface[0] = NULL;
+    assert_true(renderer_set_slices(renderer, &rs, 1));
+    draw(&v, NULL, false, &img);
+    assert_true(renderer_set_slices(renderer, NULL, 0));
+    assert_float_equal(img.rgba[4 * ((size_t)1 * W + W / 2) + 3], 1.0, 1e-6);
+    image_finish(&img);
+    ext_volume_finish(&v);
+}
+
 static int setup(void **state)
 {
     ctx = test_gl_context_or_skip();
@@ -360,6 +491,8 @@ int main(void)
         cmocka_unit_test(test_composited_with_clouds),
         cmocka_unit_test(test_tint_mode),
         cmocka_unit_test(test_slice_colours),
+        cmocka_unit_test(test_slice_follows_level),
+        cmocka_unit_test(test_slice_contour_values),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

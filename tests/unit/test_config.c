@@ -304,6 +304,42 @@ static void test_include_in_tmpdir(void **state)
     check_error(before, "junk.cfg:1:", "syntax error", NULL);
 }
 
+/* A slice's contour values and model level from a file: up to six values, any count, then
+ * set again element by element; seven, or a word among them, refused with the file's line. */
+static void test_slice_contours_and_level(void **state)
+{
+    (void)state;
+    const char *good = test_write_file(
+        "contours.cfg", "look = { slices = ( { field = \"temperature\"; level = 3;\n"
+                        "    contours = [273.15, 253.0, 233.15]; },\n"
+                        "  { field = \"w\"; contours = []; } ); };\n");
+    static struct config cfg;
+    assert_true(config_load(good, &cfg));
+    assert_int_equal(cfg.look.slice_count, 2);
+    assert_int_equal(cfg.look.slices[0].level, 3);
+    assert_int_equal(cfg.look.slices[0].contour_count, 3);
+    assert_true(cfg.look.slices[0].contours[0] == 273.15);
+    assert_true(cfg.look.slices[0].contours[1] == 253.0);
+    assert_true(cfg.look.slices[0].contours[2] == 233.15);
+    assert_int_equal(cfg.look.slices[1].contour_count, 0);
+    assert_int_equal(cfg.look.slices[1].level, 0);
+    assert_true(config_set(&cfg, "look.slices.[1].contours=[1.5, -2.0]"));
+    assert_int_equal(cfg.look.slices[1].contour_count, 2);
+    assert_true(cfg.look.slices[1].contours[1] == -2.0);
+
+    const char *many = test_write_file(
+        "contours7.cfg",
+        "look = { slices = (\n  { contours = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]; } ); };\n");
+    unsigned before = log_error_count();
+    assert_false(config_load(many, &cfg));
+    check_error(before, "contours7.cfg:2:", "contours", "0 to 6", NULL);
+    const char *word = test_write_file(
+        "contoursw.cfg", "look = { slices = (\n  { contours = [\"two\"]; } ); };\n");
+    before = log_error_count();
+    assert_false(config_load(word, &cfg));
+    check_error(before, "contoursw.cfg:2:", "contours", "\"two\"", NULL);
+}
+
 static void test_file_errors(void **state)
 {
     EXPECT_LOAD_ERROR("config/syntax.cfg", "syntax.cfg:4:", "syntax error");
@@ -648,7 +684,7 @@ static void test_reference(void **state)
         if (strncmp(path, "optics.radius_mm.", 17) != 0) /* mm to m may round differently */
             assert_memory_equal(&cfg, &before, sizeof(cfg));
     }
-    assert_int_equal(rows, 2 + 140);
+    assert_int_equal(rows, 2 + 142);
 
     /* docs/config-reference.md holds the current table. */
     char doc_path[1024];
@@ -675,6 +711,7 @@ int main(void)
         cmocka_unit_test(test_nested_include),
         cmocka_unit_test(test_include_overrides),
         cmocka_unit_test(test_include_in_tmpdir),
+        cmocka_unit_test(test_slice_contours_and_level),
         cmocka_unit_test(test_file_errors),
         cmocka_unit_test(test_missing_file),
         cmocka_unit_test(test_load_keeps_values_read_before_error),

@@ -241,6 +241,105 @@ static void test_synth_wind_and_temperature(void **state)
     wrf_close(w);
 }
 
+/* The vertical velocity and vorticity of anvil synth's wind: inside the radius of maximum wind
+ * its vortex turns as a solid body at Omega = 30 m/s decay(z) / rmax, so zeta = 2 Omega (the
+ * uniform westerly adds none); W is the mean of its two staggered levels.  Read with a stride
+ * too (the spacing between kept columns), and through derived_field from u and v alone (what
+ * CM1, CF and Isabel give). */
+static void test_vorticity_solid_body(void **state)
+{
+    (void)state;
+    char path[512];
+    snprintf(path, sizeof(path), "%s", test_tmp_path("synthz.nc"));
+    struct synth_desc sd = {
+        .kind = SYNTH_STORM, .n = {40, 40, 8}, .extent_m = {80000.0, 80000.0, 16000.0}, .seed = 5};
+    struct field_volume in;
+    assert_true(synth_storm_fields(&sd, &in));
+    struct wrf_writer *ww = wrf_writer_create(path, &in.grid, NULL);
+    assert_non_null(ww);
+    assert_true(wrf_writer_add(ww, &in, "2000-01-01_00:00:00"));
+    assert_true(wrf_writer_finish(ww));
+    const char *p = path;
+    struct wrf *w = wrf_open(&p, 1, 0.0);
+    assert_non_null(w);
+    const struct grid3 *g = &in.grid;
+    double rmax = 0.15 * 80000.0;
+    for (int stride = 1; stride <= 2; stride++) {
+        struct wrf_desc d;
+        wrf_desc_defaults(&d);
+        d.stride[0] = d.stride[1] = stride;
+        struct field_volume out;
+        assert_true(wrf_read_step(w, 0, &d, &out, NULL));
+        assert_null(out.vorticity); /* not asked */
+        assert_false(derived_field_available(&out, TRANSFER_FIELD_VORTICITY));
+        field_volume_finish(&out);
+        assert_null(out.level_z);
+        d.wind_components = true;
+        d.level_heights = true;
+        assert_true(wrf_read_step(w, 0, &d, &out, NULL));
+        /* The mass levels' heights per kept column: the synthetic file's levels are flat, at
+         * the voxel centres. */
+        assert_non_null(out.level_z);
+        assert_int_equal(out.level_count, g->n[2]);
+        for (int k = 0; k < g->n[2]; k++)
+            assert_float_equal(out.level_z[grid3_index(&out.grid, 3, 5, k)],
+                               g->origin[2] + (k + 0.5) * g->spacing[2], 0.05);
+        assert_non_null(out.vorticity);
+        assert_non_null(out.w);
+        assert_non_null(out.wind);
+        assert_true(derived_field_available(&out, TRANSFER_FIELD_VORTICITY));
+        assert_true(derived_field_available(&out, TRANSFER_FIELD_W));
+        size_t n = grid3_count(&out.grid);
+        float *zeta = malloc(n * sizeof(float)), *fromuv = malloc(n * sizeof(float));
+        float *wz = malloc(n * sizeof(float));
+        assert_non_null(zeta);
+        assert_non_null(fromuv);
+        assert_non_null(wz);
+        derived_field(&out, TRANSFER_FIELD_VORTICITY, zeta);
+        derived_field(&out, TRANSFER_FIELD_W, wz);
+        float *own = out.vorticity;
+        out.vorticity = NULL;
+        derived_field(&out, TRANSFER_FIELD_VORTICITY, fromuv);
+        out.vorticity = own;
+        int checked = 0;
+        for (int k = 0; k < out.grid.n[2]; k++)
+            for (int j = 0; j < out.grid.n[1]; j++)
+                for (int i = 0; i < out.grid.n[0]; i++) {
+                    /* Kept column i is the file's mass column i * stride. */
+                    double x = (i * stride + 0.5) * g->spacing[0];
+                    double y = (j * stride + 0.5) * g->spacing[1];
+                    double z = g->origin[2] + (k + 0.5) * g->spacing[2];
+                    double r = hypot(x - 40000.0, y - 40000.0);
+                    size_t idx = grid3_index(&out.grid, i, j, k);
+                    double w0, w1, a, b;
+                    wrf_synth_wind(g, x, y, z - 0.5 * g->spacing[2], &a, &b, &w0);
+                    wrf_synth_wind(g, x, y, z + 0.5 * g->spacing[2], &a, &b, &w1);
+                    assert_float_equal(wz[idx], 0.5 * (w0 + w1), 1e-4);
+                    /* Every wind the differences take inside the core: the neighbours one
+                     * kept spacing away, their faces half a file spacing beyond. */
+                    if (r > rmax - M_SQRT2 * out.grid.spacing[0] - 0.5 * g->spacing[0])
+                        continue;
+                    double omega = 30.0 * fmax(0.0, 1.0 - z / 15000.0) / rmax;
+                    assert_float_equal(zeta[idx], 2.0 * omega, 1e-3 * 2.0 * omega + 1e-7);
+                    assert_float_equal(fromuv[idx], zeta[idx], 1e-7);
+                    checked++;
+                }
+        assert_true(checked > 20);
+        /* Outside the core the Rankine vortex is irrotational (v r constant): zeta is small
+         * against 2 Omega away from the core's edge and the domain's. */
+        size_t far = grid3_index(&out.grid, out.grid.n[0] / 2 + 14 / stride,
+                                 out.grid.n[1] / 2, 0);
+        double omega0 = 30.0 * (1.0 - (g->origin[2] + 0.5 * g->spacing[2]) / 15000.0) / rmax;
+        assert_true(fabs(zeta[far]) < 0.1 * 2.0 * omega0);
+        free(zeta);
+        free(fromuv);
+        free(wz);
+        field_volume_finish(&out);
+    }
+    field_volume_finish(&in);
+    wrf_close(w);
+}
+
 /* Katrina has U, V, W and T: every voxel finite and plausible; column (10, 10) near the
  * ground from its P, PB, T (ncdump): 302.289789 (99571.77 / 1e5)^(287 / 1004.5). */
 static void test_katrina(void **state)
@@ -312,7 +411,8 @@ static void test_derived_fields(void **state)
 
 static void test_field_names(void **state)
 {
-    const char *names[] = {"qvapor", "condensate", "temperature", "wind", "theta", "rh"};
+    const char *names[] = {"qvapor",    "condensate", "temperature", "wind",
+                           "theta",     "rh",         "w",           "vorticity"};
     assert_int_equal(TRANSFER_FIELD_COUNT, sizeof(names) / sizeof(names[0]));
     for (int f = 0; f < TRANSFER_FIELD_COUNT; f++) {
         enum transfer_field got;
@@ -343,6 +443,7 @@ int main(void)
         cmocka_unit_test(test_wind_by_hand),
         cmocka_unit_test(test_wind_unavailable),
         cmocka_unit_test(test_synth_wind_and_temperature),
+        cmocka_unit_test(test_vorticity_solid_body),
         cmocka_unit_test(test_katrina),
         cmocka_unit_test(test_field_names),
         cmocka_unit_test(test_derived_fields),

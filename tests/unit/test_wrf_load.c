@@ -208,7 +208,8 @@ static void test_synth(void **state)
     check_step(path, 0, &d);
 }
 
-/* QVAPOR is read when a load asks for it, not otherwise. */
+/* QVAPOR, and the wind's components with the vorticity, are read when a load asks for them,
+ * not otherwise. */
 static void test_qvapor_when_asked(void **state)
 {
     const char *files[] = {test_shared_data("wrf/katrina_2005_mercator_wsm3.nc")};
@@ -223,7 +224,24 @@ static void test_qvapor_when_asked(void **state)
     assert_true(data_source_load_fields_want(s, 0, &(struct data_fields_want){0}, &v));
     assert_null(v.qvapor);
     assert_null(v.temperature);
+    assert_null(v.u);
+    assert_null(v.vorticity);
     assert_non_null(v.q[SPECIES_CLOUD]);
+    field_volume_finish(&v);
+    assert_true(data_source_load_fields_want(
+        s, 0, &(struct data_fields_want){.wind_components = true}, &v));
+    assert_non_null(v.u);
+    assert_non_null(v.v);
+    assert_non_null(v.w);
+    assert_non_null(v.vorticity);
+    assert_non_null(v.wind);
+    /* A hurricane: somewhere near the ground, cyclonic vorticity well above f (1e-4 1/s). */
+    float zmax = 0.0f;
+    for (size_t i = 0; i < grid3_count(&v.grid); i++) {
+        assert_true(isfinite(v.vorticity[i]) && isfinite(v.w[i]));
+        zmax = fmaxf(zmax, v.vorticity[i]);
+    }
+    assert_true(zmax > 1e-3f);
     field_volume_finish(&v);
     assert_true(data_source_load_fields_want(s, 0, &(struct data_fields_want){.qvapor = true}, &v));
     assert_non_null(v.qvapor);
