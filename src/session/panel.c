@@ -5,8 +5,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <cglm/cglm.h>
+
 #include "common/log.h"
+#include "display/display.h"
 #include "gpu/gpu.h"
+#include "render/camera.h"
 
 /* Texels hold the radiance that the tone mapping (Reinhard's x / (1 + x) of exposure times
  * radiance, then sRGB: image_tonemap) turns back into the image's own sRGB colour, as floats.
@@ -158,4 +162,27 @@ bool panel_show(struct panel *p, const uint8_t *px, int w, int h, unsigned gener
     panel_mat4_mul(to_world, local, model);
     render_mesh_set_model(p->mesh, model);
     return true;
+}
+
+void panel_in_view_corner(const struct display_camera *cam, int w, int h, float aspect,
+                          float max_w, float max_h, bool upper, float c[3], float right[3],
+                          float up[3])
+{
+    struct render_view rv;
+    camera_look_at(cam->eye, cam->target, cam->up, cam->fov_deg, cam->near_m, cam->far_m,
+                   w > 0 ? w : 1, h > 0 ? h : 1, &rv);
+    mat4 view, inv;
+    memcpy(view, rv.view, sizeof(view));
+    glm_mat4_inv(view, inv);
+    float near = rv.proj[14] / (rv.proj[10] - 1.0f);
+    float dist = 3.0f * fabsf(near);
+    float half_h = dist / rv.proj[5], half_w = dist / rv.proj[0];
+    float width = fminf(max_w * half_w, max_h * half_h / aspect);
+    float v = upper ? 1.0f : -1.0f;
+    for (int i = 0; i < 3; i++) {
+        right[i] = inv[0][i] * width;
+        up[i] = inv[1][i] * width * aspect;
+        c[i] = inv[3][i] - inv[2][i] * dist - inv[0][i] * (half_w * 0.97f - 0.5f * width) +
+               v * inv[1][i] * (half_h * 0.95f - 0.5f * width * aspect);
+    }
 }

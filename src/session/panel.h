@@ -27,6 +27,16 @@ bool panel_show(struct panel *p, const uint8_t *img, int w, int h, unsigned gene
                 const float to_world[16], float exposure);
 void panel_hide(struct panel *p);
 
+struct display_camera;
+
+/* Where a panel ASPECT times as high as wide goes on the orbit camera CAM's W x H view: in its
+ * upper (UPPER) or lower left corner at the menu's depth (three near planes out), as wide as
+ * MAX_W of the view's half width allows and MAX_H of its half height.  C, RIGHT and UP as
+ * panel_show takes them, in the world. */
+void panel_in_view_corner(const struct display_camera *cam, int w, int h, float aspect,
+                          float max_w, float max_h, bool upper, float c[3], float right[3],
+                          float up[3]);
+
 /* The radiance the panel shows for an image texel (what the view's pixel holds). */
 void panel_texel_radiance(const uint8_t rgba[4], float exposure, float out[3]);
 

@@ -5,10 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <cglm/cglm.h>
-
 #include "common/log.h"
-#include "render/camera.h"
 #include "session/panel.h"
 
 struct probe_view {
@@ -123,24 +120,8 @@ bool probe_view_update(struct probe_view *v, const struct readout_model *m,
         const float x[3] = {width, 0, 0}, y[3] = {0, width * aspect, 0};
         return show(v, px, gen, c, x, y, to_world, exposure);
     }
-    /* The upper left of the camera's view, at the menu's depth: three near planes out. */
-    struct render_view rv;
-    camera_look_at(cam->eye, cam->target, cam->up, cam->fov_deg, cam->near_m, cam->far_m,
-                   w > 0 ? w : 1, h > 0 ? h : 1, &rv);
-    mat4 view, inv;
-    memcpy(view, rv.view, sizeof(view));
-    glm_mat4_inv(view, inv);
-    float near = rv.proj[14] / (rv.proj[10] - 1.0f);
-    float dist = 3.0f * fabsf(near);
-    float half_h = dist / rv.proj[5], half_w = dist / rv.proj[0];
-    float width = fminf(0.75f * half_w, 0.95f * half_h / aspect);
     float c[3], x[3], y[3];
-    for (int i = 0; i < 3; i++) {
-        x[i] = inv[0][i] * width;
-        y[i] = inv[1][i] * width * aspect;
-        c[i] = inv[3][i] - inv[2][i] * dist - inv[0][i] * (half_w * 0.97f - 0.5f * width) +
-               inv[1][i] * (half_h * 0.95f - 0.5f * width * aspect);
-    }
+    panel_in_view_corner(cam, w, h, aspect, 0.75f, 0.95f, true, c, x, y); /* upper left */
     const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     return show(v, px, gen, c, x, y, identity, exposure);
 }
