@@ -90,6 +90,10 @@ bool data_file_is_netcdf(const char *path);
 
 /* The WRF reader behind S, or NULL for other formats (for metadata: lat/lon, terrain). */
 struct wrf *data_source_wrf(struct data_source *s);
+/* The WRF domains behind S when its files are a parent and its nests (data/nest.h; then
+ * data_source_wrf is the outermost domain's reader and a step is their composite), else NULL. */
+struct nest_set;
+struct nest_set *data_source_nests(struct data_source *s);
 /* The CM1 or CF reader behind S, or NULL for other formats. */
 struct hgrid *data_source_hgrid(struct data_source *s);
 
