@@ -616,9 +616,10 @@ bool nest_read_step(struct nest_set *s, int step, const struct wrf_desc *d,
     if (need == 0)
         return false;
     if ((d->memory_mb > 0 && (double)need > d->memory_mb * 1048576.0) || need == SIZE_MAX) {
-        log_error("%s and its %d nests: a time step of every domain and their composite on "
+        log_error("%s and %d nest%s: a time step of every domain and their composite on "
                   "%d x %d x %d voxels need %.0f MiB, above the budget data.memory = %.0f MiB",
-                  s->dom[0].path, s->count - 1, l.grid.n[0], l.grid.n[1], l.grid.n[2],
+                  s->dom[0].path, s->count - 1, s->count > 2 ? "s" : "", l.grid.n[0],
+                  l.grid.n[1], l.grid.n[2],
                   (double)need / 1048576.0, d->memory_mb);
         return false;
     }
