@@ -316,6 +316,81 @@ static void test_single_domain(void **state)
     nest_close(s);
 }
 
+/* Three levels: d03 inside d02 inside d01, each placed in its parent, composed at d03's
+ * spacing; d03's columns exact, given in any order. */
+static void test_three_levels(void **state)
+{
+    (void)state;
+    struct grid3 g1 = {{NXP, NXP, NZ}, {DX, DX, DZ}, {0, 0, 0}};
+    struct grid3 g2 = {{18, 18, NZ}, {DX / 3, DX / 3, DZ}, {0, 0, 0}};
+    struct grid3 g3 = {{9, 12, NZ}, {DX / 9, DX / 9, DZ}, {0, 0, 0}};
+    double ex = NXP * DX;
+    struct wrf_write_desc d1 = {.cen_lat = 25.0, .cen_lon = -89.0, .grid_id = 1, .parent_id = 1,
+                                .i_parent_start = 1, .j_parent_start = 1,
+                                .parent_grid_ratio = 1, .map_corner_m = {-0.5 * ex, -0.5 * ex}};
+    struct wrf_write_desc d2 = d1, d3 = d1;
+    d2.grid_id = 2;
+    d2.i_parent_start = 6;
+    d2.j_parent_start = 5;
+    d2.parent_grid_ratio = 3;
+    d3.grid_id = 3;
+    d3.parent_id = 2;
+    d3.i_parent_start = 7;
+    d3.j_parent_start = 4;
+    d3.parent_grid_ratio = 3;
+    double x2 = 5 * DX, y2 = 4 * DX, x3 = x2 + 6 * DX / 3, y3 = y2 + 3 * DX / 3;
+    const struct {
+        const char *name;
+        const struct grid3 *g;
+        struct wrf_write_desc *d;
+        double x0, y0;
+    } dom[3] = {{"three_d01.nc", &g1, &d1, 0, 0},
+                {"three_d02.nc", &g2, &d2, x2, y2},
+                {"three_d03.nc", &g3, &d3, x3, y3}};
+    char paths[3][512];
+    for (int i = 0; i < 3; i++) {
+        snprintf(paths[i], sizeof(paths[i]), "%s", test_tmp_path(dom[i].name));
+        dom[i].d->map_corner_m[0] += dom[i].x0;
+        dom[i].d->map_corner_m[1] += dom[i].y0;
+        struct wrf_writer *w = wrf_writer_create(paths[i], dom[i].g, dom[i].d);
+        assert_non_null(w);
+        struct field_volume fv;
+        fill(dom[i].g, dom[i].x0, dom[i].y0, &fv);
+        assert_true(wrf_writer_add(w, &fv, dates[0]));
+        field_volume_finish(&fv);
+        assert_true(wrf_writer_finish(w));
+    }
+    const char *order[3] = {paths[2], paths[0], paths[1]};
+    bool single;
+    struct nest_set *s = nest_open(order, 3, 0.0, &single);
+    assert_non_null(s);
+    assert_int_equal(nest_domain_count(s), 3);
+    assert_int_equal(nest_domain(s, 2)->grid_id, 3);
+    assert_int_equal(nest_domain(s, 2)->parent_id, 2);
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    struct nest_layout l;
+    assert_true(nest_layout(s, &d, &l));
+    assert_int_equal(l.grid.n[0], NXP * 9);
+    assert_int_equal(l.place[1].offset[0], 5 * 9);
+    assert_int_equal(l.place[2].offset[0], 5 * 9 + 6 * 3);
+    assert_int_equal(l.place[2].offset[1], 4 * 9 + 3 * 3);
+    assert_int_equal(l.place[2].blend, 3); /* one d02 column */
+    struct field_volume fv;
+    assert_true(nest_read_step(s, 0, &d, &fv, NULL));
+    /* d03's middle column, and d02's where d03 is not (beyond its blend with d01). */
+    int i3 = l.place[2].offset[0] + 4, j3 = l.place[2].offset[1] + 6, k = 3;
+    double truth = field((i3 + 0.5) * fv.grid.spacing[0], (j3 + 0.5) * fv.grid.spacing[1],
+                         (k + 0.5) * DZ);
+    assert_float_equal(fv.q[SPECIES_CLOUD][grid3_index(&fv.grid, i3, j3, k)], truth, 1e-9);
+    int i2 = l.place[1].offset[0] + 3 * 4 + 1, j2 = l.place[1].offset[1] + 3 * 14 + 1;
+    truth = field((i2 + 0.5) * fv.grid.spacing[0], (j2 + 0.5) * fv.grid.spacing[1],
+                  (k + 0.5) * DZ);
+    assert_float_equal(fv.q[SPECIES_CLOUD][grid3_index(&fv.grid, i2, j2, k)], truth, 1e-9);
+    field_volume_finish(&fv);
+    nest_close(s);
+}
+
 static void expect_refused(const char *name, const struct pair *p, const char *words)
 {
     write_pair(name, p);
@@ -384,6 +459,7 @@ int main(void)
         cmocka_unit_test(test_latlon_agrees),
         cmocka_unit_test(test_times_matched),
         cmocka_unit_test(test_single_domain),
+        cmocka_unit_test(test_three_levels),
         cmocka_unit_test(test_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
