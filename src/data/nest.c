@@ -146,11 +146,12 @@ static bool place_latlon(struct nest_set *s, int i, double fine_dx, double fine_
     const struct wrf_meta *outer = wrf_get_meta(s->dom[0].wrf);
     const struct wrf_meta *m = wrf_get_meta(s->dom[i].wrf);
     if (!m->xlat || !m->xlong || !outer->xlat || !outer->xlong) {
+        bool own = m->xlat && m->xlong;
         log_error("%s: domain %d has no PARENT_ID, I_PARENT_START, J_PARENT_START and "
-                  "PARENT_GRID_RATIO naming a domain given, and %s no XLAT/XLONG: it cannot be "
-                  "placed in %s",
-                  s->dom[i].path, s->dom[i].grid_id, m->xlat && m->xlong ? s->dom[0].path : "has",
-                  s->dom[0].path);
+                  "PARENT_GRID_RATIO naming a domain given, and %s%s no XLAT/XLONG: it cannot "
+                  "be placed in %s",
+                  s->dom[i].path, s->dom[i].grid_id, own ? s->dom[0].path : "",
+                  own ? " has" : "has", s->dom[0].path);
         return false;
     }
     struct geo_map map;
