@@ -139,8 +139,30 @@ static bool near(double a, double b)
     return fabs(a - b) <= 1e-3 * fabs(b);
 }
 
-/* Places domain I by its first column's latitude and longitude on the outermost domain's map
- * (both XLAT/XLONG grids: exact at the columns, bilinear between them). */
+/* Where domain I's south-west corner lies in the outermost domain's frame, m, from its first
+ * column's latitude and longitude on the outermost domain's map (both XLAT/XLONG grids: exact
+ * at the columns, bilinear between them).  False when either lacks them or the point cannot
+ * be placed. */
+static bool latlon_corner(const struct nest_set *s, int i, double out[2])
+{
+    const struct wrf_meta *outer = wrf_get_meta(s->dom[0].wrf);
+    const struct wrf_meta *m = wrf_get_meta(s->dom[i].wrf);
+    if (!m->xlat || !m->xlong || !outer->xlat || !outer->xlong)
+        return false;
+    struct geo_map map;
+    if (!geo_map_init_grid(&map, outer->xlat, outer->xlong, outer->nx, outer->ny, outer->dx,
+                           outer->dy))
+        return false;
+    double x, y;
+    bool ok = geo_map_to_frame(&map, m->xlat[0], m->xlong[0], &x, &y);
+    geo_map_finish(&map);
+    /* The column's centre is half a column in from the domain's corner. */
+    out[0] = x - 0.5 * m->dx;
+    out[1] = y - 0.5 * m->dy;
+    return ok;
+}
+
+/* Places domain I by its latitude and longitude. */
 static bool place_latlon(struct nest_set *s, int i, double fine_dx, double fine_dy)
 {
     const struct wrf_meta *outer = wrf_get_meta(s->dom[0].wrf);
@@ -154,21 +176,14 @@ static bool place_latlon(struct nest_set *s, int i, double fine_dx, double fine_
                   own ? " has" : "has", s->dom[0].path);
         return false;
     }
-    struct geo_map map;
-    if (!geo_map_init_grid(&map, outer->xlat, outer->xlong, outer->nx, outer->ny, outer->dx,
-                           outer->dy))
-        return false;
-    double x, y;
-    bool ok = geo_map_to_frame(&map, m->xlat[0], m->xlong[0], &x, &y);
-    geo_map_finish(&map);
-    if (!ok) {
+    double c[2];
+    if (!latlon_corner(s, i, c)) {
         log_error("%s: its first column (%.4f N, %.4f E) lies far outside %s: expected a nest "
                   "inside the outermost domain",
                   s->dom[i].path, m->xlat[0], m->xlong[0], s->dom[0].path);
         return false;
     }
-    /* The column's centre is half a column in from the domain's corner. */
-    double cx = (x - 0.5 * m->dx) / fine_dx, cy = (y - 0.5 * m->dy) / fine_dy;
+    double cx = c[0] / fine_dx, cy = c[1] / fine_dy;
     s->offset[i][0] = (int)lround(cx);
     s->offset[i][1] = (int)lround(cy);
     s->dom[i].by_latlon = true;
@@ -271,6 +286,20 @@ static bool place(struct nest_set *s, const struct domain_attrs *attrs)
             d->ratio = a->ratio;
             d->start[0] = a->start[0];
             d->start[1] = a->start[1];
+            /* Where its latitude and longitude put it: the same place for a nest of this run,
+             * elsewhere for files of two runs. */
+            double c[2];
+            d->misfit_m = NAN;
+            if (latlon_corner(s, i, c)) {
+                d->misfit_m = hypot(c[0] - s->offset[i][0] * fine_dx,
+                                    c[1] - s->offset[i][1] * fine_dy);
+                if (d->misfit_m > 0.5 * pdx)
+                    log_warn("%s: its PARENT attributes put it at column %d, %d of %s, but its "
+                             "XLAT/XLONG %.1f km from there: a nest of another run? (placed "
+                             "by the attributes)",
+                             d->path, a->start[0], a->start[1], s->dom[p].path,
+                             d->misfit_m / 1000.0);
+            }
         } else {
             if (!place_latlon(s, i, fine_dx, fine_dy))
                 return false;
@@ -688,6 +717,9 @@ void nest_describe(const struct nest_set *s, int i, char *out, size_t size)
     if (d->by_latlon)
         snprintf(out + n, size - (size_t)n, "placed by its XLAT/XLONG (%.0f m off the grid) "
                  "(%s)", d->misfit_m, d->path);
+    else if (isfinite(d->misfit_m))
+        snprintf(out + n, size - (size_t)n, "placed by PARENT_ID, I/J_PARENT_START and "
+                 "PARENT_GRID_RATIO; XLAT/XLONG agree within %.0f m (%s)", d->misfit_m, d->path);
     else
         snprintf(out + n, size - (size_t)n, "placed by PARENT_ID, I/J_PARENT_START and "
                  "PARENT_GRID_RATIO (%s)", d->path);

@@ -61,7 +61,8 @@ struct nest_domain {
                             used, or as found from lat/lon */
     bool by_latlon;      /* placed from XLAT/XLONG rather than the PARENT attributes */
     double misfit_m;     /* by lat/lon: how far its corner lay from the composite column edge
-                            it was put on, m */
+                            it was put on; by attributes: how far from there its XLAT/XLONG
+                            put it (NAN without them), m */
 };
 
 struct nest_set;

@@ -14,7 +14,7 @@ expect_exit 0 "synth writes a parent and its nest" "$anvil" synth -o wrfout_d01.
 check "the nest is where it was asked" stderr_has "nest wrfout_d02.nc: 27 x 27 columns of 833.333 m from column 15, 15"
 expect_exit 0 "info on the pair" "$anvil" info wrfout_d01.nc wrfout_d02.nc
 check "info says how they are composed" stdout_has "2 WRF domains in one scene, composed on 72 x 72 columns of 833.333 m"
-check "and where the nest lies" stdout_has "d02 27 x 27 columns of 833.333 m in d01 from its column 15, 15 (ratio 3), placed by PARENT_ID"
+check "and where the nest lies" stdout_has "d02 27 x 27 columns of 833.333 m in d01 from its column 15, 15 (ratio 3), placed by PARENT_ID, I/J_PARENT_START and PARENT_GRID_RATIO; XLAT/XLONG agree within [0-9] m"
 check "then each domain" stdout_has "wrfout_d02.nc: WRF output"
 
 expect_exit 0 "a nest without PARENT attributes" "$anvil" synth -o ll_d01.nc \

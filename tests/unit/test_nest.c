@@ -193,6 +193,11 @@ static void test_pair_placed_and_composed(void **state)
     assert_int_equal(d1->start[0], IPS);
     assert_int_equal(d1->start[1], JPS);
     assert_int_equal(d1->ratio, RATIO);
+    /* Its XLAT/XLONG put it where the attributes do. */
+    assert_true(d1->misfit_m < 0.05 * DX / RATIO);
+    char line[512];
+    nest_describe(s, 1, line, sizeof(line));
+    assert_non_null(strstr(line, "XLAT/XLONG agree within"));
     struct wrf_desc d;
     wrf_desc_defaults(&d);
     struct nest_layout l;
@@ -264,6 +269,43 @@ static void test_latlon_agrees(void **state)
     char line[512];
     nest_describe(s, 1, line, sizeof(line));
     assert_non_null(strstr(line, "XLAT/XLONG"));
+    nest_close(s);
+}
+
+/* Attributes that put a nest a parent column away from where its latitude and longitude do
+ * (files of two runs): a warning, the attributes kept. */
+static void test_attributes_against_latlon(void **state)
+{
+    (void)state;
+    write_pair("two", NULL);
+    /* The nest's lat/lon as written for IPS; its attributes say IPS + 2. */
+    struct grid3 ng = {{NNEST * RATIO, NNEST * RATIO, NZ}, {DX / RATIO, DX / RATIO, DZ},
+                       {0, 0, 0}};
+    double ex = NXP * DX;
+    struct wrf_write_desc nd = {.cen_lat = 25.0, .cen_lon = -89.0, .grid_id = 2,
+                                .parent_id = 1, .i_parent_start = IPS + 2,
+                                .j_parent_start = JPS, .parent_grid_ratio = RATIO,
+                                .map_corner_m = {-0.5 * ex + (IPS - 1) * DX,
+                                                 -0.5 * ex + (JPS - 1) * DX}};
+    char path[512];
+    snprintf(path, sizeof(path), "%s_d02.nc", test_tmp_path("two"));
+    struct wrf_writer *w = wrf_writer_create(path, &ng, &nd);
+    assert_non_null(w);
+    struct field_volume fv;
+    fill(&ng, (IPS - 1) * DX, (JPS - 1) * DX, &fv);
+    assert_true(wrf_writer_add(w, &fv, dates[0]));
+    field_volume_finish(&fv);
+    assert_true(wrf_writer_finish(w));
+    unsigned warns = log_warn_count();
+    log_set_level(LOG_NONE);
+    bool single;
+    struct nest_set *s = open_pair("two", &single);
+    log_set_level(LOG_WARN);
+    assert_non_null(s);
+    assert_int_equal(log_warn_count(), warns + 1);
+    assert_non_null(strstr(log_last_warning(), "a nest of another run?"));
+    assert_int_equal(nest_domain(s, 1)->start[0], IPS + 2);
+    assert_float_equal(nest_domain(s, 1)->misfit_m, 2 * DX, 1.0);
     nest_close(s);
 }
 
@@ -457,6 +499,7 @@ int main(void)
         cmocka_unit_test(test_compose_layout),
         cmocka_unit_test(test_pair_placed_and_composed),
         cmocka_unit_test(test_latlon_agrees),
+        cmocka_unit_test(test_attributes_against_latlon),
         cmocka_unit_test(test_times_matched),
         cmocka_unit_test(test_single_domain),
         cmocka_unit_test(test_three_levels),
