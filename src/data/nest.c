@@ -17,10 +17,10 @@
 /* What a file says of its domain (the first file of each domain is asked). */
 struct domain_attrs {
     int grid_id;
-    int parent_id;        /* 0 when absent */
-    int start[2];         /* I_PARENT_START, J_PARENT_START; 0 when absent */
-    int ratio;            /* PARENT_GRID_RATIO; 0 when absent */
-    double dx, dy;        /* DX, DY */
+    int parent_id; /* 0 when absent */
+    int start[2];  /* I_PARENT_START, J_PARENT_START; 0 when absent */
+    int ratio;     /* PARENT_GRID_RATIO; 0 when absent */
+    double dx, dy; /* DX, DY */
 };
 
 struct nest_set {
@@ -187,8 +187,7 @@ static bool place_latlon(struct nest_set *s, int i, double fine_dx, double fine_
     s->offset[i][0] = (int)lround(cx);
     s->offset[i][1] = (int)lround(cy);
     s->dom[i].by_latlon = true;
-    s->dom[i].misfit_m =
-        hypot((cx - s->offset[i][0]) * fine_dx, (cy - s->offset[i][1]) * fine_dy);
+    s->dom[i].misfit_m = hypot((cx - s->offset[i][0]) * fine_dx, (cy - s->offset[i][1]) * fine_dy);
     return true;
 }
 
@@ -216,8 +215,7 @@ static bool place(struct nest_set *s, const struct domain_attrs *attrs)
     for (int i = 1; i < s->count; i++)
         for (int j = i; j > 0; j--) {
             const struct domain_attrs *a = &attrs[order[j]], *b = &attrs[order[j - 1]];
-            if (a->dx > b->dx * (1 + 1e-6) ||
-                (near(a->dx, b->dx) && a->grid_id < b->grid_id)) {
+            if (a->dx > b->dx * (1 + 1e-6) || (near(a->dx, b->dx) && a->grid_id < b->grid_id)) {
                 int t = order[j];
                 order[j] = order[j - 1];
                 order[j - 1] = t;
@@ -291,8 +289,8 @@ static bool place(struct nest_set *s, const struct domain_attrs *attrs)
             double c[2];
             d->misfit_m = NAN;
             if (latlon_corner(s, i, c)) {
-                d->misfit_m = hypot(c[0] - s->offset[i][0] * fine_dx,
-                                    c[1] - s->offset[i][1] * fine_dy);
+                d->misfit_m =
+                    hypot(c[0] - s->offset[i][0] * fine_dx, c[1] - s->offset[i][1] * fine_dy);
                 if (d->misfit_m > 0.5 * pdx)
                     log_warn("%s: its PARENT attributes put it at column %d, %d of %s, but its "
                              "XLAT/XLONG %.1f km from there: a nest of another run? (placed "
@@ -311,8 +309,8 @@ static bool place(struct nest_set *s, const struct domain_attrs *attrs)
             d->parent_id = 0;
             d->ratio = s->scale[p] / s->scale[i];
             for (int ax = 0; ax < 2; ax++)
-                d->start[ax] = 1 + (int)floor((double)(s->offset[i][ax] - s->offset[p][ax]) /
-                                              s->scale[p]);
+                d->start[ax] =
+                    1 + (int)floor((double)(s->offset[i][ax] - s->offset[p][ax]) / s->scale[p]);
         }
         s->parent[i] = p;
         s->blend[i] = s->scale[p];
@@ -484,8 +482,7 @@ bool nest_layout(const struct nest_set *s, const struct wrf_desc *d, struct nest
 }
 
 /* A nest's read: the outermost's heights, all its columns. */
-static bool nest_desc(const struct nest_layout *l, const struct wrf_desc *d,
-                      struct wrf_desc *out)
+static bool nest_desc(const struct nest_layout *l, const struct wrf_desc *d, struct wrf_desc *out)
 {
     *out = *d;
     out->levels = l->grid.n[2];
@@ -577,7 +574,7 @@ static float **member(struct field_volume *v, int m)
 {
     if (m < SPECIES_COUNT)
         return &v->q[m];
-    float **rest[] = {&v->qvapor, &v->rho_air, &v->temperature, &v->wind, &v->u,
+    float **rest[] = {&v->qvapor, &v->rho_air, &v->temperature, &v->wind,   &v->u,
                       &v->v,      &v->w,       &v->vorticity,   &v->level_z};
     return rest[m - SPECIES_COUNT];
 }
@@ -599,9 +596,9 @@ bool nest_compose(const struct nest_layout *l, const struct field_volume *in,
             p->offset[1] + dg->n[1] * p->scale > g->n[1]) {
             log_error("domain %d of %d: its grid (%d x %d x %d, %g m, heights from %g m by %g m) "
                       "does not fit the composite (%d x %d x %d, %g m, from %g m by %g m)",
-                      d + 1, l->count, dg->n[0], dg->n[1], dg->n[2], dg->spacing[0],
-                      dg->origin[2], dg->spacing[2], g->n[0], g->n[1], g->n[2], g->spacing[0],
-                      g->origin[2], g->spacing[2]);
+                      d + 1, l->count, dg->n[0], dg->n[1], dg->n[2], dg->spacing[0], dg->origin[2],
+                      dg->spacing[2], g->n[0], g->n[1], g->n[2], g->spacing[0], g->origin[2],
+                      g->spacing[2]);
             return false;
         }
     }
@@ -623,8 +620,8 @@ bool nest_compose(const struct nest_layout *l, const struct field_volume *in,
         float *dst = calloc(plane * (size_t)nz, sizeof(float));
         if (!dst) {
             field_volume_finish(out);
-            log_error("out of memory composing %d domains (%d x %d x %d voxels)", l->count,
-                      g->n[0], g->n[1], nz);
+            log_error("out of memory composing %d domains (%d x %d x %d voxels)", l->count, g->n[0],
+                      g->n[1], nz);
             return false;
         }
         compose_array(l, in, src, nz, dst);
@@ -648,9 +645,8 @@ bool nest_read_step(struct nest_set *s, int step, const struct wrf_desc *d,
     if ((d->memory_mb > 0 && (double)need > d->memory_mb * 1048576.0) || need == SIZE_MAX) {
         log_error("%s and %d nest%s: a time step of every domain and their composite on "
                   "%d x %d x %d voxels need %.0f MiB, above the budget data.memory = %.0f MiB",
-                  s->dom[0].path, s->count - 1, s->count > 2 ? "s" : "", l.grid.n[0],
-                  l.grid.n[1], l.grid.n[2],
-                  (double)need / 1048576.0, d->memory_mb);
+                  s->dom[0].path, s->count - 1, s->count > 2 ? "s" : "", l.grid.n[0], l.grid.n[1],
+                  l.grid.n[2], (double)need / 1048576.0, d->memory_mb);
         return false;
     }
     struct wrf_desc nd;
@@ -704,29 +700,38 @@ void nest_describe(const struct nest_set *s, int i, char *out, size_t size)
     const struct nest_domain *d = &s->dom[i];
     const struct wrf_meta *m = wrf_get_meta(d->wrf);
     if (i == 0) {
-        snprintf(out, size, "d%02d %d x %d columns of %g m: the outermost domain, the scene's "
-                 "frame (%s)", d->grid_id, m->nx, m->ny, m->dx, d->path);
+        snprintf(out, size,
+                 "d%02d %d x %d columns of %g m: the outermost domain, the scene's "
+                 "frame (%s)",
+                 d->grid_id, m->nx, m->ny, m->dx, d->path);
         return;
     }
     const struct nest_domain *p = &s->dom[s->parent[i]];
-    int n = snprintf(out, size, "d%02d %d x %d columns of %g m in d%02d from its column %d, %d "
-                     "(ratio %d), ", d->grid_id, m->nx, m->ny, m->dx, p->grid_id, d->start[0],
-                     d->start[1], d->ratio);
+    int n =
+        snprintf(out, size,
+                 "d%02d %d x %d columns of %g m in d%02d from its column %d, %d "
+                 "(ratio %d), ",
+                 d->grid_id, m->nx, m->ny, m->dx, p->grid_id, d->start[0], d->start[1], d->ratio);
     if (n < 0 || (size_t)n >= size)
         return;
     if (d->by_latlon)
-        snprintf(out + n, size - (size_t)n, "placed by its XLAT/XLONG (%.0f m off the grid) "
-                 "(%s)", d->misfit_m, d->path);
+        snprintf(out + n, size - (size_t)n,
+                 "placed by its XLAT/XLONG (%.0f m off the grid) "
+                 "(%s)",
+                 d->misfit_m, d->path);
     else if (isfinite(d->misfit_m))
-        snprintf(out + n, size - (size_t)n, "placed by PARENT_ID, I/J_PARENT_START and "
-                 "PARENT_GRID_RATIO; XLAT/XLONG agree within %.0f m (%s)", d->misfit_m, d->path);
+        snprintf(out + n, size - (size_t)n,
+                 "placed by PARENT_ID, I/J_PARENT_START and "
+                 "PARENT_GRID_RATIO; XLAT/XLONG agree within %.0f m (%s)",
+                 d->misfit_m, d->path);
     else
-        snprintf(out + n, size - (size_t)n, "placed by PARENT_ID, I/J_PARENT_START and "
-                 "PARENT_GRID_RATIO (%s)", d->path);
+        snprintf(out + n, size - (size_t)n,
+                 "placed by PARENT_ID, I/J_PARENT_START and "
+                 "PARENT_GRID_RATIO (%s)",
+                 d->path);
 }
 
-bool nest_cut(const struct field_volume *fine, int ratio, const int *box,
-              struct field_volume *out)
+bool nest_cut(const struct field_volume *fine, int ratio, const int *box, struct field_volume *out)
 {
     memset(out, 0, sizeof(*out));
     const struct grid3 *g = &fine->grid;
@@ -734,9 +739,8 @@ bool nest_cut(const struct field_volume *fine, int ratio, const int *box,
     if (box) {
         if (box[0] < 0 || box[1] < 0 || box[2] < 1 || box[3] < 1 || box[0] + box[2] > g->n[0] ||
             box[1] + box[3] > g->n[1]) {
-            log_error("nest: columns %d to %d, %d to %d lie outside the %d x %d columns",
-                      box[0], box[0] + box[2] - 1, box[1], box[1] + box[3] - 1, g->n[0],
-                      g->n[1]);
+            log_error("nest: columns %d to %d, %d to %d lie outside the %d x %d columns", box[0],
+                      box[0] + box[2] - 1, box[1], box[1] + box[3] - 1, g->n[0], g->n[1]);
             return false;
         }
         og.n[0] = box[2];

@@ -52,17 +52,17 @@ bool nest_compose(const struct nest_layout *l, const struct field_volume *in,
 
 /* One domain of a set, as placed. */
 struct nest_domain {
-    struct wrf *wrf;     /* its series; owned by the set */
-    const char *path;    /* its first file (for messages); valid until nest_close */
-    int grid_id;         /* GRID_ID (or the `_dNN_` of the file name) */
-    int parent_id;       /* PARENT_ID it is placed in, 0 for the outermost and by lat/lon */
-    int ratio;           /* its columns per column of the domain it is placed in */
-    int start[2];        /* I_PARENT_START, J_PARENT_START (1-based, the parent's columns) as
-                            used, or as found from lat/lon */
-    bool by_latlon;      /* placed from XLAT/XLONG rather than the PARENT attributes */
-    double misfit_m;     /* by lat/lon: how far its corner lay from the composite column edge
-                            it was put on; by attributes: how far from there its XLAT/XLONG
-                            put it (NAN without them), m */
+    struct wrf *wrf;  /* its series; owned by the set */
+    const char *path; /* its first file (for messages); valid until nest_close */
+    int grid_id;      /* GRID_ID (or the `_dNN_` of the file name) */
+    int parent_id;    /* PARENT_ID it is placed in, 0 for the outermost and by lat/lon */
+    int ratio;        /* its columns per column of the domain it is placed in */
+    int start[2];     /* I_PARENT_START, J_PARENT_START (1-based, the parent's columns) as
+                         used, or as found from lat/lon */
+    bool by_latlon;   /* placed from XLAT/XLONG rather than the PARENT attributes */
+    double misfit_m;  /* by lat/lon: how far its corner lay from the composite column edge
+                         it was put on; by attributes: how far from there its XLAT/XLONG
+                         put it (NAN without them), m */
 };
 
 struct nest_set;
@@ -104,8 +104,7 @@ bool nest_read_step(struct nest_set *s, int step, const struct wrf_desc *d,
  * BOX[0] <= i < BOX[0] + BOX[2], BOX[1] <= j < BOX[1] + BOX[3] as they are.  Mass ratios,
  * QVAPOR and air density are carried.  OUT is initialised here.  False (logged) on a box
  * outside FINE, a size RATIO does not divide or out of memory. */
-bool nest_cut(const struct field_volume *fine, int ratio, const int *box,
-              struct field_volume *out);
+bool nest_cut(const struct field_volume *fine, int ratio, const int *box, struct field_volume *out);
 
 /* How domain I is placed, one line for `anvil info` (no newline). */
 void nest_describe(const struct nest_set *s, int i, char *out, size_t size);

@@ -64,12 +64,16 @@ static void write_domain(const char *name, const struct grid3 *g, double x0, dou
 static void write_files(void)
 {
     struct grid3 pg = {{NXP, NXP, NZ}, {DX, DX, DZ}, {0, 0, 0}};
-    struct grid3 ng = {{NNEST * RATIO, NNEST * RATIO, NZ}, {DX / RATIO, DX / RATIO, DZ},
-                       {0, 0, 0}};
+    struct grid3 ng = {{NNEST * RATIO, NNEST * RATIO, NZ}, {DX / RATIO, DX / RATIO, DZ}, {0, 0, 0}};
     double ex = NXP * DX;
-    struct wrf_write_desc pd = {.cen_lat = 25.0, .cen_lon = -89.0, .grid_id = 1, .parent_id = 1,
-                                .i_parent_start = 1, .j_parent_start = 1,
-                                .parent_grid_ratio = 1, .map_corner_m = {-0.5 * ex, -0.5 * ex}};
+    struct wrf_write_desc pd = {.cen_lat = 25.0,
+                                .cen_lon = -89.0,
+                                .grid_id = 1,
+                                .parent_id = 1,
+                                .i_parent_start = 1,
+                                .j_parent_start = 1,
+                                .parent_grid_ratio = 1,
+                                .map_corner_m = {-0.5 * ex, -0.5 * ex}};
     write_domain("wrfout_d01.nc", &pg, 0.0, 0.0, &pd);
     struct wrf_write_desc nd = pd;
     nd.grid_id = 2;
@@ -95,14 +99,22 @@ static void render(const char *const *files, double step, bool no_skip, struct i
     }
     strcat(list, "]");
     snprintf(stepset, sizeof(stepset), "render.step=%g", step);
-    const char *sets[] = {"scene.kind=data",        list,
-                          stepset,                  "camera.position=[24,20,90]",
-                          "camera.target=[24,24,0]", "camera.up=[0,1,0]",
-                          "camera.fov=32",          "render.width=96",
-                          "render.height=96",       "light.elevation=60",
-                          "light.azimuth=30",       "effects.multiple=off",
-                          "effects.lateral=off",    "effects.shadows=on",
-                          "effects.forward=off",    "effects.peripheral=off",
+    const char *sets[] = {"scene.kind=data",
+                          list,
+                          stepset,
+                          "camera.position=[24,20,90]",
+                          "camera.target=[24,24,0]",
+                          "camera.up=[0,1,0]",
+                          "camera.fov=32",
+                          "render.width=96",
+                          "render.height=96",
+                          "light.elevation=60",
+                          "light.azimuth=30",
+                          "effects.multiple=off",
+                          "effects.lateral=off",
+                          "effects.shadows=on",
+                          "effects.forward=off",
+                          "effects.peripheral=off",
                           "effects.phase=off"};
     struct config cfg;
     test_config_from(&cfg, sets, (int)(sizeof(sets) / sizeof(sets[0])));

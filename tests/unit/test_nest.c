@@ -66,12 +66,17 @@ static void write_pair(const char *name, const struct pair *p_in)
         p = *p_in;
     char path[512];
     struct grid3 pg = {{NXP, NXP, NZ}, {DX, DX, DZ}, {0, 0, 0}};
-    struct grid3 ng = {{p.nnest * RATIO, p.nnest * RATIO, NZ}, {DX / RATIO, DX / RATIO, DZ},
-                       {0, 0, 0}};
+    struct grid3 ng = {
+        {p.nnest * RATIO, p.nnest * RATIO, NZ}, {DX / RATIO, DX / RATIO, DZ}, {0, 0, 0}};
     double ex = NXP * DX;
-    struct wrf_write_desc pd = {.cen_lat = 25.0, .cen_lon = -89.0, .grid_id = 1, .parent_id = 1,
-                                .i_parent_start = 1, .j_parent_start = 1,
-                                .parent_grid_ratio = 1, .map_corner_m = {-0.5 * ex, -0.5 * ex}};
+    struct wrf_write_desc pd = {.cen_lat = 25.0,
+                                .cen_lon = -89.0,
+                                .grid_id = 1,
+                                .parent_id = 1,
+                                .i_parent_start = 1,
+                                .j_parent_start = 1,
+                                .parent_grid_ratio = 1,
+                                .map_corner_m = {-0.5 * ex, -0.5 * ex}};
     struct wrf_write_desc nd = pd;
     nd.grid_id = 2;
     nd.i_parent_start = p.ips;
@@ -158,9 +163,9 @@ static void test_compose_layout(void **state)
     /* Its outermost column (composite column 3, centre 3.5 = parent column 0.67; row 7 on
      * parent row 2): a sixth of the nest, the rest the parent there. */
     const float *p = in[0].q[SPECIES_RAIN];
-    double under = p[grid3_index(&in[0].grid, 0, 2, 0)] +
-                   (p[grid3_index(&in[0].grid, 1, 2, 0)] - p[grid3_index(&in[0].grid, 0, 2, 0)]) *
-                       2.0 / 3.0;
+    double under =
+        p[grid3_index(&in[0].grid, 0, 2, 0)] +
+        (p[grid3_index(&in[0].grid, 1, 2, 0)] - p[grid3_index(&in[0].grid, 0, 2, 0)]) * 2.0 / 3.0;
     double nest = in[1].q[SPECIES_RAIN][grid3_index(&in[1].grid, 0, 4, 0)];
     assert_float_equal(c[grid3_index(&l.grid, 3, 7, 0)], under + (nest - under) / 6.0, 1e-3);
     field_volume_finish(&out);
@@ -279,14 +284,17 @@ static void test_attributes_against_latlon(void **state)
     (void)state;
     write_pair("two", NULL);
     /* The nest's lat/lon as written for IPS; its attributes say IPS + 2. */
-    struct grid3 ng = {{NNEST * RATIO, NNEST * RATIO, NZ}, {DX / RATIO, DX / RATIO, DZ},
-                       {0, 0, 0}};
+    struct grid3 ng = {{NNEST * RATIO, NNEST * RATIO, NZ}, {DX / RATIO, DX / RATIO, DZ}, {0, 0, 0}};
     double ex = NXP * DX;
-    struct wrf_write_desc nd = {.cen_lat = 25.0, .cen_lon = -89.0, .grid_id = 2,
-                                .parent_id = 1, .i_parent_start = IPS + 2,
-                                .j_parent_start = JPS, .parent_grid_ratio = RATIO,
-                                .map_corner_m = {-0.5 * ex + (IPS - 1) * DX,
-                                                 -0.5 * ex + (JPS - 1) * DX}};
+    struct wrf_write_desc nd = {
+        .cen_lat = 25.0,
+        .cen_lon = -89.0,
+        .grid_id = 2,
+        .parent_id = 1,
+        .i_parent_start = IPS + 2,
+        .j_parent_start = JPS,
+        .parent_grid_ratio = RATIO,
+        .map_corner_m = {-0.5 * ex + (IPS - 1) * DX, -0.5 * ex + (JPS - 1) * DX}};
     char path[512];
     snprintf(path, sizeof(path), "%s_d02.nc", test_tmp_path("two"));
     struct wrf_writer *w = wrf_writer_create(path, &ng, &nd);
@@ -367,9 +375,14 @@ static void test_three_levels(void **state)
     struct grid3 g2 = {{18, 18, NZ}, {DX / 3, DX / 3, DZ}, {0, 0, 0}};
     struct grid3 g3 = {{9, 12, NZ}, {DX / 9, DX / 9, DZ}, {0, 0, 0}};
     double ex = NXP * DX;
-    struct wrf_write_desc d1 = {.cen_lat = 25.0, .cen_lon = -89.0, .grid_id = 1, .parent_id = 1,
-                                .i_parent_start = 1, .j_parent_start = 1,
-                                .parent_grid_ratio = 1, .map_corner_m = {-0.5 * ex, -0.5 * ex}};
+    struct wrf_write_desc d1 = {.cen_lat = 25.0,
+                                .cen_lon = -89.0,
+                                .grid_id = 1,
+                                .parent_id = 1,
+                                .i_parent_start = 1,
+                                .j_parent_start = 1,
+                                .parent_grid_ratio = 1,
+                                .map_corner_m = {-0.5 * ex, -0.5 * ex}};
     struct wrf_write_desc d2 = d1, d3 = d1;
     d2.grid_id = 2;
     d2.i_parent_start = 6;
@@ -422,12 +435,11 @@ static void test_three_levels(void **state)
     assert_true(nest_read_step(s, 0, &d, &fv, NULL));
     /* d03's middle column, and d02's where d03 is not (beyond its blend with d01). */
     int i3 = l.place[2].offset[0] + 4, j3 = l.place[2].offset[1] + 6, k = 3;
-    double truth = field((i3 + 0.5) * fv.grid.spacing[0], (j3 + 0.5) * fv.grid.spacing[1],
-                         (k + 0.5) * DZ);
+    double truth =
+        field((i3 + 0.5) * fv.grid.spacing[0], (j3 + 0.5) * fv.grid.spacing[1], (k + 0.5) * DZ);
     assert_float_equal(fv.q[SPECIES_CLOUD][grid3_index(&fv.grid, i3, j3, k)], truth, 1e-9);
     int i2 = l.place[1].offset[0] + 3 * 4 + 1, j2 = l.place[1].offset[1] + 3 * 14 + 1;
-    truth = field((i2 + 0.5) * fv.grid.spacing[0], (j2 + 0.5) * fv.grid.spacing[1],
-                  (k + 0.5) * DZ);
+    truth = field((i2 + 0.5) * fv.grid.spacing[0], (j2 + 0.5) * fv.grid.spacing[1], (k + 0.5) * DZ);
     assert_float_equal(fv.q[SPECIES_CLOUD][grid3_index(&fv.grid, i2, j2, k)], truth, 1e-9);
     field_volume_finish(&fv);
     nest_close(s);
@@ -496,14 +508,10 @@ int main(void)
 {
     log_set_level(LOG_WARN);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_compose_layout),
-        cmocka_unit_test(test_pair_placed_and_composed),
-        cmocka_unit_test(test_latlon_agrees),
-        cmocka_unit_test(test_attributes_against_latlon),
-        cmocka_unit_test(test_times_matched),
-        cmocka_unit_test(test_single_domain),
-        cmocka_unit_test(test_three_levels),
-        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_compose_layout), cmocka_unit_test(test_pair_placed_and_composed),
+        cmocka_unit_test(test_latlon_agrees),  cmocka_unit_test(test_attributes_against_latlon),
+        cmocka_unit_test(test_times_matched),  cmocka_unit_test(test_single_domain),
+        cmocka_unit_test(test_three_levels),   cmocka_unit_test(test_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
