@@ -10,6 +10,7 @@
 #include <netcdf.h>
 
 #include "common/log.h"
+#include "common/parallel.h"
 #include "data/geo.h"
 #include "data/nclock.h"
 #include "data/ncopen.h"
@@ -515,58 +516,96 @@ size_t nest_step_bytes(const struct nest_set *s, const struct wrf_desc *d)
 
 /* ---- composing ---------------------------------------------------------------------------- */
 
-/* One array of every domain onto the composite: NZ planes of the composite's columns.
- * SRC[i] NULL reads as zero. */
-static void compose_array(const struct nest_layout *l, const struct field_volume *in,
-                          float *const *src, int nz, float *dst)
+/* Where each composite column along one axis reads a domain: its lower and upper column and
+ * the weight of the upper (bilinear between the domain's column centres, clamped to its edge
+ * columns as the eye pass's sampler clamps), and its distance from the domain's edge in
+ * composite columns. */
+struct axis_tap {
+    int lo, hi;
+    double f, edge;
+};
+
+static void axis_taps(int cells, int scale, struct axis_tap *out)
 {
-    const int nx = l->grid.n[0], ny = l->grid.n[1];
-    size_t plane = (size_t)nx * ny;
-    for (int d = 0; d < l->count; d++) {
-        const struct nest_place *p = &l->place[d];
-        const int cx = in[d].grid.n[0], cy = in[d].grid.n[1];
-        const int i0 = p->offset[0], j0 = p->offset[1];
-        const int i1 = i0 + cx * p->scale, j1 = j0 + cy * p->scale;
-        size_t cplane = (size_t)cx * cy;
-        for (int J = j0; J < j1; J++) {
-            /* The composite column's centre in the domain's column index (centres integral),
-             * clamped to its edge columns as the eye pass's sampler clamps. */
-            double v = (J - j0 + 0.5) / p->scale - 0.5;
-            v = fmin(fmax(v, 0.0), cy - 1.0);
-            int jb = (int)floor(v);
-            if (jb > cy - 2)
-                jb = cy > 1 ? cy - 2 : 0;
-            double fy = cy > 1 ? v - jb : 0.0;
-            int jn = cy > 1 ? jb + 1 : jb;
-            double ey = fmin(J - j0 + 0.5, j1 - J - 0.5);
-            for (int I = i0; I < i1; I++) {
-                double u = (I - i0 + 0.5) / p->scale - 0.5;
-                u = fmin(fmax(u, 0.0), cx - 1.0);
-                int ib = (int)floor(u);
-                if (ib > cx - 2)
-                    ib = cx > 1 ? cx - 2 : 0;
-                double fx = cx > 1 ? u - ib : 0.0;
-                int in_ = cx > 1 ? ib + 1 : ib;
-                double e = fmin(fmin(I - i0 + 0.5, i1 - I - 0.5), ey);
-                double w = p->blend > 0 ? fmin(1.0, e / p->blend) : 1.0;
-                size_t a00 = (size_t)jb * cx + ib, a10 = (size_t)jb * cx + in_;
-                size_t a01 = (size_t)jn * cx + ib, a11 = (size_t)jn * cx + in_;
-                size_t o = (size_t)J * nx + I;
-                for (int k = 0; k < nz; k++) {
-                    double val = 0.0;
-                    if (src[d]) {
-                        const float *s = src[d] + k * cplane;
-                        /* Weights exactly 0 or 1 keep a column's value bit for bit. */
-                        double lo = fx > 0.0 ? s[a00] + fx * (s[a10] - s[a00]) : s[a00];
-                        double hi = fx > 0.0 ? s[a01] + fx * (s[a11] - s[a01]) : s[a01];
-                        val = fy > 0.0 ? lo + fy * (hi - lo) : lo;
-                    }
-                    float *t = dst + k * plane + o;
-                    *t = w >= 1.0 ? (float)val : (float)(w * val + (1.0 - w) * *t);
-                }
+    int n = cells * scale;
+    for (int c = 0; c < n; c++) {
+        double u = fmin(fmax((c + 0.5) / scale - 0.5, 0.0), cells - 1.0);
+        int lo = cells > 1 ? (int)floor(u) : 0;
+        if (cells > 1 && lo > cells - 2)
+            lo = cells - 2;
+        out[c].lo = lo;
+        out[c].hi = cells > 1 ? lo + 1 : lo;
+        out[c].f = cells > 1 ? u - lo : 0.0;
+        out[c].edge = fmin(c + 0.5, n - c - 0.5);
+    }
+}
+
+/* One domain's pass over rows (plane k, composite row J) [BEGIN, END). */
+struct compose_pass {
+    const struct nest_place *p;
+    const float *src; /* NULL: zero */
+    int cx, cy, nx, ny, rows;
+    const struct axis_tap *tx, *ty;
+    float *dst;
+};
+
+static bool compose_rows(void *ctx, int share, size_t begin, size_t end)
+{
+    (void)share;
+    const struct compose_pass *c = ctx;
+    const struct nest_place *p = c->p;
+    size_t plane = (size_t)c->nx * c->ny, cplane = (size_t)c->cx * c->cy;
+    for (size_t r = begin; r < end; r++) {
+        int k = (int)(r / (size_t)c->rows), jr = (int)(r % (size_t)c->rows);
+        const struct axis_tap *ty = &c->ty[jr];
+        float *t = c->dst + k * plane + (size_t)(p->offset[1] + jr) * c->nx + p->offset[0];
+        const float *s = c->src ? c->src + k * cplane : NULL;
+        for (int ir = 0; ir < c->cx * p->scale; ir++) {
+            const struct axis_tap *tx = &c->tx[ir];
+            double val = 0.0;
+            if (s) {
+                const float *r0 = s + (size_t)ty->lo * c->cx, *r1 = s + (size_t)ty->hi * c->cx;
+                /* Weights exactly 0 keep a column's value bit for bit. */
+                double lo =
+                    tx->f > 0.0 ? r0[tx->lo] + tx->f * (r0[tx->hi] - r0[tx->lo]) : r0[tx->lo];
+                double hi =
+                    tx->f > 0.0 ? r1[tx->lo] + tx->f * (r1[tx->hi] - r1[tx->lo]) : r1[tx->lo];
+                val = ty->f > 0.0 ? lo + ty->f * (hi - lo) : lo;
             }
+            double w = p->blend > 0 ? fmin(1.0, fmin(tx->edge, ty->edge) / p->blend) : 1.0;
+            t[ir] = w >= 1.0 ? (float)val : (float)(w * val + (1.0 - w) * t[ir]);
         }
     }
+    return true;
+}
+
+/* One array of every domain onto the composite: NZ planes of the composite's columns, the
+ * domains in order (each blends into what those before it wrote), each cut into shares of
+ * rows.  SRC[i] NULL reads as zero.  False when out of memory. */
+static bool compose_array(const struct nest_layout *l, const struct field_volume *in,
+                          float *const *src, int nz, float *dst)
+{
+    for (int d = 0; d < l->count; d++) {
+        const struct nest_place *p = &l->place[d];
+        struct compose_pass c = {.p = p,
+                                 .src = src[d],
+                                 .cx = in[d].grid.n[0],
+                                 .cy = in[d].grid.n[1],
+                                 .nx = l->grid.n[0],
+                                 .ny = l->grid.n[1],
+                                 .dst = dst};
+        c.rows = c.cy * p->scale;
+        struct axis_tap *tx = malloc(((size_t)c.cx + c.cy) * p->scale * sizeof(*tx));
+        if (!tx)
+            return false;
+        axis_taps(c.cx, p->scale, tx);
+        axis_taps(c.cy, p->scale, tx + (size_t)c.cx * p->scale);
+        c.tx = tx;
+        c.ty = tx + (size_t)c.cx * p->scale;
+        parallel_for((size_t)nz * c.rows, 16, &c, compose_rows);
+        free(tx);
+    }
+    return true;
 }
 
 /* The member of a field volume that nest_compose carries, by number. */
@@ -624,8 +663,12 @@ bool nest_compose(const struct nest_layout *l, const struct field_volume *in,
                       g->n[1], nz);
             return false;
         }
-        compose_array(l, in, src, nz, dst);
         *member(out, m) = dst;
+        if (!compose_array(l, in, src, nz, dst)) {
+            field_volume_finish(out);
+            log_error("out of memory composing %d domains", l->count);
+            return false;
+        }
         if (m == MEMBER_LEVEL_Z)
             out->level_count = nz;
     }
