@@ -444,52 +444,82 @@ struct wrf *nest_outer(struct nest_set *s)
     return s->dom[0].wrf;
 }
 
-static bool selects_all(const struct wrf_desc *d)
-{
-    for (int i = 0; i < 6; i++)
-        if (d->crop[i] >= 0)
-            return false;
-    for (int a = 0; a < 3; a++)
-        if (d->stride[a] > 1)
-            return false;
-    return true;
-}
-
 bool nest_layout(const struct nest_set *s, const struct wrf_desc *d, struct nest_layout *out)
 {
     memset(out, 0, sizeof(*out));
-    if (!selects_all(d)) {
-        log_error("%s and its nests: data.crop and data.stride select one domain's columns: "
-                  "not with nests (leave them at their defaults, or give one domain)",
-                  s->dom[0].path);
-        return false;
-    }
+    for (int a = 0; a < 3; a++)
+        if (d->stride[a] > 1) {
+            log_error("%s and its nests: data.stride would undo the nests' resolution: not with "
+                      "nests (data.crop selects a part of the composite)",
+                      s->dom[0].path);
+            return false;
+        }
+    /* The outermost's heights before a crop along z: every domain is read on them. */
+    struct wrf_desc full = *d;
+    for (int i = 0; i < 6; i++)
+        full.crop[i] = -1;
     struct grid3 g;
-    if (!wrf_grid(s->dom[0].wrf, d, &g))
+    if (!wrf_grid(s->dom[0].wrf, &full, &g))
+        return false;
+    out->levels = g.n[2];
+    out->bottom_m = g.origin[2];
+    out->top_m = g.origin[2] + g.n[2] * g.spacing[2];
+    /* Along z as the reader crops; along x and y in composite columns. */
+    struct wrf_desc zc = full;
+    zc.crop[4] = d->crop[4];
+    zc.crop[5] = d->crop[5];
+    if (!wrf_grid(s->dom[0].wrf, &zc, &g))
         return false;
     out->count = s->count;
     out->grid = g;
+    int lo[2] = {0, 0};
     for (int a = 0; a < 2; a++) {
-        out->grid.n[a] = g.n[a] * s->scale[0];
+        int n = g.n[a] * s->scale[0];
+        int c0 = d->crop[2 * a] >= 0 ? d->crop[2 * a] : 0;
+        int c1 = d->crop[2 * a + 1] >= 0 ? d->crop[2 * a + 1] : n - 1;
+        if (c0 > c1 || c1 >= n) {
+            log_error("%s and its nests: data.crop along %c keeps columns %d to %d of the "
+                      "composite's %d (with nests the crop counts the composite's columns of "
+                      "%g m)",
+                      s->dom[0].path, "xy"[a], c0, c1, n, g.spacing[a] / s->scale[0]);
+            return false;
+        }
+        lo[a] = c0;
+        out->grid.n[a] = c1 - c0 + 1;
         out->grid.spacing[a] = g.spacing[a] / s->scale[0];
+        out->grid.origin[a] = g.origin[a] + c0 * out->grid.spacing[a];
     }
     for (int i = 0; i < s->count; i++) {
-        out->place[i].offset[0] = s->offset[i][0];
-        out->place[i].offset[1] = s->offset[i][1];
+        out->place[i].offset[0] = s->offset[i][0] - lo[0];
+        out->place[i].offset[1] = s->offset[i][1] - lo[1];
         out->place[i].scale = s->scale[i];
         out->place[i].blend = s->blend[i];
     }
     return true;
 }
 
-/* A nest's read: the outermost's heights, all its columns. */
-static bool nest_desc(const struct nest_layout *l, const struct wrf_desc *d, struct wrf_desc *out)
+/* Whether domain I's box overlaps L's grid. */
+static bool overlaps(const struct nest_layout *l, const struct nest_set *s, int i)
+{
+    const struct wrf_meta *m = wrf_get_meta(s->dom[i].wrf);
+    int cells[2] = {m->nx, m->ny};
+    for (int a = 0; a < 2; a++) {
+        int o = l->place[i].offset[a];
+        if (o >= l->grid.n[a] || o + cells[a] * l->place[i].scale <= 0)
+            return false;
+    }
+    return true;
+}
+
+/* A domain's read: the outermost's heights (and crop along z), all its columns. */
+static void nest_desc(const struct nest_layout *l, const struct wrf_desc *d, struct wrf_desc *out)
 {
     *out = *d;
-    out->levels = l->grid.n[2];
-    out->bottom_m = l->grid.origin[2];
-    out->top_m = l->grid.origin[2] + l->grid.n[2] * l->grid.spacing[2];
-    return true;
+    out->levels = l->levels;
+    out->bottom_m = l->bottom_m;
+    out->top_m = l->top_m;
+    for (int i = 0; i < 4; i++)
+        out->crop[i] = -1;
 }
 
 size_t nest_step_bytes(const struct nest_set *s, const struct wrf_desc *d)
@@ -499,18 +529,21 @@ size_t nest_step_bytes(const struct nest_set *s, const struct wrf_desc *d)
         return 0;
     struct wrf_desc nd;
     nest_desc(&l, d, &nd);
-    size_t outer = wrf_step_bytes(s->dom[0].wrf, d);
-    if (outer == 0 || outer == SIZE_MAX)
-        return outer;
-    double total = (double)outer;
-    for (int i = 1; i < s->count; i++) {
+    double total = 0.0, outer = 0.0;
+    for (int i = 0; i < s->count; i++) {
+        if (i > 0 && !overlaps(&l, s, i))
+            continue;
         size_t b = wrf_step_bytes(s->dom[i].wrf, &nd);
         if (b == 0 || b == SIZE_MAX)
             return b;
         total += (double)b;
+        if (i == 0)
+            outer = (double)b;
     }
-    /* The composite holds the outermost's arrays on scale^2 times its columns. */
-    total += (double)outer * s->scale[0] * s->scale[0];
+    /* The composite holds the outermost's arrays on its share of the columns, scale^2 times
+     * finer. */
+    const struct wrf_meta *m = wrf_get_meta(s->dom[0].wrf);
+    total += outer * ((double)l.grid.n[0] * l.grid.n[1]) / ((double)m->nx * m->ny);
     return total >= (double)SIZE_MAX ? SIZE_MAX : (size_t)total;
 }
 
@@ -540,11 +573,13 @@ static void axis_taps(int cells, int scale, struct axis_tap *out)
     }
 }
 
-/* One domain's pass over rows (plane k, composite row J) [BEGIN, END). */
+/* One domain's pass over rows (plane k, composite row) [BEGIN, END): its columns I_LO to
+ * I_HI and rows J_LO on, of its own box (the part the grid holds). */
 struct compose_pass {
     const struct nest_place *p;
     const float *src; /* NULL: zero */
-    int cx, cy, nx, ny, rows;
+    int cx, cy, nx, ny;
+    int i_lo, i_hi, j_lo, rows;
     const struct axis_tap *tx, *ty;
     float *dst;
 };
@@ -556,11 +591,11 @@ static bool compose_rows(void *ctx, int share, size_t begin, size_t end)
     const struct nest_place *p = c->p;
     size_t plane = (size_t)c->nx * c->ny, cplane = (size_t)c->cx * c->cy;
     for (size_t r = begin; r < end; r++) {
-        int k = (int)(r / (size_t)c->rows), jr = (int)(r % (size_t)c->rows);
+        int k = (int)(r / (size_t)c->rows), jr = c->j_lo + (int)(r % (size_t)c->rows);
         const struct axis_tap *ty = &c->ty[jr];
         float *t = c->dst + k * plane + (size_t)(p->offset[1] + jr) * c->nx + p->offset[0];
         const float *s = c->src ? c->src + k * cplane : NULL;
-        for (int ir = 0; ir < c->cx * p->scale; ir++) {
+        for (int ir = c->i_lo; ir < c->i_hi; ir++) {
             const struct axis_tap *tx = &c->tx[ir];
             double val = 0.0;
             if (s) {
@@ -579,6 +614,11 @@ static bool compose_rows(void *ctx, int share, size_t begin, size_t end)
     return true;
 }
 
+static int clampi(int v, int lo, int hi)
+{
+    return v < lo ? lo : v > hi ? hi : v;
+}
+
 /* One array of every domain onto the composite: NZ planes of the composite's columns, the
  * domains in order (each blends into what those before it wrote), each cut into shares of
  * rows.  SRC[i] NULL reads as zero.  False when out of memory. */
@@ -594,14 +634,20 @@ static bool compose_array(const struct nest_layout *l, const struct field_volume
                                  .nx = l->grid.n[0],
                                  .ny = l->grid.n[1],
                                  .dst = dst};
-        c.rows = c.cy * p->scale;
-        struct axis_tap *tx = malloc(((size_t)c.cx + c.cy) * p->scale * sizeof(*tx));
+        int w = c.cx * p->scale, h = c.cy * p->scale;
+        c.i_lo = clampi(-p->offset[0], 0, w);
+        c.i_hi = clampi(c.nx - p->offset[0], 0, w);
+        c.j_lo = clampi(-p->offset[1], 0, h);
+        c.rows = clampi(c.ny - p->offset[1], 0, h) - c.j_lo;
+        if (c.i_hi <= c.i_lo || c.rows <= 0)
+            continue;
+        struct axis_tap *tx = malloc(((size_t)w + h) * sizeof(*tx));
         if (!tx)
             return false;
         axis_taps(c.cx, p->scale, tx);
-        axis_taps(c.cy, p->scale, tx + (size_t)c.cx * p->scale);
+        axis_taps(c.cy, p->scale, tx + w);
         c.tx = tx;
-        c.ty = tx + (size_t)c.cx * p->scale;
+        c.ty = tx + w;
         parallel_for((size_t)nz * c.rows, 16, &c, compose_rows);
         free(tx);
     }
@@ -631,8 +677,7 @@ bool nest_compose(const struct nest_layout *l, const struct field_volume *in,
         if (dg->n[2] != g->n[2] || fabs(dg->origin[2] - g->origin[2]) > 1e-3 * g->spacing[2] ||
             fabs(dg->spacing[2] - g->spacing[2]) > 1e-6 * g->spacing[2] || p->scale < 1 ||
             fabs(dg->spacing[0] - p->scale * g->spacing[0]) > 1e-3 * dg->spacing[0] ||
-            p->offset[0] < 0 || p->offset[1] < 0 || p->offset[0] + dg->n[0] * p->scale > g->n[0] ||
-            p->offset[1] + dg->n[1] * p->scale > g->n[1]) {
+            dg->n[0] < 1 || dg->n[1] < 1) {
             log_error("domain %d of %d: its grid (%d x %d x %d, %g m, heights from %g m by %g m) "
                       "does not fit the composite (%d x %d x %d, %g m, from %g m by %g m)",
                       d + 1, l->count, dg->n[0], dg->n[1], dg->n[2], dg->spacing[0], dg->origin[2],
@@ -699,7 +744,11 @@ bool nest_read_step(struct nest_set *s, int step, const struct wrf_desc *d,
     struct nest_layout used = l;
     used.count = 0;
     int from[NEST_DOMAIN_MAX]; /* the set's domain each used one is */
-    bool ok = wrf_read_step(s->dom[0].wrf, step, d, &in[0], stats);
+    /* The outermost whole along x and y (the crop is the composite's), cropped along z. */
+    struct wrf_desc od = *d;
+    for (int i = 0; i < 4; i++)
+        od.crop[i] = -1;
+    bool ok = wrf_read_step(s->dom[0].wrf, step, &od, &in[0], stats);
     if (ok) {
         used.count = 1;
         from[0] = 0;
@@ -717,6 +766,8 @@ bool nest_read_step(struct nest_set *s, int step, const struct wrf_desc *d,
                      s->dom[i].path, s->dom[i].grid_id, date[0] ? date : "this index");
             continue;
         }
+        if (!overlaps(&l, s, i))
+            continue; /* outside the crop: not read */
         /* A nest of a nest left out leaves it out too: it blends into its parent. */
         bool parent_used = false;
         for (int j = 0; j < used.count; j++)

@@ -32,9 +32,14 @@
  * else, so it can be tested without files). */
 struct nest_layout {
     int count;         /* domains, coarsest first: [0] the outermost */
-    struct grid3 grid; /* the composite: the outermost domain's box at the finest spacing */
+    struct grid3 grid; /* the composite: the outermost domain's box at the finest spacing, or
+                          the part of it data.crop keeps */
+    int levels;        /* the heights every domain is read on (wrf_desc levels, bottom_m,
+                          top_m): the outermost's before a crop along z */
+    double bottom_m, top_m;
     struct nest_place {
-        int offset[2]; /* the domain's west and south edge, in composite columns */
+        int offset[2]; /* the domain's west and south edge, in composite columns from the
+                          composite's (negative, or beyond it, where a crop cuts the domain) */
         int scale;     /* composite columns per column of the domain (1 for the finest) */
         int blend;     /* composite columns over which its edge blends into what lies below
                           (one column of the domain it sits in); 0 for the outermost */
@@ -42,7 +47,8 @@ struct nest_layout {
 };
 
 /* Composes IN[0 .. L->count - 1] (the domains' fields in L's order, on the composite's
- * heights: same n[2], origin and spacing along z) onto L->grid.  A species or QVAPOR that a
+ * heights: same n[2], origin and spacing along z) onto L->grid, each where its box and the
+ * grid overlap (a domain outside the grid is passed over; its IN may be empty).  A species or QVAPOR that a
  * domain lacks reads as zero there; air density, temperature, the wind, vorticity and the level
  * heights are kept only when every domain has them (else NULL: the standard atmosphere for the
  * density).  OUT is initialised here; the caller finishes it.  False (logged) when a domain's
@@ -82,8 +88,9 @@ const struct nest_domain *nest_domain(const struct nest_set *s, int i);
 /* The outermost domain's series: the time steps, dates, metadata, map and terrain. */
 struct wrf *nest_outer(struct nest_set *s);
 
-/* The layout and composite grid for a read with D (the outermost domain's selection; crop and
- * stride are refused with nests: they name one domain's columns).  False (logged). */
+/* The layout and composite grid for a read with D.  With nests D's crop along x and y counts
+ * the composite's columns (at the finest spacing), along z the output levels as for one
+ * domain; a stride is refused (it would undo the nests' resolution).  False (logged). */
 bool nest_layout(const struct nest_set *s, const struct wrf_desc *d, struct nest_layout *out);
 
 /* Bytes a step read with D needs: every domain's step (wrf_step_bytes) and the composite's

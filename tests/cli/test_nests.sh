@@ -39,6 +39,10 @@ CFG
 expect_exit 0 "render from a config's data.files" "$anvil" render nests.cfg $small -o cfg.png
 check "the config's files are grouped too" stderr_has "volume 72x72x16"
 
+expect_exit 0 "a crop of the composite around the nest" "$anvil" render wrfout_d01.nc \
+    wrfout_d02.nc --set 'data.crop=[36,71,36,71,-1,-1]' $small -o crop.png
+check "the volume is that part" stderr_has "volume 36x36x16"
+
 # Refused, naming the file.
 "$anvil" --quiet synth -o small_d01.nc --size 18x18x16 --extent 45x45x16
 expect_exit 1 "a nest outside its parent" "$anvil" render small_d01.nc wrfout_d02.nc $small -o x.png

@@ -170,8 +170,15 @@ static void test_compose_layout(void **state)
     assert_float_equal(c[grid3_index(&l.grid, 3, 7, 0)], under + (nest - under) / 6.0, 1e-3);
     field_volume_finish(&out);
 
-    /* A nest beyond the composite is refused, not written past the end. */
-    l.place[1].offset[0] = 4;
+    /* A nest the grid cuts writes only what the grid holds (a crop); its columns there are
+     * its own. */
+    l.place[1].offset[0] = 6;
+    assert_true(nest_compose(&l, in, &out));
+    assert_true(out.q[SPECIES_RAIN][grid3_index(&l.grid, 11, 7, 1)] ==
+                in[1].q[SPECIES_RAIN][grid3_index(&in[1].grid, 5, 4, 1)]);
+    field_volume_finish(&out);
+    /* Other heights are refused. */
+    in[1].grid.n[2] = 1;
     log_set_level(LOG_NONE);
     assert_false(nest_compose(&l, in, &out));
     log_set_level(LOG_WARN);
@@ -474,7 +481,8 @@ static void test_errors(void **state)
     struct pair ratio = {IPS, JPS, 2, NNEST, false, 2};
     expect_refused("ratio", &ratio, "PARENT_GRID_RATIO 2");
 
-    /* The source refuses a crop with nests, naming the file. */
+    /* The source refuses a stride with nests, and a crop beyond the composite, naming the
+     * file. */
     write_pair("crop", NULL);
     char a[512], b[512];
     snprintf(a, sizeof(a), "%s_d01.nc", test_tmp_path("crop"));
@@ -484,14 +492,20 @@ static void test_errors(void **state)
     wrf_desc_defaults(&sd.wrf);
     optics_params_defaults(&sd.optics);
     species_select_defaults(&sd.select);
-    sd.wrf.crop[0] = 2;
+    sd.wrf.stride[0] = 2;
     log_set_level(LOG_NONE);
     assert_null(data_source_open(&sd));
     log_set_level(LOG_WARN);
-    assert_non_null(strstr(log_last_error(), "data.crop"));
+    assert_non_null(strstr(log_last_error(), "data.stride"));
     assert_non_null(strstr(log_last_error(), a));
-    /* Without it, the source's grid is the composite's and a step loads on it. */
-    sd.wrf.crop[0] = -1;
+    sd.wrf.stride[0] = 0;
+    sd.wrf.crop[1] = NXP * RATIO; /* one past the last composite column */
+    log_set_level(LOG_NONE);
+    assert_null(data_source_open(&sd));
+    log_set_level(LOG_WARN);
+    assert_non_null(strstr(log_last_error(), "data.crop along x keeps columns 0 to 48"));
+    /* Without them, the source's grid is the composite's and a step loads on it. */
+    sd.wrf.crop[1] = -1;
     struct data_source *src = data_source_open(&sd);
     assert_non_null(src);
     struct grid3 g;
@@ -504,6 +518,53 @@ static void test_errors(void **state)
     data_source_close(src);
 }
 
+/* data.crop with nests counts the composite's columns (and levels along z): the cropped step is
+ * that part of the whole composite, value for value; a nest outside the crop is not read. */
+static void test_crop(void **state)
+{
+    (void)state;
+    write_pair("cut", NULL);
+    bool single;
+    struct nest_set *s = open_pair("cut", &single);
+    assert_non_null(s);
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    struct field_volume whole, part;
+    assert_true(nest_read_step(s, 0, &d, &whole, NULL));
+    /* Across the nest's west edge, rows through it, levels 2 to 5. */
+    int c[6] = {10, 25, 12, 40, 2, 5};
+    memcpy(d.crop, c, sizeof(c));
+    struct nest_layout l;
+    assert_true(nest_layout(s, &d, &l));
+    assert_int_equal(l.grid.n[0], 16);
+    assert_int_equal(l.grid.n[1], 29);
+    assert_int_equal(l.grid.n[2], 4);
+    assert_float_equal(l.grid.origin[0], 10 * DX / RATIO, 1e-6);
+    assert_float_equal(l.grid.origin[2], 2 * DZ, 1e-6);
+    assert_true(nest_read_step(s, 0, &d, &part, NULL));
+    assert_int_equal(part.grid.n[0], 16);
+    for (int k = 0; k < 4; k++)
+        for (int j = 0; j < 29; j++)
+            for (int i = 0; i < 16; i++)
+                assert_true(
+                    part.q[SPECIES_CLOUD][grid3_index(&part.grid, i, j, k)] ==
+                    whole.q[SPECIES_CLOUD][grid3_index(&whole.grid, i + 10, j + 12, k + 2)]);
+    field_volume_finish(&part);
+    size_t with = nest_step_bytes(s, &d);
+    /* West of the nest: the nest is not read, and not counted. */
+    int w[6] = {0, 9, 0, 47, -1, -1};
+    memcpy(d.crop, w, sizeof(w));
+    assert_true(nest_step_bytes(s, &d) < with);
+    assert_true(nest_read_step(s, 0, &d, &part, NULL));
+    for (int j = 0; j < 48; j++)
+        for (int i = 0; i < 10; i++)
+            assert_true(part.q[SPECIES_CLOUD][grid3_index(&part.grid, i, j, 3)] ==
+                        whole.q[SPECIES_CLOUD][grid3_index(&whole.grid, i, j, 3)]);
+    field_volume_finish(&part);
+    field_volume_finish(&whole);
+    nest_close(s);
+}
+
 int main(void)
 {
     log_set_level(LOG_WARN);
@@ -511,7 +572,8 @@ int main(void)
         cmocka_unit_test(test_compose_layout), cmocka_unit_test(test_pair_placed_and_composed),
         cmocka_unit_test(test_latlon_agrees),  cmocka_unit_test(test_attributes_against_latlon),
         cmocka_unit_test(test_times_matched),  cmocka_unit_test(test_single_domain),
-        cmocka_unit_test(test_three_levels),   cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_crop),           cmocka_unit_test(test_three_levels),
+        cmocka_unit_test(test_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
