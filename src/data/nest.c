@@ -720,6 +720,45 @@ bool nest_compose(const struct nest_layout *l, const struct field_volume *in,
     return true;
 }
 
+/* Domain I's step at the outermost's STEP's Times (its index where there are none), or -1. */
+static int match_step(struct nest_set *s, int i, int step)
+{
+    const char *date = wrf_step_date(s->dom[0].wrf, step);
+    struct wrf *w = s->dom[i].wrf;
+    for (int t = 0; t < wrf_step_count(w); t++)
+        if (date[0] ? !strcmp(wrf_step_date(w, t), date) : t == step)
+            return t;
+    return -1;
+}
+
+enum wrf_point_result nest_read_point(struct nest_set *s, int step, const struct wrf_desc *d,
+                                      const double p[3], struct wrf_point *out)
+{
+    memset(out, 0, sizeof(*out));
+    struct nest_layout l;
+    if (!nest_layout(s, d, &l))
+        return WRF_POINT_ERROR;
+    const struct grid3 *g = &l.grid;
+    for (int a = 0; a < 2; a++)
+        if (!(p[a] >= g->origin[a] && p[a] <= g->origin[a] + g->n[a] * g->spacing[a]))
+            return WRF_POINT_OUTSIDE;
+    struct wrf_desc nd;
+    nest_desc(&l, d, &nd);
+    /* The finest domain there with a step at that time. */
+    for (int i = s->count - 1; i >= 0; i--) {
+        const struct wrf_meta *m = wrf_get_meta(s->dom[i].wrf);
+        double q[3] = {p[0] - s->offset[i][0] * (g->spacing[0]),
+                       p[1] - s->offset[i][1] * (g->spacing[1]), p[2]};
+        if (q[0] < 0.0 || q[1] < 0.0 || q[0] > m->nx * m->dx || q[1] > m->ny * m->dy)
+            continue;
+        int t = i ? match_step(s, i, step) : step;
+        if (t < 0)
+            continue;
+        return wrf_read_point(s->dom[i].wrf, t, &nd, q, out);
+    }
+    return WRF_POINT_OUTSIDE;
+}
+
 bool nest_read_step(struct nest_set *s, int step, const struct wrf_desc *d,
                     struct field_volume *out, struct wrf_stats *stats)
 {
@@ -756,10 +795,7 @@ bool nest_read_step(struct nest_set *s, int step, const struct wrf_desc *d,
     const char *date = wrf_step_date(s->dom[0].wrf, step);
     for (int i = 1; ok && i < s->count; i++) {
         struct wrf *w = s->dom[i].wrf;
-        int match = -1;
-        for (int t = 0; t < wrf_step_count(w) && match < 0; t++)
-            if (date[0] ? !strcmp(wrf_step_date(w, t), date) : t == step)
-                match = t;
+        int match = match_step(s, i, step);
         if (match < 0) {
             log_warn("%s: domain %d has no step at %s: the time step shows the domains around "
                      "it only",

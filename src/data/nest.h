@@ -48,11 +48,11 @@ struct nest_layout {
 
 /* Composes IN[0 .. L->count - 1] (the domains' fields in L's order, on the composite's
  * heights: same n[2], origin and spacing along z) onto L->grid, each where its box and the
- * grid overlap (a domain outside the grid is passed over; its IN may be empty).  A species or QVAPOR that a
- * domain lacks reads as zero there; air density, temperature, the wind, vorticity and the level
- * heights are kept only when every domain has them (else NULL: the standard atmosphere for the
- * density).  OUT is initialised here; the caller finishes it.  False (logged) when a domain's
- * grid does not fit L or out of memory. */
+ * grid overlap (a domain outside the grid is passed over; its IN may be empty).  A species or
+ * QVAPOR that a domain lacks reads as zero there; air density, temperature, the wind, vorticity and
+ * the level heights are kept only when every domain has them (else NULL: the standard atmosphere
+ * for the density).  OUT is initialised here; the caller finishes it.  False (logged) when a
+ * domain's grid does not fit L or out of memory. */
 bool nest_compose(const struct nest_layout *l, const struct field_volume *in,
                   struct field_volume *out);
 
@@ -103,6 +103,13 @@ size_t nest_step_bytes(const struct nest_set *s, const struct wrf_desc *d);
  * domain's counts.  Refused (logged) when nest_step_bytes(D) exceeds D->memory_mb. */
 bool nest_read_step(struct nest_set *s, int step, const struct wrf_desc *d,
                     struct field_volume *out, struct wrf_stats *stats);
+
+/* What the files hold at P (metres in the outermost domain's frame, as wrf_read_point takes
+ * it) at the outermost's STEP: read from the finest domain whose box holds P and that has a
+ * step at that time (wrf_read_point on its columns, on the composite's heights).  Outside the
+ * composite's grid (a crop included): WRF_POINT_OUTSIDE. */
+enum wrf_point_result nest_read_point(struct nest_set *s, int step, const struct wrf_desc *d,
+                                      const double p[3], struct wrf_point *out);
 
 /* For writing a parent and its nest from one field (anvil synth --nest): the fields of FINE
  * (a volume at the nest's spacing over the whole parent domain) on the parent's grid, RATIO

@@ -135,6 +135,18 @@ struct wrf *data_source_wrf(struct data_source *s)
     return s->wrf;
 }
 
+enum wrf_point_result data_source_read_point(struct data_source *s, int step, const double p[3],
+                                             struct wrf_point *out)
+{
+    if (s->nest)
+        return nest_read_point(s->nest, step, &s->desc.wrf, p, out);
+    if (s->wrf)
+        return wrf_read_point(s->wrf, step, &s->desc.wrf, p, out);
+    memset(out, 0, sizeof(*out));
+    log_error("%s: only WRF output is read at a point", s->desc.files[0]);
+    return WRF_POINT_ERROR;
+}
+
 struct nest_set *data_source_nests(struct data_source *s)
 {
     return s->nest;

@@ -565,6 +565,44 @@ static void test_crop(void **state)
     nest_close(s);
 }
 
+/* The probe's point: the nest's columns where it is, the parent's elsewhere, nothing outside
+ * a crop. */
+static void test_point(void **state)
+{
+    (void)state;
+    write_pair("pt", NULL);
+    bool single;
+    struct nest_set *s = open_pair("pt", &single);
+    assert_non_null(s);
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    struct wrf_point wp;
+    /* A nest column's centre (its column 4, 7) and a parent column's away from it. */
+    double inside[3] = {(IPS - 1) * DX + 4.5 * DX / RATIO, (JPS - 1) * DX + 7.5 * DX / RATIO,
+                        3.5 * DZ};
+    assert_int_equal(nest_read_point(s, 0, &d, inside, &wp), WRF_POINT_OK);
+    assert_float_equal(wp.q[SPECIES_CLOUD], field(inside[0], inside[1], inside[2]), 1e-9);
+    double away[3] = {1.5 * DX, 13.5 * DX, 3.5 * DZ};
+    assert_int_equal(nest_read_point(s, 0, &d, away, &wp), WRF_POINT_OK);
+    assert_float_equal(wp.q[SPECIES_CLOUD], field(away[0], away[1], away[2]), 1e-9);
+    /* Between nest columns the parent's interpolation would differ from the field by more than
+     * the nest's does. */
+    double mid[3] = {inside[0] + 0.5 * DX / RATIO, inside[1], inside[2]};
+    assert_int_equal(nest_read_point(s, 0, &d, mid, &wp), WRF_POINT_OK);
+    double truth = field(mid[0], mid[1], mid[2]);
+    double nest_err = fabs(wp.q[SPECIES_CLOUD] - truth);
+    struct wrf_point pp;
+    struct wrf_desc od;
+    wrf_desc_defaults(&od);
+    od.levels = NZ;
+    assert_int_equal(wrf_read_point(nest_outer(s), 0, &od, mid, &pp), WRF_POINT_OK);
+    assert_true(nest_err < 0.5 * fabs(pp.q[SPECIES_CLOUD] - truth));
+    int c[6] = {0, 9, -1, -1, -1, -1};
+    memcpy(d.crop, c, sizeof(c));
+    assert_int_equal(nest_read_point(s, 0, &d, inside, &wp), WRF_POINT_OUTSIDE);
+    nest_close(s);
+}
+
 int main(void)
 {
     log_set_level(LOG_WARN);
@@ -572,8 +610,8 @@ int main(void)
         cmocka_unit_test(test_compose_layout), cmocka_unit_test(test_pair_placed_and_composed),
         cmocka_unit_test(test_latlon_agrees),  cmocka_unit_test(test_attributes_against_latlon),
         cmocka_unit_test(test_times_matched),  cmocka_unit_test(test_single_domain),
-        cmocka_unit_test(test_crop),           cmocka_unit_test(test_three_levels),
-        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_crop),           cmocka_unit_test(test_point),
+        cmocka_unit_test(test_three_levels),   cmocka_unit_test(test_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
