@@ -15,6 +15,9 @@
 #include "data/nclock.h"
 #include "data/ncopen.h"
 
+#define NEST_SIDE_MAX (1 << 20) /* composite columns a side */
+#define NEST_SCALE_MAX 1000     /* the outermost's columns per composite column */
+
 /* What a file says of its domain (the first file of each domain is asked). */
 struct domain_attrs {
     int grid_id;
@@ -185,6 +188,12 @@ static bool place_latlon(struct nest_set *s, int i, double fine_dx, double fine_
         return false;
     }
     double cx = c[0] / fine_dx, cy = c[1] / fine_dy;
+    if (!(fabs(cx) < NEST_SIDE_MAX && fabs(cy) < NEST_SIDE_MAX)) {
+        log_error("%s: its first column (%.4f N, %.4f E) lies far outside %s: expected a nest "
+                  "inside the outermost domain",
+                  s->dom[i].path, m->xlat[0], m->xlong[0], s->dom[0].path);
+        return false;
+    }
     s->offset[i][0] = (int)lround(cx);
     s->offset[i][1] = (int)lround(cy);
     s->dom[i].by_latlon = true;
@@ -245,6 +254,15 @@ static bool place(struct nest_set *s, const struct domain_attrs *attrs)
             return false;
         }
     }
+    /* What an int indexes, with room: a composite side of at most 2^20 columns. */
+    if (s->scale[0] > NEST_SCALE_MAX || (double)outer->nx * s->scale[0] > NEST_SIDE_MAX ||
+        (double)outer->ny * s->scale[0] > NEST_SIDE_MAX) {
+        log_error("%s: %d x %d columns of %g m at the finest domain's spacing of %g m (%s) "
+                  "are more than anvil composes (%d a side, ratios up to %d)",
+                  s->dom[0].path, outer->nx, outer->ny, outer->dx, finest->dx,
+                  s->dom[s->count - 1].path, NEST_SIDE_MAX, NEST_SCALE_MAX);
+        return false;
+    }
     /* The composite's spacing is the outermost's divided exactly. */
     double fine_dx = outer->dx / s->scale[0], fine_dy = outer->dy / s->scale[0];
     s->offset[0][0] = s->offset[0][1] = 0;
@@ -273,14 +291,20 @@ static bool place(struct nest_set *s, const struct domain_attrs *attrs)
         }
         if (attributes) {
             double pdx = wrf_get_meta(s->dom[p].wrf)->dx, dx = wrf_get_meta(d->wrf)->dx;
-            if (!near(pdx, a->ratio * dx) || s->scale[p] != a->ratio * s->scale[i]) {
+            if (a->ratio > NEST_SCALE_MAX || !near(pdx, a->ratio * dx) ||
+                s->scale[p] != a->ratio * s->scale[i]) {
                 log_error("%s: PARENT_GRID_RATIO %d, but DX %g m against its parent's %g m "
                           "(%s) is a ratio of %g: inconsistent",
                           d->path, a->ratio, dx, pdx, s->dom[p].path, pdx / dx);
                 return false;
             }
-            for (int ax = 0; ax < 2; ax++)
-                s->offset[i][ax] = s->offset[p][ax] + (a->start[ax] - 1) * s->scale[p];
+            const struct wrf_meta *pm = wrf_get_meta(s->dom[p].wrf);
+            int pcells[2] = {pm->nx, pm->ny};
+            for (int ax = 0; ax < 2; ax++) /* a start beyond the parent fails below */
+                s->offset[i][ax] =
+                    s->offset[p][ax] +
+                    ((a->start[ax] <= pcells[ax] ? a->start[ax] : pcells[ax] + 1) - 1) *
+                        s->scale[p];
             d->parent_id = a->parent_id;
             d->ratio = a->ratio;
             d->start[0] = a->start[0];
@@ -320,9 +344,7 @@ static bool place(struct nest_set *s, const struct domain_attrs *attrs)
             log_error("%s: domain %d (%d x %d columns of %g m) starts at column %d, %d of %s "
                       "(%d x %d columns of %g m) and does not fit inside it: expected a nest "
                       "inside its parent",
-                      d->path, d->grid_id, m->nx, m->ny, m->dx,
-                      (int)floor((double)(s->offset[i][0] - s->offset[p][0]) / s->scale[p]) + 1,
-                      (int)floor((double)(s->offset[i][1] - s->offset[p][1]) / s->scale[p]) + 1,
+                      d->path, d->grid_id, m->nx, m->ny, m->dx, d->start[0], d->start[1],
                       s->dom[p].path, pm->nx, pm->ny, pm->dx);
             return false;
         }

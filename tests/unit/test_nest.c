@@ -477,6 +477,9 @@ static void test_errors(void **state)
     expect_refused("out", &out, "does not fit inside it");
     out.latlon_only = true;
     expect_refused("outll", &out, "does not fit inside it");
+    /* A start far beyond the parent (no overflow on the way to the message). */
+    struct pair huge = {1 << 30, JPS, RATIO, NNEST, false, 2};
+    expect_refused("huge", &huge, "starts at column 1073741824, 5 of");
     /* PARENT_GRID_RATIO 2 on a grid 3 times finer. */
     struct pair ratio = {IPS, JPS, 2, NNEST, false, 2};
     expect_refused("ratio", &ratio, "PARENT_GRID_RATIO 2");
