@@ -361,6 +361,16 @@ struct nest_set *nest_open(const char *const *paths, int count, double memory_mb
         *single = false;
         return NULL;
     }
+    /* A series whose names all say one domain (WRF's wrfout_d01_...) is one without opening
+     * its files twice. */
+    int named = name_domain(list[0]);
+    for (int i = 1; i < n && named; i++)
+        if (name_domain(list[i]) != named)
+            named = 0;
+    if (named) {
+        free_paths(list, n);
+        return NULL;
+    }
     /* Each file's domain; a file that cannot be read is left to the WRF reader. */
     int *id = calloc((size_t)(n ? n : 1), sizeof(*id));
     struct domain_attrs attrs[NEST_DOMAIN_MAX];

@@ -74,8 +74,9 @@ struct nest_domain {
 struct nest_set;
 
 /* Groups PATHS (files or glob patterns) by domain and opens each domain's series
- * (wrf_open(MEMORY_MB)).  When all the files are one domain it returns NULL with *SINGLE true,
- * having opened and logged nothing (open them as one series).  Else NULL with *SINGLE false
+ * (wrf_open(MEMORY_MB)).  When all the files are one domain (their names all carry one `_dNN_`,
+ * or else their GRID_IDs agree) it returns NULL with *SINGLE true, having logged nothing and
+ * kept nothing open (open them as one series).  Else NULL with *SINGLE false
  * after one log_error naming the file (a nest outside its parent, a ratio the spacings
  * contradict, a domain that cannot be placed, more than NEST_DOMAIN_MAX domains).  The paths
  * are copied. */
