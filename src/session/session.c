@@ -69,6 +69,9 @@ struct session {
      * map built, so that the step change is a swap of textures on the GPU. */
     bool staged;
     const struct ext_volume *stage_src; /* the next volume waiting for the pixel buffer */
+    struct ext_volume probe_next;       /* with the probe: the staged step's extinction on the
+                                           CPU, swapped with probe_volume at its step change */
+    uint64_t probe_next_id;             /* its step (player_step_id), 0: none */
 
     /* What the last session_apply made the GPU hold. */
     int shown;                /* the step on screen */
@@ -204,6 +207,22 @@ static bool keep_probe_volume(struct session *s, const struct ext_volume *v)
     s->probe_volume.grid = v->grid;
     memcpy(s->probe_volume.beta, v->beta, 2 * n * sizeof(float));
     s->probe_volume_id++;
+    return true;
+}
+
+/* Staged playback: V's extinction kept for the probe until V's step is shown. */
+static bool keep_probe_next(struct session *s, const struct ext_volume *v)
+{
+    size_t n = grid3_count(&v->grid);
+    s->probe_next_id = 0;
+    if (!s->probe_next.beta || grid3_count(&s->probe_next.grid) != n) {
+        ext_volume_finish(&s->probe_next);
+        if (!ext_volume_init(&s->probe_next, &v->grid))
+            return false;
+    }
+    s->probe_next.grid = v->grid;
+    memcpy(s->probe_next.beta, v->beta, 2 * n * sizeof(float));
+    s->probe_next_id = player_step_id(s->player, true);
     return true;
 }
 
@@ -412,7 +431,7 @@ struct session *session_create(const struct config *cfg, const struct session_de
                   cfg->scene.kind == SCENE_DATA ? cfg->data.step : 0, cfg->playback.speed,
                   cfg->playback.loop);
     s->shown = s->playback.step;
-    s->staged = d->interactive && d->playback && s->playback.count > 1;
+    s->staged = d->interactive && d->playback && !d->unstaged && s->playback.count > 1;
     s->view_size[0] = cfg->render.width;
     s->view_size[1] = cfg->render.height;
     enum overlay_when when = cfg->overlay.when;
@@ -448,6 +467,7 @@ void session_destroy(struct session *s)
     probe_view_destroy(s->probe_view, s->renderer);
     probe_destroy(s->probe);
     ext_volume_finish(&s->probe_volume);
+    ext_volume_finish(&s->probe_next);
     ext_volume_finish(&s->first_histogram);
     menu_destroy(s->menu);
     for (int i = 0; i < s->n_sources; i++)
@@ -1514,8 +1534,15 @@ static bool swap_staged(struct session *s, int want, bool *swapped)
         return false;
     s->shown = want;
     s->stage_src = NULL;
-    if (s->probe && !keep_probe_volume(s, v))
+    if (s->probe && s->probe_next_id == player_step_id(s->player, false)) {
+        struct ext_volume t = s->probe_volume; /* copied between frames: no copy here */
+        s->probe_volume = s->probe_next;
+        s->probe_next = t;
+        s->probe_next_id = 0;
+        s->probe_volume_id++;
+    } else if (s->probe && !keep_probe_volume(s, v)) {
         return false;
+    }
     show_histogram(s, v);
     s->light.generation++;
     s->stats.volume_swaps++;
@@ -1667,6 +1694,10 @@ bool session_prepare(struct session *s, bool *more)
         if (s->stage_src) {
             bool started = false;
             ok = renderer_stage_next(s->renderer, s->stage_src, &started);
+            if (ok && started && s->probe) {
+                /* The probe's copy of it, now rather than in the frame of its step change. */
+                ok = keep_probe_next(s, s->stage_src);
+            }
             if (ok && started)
                 s->stage_src = NULL; /* the renderer has it until the copy is done */
             *more = ok;

@@ -68,6 +68,8 @@ struct session_desc {
                                   decided as that run decided them (the sun could move) */
     bool count_rays;           /* count what the views' rays do (renderer_set_counting; the
                                   counts go to the stats at session_collect_timings(s, true)) */
+    bool unstaged;             /* a run's step changes upload and build in their own frame,
+                                  without session_prepare (the playback bench's yardstick) */
     bool probe;                /* the probe can be used (run, a script, --menu; every rank of
                                   a cluster): a second reader of the data and the extinction
                                   of the step on screen kept on the CPU */

@@ -45,6 +45,7 @@ static struct session *make(const struct config *cfg, const struct display_confi
                                            .views_move = true,
                                            .interactive = interactive,
                                            .playback = true,
+                                           .probe = true, /* as anvil run has it */
                                        },
                                        &rc);
     assert_non_null(s);
@@ -189,6 +190,69 @@ static void test_fields(void **state)
     assert_int_equal(moved, 0);
 }
 
+/* The renderer's stage alone: a volume copied on the stage's thread, uploaded in slabs of a
+ * budget (several calls), swapped in: the texture holds the volume exactly (in half floats,
+ * clamped to their largest value), and the call that finishes the upload is the first to say
+ * ready. */
+static void stage_in_slabs(bool half)
+{
+    struct renderer *r = renderer_create();
+    assert_non_null(r);
+    renderer_set_half(r, half);
+    struct grid3 g = {.n = {12, 10, 9}, .spacing = {1.0, 1.0, 1.0}};
+    struct ext_volume first = {0}, vol = {0};
+    assert_true(ext_volume_init(&first, &g) && ext_volume_init(&vol, &g));
+    size_t n = grid3_count(&g);
+    for (size_t i = 0; i < 2 * n; i++)
+        vol.beta[i] = 1e-4f * (float)(i % 977) + (i == 5 ? 1e6f : 0.0f);
+    vol.tint = malloc(4 * n);
+    assert_non_null(vol.tint);
+    memset(vol.tint, 200, 4 * n);
+    assert_true(renderer_set_volume(r, &first));
+    bool started = false, ready = false;
+    assert_true(renderer_stage_next(r, &vol, &started));
+    assert_true(started);
+    assert_false(renderer_has_next(r));
+    const size_t layer = (size_t)12 * 10 * 8; /* one z layer of RG32F */
+    int calls = 0;
+    for (int k = 0; k < 10000 && !ready; k++) {
+        assert_true(renderer_stage_step(r, 2 * layer, &ready));
+        if (!ready && renderer_stage_busy(r))
+            calls++;
+        usleep(200);
+    }
+    assert_true(ready);
+    assert_true(calls >= 9 / 2); /* the extinction alone takes five calls of two layers */
+    assert_true(renderer_swap_next(r));
+    assert_false(renderer_swap_next(r)); /* nothing staged any more */
+    float *back = malloc(2 * n * sizeof(float));
+    assert_non_null(back);
+    gpu_texture_read(renderer_volume_texture(r), back, 2 * n * sizeof(float));
+    for (size_t i = 0; i < 2 * n; i++) {
+        float want = vol.beta[i] > RENDER_HALF_MAX && half ? RENDER_HALF_MAX : vol.beta[i];
+        if (half)
+            assert_float_equal(back[i], want, 1e-3f * want + 1e-7f);
+        else
+            assert_true(back[i] == want);
+    }
+    free(back);
+    ext_volume_finish(&first);
+    ext_volume_finish(&vol);
+    renderer_destroy(r);
+}
+
+static void test_stage_floats(void **state)
+{
+    (void)state;
+    stage_in_slabs(false);
+}
+
+static void test_stage_half(void **state)
+{
+    (void)state;
+    stage_in_slabs(true);
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -233,6 +297,8 @@ int main(void)
         return TEST_SKIP;
     }
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_stage_floats),
+        cmocka_unit_test(test_stage_half),
         cmocka_unit_test(test_plain),
         cmocka_unit_test(test_temporal),
         cmocka_unit_test(test_fields),
