@@ -106,6 +106,7 @@ static bool play(const struct bench_playback_desc *d, const struct config *cfg, 
     while (shown < steps - 1 && out->frames < MAX_FRAMES) {
         double t0 = time_now_ms();
         double bytes = (double)rs->upload_bytes;
+        bool copying = renderer_stage_copying(session_renderer(s));
         unsigned builds = session_stats(s)->light_builds;
         if (!frame(s, disp, (t0 - last) * 1e-3, (t0 - play_start) * 1e-3))
             goto done;
@@ -130,6 +131,10 @@ static bool play(const struct bench_playback_desc *d, const struct config *cfg, 
         } else {
             normal[normals++] = ms;
         }
+        if (copying)
+            out->copy_max_ms = fmax(out->copy_max_ms, ms);
+        else if (advanced == 0)
+            out->quiet_max_ms = fmax(out->quiet_max_ms, ms);
         out->max_ms = fmax(out->max_ms, ms);
         int step;
         double acc;
@@ -168,7 +173,7 @@ bool bench_playback(const struct bench_playback_desc *d, struct bench_playback_r
     memset(out, 0, sizeof(*out));
     const int big[3] = {500, 500, 100}, small[3] = {64, 64, 20};
     memcpy(out->n, d->quick ? small : big, sizeof(out->n));
-    out->steps = 4;
+    out->steps = d->quick ? 4 : 6;
     out->width = d->quick ? 160 : 320;
     out->height = d->quick ? 120 : 240;
     out->speed = 0.5;
@@ -245,6 +250,10 @@ void bench_write_playback_table(FILE *f, const struct bench_playback_desc *d,
         u->median_ms > 0.0 ? u->max_ms / u->median_ms : 0.0);
     ROW("the longest step-change frame ÷ a normal one", "%.2f",
         u->median_ms > 0.0 ? u->change_max_ms / u->median_ms : 0.0);
+    ROW("the longest frame beside the stage's copy thread ÷ a normal one", "%.2f",
+        u->median_ms > 0.0 ? u->copy_max_ms / u->median_ms : 0.0);
+    ROW("the longest of the other frames ÷ a normal one", "%.2f",
+        u->median_ms > 0.0 ? u->quiet_max_ms / u->median_ms : 0.0);
     ROW("bytes uploaded in step-change frames", "%.0f", u->change_bytes);
     ROW("light maps built in step-change frames", "%u", u->change_builds);
     ROW("the longest work between two frames, ms", "%.0f", u->prepare_max_ms);

@@ -35,6 +35,9 @@ struct bench_playback_run {
     double median_ms;       /* a normal frame: the median of the frames that kept their step */
     double max_ms;          /* the longest frame */
     double change_max_ms;   /* the longest frame that changed the step */
+    double copy_max_ms;     /* the longest frame the stage's copy thread may have overlapped */
+    double quiet_max_ms;    /* the longest frame that neither changed the step nor overlapped
+                               a copy */
     double interval_max_ms; /* the longest frame plus the work after it, before the next */
     double prepare_max_ms;  /* the longest work between two frames */
     unsigned stalls;        /* frames whose step was due but not ready (the cursor waited) */

@@ -626,6 +626,11 @@ bool renderer_stage_busy(const struct renderer *r)
     return r->stage_state != STAGE_IDLE;
 }
 
+bool renderer_stage_copying(const struct renderer *r)
+{
+    return r->stage_state == STAGE_COPYING;
+}
+
 void renderer_stage_cancel(struct renderer *r)
 {
     if (r->stage_state == STAGE_IDLE)

@@ -122,8 +122,10 @@ bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, bool 
  * after the last builds its cells.  *READY: the next volume is whole on the GPU (now or
  * before).  Never waits for the copy.  False (logged) on a GL failure. */
 bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready);
-/* Whether a staged volume is being copied or uploaded. */
+/* Whether a staged volume is being copied or uploaded; whether it is still being copied (the
+ * stage's thread is on it: renderer_stage_step cannot move it on yet). */
 bool renderer_stage_busy(const struct renderer *r);
+bool renderer_stage_copying(const struct renderer *r);
 /* Waits for a copy in flight and drops the staged volume (its source may then go). */
 void renderer_stage_cancel(struct renderer *r);
 /* Makes the staged next volume the volume (and the volume the spare one): its extinction,

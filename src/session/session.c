@@ -72,6 +72,7 @@ struct session {
     struct ext_volume probe_next;       /* with the probe: the staged step's extinction on the
                                            CPU, swapped with probe_volume at its step change */
     uint64_t probe_next_id;             /* its step (player_step_id), 0: none */
+    double frame_start_ms, frame_ms;    /* the last frame's session_apply .. session_draw */
 
     /* What the last session_apply made the GPU hold. */
     int shown;                /* the step on screen */
@@ -1585,6 +1586,7 @@ static bool temporal_frame(struct session *s, const struct frame_state *f, bool 
 
 bool session_apply(struct session *s, const struct frame_state *f, bool *changed)
 {
+    s->frame_start_ms = time_now_ms();
     bool uploaded = false;
     int want = f->time_step < s->playback.count ? f->time_step : s->playback.count - 1;
     if (want != s->shown && !swap_staged(s, want, &uploaded))
@@ -1599,6 +1601,8 @@ bool session_apply(struct session *s, const struct frame_state *f, bool *changed
     } else if (!s->desc.interactive) {
         v = player_wait(s->player, want, &s->shown); /* a new look: made again, waited for */
     } else {
+        if (!player_settled(s->player, want))
+            drop_staged(s); /* the step shown is made again: the series may move on */
         v = player_poll(s->player, want, &s->shown);
     }
     if (v) {
@@ -1660,51 +1664,77 @@ bool session_light(struct session *s)
  * Isabel's size (191 MiB of extinction) goes up over a few calls. */
 #define STAGE_SLAB_BYTES ((size_t)64 << 20)
 
-bool session_prepare(struct session *s, bool *more)
+/* One piece of readying the step after the one shown.  *PROGRESSED: the next piece can follow
+ * at once (not waiting for the stage's thread); *MORE: work remains. */
+static bool prepare_piece(struct session *s, bool *progressed, bool *more)
 {
-    *more = false;
-    if (!s->staged)
-        return true;
-    double t0 = time_now_ms();
-    bool ok = true;
+    *progressed = *more = false;
     int next = step_after(s, s->shown);
-    /* While another step than the next is wanted (a jump, a rank holding), nothing is staged:
-     * that step's upload would drop it. */
-    bool settled = !s->have_applied || s->applied.time_step == s->shown;
+    /* While another step than the next is wanted (a jump, a rank holding), or the step shown is
+     * being made again (a new look), nothing is staged: that step's upload would drop it. */
+    bool settled = (!s->have_applied || s->applied.time_step == s->shown) &&
+                   player_settled(s->player, s->shown);
     if (renderer_stage_busy(s->renderer)) {
-        /* One piece a call: the copy's end, then the upload in slabs, then the cells. */
+        /* The copy's end, then the upload in slabs, then the cells. */
         bool ready = false;
-        ok = renderer_stage_step(s->renderer, STAGE_SLAB_BYTES, &ready);
+        bool ok = renderer_stage_step(s->renderer, STAGE_SLAB_BYTES, &ready);
+        *progressed = ok && !renderer_stage_copying(s->renderer);
         *more = ok;
-    } else if (next >= 0 && settled && player_next_step(s->player) == next &&
-               renderer_next_cells(s->renderer)) {
+        return ok;
+    }
+    if (next < 0 || !settled)
+        return true;
+    if (player_next_step(s->player) == next && renderer_next_cells(s->renderer)) {
         /* Staged: its light map, once, with the sun of the last frame (the next frame's
          * session_apply sets the ids again). */
         s->light.temporal = true;
         s->light.step_id = player_step_id(s->player, false);
         s->light.next_id = player_step_id(s->player, true);
+        if (lightmaps_next_built(&s->light, s->light.next_id))
+            return true;
         struct lightmaps_params p;
         light_params(s, &p);
-        ok = lightmaps_prepare_next(&s->light, &p, s->renderer, &s->stats);
-    } else if (next >= 0 && settled) {
-        if (!s->stage_src || player_next_step(s->player) != next) {
-            int held = -1;
-            s->stage_src = player_poll_next(s->player, next, false, &held);
-        }
-        if (s->stage_src) {
-            bool started = false;
-            ok = renderer_stage_next(s->renderer, s->stage_src, &started);
-            if (ok && started && s->probe) {
-                /* The probe's copy of it, now rather than in the frame of its step change. */
-                ok = keep_probe_next(s, s->stage_src);
-            }
-            if (ok && started)
-                s->stage_src = NULL; /* the renderer has it until the copy is done */
-            *more = ok;
-        }
+        *progressed = true;
+        return lightmaps_prepare_next(&s->light, &p, s->renderer, &s->stats);
     }
-    s->stats.prepare_ms += time_now_ms() - t0;
+    if (!s->stage_src || player_next_step(s->player) != next) {
+        int held = -1;
+        s->stage_src = player_poll_next(s->player, next, false, &held);
+    }
+    if (!s->stage_src)
+        return true; /* not loaded yet: the series' thread is on it */
+    bool started = false;
+    bool ok = renderer_stage_next(s->renderer, s->stage_src, &started);
+    if (ok && started && s->probe) /* the probe's copy, now rather than at the step change */
+        ok = keep_probe_next(s, s->stage_src);
+    if (ok && started)
+        s->stage_src = NULL; /* the renderer has it until the copy is done */
+    *more = ok;
     return ok;
+}
+
+bool session_prepare(struct session *s, bool *more)
+{
+    *more = false;
+    if (!s->staged)
+        return true;
+    /* Pieces while they need not wait, for about as long as a frame takes (a light build is
+     * one piece, however long). */
+    double t0 = time_now_ms(), budget = s->frame_ms > 10.0 ? s->frame_ms : 10.0;
+    bool ok = true, progressed = true;
+    while (ok && progressed && time_now_ms() - t0 < budget)
+        ok = prepare_piece(s, &progressed, more);
+    s->stats.prepare_ms += time_now_ms() - t0;
+    if (!ok) {
+        /* Most likely GPU memory for the second set of volume textures: play on without. */
+        log_warn("playback: the next time step could not be readied on the GPU (see above); "
+                 "from now on each step change uploads its step and builds its light map in "
+                 "its frame");
+        drop_staged(s);
+        s->staged = false;
+        *more = false;
+    }
+    return true;
 }
 
 /* "2005-08-28 06:00 UTC" from WRF's "2005-08-28_06:00:00". */
@@ -1915,7 +1945,9 @@ bool session_draw(struct session *s, struct display *d, const struct frame_state
             session_stats_add_view(&s->stats);
     }
     s->stats.frames++;
-    return display_present(d, s->renderer, (float)s->cfg.render.exposure);
+    bool ok = display_present(d, s->renderer, (float)s->cfg.render.exposure);
+    s->frame_ms = time_now_ms() - s->frame_start_ms;
+    return ok;
 }
 
 /* ---- queries -------------------------------------------------------------------------- */

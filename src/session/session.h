@@ -101,11 +101,15 @@ bool session_apply(struct session *s, const struct frame_state *f, bool *changed
  * moves the view and build times that arrived into the stats (never waiting). */
 bool session_light(struct session *s);
 
-/* Between frames (after session_draw): readies the step after the one shown, a piece a call,
- * so that its step change is a swap: its volume copied into a pixel buffer off the render
- * thread, uploaded from there in slabs, its light map built.  Playback moves onto that step
- * only once it is ready (a stall, not a slow frame).  *MORE: call again soon (work is in
- * flight).  No-op but for runs of a series (session_desc.interactive and playback). */
+/* Between frames (after session_draw): readies the step after the one shown, so that its step
+ * change is a swap: its volume copied into a pixel buffer off the render thread, uploaded from
+ * there in slabs, its light map built; as many of those pieces as need not wait for the copy,
+ * for about as long as the last frame took (the light build is one piece, however long).
+ * Playback moves onto that step only once it is ready (a stall, not a slow frame).  *MORE:
+ * call again soon (work is in flight).  No-op but for runs of a series (session_desc
+ * interactive and playback).  A step that cannot be readied (GPU memory, most likely) is
+ * warned about once and turns staging off: step changes then upload in their frame.  Returns
+ * true (false is kept for failures the frame loop must end on; there are none yet). */
 bool session_prepare(struct session *s, bool *more);
 
 /* Places D's views for F, the menu's panel and ray, draws every view and presents them. */
