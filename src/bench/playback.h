@@ -32,6 +32,7 @@ struct bench_playback_run {
     int skipped;            /* steps never shown: the cursor moved two or more at once */
     double steps_per_s;     /* between the first and the last step change */
     double gap_max_s;       /* the longest time between two step changes */
+    /* Frame times are CPU ms of the whole process (its threads, llvmpipe's too). */
     double median_ms;       /* a normal frame: the median of the frames that kept their step */
     double max_ms;          /* the longest frame */
     double change_max_ms;   /* the longest frame that changed the step */

@@ -602,13 +602,14 @@ static bool ensure_volume_texture(struct gpu_texture *tex, bool want, int dims, 
     return gpu_texture_init(tex, dims, size, f, NULL);
 }
 
-bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, bool *started)
+bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, float *also,
+                         bool *started)
 {
     *started = false;
     if (r->stage_state != STAGE_IDLE)
         return true;
     bool failed = false;
-    if (!render_stage_begin(&r->stage, vol, r->half, &failed))
+    if (!render_stage_begin(&r->stage, vol, also, r->half, &failed))
         return !failed;
     r->have_next = false; /* beta_next is about to hold another volume */
     r->next_whole = false;

@@ -112,11 +112,13 @@ bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol);
 /* The next volume through a pixel buffer, so that a later step change is a swap of textures
  * already on the GPU (nothing uploaded, nothing built in that frame).  renderer_stage_next
  * starts copying VOL's arrays (extinction, tints, layers, slices, surfaces) into a
- * persistently mapped buffer on a thread of the renderer's (no GL there); VOL is borrowed and
- * must stay valid and unchanged until renderer_stage_step said *READY or renderer_stage_cancel
+ * persistently mapped buffer on a thread of the renderer's (no GL there), and its extinction
+ * into ALSO (2 floats a voxel, may be NULL: a CPU copy the caller keeps); VOL and ALSO are
+ * borrowed and must stay valid until renderer_stage_step said *READY or renderer_stage_cancel
  * returned.  *STARTED false: the buffer is busy (try again later).  The next volume held
  * before is gone from now on (renderer_has_next false). */
-bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, bool *started);
+bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, float *also,
+                         bool *started);
 /* Moves the staged volume on: once the copy is complete, uploads at most BUDGET bytes of it
  * (whole z layers, at least one; 0: all) from the buffer into the next volume's textures, and
  * after the last builds its cells.  *READY: the next volume is whole on the GPU (now or

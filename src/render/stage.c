@@ -51,6 +51,8 @@ static void copy(const struct render_stage *st, const struct ext_volume *vol)
     } else {
         memcpy(beta, vol->beta, voxels * 2 * sizeof(float));
     }
+    if (st->also)
+        memcpy(st->also, vol->beta, voxels * 2 * sizeof(float));
     if (st->lay.tint != RENDER_STAGE_NONE)
         memcpy(base + st->lay.tint, vol->tint, voxels * 4);
     if (st->lay.layers != RENDER_STAGE_NONE)
@@ -114,8 +116,8 @@ bool render_stage_busy(struct render_stage *st)
     return busy;
 }
 
-bool render_stage_begin(struct render_stage *st, const struct ext_volume *vol, bool half,
-                        bool *failed)
+bool render_stage_begin(struct render_stage *st, const struct ext_volume *vol, float *also,
+                        bool half, bool *failed)
 {
     *failed = false;
     if (render_stage_busy(st))
@@ -159,6 +161,7 @@ bool render_stage_begin(struct render_stage *st, const struct ext_volume *vol, b
     pthread_mutex_lock(&st->lock);
     st->lay = lay;
     st->half = half;
+    st->also = also;
     st->job = vol;
     st->copied = false;
     pthread_cond_broadcast(&st->cond);

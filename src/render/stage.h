@@ -39,6 +39,7 @@ struct render_stage {
     bool copied;                  /* the last job's copy is complete */
     bool quit;
     bool half;        /* clamp the extinction to RENDER_HALF_MAX (half-float textures) */
+    float *also;      /* the extinction copied here too (2 floats a voxel), or NULL */
     uint64_t fence;   /* after the uploads that read the buffer (0: none in flight) */
 };
 
@@ -50,12 +51,13 @@ void render_stage_init(struct render_stage *st);
 /* Waits for a copy in flight, ends the thread, frees the buffer.  Needs the GL context. */
 void render_stage_finish(struct render_stage *st);
 
-/* Starts copying VOL into the buffer on the stage's thread; VOL must stay valid and unchanged
- * until render_stage_copied returned true (or render_stage_wait returned).  False when the
+/* Starts copying VOL into the buffer on the stage's thread (and its extinction, unclamped, into
+ * ALSO: 2 floats a voxel, or NULL); VOL and ALSO must stay valid and VOL unchanged until
+ * render_stage_copied returned true (or render_stage_wait returned).  False when the
  * buffer is still read by earlier uploads or a copy is in flight (try again next frame), or
  * on failure (logged, *FAILED set).  Needs the GL context (the buffer may be remade). */
-bool render_stage_begin(struct render_stage *st, const struct ext_volume *vol, bool half,
-                        bool *failed);
+bool render_stage_begin(struct render_stage *st, const struct ext_volume *vol, float *also,
+                        bool half, bool *failed);
 /* Whether the copy started by render_stage_begin is complete (never waits). */
 bool render_stage_copied(struct render_stage *st);
 /* Waits for a copy in flight (before the volume it reads may go). */

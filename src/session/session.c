@@ -211,8 +211,9 @@ static bool keep_probe_volume(struct session *s, const struct ext_volume *v)
     return true;
 }
 
-/* Staged playback: V's extinction kept for the probe until V's step is shown. */
-static bool keep_probe_next(struct session *s, const struct ext_volume *v)
+/* Staged playback: room for V's extinction for the probe until V's step is shown (the stage's
+ * thread copies it there). */
+static bool room_probe_next(struct session *s, const struct ext_volume *v)
 {
     size_t n = grid3_count(&v->grid);
     s->probe_next_id = 0;
@@ -222,8 +223,6 @@ static bool keep_probe_next(struct session *s, const struct ext_volume *v)
             return false;
     }
     s->probe_next.grid = v->grid;
-    memcpy(s->probe_next.beta, v->beta, 2 * n * sizeof(float));
-    s->probe_next_id = player_step_id(s->player, true);
     return true;
 }
 
@@ -246,6 +245,7 @@ static void drop_staged(struct session *s)
         return;
     renderer_stage_cancel(s->renderer);
     s->stage_src = NULL;
+    s->probe_next_id = 0;
 }
 
 /* The facts, gathered once: the first volume, the display, what can change while running. */
@@ -1695,6 +1695,9 @@ static bool prepare_piece(struct session *s, bool *progressed, bool *more)
         struct lightmaps_params p;
         light_params(s, &p);
         *progressed = true;
+        /* The blend reads the pair's cells: made now, not in the first blended frame. */
+        if (s->effects.on[EFFECT_TEMPORAL])
+            renderer_pair_cells(s->renderer);
         return lightmaps_prepare_next(&s->light, &p, s->renderer, &s->stats);
     }
     if (!s->stage_src || player_next_step(s->player) != next) {
@@ -1703,12 +1706,17 @@ static bool prepare_piece(struct session *s, bool *progressed, bool *more)
     }
     if (!s->stage_src)
         return true; /* not loaded yet: the series' thread is on it */
+    /* With the probe, its copy of the extinction too, on the stage's thread rather than in
+     * the frame of the step change. */
+    if (s->probe && !room_probe_next(s, s->stage_src))
+        return false;
     bool started = false;
-    bool ok = renderer_stage_next(s->renderer, s->stage_src, &started);
-    if (ok && started && s->probe) /* the probe's copy, now rather than at the step change */
-        ok = keep_probe_next(s, s->stage_src);
-    if (ok && started)
+    bool ok = renderer_stage_next(s->renderer, s->stage_src,
+                                  s->probe ? s->probe_next.beta : NULL, &started);
+    if (ok && started) {
+        s->probe_next_id = s->probe ? player_step_id(s->player, true) : 0;
         s->stage_src = NULL; /* the renderer has it until the copy is done */
+    }
     *more = ok;
     return ok;
 }

@@ -210,7 +210,9 @@ static void stage_in_slabs(bool half)
     memset(vol.tint, 200, 4 * n);
     assert_true(renderer_set_volume(r, &first));
     bool started = false, ready = false;
-    assert_true(renderer_stage_next(r, &vol, &started));
+    float *also = malloc(2 * n * sizeof(float));
+    assert_non_null(also);
+    assert_true(renderer_stage_next(r, &vol, also, &started));
     assert_true(started);
     assert_false(renderer_has_next(r));
     const size_t layer = (size_t)12 * 10 * 8; /* one z layer of RG32F */
@@ -235,6 +237,8 @@ static void stage_in_slabs(bool half)
         else
             assert_true(back[i] == want);
     }
+    assert_memory_equal(also, vol.beta, 2 * n * sizeof(float)); /* the CPU copy, unclamped */
+    free(also);
     free(back);
     ext_volume_finish(&first);
     ext_volume_finish(&vol);
