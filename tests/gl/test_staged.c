@@ -141,8 +141,10 @@ static int play(const char *path, const char *const *sets, int n_sets, int *move
             image_finish(&ia);
             image_finish(&ib);
         }
-        /* Between frames: as many pieces as are ready (the copy runs on its own thread). */
-        for (int k = 0; k < 50; k++) {
+        /* Between frames: until nothing is in flight (the copy runs on its own thread), so
+         * that the next frame finds the step readied however loaded the machine is: the
+         * blend then shows between step changes. */
+        for (int k = 0; k < 5000; k++) {
             bool more = false;
             assert_true(session_prepare(a, &more));
             if (!more)
