@@ -344,6 +344,11 @@ static bool consume(struct loop *l, struct shared_frame *sf, struct frame_state 
     if (l->root && l->frames_left > 0 && draw)
         l->frames_left--;
     l->idle = !draw;
+    /* Between frames: the next step readied, so that its step change is a swap. */
+    bool more = false;
+    ok = ok && session_prepare(l->s, &more);
+    if (more)
+        l->idle = false;
     /* A rank that failed ends the job's loop on every rank, naming itself. */
     t = time_now_ms();
     bool all_ok = !cluster_active() || cluster_all(ok);

@@ -63,8 +63,7 @@ static double median(double *v, int n)
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-/* The storm as a WRF series of STEPS steps on N voxels at PATH. */
-static bool write_series(const char *path, const int n[3], int steps)
+bool bench_write_storm_series(const char *path, const int n[3], int steps)
 {
     struct wrf_writer *w = NULL;
     for (int s = 0; s < steps; s++) {
@@ -91,7 +90,7 @@ static bool write_series(const char *path, const int n[3], int steps)
             wrf_writer_destroy(w);
             return false;
         }
-        log_info("bench: load: step %d of %d written", s + 1, steps);
+        log_info("bench: step %d of %d written", s + 1, steps);
     }
     return wrf_writer_finish(w);
 }
@@ -113,7 +112,7 @@ bool bench_load(const struct bench_load_desc *d, struct bench_load_result *out)
              (long)getpid());
     log_info("bench: load: writing a %d x %d x %d series of %d steps to %s", out->n[0],
              out->n[1], out->n[2], out->steps, path);
-    if (!write_series(path, out->n, out->steps)) {
+    if (!bench_write_storm_series(path, out->n, out->steps)) {
         remove(path);
         return false;
     }

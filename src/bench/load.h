@@ -36,6 +36,10 @@ struct bench_load_result {
     double volume_mb;                   /* the extinction volume a load returns, MiB */
 };
 
+/* The procedural storm as a WRF series of STEPS steps on N mass points at PATH, the storm
+ * moving on from step to step (200 x 200 x 16 km).  False (logged) on failure. */
+bool bench_write_storm_series(const char *path, const int n[3], int steps);
+
 /* Writes the file, measures, removes the file.  False (logged) on failure. */
 bool bench_load(const struct bench_load_desc *d, struct bench_load_result *out);
 

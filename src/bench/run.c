@@ -18,6 +18,7 @@
 #include "bench/movie.h"
 #include "bench/paraview.h"
 #include "bench/load.h"
+#include "bench/playback.h"
 #include "bench/scale.h"
 #include "bench/tables.h"
 #include "common/log.h"
@@ -328,6 +329,27 @@ static bool run_load(const struct bench_options *o)
     return ok;
 }
 
+/* ---- playback --------------------------------------------------------------------------- */
+
+static bool run_playback(const struct bench_options *o, const char *device,
+                         struct gpu_context *ctx)
+{
+    struct bench_playback_desc d = {.quick = o->quick, .context = ctx, .device = device};
+    struct bench_playback_result r;
+    if (!bench_playback(&d, &r))
+        return false;
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    bench_table_head(f, o->quick, "playback");
+    bench_write_playback_table(f, &d, &r);
+    fclose(f);
+    bool ok = write_text(o, "playback-table.md", buf, len);
+    echo(o, "%.*s", (int)len, buf);
+    free(buf);
+    return ok;
+}
+
 /* ---- the GPU benchmark ------------------------------------------------------------------ */
 
 static bool run_device(const struct bench_options *o)
@@ -353,7 +375,7 @@ enum bench_status bench_run(const struct bench_options *opts)
 {
     assert(opts && opts->out && opts->configs);
     assert(opts->views || opts->quality || opts->movie || opts->scale || opts->cluster ||
-           opts->device || opts->load);
+           opts->device || opts->load || opts->playback);
     assert(!(opts->cluster || opts->device) || opts->displays);
     assert(!opts->paraview || opts->paraview_script);
     struct bench_options o = *opts;
@@ -399,6 +421,8 @@ enum bench_status bench_run(const struct bench_options *opts)
     if (o.scale && !run_scale(&o, device))
         goto done;
     if (o.device && !run_device(&o))
+        goto done;
+    if (o.playback && !run_playback(&o, device, ctx))
         goto done;
     struct bench_movie_result movie;
     if (o.movie && !bench_movie(&(struct bench_movie_desc){.quick = o.quick,

@@ -34,6 +34,9 @@ struct bench_options {
     bool load;            /* --load-only: a 500 x 500 x 100 WRF step loaded against the plain
                              NetCDF read of its variables (bench/load.h, load-table.md); not
                              part of the default run */
+    bool playback;        /* --playback-only: a 500 x 500 x 100 WRF series played with and
+                             without staged step changes (bench/playback.h,
+                             playback-table.md); not part of the default run */
     bool device;          /* --gpu: the Isabel-sized storm on an HMD and a CAVE frame
                              (bench/device.h, gpu-table.md) */
     const char *displays; /* folder of cave4.cfg and cave6.cfg (the cluster and device

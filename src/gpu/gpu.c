@@ -196,6 +196,78 @@ void gpu_image_bind_rw(const struct gpu_texture *tex, unsigned unit)
 
 /* ---- buffers ------------------------------------------------------------------------- */
 
+/* ---- pixel-buffer uploads ------------------------------------------------------------- */
+
+bool gpu_upload_buffer_init(struct gpu_upload_buffer *buf, size_t bytes)
+{
+    memset(buf, 0, sizeof(*buf));
+    const GLbitfield flags = GL_MAP_WRITE_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
+    glCreateBuffers(1, &buf->id);
+    while (glGetError() != GL_NO_ERROR) {
+    }
+    glNamedBufferStorage(buf->id, (GLsizeiptr)(bytes ? bytes : 4), NULL, flags);
+    if (glGetError() == GL_NO_ERROR)
+        buf->map = glMapNamedBufferRange(buf->id, 0, (GLsizeiptr)(bytes ? bytes : 4), flags);
+    if (!buf->map) {
+        log_error("the GPU could not map a pixel buffer of %zu bytes", bytes);
+        glDeleteBuffers(1, &buf->id);
+        buf->id = 0;
+        return false;
+    }
+    buf->bytes = bytes;
+    atomic_fetch_add(&bytes_allocated, bytes);
+    return true;
+}
+
+void gpu_upload_buffer_finish(struct gpu_upload_buffer *buf)
+{
+    if (buf->id) {
+        glUnmapNamedBuffer(buf->id);
+        glDeleteBuffers(1, &buf->id);
+        atomic_fetch_sub(&bytes_allocated, buf->bytes);
+    }
+    memset(buf, 0, sizeof(*buf));
+}
+
+void gpu_texture_upload_from(struct gpu_texture *tex, const struct gpu_upload_buffer *buf,
+                             size_t offset, int z0, int count)
+{
+    struct format_info fi = format_info(tex->format);
+    assert(offset + texel_count(tex) / (size_t)tex->size[2] * (size_t)count * fi.texel_bytes <=
+           buf->bytes);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, buf->id);
+    const void *at = (const void *)(uintptr_t)offset; /* an offset into the bound buffer */
+    if (tex->dims == 2)
+        glTextureSubImage2D(tex->id, 0, 0, 0, tex->size[0], tex->size[1], fi.format, fi.type,
+                            at);
+    else
+        glTextureSubImage3D(tex->id, 0, 0, 0, z0, tex->size[0], tex->size[1], count, fi.format,
+                            fi.type, at);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+}
+
+uint64_t gpu_fence_insert(void)
+{
+    GLsync sync = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    glFlush(); /* so that the fence is reached without anyone waiting on it */
+    return (uint64_t)(uintptr_t)sync;
+}
+
+bool gpu_fence_passed(uint64_t fence)
+{
+    if (!fence)
+        return true;
+    GLenum r = glClientWaitSync((GLsync)(uintptr_t)fence, 0, 0);
+    return r == GL_ALREADY_SIGNALED || r == GL_CONDITION_SATISFIED || r == GL_WAIT_FAILED;
+}
+
+void gpu_fence_delete(uint64_t fence)
+{
+    if (fence)
+        glDeleteSync((GLsync)(uintptr_t)fence);
+}
+
 bool gpu_buffer_init(struct gpu_buffer *buf, size_t bytes, const void *data)
 {
     memset(buf, 0, sizeof(*buf));

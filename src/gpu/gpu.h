@@ -141,6 +141,34 @@ void gpu_buffer_read(const struct gpu_buffer *buf, size_t offset, size_t bytes, 
 void gpu_buffer_bind(const struct gpu_buffer *buf, unsigned binding);
 void gpu_buffer_finish(struct gpu_buffer *buf);
 
+/* ---- pixel-buffer uploads ------------------------------------------------------------- */
+
+/* A buffer mapped persistently into this process's memory: any thread may write MAP (no GL
+ * call needed for that), then the context's thread uploads from it into textures
+ * (gpu_texture_upload_from) without the driver copying client memory while a frame waits.
+ * MAP is valid until gpu_upload_buffer_finish; writes are seen by the GPU without a flush
+ * (coherent), but the caller must not rewrite a region before the fence of the uploads that
+ * read it has passed (gpu_fence_insert). */
+struct gpu_upload_buffer {
+    unsigned id;
+    size_t bytes;
+    void *map;
+};
+
+bool gpu_upload_buffer_init(struct gpu_upload_buffer *buf, size_t bytes);
+void gpu_upload_buffer_finish(struct gpu_upload_buffer *buf);
+/* Replaces the layers Z0 .. Z0 + COUNT - 1 of TEX (a 3D texture; for 2D, Z0 0 and COUNT 1)
+ * with the data at byte OFFSET of BUF, laid out as for gpu_texture_init.  Queued: returns
+ * without waiting for the copy. */
+void gpu_texture_upload_from(struct gpu_texture *tex, const struct gpu_upload_buffer *buf,
+                             size_t offset, int z0, int count);
+
+/* A fence after the GL work issued so far (0 when none could be made: then treat it as
+ * passed).  gpu_fence_passed never waits; every fence made is deleted with gpu_fence_delete. */
+uint64_t gpu_fence_insert(void);
+bool gpu_fence_passed(uint64_t fence);
+void gpu_fence_delete(uint64_t fence);
+
 /* Bytes currently held by textures and buffers made through this part. */
 size_t gpu_bytes_allocated(void);
 

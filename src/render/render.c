@@ -9,6 +9,7 @@
 
 #include "common/log.h"
 #include "common/progress.h"
+#include "render/stage.h"
 #include "shaders/bindings.h"
 
 #define PHASE_TABLE_SIZE 512
@@ -26,6 +27,13 @@ struct variant {
     char defines[384];
     struct gpu_program prog;
     uint64_t used; /* renderer.variant_clock when last asked for */
+};
+
+/* What a volume's textures hold besides the extinction. */
+struct held_fields {
+    bool tint;
+    bool layer[TRANSFER_LAYER_MAX], slice[TRANSFER_SLICE_MAX], surface[TRANSFER_SLICE_MAX];
+    enum transfer_field layer_field[TRANSFER_LAYER_MAX], slice_field[TRANSFER_SLICE_MAX];
 };
 
 struct renderer {
@@ -51,6 +59,17 @@ struct renderer {
     struct gpu_texture beta_next; /* effects.temporal: step k + 1 (TEMPORAL 1) */
     struct grid3 grid_next;
     bool have_next;
+    /* A staged next volume (renderer_stage_next) is a whole one, ready to be swapped in:
+     * its tints, fields, surfaces and cells beside beta_next, what they hold in NEXT_HELD. */
+    struct gpu_texture tint_next, layer_fields_next, slice_fields_next, slice_surfaces_next;
+    struct render_cells next_cells;
+    struct held_fields next_held;
+    bool next_whole;
+    struct render_stage stage;
+    enum { STAGE_IDLE, STAGE_COPYING, STAGE_UPLOADING } stage_state;
+    struct grid3 stage_grid;
+    struct held_fields stage_held;
+    size_t stage_done; /* bytes of the staged volume uploaded so far */
     struct gpu_texture phase;
     float mean_cosine[2]; /* g of the ice and the water phase (MULTIPLE) */
     struct gpu_program tonemap, tonemap_packed;
@@ -140,6 +159,12 @@ void renderer_destroy(struct renderer *r)
         return;
     gpu_texture_finish(&r->beta);
     gpu_texture_finish(&r->beta_next);
+    render_stage_finish(&r->stage); /* before the textures the uploads write go */
+    gpu_texture_finish(&r->tint_next);
+    gpu_texture_finish(&r->layer_fields_next);
+    gpu_texture_finish(&r->slice_fields_next);
+    gpu_texture_finish(&r->slice_surfaces_next);
+    render_cells_finish(&r->next_cells);
     gpu_texture_finish(&r->tint);
     gpu_texture_finish(&r->layer_fields);
     gpu_texture_finish(&r->slice_fields);
@@ -526,6 +551,8 @@ bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
 
 bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol)
 {
+    renderer_stage_cancel(r);
+    r->next_whole = false;
     if (!vol) {
         gpu_texture_finish(&r->beta_next);
         r->have_next = false;
@@ -541,6 +568,222 @@ bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol)
     r->stats.upload_bytes += (size_t)n[0] * n[1] * n[2] * (r->half ? 4 : 8);
     r->stats.uploads++;
     return true;
+}
+
+/* ---- the next volume through a pixel buffer: a step change that is a swap ------------------ */
+
+static void held_of(const struct ext_volume *vol, struct held_fields *h)
+{
+    h->tint = vol->tint != NULL;
+    for (int i = 0; i < TRANSFER_LAYER_MAX; i++) {
+        h->layer[i] = vol->layer[i] != NULL;
+        h->layer_field[i] = vol->layer_field[i];
+    }
+    for (int i = 0; i < TRANSFER_SLICE_MAX; i++) {
+        h->slice[i] = vol->slice[i] != NULL;
+        h->slice_field[i] = vol->slice_field[i];
+        h->surface[i] = vol->slice_surface[i] != NULL;
+    }
+}
+
+/* TEX made (or kept) as a DIMS-D texture of SIZE and format F; WANT false: none. */
+static bool ensure_volume_texture(struct gpu_texture *tex, bool want, int dims, const int n[3],
+                                  enum gpu_format f)
+{
+    const int size[3] = {n[0], n[1], dims == 3 ? n[2] : 1};
+    if (!want) {
+        gpu_texture_finish(tex);
+        return true;
+    }
+    if (tex->id && tex->dims == dims && memcmp(tex->size, size, sizeof(size)) == 0 &&
+        tex->format == f)
+        return true;
+    gpu_texture_finish(tex);
+    return gpu_texture_init(tex, dims, size, f, NULL);
+}
+
+bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, float *also,
+                         bool *started)
+{
+    *started = false;
+    if (r->stage_state != STAGE_IDLE)
+        return true;
+    bool failed = false;
+    if (!render_stage_begin(&r->stage, vol, also, r->half, &failed))
+        return !failed;
+    r->have_next = false; /* beta_next is about to hold another volume */
+    r->next_whole = false;
+    r->pair_stale = true;
+    r->stage_grid = vol->grid;
+    held_of(vol, &r->stage_held);
+    r->stage_state = STAGE_COPYING;
+    r->stage_done = 0;
+    *started = true;
+    return true;
+}
+
+bool renderer_stage_busy(const struct renderer *r)
+{
+    return r->stage_state != STAGE_IDLE;
+}
+
+bool renderer_stage_copying(const struct renderer *r)
+{
+    return r->stage_state == STAGE_COPYING;
+}
+
+void renderer_stage_cancel(struct renderer *r)
+{
+    if (r->stage_state == STAGE_IDLE)
+        return;
+    render_stage_wait(&r->stage);
+    render_stage_release(&r->stage);
+    r->stage_state = STAGE_IDLE;
+    r->have_next = false;
+    r->next_whole = false;
+}
+
+/* The staged volume's regions in upload order: the texture, its buffer offset, the bytes of
+ * one z layer of it (a 2-D texture is one layer). */
+struct stage_piece {
+    struct gpu_texture *tex;
+    size_t offset, layer_bytes;
+    int layers;
+};
+
+static int stage_pieces(struct renderer *r, struct stage_piece out[5])
+{
+    const struct render_stage_layout *lay = &r->stage.lay;
+    const int *n = r->stage_grid.n;
+    size_t plane = (size_t)n[0] * n[1];
+    struct stage_piece all[5] = {
+        {&r->beta_next, lay->beta, plane * 8, n[2]},
+        {&r->tint_next, lay->tint, plane * 4, n[2]},
+        {&r->layer_fields_next, lay->layers, plane * 16, n[2]},
+        {&r->slice_fields_next, lay->slices, plane * 16, n[2]},
+        {&r->slice_surfaces_next, lay->surfaces, plane * 16, 1},
+    };
+    int count = 0;
+    for (int i = 0; i < 5; i++)
+        if (all[i].offset != RENDER_STAGE_NONE)
+            out[count++] = all[i];
+    return count;
+}
+
+bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
+{
+    *ready = false;
+    if (r->stage_state == STAGE_IDLE) {
+        *ready = r->have_next && r->next_whole;
+        return true;
+    }
+    if (r->stage_state == STAGE_COPYING) {
+        if (!render_stage_copied(&r->stage))
+            return true;
+        const struct render_stage_layout *lay = &r->stage.lay;
+        const int *n = r->stage_grid.n;
+        if (!ensure_volume_texture(&r->beta_next, true, 3, n, r->half ? GPU_RG16F : GPU_RG32F) ||
+            !ensure_volume_texture(&r->tint_next, lay->tint != RENDER_STAGE_NONE, 3, n,
+                                   GPU_RGBA8) ||
+            !ensure_volume_texture(&r->layer_fields_next, lay->layers != RENDER_STAGE_NONE, 3, n,
+                                   GPU_RGBA32F) ||
+            !ensure_volume_texture(&r->slice_fields_next, lay->slices != RENDER_STAGE_NONE, 3,
+                                   n, GPU_RGBA32F) ||
+            !ensure_volume_texture(&r->slice_surfaces_next, lay->surfaces != RENDER_STAGE_NONE,
+                                   2, n, GPU_RGBA32F)) {
+            renderer_stage_cancel(r);
+            return false;
+        }
+        r->stage_state = STAGE_UPLOADING;
+    }
+    /* Whole z layers, as many as BUDGET allows (at least one): a long upload is spread over
+     * several calls. */
+    struct stage_piece pieces[5];
+    int count = stage_pieces(r, pieces);
+    size_t start = r->stage_done, at = 0, total = 0;
+    for (int i = 0; i < count; i++)
+        total += pieces[i].layer_bytes * (size_t)pieces[i].layers;
+    for (int i = 0; i < count; i++) {
+        const struct stage_piece *p = &pieces[i];
+        size_t bytes = p->layer_bytes * (size_t)p->layers;
+        if (r->stage_done < at + bytes) {
+            while (r->stage_done < at + bytes &&
+                   (budget == 0 || r->stage_done == start || r->stage_done - start < budget)) {
+                int z = (int)((r->stage_done - at) / p->layer_bytes);
+                size_t left = budget == 0 ? bytes : budget - (r->stage_done - start);
+                int layers = (int)(left / p->layer_bytes);
+                if (layers < 1)
+                    layers = 1;
+                if (layers > p->layers - z)
+                    layers = p->layers - z;
+                gpu_texture_upload_from(p->tex, &r->stage.pbo,
+                                        p->offset + (size_t)z * p->layer_bytes, z, layers);
+                r->stage_done += (size_t)layers * p->layer_bytes;
+            }
+        }
+        at += bytes;
+    }
+    if (r->stage_done < total)
+        return true;
+    render_stage_release(&r->stage);
+    r->stage_state = STAGE_IDLE;
+    if (!render_cells_build(&r->next_cells, &r->cell_programs, &r->beta_next, NULL))
+        return false;
+    r->grid_next = r->stage_grid;
+    r->next_held = r->stage_held;
+    r->have_next = true;
+    r->next_whole = true;
+    r->pair_stale = true;
+    r->stats.upload_bytes += total;
+    r->stats.uploads++;
+    *ready = true;
+    return true;
+}
+
+static void swap_textures(struct gpu_texture *a, struct gpu_texture *b)
+{
+    struct gpu_texture t = *a;
+    *a = *b;
+    *b = t;
+}
+
+bool renderer_swap_next(struct renderer *r)
+{
+    if (!r->have_next || !r->next_whole || r->stage_state != STAGE_IDLE)
+        return false;
+    swap_textures(&r->beta, &r->beta_next);
+    swap_textures(&r->tint, &r->tint_next);
+    swap_textures(&r->layer_fields, &r->layer_fields_next);
+    swap_textures(&r->slice_fields, &r->slice_fields_next);
+    swap_textures(&r->slice_surfaces, &r->slice_surfaces_next);
+    struct render_cells cells = r->cells;
+    r->cells = r->next_cells;
+    r->next_cells = cells;
+    struct grid3 grid = r->grid;
+    r->grid = r->grid_next;
+    r->grid_next = grid;
+    const struct held_fields *h = &r->next_held;
+    r->have_tint = h->tint;
+    for (int i = 0; i < TRANSFER_LAYER_MAX; i++) {
+        r->layer_held[i] = h->layer[i];
+        r->layer_field[i] = h->layer_field[i];
+    }
+    for (int i = 0; i < TRANSFER_SLICE_MAX; i++) {
+        r->slice_held[i] = h->slice[i];
+        r->slice_field[i] = h->slice_field[i];
+        r->surface_held[i] = h->surface[i];
+    }
+    /* The old step's textures stay allocated for the next staged volume, but hold nothing. */
+    r->have_volume = true;
+    r->have_next = false;
+    r->next_whole = false;
+    r->pair_stale = true;
+    return true;
+}
+
+const struct render_cells *renderer_next_cells(const struct renderer *r)
+{
+    return r->have_next && r->next_whole ? &r->next_cells : NULL;
 }
 
 const struct render_cells *renderer_cells(const struct renderer *r)

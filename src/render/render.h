@@ -109,6 +109,33 @@ const struct gpu_texture *renderer_volume_texture(const struct renderer *r);
 /* effects.temporal: uploads the next time step's extinction into a second RG32F texture
  * (NULL drops it).  Its tints, if any, are not used: the blend takes step k's. */
 bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol);
+/* The next volume through a pixel buffer, so that a later step change is a swap of textures
+ * already on the GPU (nothing uploaded, nothing built in that frame).  renderer_stage_next
+ * starts copying VOL's arrays (extinction, tints, layers, slices, surfaces) into a
+ * persistently mapped buffer on a thread of the renderer's (no GL there), and its extinction
+ * into ALSO (2 floats a voxel, may be NULL: a CPU copy the caller keeps); VOL and ALSO are
+ * borrowed and must stay valid until renderer_stage_step said *READY or renderer_stage_cancel
+ * returned.  *STARTED false: the buffer is busy (try again later).  The next volume held
+ * before is gone from now on (renderer_has_next false). */
+bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, float *also,
+                         bool *started);
+/* Moves the staged volume on: once the copy is complete, uploads at most BUDGET bytes of it
+ * (whole z layers, at least one; 0: all) from the buffer into the next volume's textures, and
+ * after the last builds its cells.  *READY: the next volume is whole on the GPU (now or
+ * before).  Never waits for the copy.  False (logged) on a GL failure. */
+bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready);
+/* Whether a staged volume is being copied or uploaded; whether it is still being copied (the
+ * stage's thread is on it: renderer_stage_step cannot move it on yet). */
+bool renderer_stage_busy(const struct renderer *r);
+bool renderer_stage_copying(const struct renderer *r);
+/* Waits for a copy in flight and drops the staged volume (its source may then go). */
+void renderer_stage_cancel(struct renderer *r);
+/* Makes the staged next volume the volume (and the volume the spare one): its extinction,
+ * tints, fields, surfaces, cells and grid, by exchanging textures.  False when no whole next
+ * volume is held (nothing changes). */
+bool renderer_swap_next(struct renderer *r);
+/* The cells of the staged next volume alone (its light build), or NULL without one. */
+const struct render_cells *renderer_next_cells(const struct renderer *r);
 /* Whether a next volume is held, its texture (for its light map build) and grid. */
 bool renderer_has_next(const struct renderer *r);
 const struct gpu_texture *renderer_next_texture(const struct renderer *r);

@@ -88,17 +88,61 @@ static bool build(struct lightmaps *al, int which, const struct light_gpu_source
 /* effects.temporal: one map per step in the ring {gpu, spare}.  The map that already holds
  * step k (or else the one not holding k + 1) serves k, the other k + 1: advancing a step finds
  * the new k built as the old next and builds only the new next. */
+/* The map of the ring that serves step k (the other serves k + 1). */
+static int serving_slot(const struct lightmaps *al, bool pair)
+{
+    if (al->spare && al->held[1] == al->step_id)
+        return 1;
+    if (al->held[0] != al->step_id && al->spare && pair && al->held[0] == al->next_id)
+        return 1;
+    return 0;
+}
+
+/* The next volume's map: its own cells when it was staged whole, else the pair's (a cell
+ * empty in the pair is empty in both). */
+static bool build_next(struct lightmaps *al, int slot, struct renderer *r,
+                       const struct lightmaps_params *p, struct session_stats *st)
+{
+    const struct render_cells *cells = renderer_next_cells(r);
+    struct light_gpu_source next = {
+        .beta = renderer_next_texture(r),
+        .grid = renderer_next_grid(r),
+        .volume_id = al->next_id,
+        .generation = TEMPORAL_GENERATION,
+        .cells = cells ? cells : renderer_pair_cells(r),
+    };
+    al->held[slot] = 0;
+    if (!build(al, slot, &next, p->sun, &p->light, p->mode, p->half, p->one_phase, st))
+        return false;
+    al->held[slot] = al->next_id;
+    return true;
+}
+
+bool lightmaps_prepare_next(struct lightmaps *al, const struct lightmaps_params *p,
+                            struct renderer *r, struct session_stats *st)
+{
+    if (!al->gpu || !p->shadows || !al->temporal || al->step_id == 0 || al->next_id == 0 ||
+        !renderer_has_next(r))
+        return true;
+    if (!al->spare && !(al->spare = light_gpu_create()))
+        return false;
+    return build_next(al, 1 - serving_slot(al, true), r, p, st);
+}
+
+bool lightmaps_next_built(const struct lightmaps *al, uint64_t next_id)
+{
+    if (!al->gpu || (al->have_effects && !al->effects.on[EFFECT_SHADOWS]))
+        return true; /* no light map to build */
+    return next_id != 0 && (al->held[0] == next_id || (al->spare && al->held[1] == next_id));
+}
+
 static bool update_temporal(struct lightmaps *al, struct renderer *r,
                             const struct lightmaps_params *p, struct session_stats *st)
 {
     bool pair = al->next_id != 0 && renderer_has_next(r);
     if (pair && !al->spare && !(al->spare = light_gpu_create()))
         return false;
-    int cur = 0;
-    if (al->spare && al->held[1] == al->step_id)
-        cur = 1;
-    else if (al->held[0] != al->step_id && al->spare && pair && al->held[0] == al->next_id)
-        cur = 1;
+    int cur = serving_slot(al, pair);
     struct light_gpu *maps[2] = {al->gpu, al->spare};
     struct light_gpu_source src = {
         .beta = renderer_volume_texture(r),
@@ -111,22 +155,14 @@ static bool update_temporal(struct lightmaps *al, struct renderer *r,
     if (!build(al, cur, &src, p->sun, &p->light, p->mode, p->half, p->one_phase, st))
         return false;
     al->held[cur] = al->step_id;
-    if (!pair) {
+    /* Without the blend the next step's map is built between frames only
+     * (lightmaps_prepare_next): the frame draws step k alone. */
+    if (!pair || al->ahead_only) {
         renderer_set_light(r, light_gpu_render_light(maps[cur]));
         return true;
     }
-    /* The pair's cells are empty only where both steps are: they serve step k + 1 too. */
-    struct light_gpu_source next = {
-        .beta = renderer_next_texture(r),
-        .grid = renderer_next_grid(r),
-        .volume_id = al->next_id,
-        .generation = TEMPORAL_GENERATION,
-        .cells = renderer_pair_cells(r),
-    };
-    al->held[1 - cur] = 0;
-    if (!build(al, 1 - cur, &next, p->sun, &p->light, p->mode, p->half, p->one_phase, st))
+    if (!build_next(al, 1 - cur, r, p, st))
         return false;
-    al->held[1 - cur] = al->next_id;
     al->pair_first = cur;
     /* Step k's variant (LIGHTMAP, MULTIPLE) and the pair: both maps are built alike. */
     snprintf(al->pair_defines, sizeof(al->pair_defines), "%s#define LIGHTMAP_PAIR 1\n",

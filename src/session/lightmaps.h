@@ -29,6 +29,10 @@ struct lightmaps {
      * step and kept keyed by it in a ring of two (gpu, spare), so a step change builds only
      * the new next step's; the eye pass blends the pair (LIGHTMAP_PAIR). */
     bool temporal;
+    /* With TEMPORAL: the next step's map is only built ahead of its step change
+     * (lightmaps_prepare_next: staged playback) and never bound; false: the eye pass blends
+     * the pair (effects.temporal). */
+    bool ahead_only;
     uint64_t step_id, next_id;
     struct light_gpu *spare; /* the second map of the ring (made on first use) */
     uint64_t held[2];        /* the step each of gpu, spare was last built for */
@@ -66,6 +70,13 @@ void lightmaps_set_effects(struct lightmaps *al, const struct effects *e);
  * the GPU (but on software drivers while timed: gpu.h, "timers"). */
 bool lightmaps_update_params(struct lightmaps *al, const struct lightmaps_params *p,
                              struct renderer *r, struct session_stats *st);
+/* Staged playback and effects.temporal: builds the map of the renderer's next volume
+ * (NEXT_ID) when stale, without touching what the views use, so that the step change finds
+ * it built.  Meant for the time between frames.  No-op without a next volume. */
+bool lightmaps_prepare_next(struct lightmaps *al, const struct lightmaps_params *p,
+                            struct renderer *r, struct session_stats *st);
+/* Whether the ring holds a map built for step NEXT_ID (true without light maps). */
+bool lightmaps_next_built(const struct lightmaps *al, uint64_t next_id);
 /* The same with the parameters of CFG, its sun and the decisions set (lightmaps_params_from). */
 bool lightmaps_update(struct lightmaps *al, const struct config *cfg, struct renderer *r,
                       struct session_stats *st);

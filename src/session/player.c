@@ -580,6 +580,25 @@ const struct ext_volume *player_poll_next(struct player *p, int want, bool wait,
     return v;
 }
 
+const struct ext_volume *player_promote_next(struct player *p)
+{
+    if (!p->series || p->next_shown < 0 || p->next_gen != p->look_gen)
+        return NULL;
+    /* The series made the next step current when it was acquired: this finds it at once. */
+    const struct ext_volume *v = series_try_acquire(p->series, p->next_shown);
+    if (!v)
+        return NULL;
+    p->shown = p->next_shown;
+    p->shown_gen = p->next_gen;
+    p->next_shown = -1;
+    return v;
+}
+
+int player_next_step(const struct player *p)
+{
+    return p->next_shown >= 0 && p->next_gen == p->look_gen ? p->next_shown : -1;
+}
+
 uint64_t player_step_id(const struct player *p, bool next)
 {
     if (next)

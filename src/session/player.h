@@ -106,6 +106,12 @@ bool player_settled(const struct player *p, int want);
  * caller's next volume holds, -1 none. */
 const struct ext_volume *player_poll_next(struct player *p, int want, bool wait,
                                               int *held);
+/* Staged playback: the next volume (player_poll_next) becomes the one shown, as player_poll
+ * would make it but without a second copy: returns its volume (valid as player_poll's), or
+ * NULL when no next volume with the current look is held (nothing changes). */
+const struct ext_volume *player_promote_next(struct player *p);
+/* The step of the next volume held with the current look, or -1. */
+int player_next_step(const struct player *p);
 /* The identity (lightmaps_step_id) of the volume shown, or with NEXT of the next volume (0
  * when it is none, or made with an older look). */
 uint64_t player_step_id(const struct player *p, bool next);

@@ -64,6 +64,16 @@ struct session {
     bool path_playing;
     double path_time;
 
+    /* Staged playback (a run of a series): the step after the one shown is readied between
+     * frames (session_prepare), its volume through the renderer's pixel buffer and its light
+     * map built, so that the step change is a swap of textures on the GPU. */
+    bool staged;
+    const struct ext_volume *stage_src; /* the next volume waiting for the pixel buffer */
+    struct ext_volume probe_next;       /* with the probe: the staged step's extinction on the
+                                           CPU, swapped with probe_volume at its step change */
+    uint64_t probe_next_id;             /* its step (player_step_id), 0: none */
+    double frame_start_ms, frame_ms;    /* the last frame's session_apply .. session_draw */
+
     /* What the last session_apply made the GPU hold. */
     int shown;                /* the step on screen */
     struct render_settings drawn; /* base with the frame's sun and temporal blend */
@@ -201,6 +211,21 @@ static bool keep_probe_volume(struct session *s, const struct ext_volume *v)
     return true;
 }
 
+/* Staged playback: room for V's extinction for the probe until V's step is shown (the stage's
+ * thread copies it there). */
+static bool room_probe_next(struct session *s, const struct ext_volume *v)
+{
+    size_t n = grid3_count(&v->grid);
+    s->probe_next_id = 0;
+    if (!s->probe_next.beta || grid3_count(&s->probe_next.grid) != n) {
+        ext_volume_finish(&s->probe_next);
+        if (!ext_volume_init(&s->probe_next, &v->grid))
+            return false;
+    }
+    s->probe_next.grid = v->grid;
+    return true;
+}
+
 /* The histogram of the volume just shown into the menu's transfer editor. */
 static void show_histogram(struct session *s, const struct ext_volume *v)
 {
@@ -210,6 +235,17 @@ static void show_histogram(struct session *s, const struct ext_volume *v)
     m->histogram = *v->histogram;
     m->histogram_valid = true;
     menu_model_changed(s->menu);
+}
+
+/* Staged playback: the staged volume goes (its copy finished first: the volume it reads may
+ * go next).  The step change that wanted it uploads as before. */
+static void drop_staged(struct session *s)
+{
+    if (!s->staged)
+        return;
+    renderer_stage_cancel(s->renderer);
+    s->stage_src = NULL;
+    s->probe_next_id = 0;
 }
 
 /* The facts, gathered once: the first volume, the display, what can change while running. */
@@ -396,6 +432,7 @@ struct session *session_create(const struct config *cfg, const struct session_de
                   cfg->scene.kind == SCENE_DATA ? cfg->data.step : 0, cfg->playback.speed,
                   cfg->playback.loop);
     s->shown = s->playback.step;
+    s->staged = d->interactive && d->playback && !d->unstaged && s->playback.count > 1;
     s->view_size[0] = cfg->render.width;
     s->view_size[1] = cfg->render.height;
     enum overlay_when when = cfg->overlay.when;
@@ -431,10 +468,13 @@ void session_destroy(struct session *s)
     probe_view_destroy(s->probe_view, s->renderer);
     probe_destroy(s->probe);
     ext_volume_finish(&s->probe_volume);
+    ext_volume_finish(&s->probe_next);
     ext_volume_finish(&s->first_histogram);
     menu_destroy(s->menu);
     for (int i = 0; i < s->n_sources; i++)
         input_source_destroy(s->sources[i]);
+    if (s->renderer)
+        drop_staged(s); /* its copy reads a volume of the player's */
     player_destroy(s->player);
     lightmaps_finish(&s->light);
     scene_map_destroy(s->map, s->renderer);
@@ -472,8 +512,10 @@ void session_set_settings(struct session *s, const struct session_settings *in)
     s->settings = *in;
     s->settings.diffuse = diffuse;
     if (look) {
-        if (player_has_fields(s->player))
+        if (player_has_fields(s->player)) {
+            drop_staged(s); /* its copy reads a volume the series is about to drop */
             player_set_look(s->player, &s->settings.look);
+        }
         else if (s->menu)
             menu_set_status(s->menu, "this scene has no mass ratios to change");
     }
@@ -1106,9 +1148,19 @@ static void pick_probe(struct session *s)
         s->probe_pick[i] = o[i] + t * dir[i];
 }
 
+/* Whether STEP is the staged next volume, whole on the GPU with its light map built (when
+ * there is one): its step change is then a swap. */
+static bool staged_ready(struct session *s, int step)
+{
+    if (player_next_step(s->player) != step || !renderer_next_cells(s->renderer))
+        return false;
+    return lightmaps_next_built(&s->light, player_step_id(s->player, true));
+}
+
 static bool ready(void *user, int step)
 {
-    return player_ready(user, step);
+    struct session *s = user;
+    return s->staged ? staged_ready(s, step) : player_ready(s->player, step);
 }
 
 /* A drag outside the menu while its Slices page shows moves the selected slice: up and down
@@ -1367,7 +1419,7 @@ bool session_update(struct session *s, const struct input_queue *window_events, 
     bool wait = !s->desc.interactive;
     int old_step = s->playback.step;
     bool was_playing = s->playback.playing;
-    playback_tick(&s->playback, dt, wait ? NULL : ready, s->player);
+    playback_tick(&s->playback, dt, wait ? NULL : ready, s);
     if (rec.have_cursor && rec.step < s->playback.count) {
         /* Where the recorded run's cursor was, stalls and all. */
         s->playback.step = rec.step;
@@ -1446,29 +1498,85 @@ static bool upload(struct session *s, const struct ext_volume *v)
     return true;
 }
 
-/* effects.temporal: keeps step k + 1 in the renderer's next volume and asks the eye pass to
- * blend it in at the frame's fraction (the light map pair follows: lightmaps).  Until k + 1 is
- * on the GPU (or while step k itself is still loading) the blend is 0: step k. */
-static bool temporal_frame(struct session *s, const struct frame_state *f, bool *changed)
+/* The step that follows STEP in playback (-1: none). */
+static int step_after(const struct session *s, int step)
 {
     const struct playback *pb = &s->playback;
-    int next = -1;
-    if (pb->count > 1 && s->shown == f->time_step) {
-        next = f->time_step + 1;
-        if (next >= pb->count)
-            next = pb->loop ? 0 : -1;
+    if (pb->count < 2)
+        return -1;
+    return step + 1 < pb->count ? step + 1 : pb->loop ? 0 : -1;
+}
+
+/* Staged playback: the light maps keyed by step (the ring of two), the next step's map built
+ * between frames and not drawn. */
+static void staged_light_ids(struct session *s)
+{
+    int next = step_after(s, s->shown);
+    bool held = next >= 0 && player_next_step(s->player) == next &&
+                renderer_next_cells(s->renderer) != NULL;
+    s->light.temporal = true;
+    s->light.ahead_only = true;
+    s->light.step_id = player_step_id(s->player, false);
+    s->light.next_id = held ? player_step_id(s->player, true) : 0;
+}
+
+/* Staged playback: WANT is the staged next volume, so the step change exchanges textures
+ * (nothing uploaded, and its light map was built ahead). */
+static bool swap_staged(struct session *s, int want, bool *swapped)
+{
+    *swapped = false;
+    if (!s->staged || player_next_step(s->player) != want ||
+        !renderer_next_cells(s->renderer))
+        return true;
+    const struct ext_volume *v = player_promote_next(s->player);
+    if (!v)
+        return true;
+    if (!renderer_swap_next(s->renderer))
+        return false;
+    s->shown = want;
+    s->stage_src = NULL;
+    if (s->probe && s->probe_next_id == player_step_id(s->player, false)) {
+        struct ext_volume t = s->probe_volume; /* copied between frames: no copy here */
+        s->probe_volume = s->probe_next;
+        s->probe_next = t;
+        s->probe_next_id = 0;
+        s->probe_volume_id++;
+    } else if (s->probe && !keep_probe_volume(s, v)) {
+        return false;
     }
+    show_histogram(s, v);
+    s->light.generation++;
+    s->stats.volume_swaps++;
+    *swapped = true;
+    return true;
+}
+
+/* effects.temporal: keeps step k + 1 in the renderer's next volume and asks the eye pass to
+ * blend it in at the frame's fraction (the light map pair follows: lightmaps).  Until k + 1 is
+ * on the GPU (or while step k itself is still loading) the blend is 0: step k.  With staged
+ * playback k + 1 arrives between frames (session_prepare). */
+static bool temporal_frame(struct session *s, const struct frame_state *f, bool *changed)
+{
+    int next = s->shown == f->time_step ? step_after(s, f->time_step) : -1;
     int held = -1;
-    const struct ext_volume *v =
-        player_poll_next(s->player, next, !s->desc.interactive, &held);
-    if (v) {
-        if (!renderer_set_next_volume(s->renderer, v))
-            return false;
-        s->stats.volume_uploads++;
-        *changed = true;
+    if (s->staged) {
+        held = renderer_next_cells(s->renderer) ? player_next_step(s->player) : -1;
+    } else {
+        const struct ext_volume *v =
+            player_poll_next(s->player, next, !s->desc.interactive, &held);
+        if (v) {
+            if (!renderer_set_next_volume(s->renderer, v))
+                return false;
+            s->stats.volume_uploads++;
+            *changed = true;
+        }
     }
     uint64_t next_id = next >= 0 && held == next ? player_step_id(s->player, true) : 0;
+    /* Staged: blended only once its map was built between frames, never built in the frame. */
+    if (s->staged && !lightmaps_next_built(&s->light, next_id))
+        next_id = 0;
     s->light.temporal = true;
+    s->light.ahead_only = false;
     s->light.step_id = player_step_id(s->player, false);
     s->light.next_id = next_id;
     s->drawn.temporal = next_id != 0;
@@ -1478,11 +1586,25 @@ static bool temporal_frame(struct session *s, const struct frame_state *f, bool 
 
 bool session_apply(struct session *s, const struct frame_state *f, bool *changed)
 {
+    s->frame_start_ms = time_now_ms();
     bool uploaded = false;
     int want = f->time_step < s->playback.count ? f->time_step : s->playback.count - 1;
-    const struct ext_volume *v = s->desc.interactive
-                                     ? player_poll(s->player, want, &s->shown)
-                                     : player_wait(s->player, want, &s->shown);
+    if (want != s->shown && !swap_staged(s, want, &uploaded))
+        return false;
+    const struct ext_volume *v = NULL;
+    if (want != s->shown) {
+        /* Not the staged step (a jump, or it was not ready): uploaded now, in this frame.  The
+         * series is about to make another step current: the staged copy must not read it. */
+        drop_staged(s);
+        v = s->desc.interactive ? player_poll(s->player, want, &s->shown)
+                                : player_wait(s->player, want, &s->shown);
+    } else if (!s->desc.interactive) {
+        v = player_wait(s->player, want, &s->shown); /* a new look: made again, waited for */
+    } else {
+        if (!player_settled(s->player, want))
+            drop_staged(s); /* the step shown is made again: the series may move on */
+        v = player_poll(s->player, want, &s->shown);
+    }
     if (v) {
         if (!upload(s, v))
             return false;
@@ -1493,8 +1615,12 @@ bool session_apply(struct session *s, const struct frame_state *f, bool *changed
     s->drawn = s->base;
     scene_sun_settings(&s->cfg, f->sun_azimuth_deg, f->sun_elevation_deg, &s->drawn);
     s->drawn.step_m = (float)s->settings.step_m;
-    if (s->effects.on[EFFECT_TEMPORAL] && !temporal_frame(s, f, &uploaded))
-        return false;
+    if (s->effects.on[EFFECT_TEMPORAL]) {
+        if (!temporal_frame(s, f, &uploaded))
+            return false;
+    } else if (s->staged) {
+        staged_light_ids(s);
+    }
     player_stats(s->player, &s->stats);
     s->stats.time_step = s->shown;
     s->applied = *f;
@@ -1532,6 +1658,91 @@ bool session_light(struct session *s)
     struct lightmaps_params p;
     light_params(s, &p);
     return lightmaps_update_params(&s->light, &p, s->renderer, &s->stats);
+}
+
+/* How much of a staged volume one session_prepare uploads from the pixel buffer: a volume of
+ * Isabel's size (191 MiB of extinction) goes up over a few calls. */
+#define STAGE_SLAB_BYTES ((size_t)64 << 20)
+
+/* One piece of readying the step after the one shown.  *PROGRESSED: the next piece can follow
+ * at once (not waiting for the stage's thread); *MORE: work remains. */
+static bool prepare_piece(struct session *s, bool *progressed, bool *more)
+{
+    *progressed = *more = false;
+    int next = step_after(s, s->shown);
+    /* While another step than the next is wanted (a jump, a rank holding), or the step shown is
+     * being made again (a new look), nothing is staged: that step's upload would drop it. */
+    bool settled = (!s->have_applied || s->applied.time_step == s->shown) &&
+                   player_settled(s->player, s->shown);
+    if (renderer_stage_busy(s->renderer)) {
+        /* The copy's end, then the upload in slabs, then the cells. */
+        bool ready = false;
+        bool ok = renderer_stage_step(s->renderer, STAGE_SLAB_BYTES, &ready);
+        *progressed = ok && !renderer_stage_copying(s->renderer);
+        *more = ok;
+        return ok;
+    }
+    if (next < 0 || !settled)
+        return true;
+    if (player_next_step(s->player) == next && renderer_next_cells(s->renderer)) {
+        /* Staged: its light map, once, with the sun of the last frame (the next frame's
+         * session_apply sets the ids again). */
+        s->light.temporal = true;
+        s->light.step_id = player_step_id(s->player, false);
+        s->light.next_id = player_step_id(s->player, true);
+        if (lightmaps_next_built(&s->light, s->light.next_id))
+            return true;
+        struct lightmaps_params p;
+        light_params(s, &p);
+        *progressed = true;
+        /* The blend reads the pair's cells: made now, not in the first blended frame. */
+        if (s->effects.on[EFFECT_TEMPORAL])
+            renderer_pair_cells(s->renderer);
+        return lightmaps_prepare_next(&s->light, &p, s->renderer, &s->stats);
+    }
+    if (!s->stage_src || player_next_step(s->player) != next) {
+        int held = -1;
+        s->stage_src = player_poll_next(s->player, next, false, &held);
+    }
+    if (!s->stage_src)
+        return true; /* not loaded yet: the series' thread is on it */
+    /* With the probe, its copy of the extinction too, on the stage's thread rather than in
+     * the frame of the step change. */
+    if (s->probe && !room_probe_next(s, s->stage_src))
+        return false;
+    bool started = false;
+    bool ok = renderer_stage_next(s->renderer, s->stage_src,
+                                  s->probe ? s->probe_next.beta : NULL, &started);
+    if (ok && started) {
+        s->probe_next_id = s->probe ? player_step_id(s->player, true) : 0;
+        s->stage_src = NULL; /* the renderer has it until the copy is done */
+    }
+    *more = ok;
+    return ok;
+}
+
+bool session_prepare(struct session *s, bool *more)
+{
+    *more = false;
+    if (!s->staged)
+        return true;
+    /* Pieces while they need not wait, for about as long as a frame takes (a light build is
+     * one piece, however long). */
+    double t0 = time_now_ms(), budget = s->frame_ms > 10.0 ? s->frame_ms : 10.0;
+    bool ok = true, progressed = true;
+    while (ok && progressed && time_now_ms() - t0 < budget)
+        ok = prepare_piece(s, &progressed, more);
+    s->stats.prepare_ms += time_now_ms() - t0;
+    if (!ok) {
+        /* Most likely GPU memory for the second set of volume textures: play on without. */
+        log_warn("playback: the next time step could not be readied on the GPU (see above); "
+                 "from now on each step change uploads its step and builds its light map in "
+                 "its frame");
+        drop_staged(s);
+        s->staged = false;
+        *more = false;
+    }
+    return true;
 }
 
 /* "2005-08-28 06:00 UTC" from WRF's "2005-08-28_06:00:00". */
@@ -1742,7 +1953,9 @@ bool session_draw(struct session *s, struct display *d, const struct frame_state
             session_stats_add_view(&s->stats);
     }
     s->stats.frames++;
-    return display_present(d, s->renderer, (float)s->cfg.render.exposure);
+    bool ok = display_present(d, s->renderer, (float)s->cfg.render.exposure);
+    s->frame_ms = time_now_ms() - s->frame_start_ms;
+    return ok;
 }
 
 /* ---- queries -------------------------------------------------------------------------- */
@@ -1831,8 +2044,11 @@ void session_want_step(struct session *s, int step)
 
 bool session_step_loaded(struct session *s, int step)
 {
-    return player_ready(s->player, step) ||
-           (player_settled(s->player, step) && s->shown == step);
+    if (player_settled(s->player, step) && s->shown == step)
+        return true;
+    /* Staged playback: loaded means ready to be swapped in, so that every rank's step change
+     * is a swap in the same frame. */
+    return s->staged ? staged_ready(s, step) : player_ready(s->player, step);
 }
 
 bool session_menu_state(struct session *s, struct menu_view_state *st, const uint8_t **pixels)

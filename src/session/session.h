@@ -14,6 +14,7 @@
  *   session_light    the light map, rebuilt only when its key changed
  *   (the caller samples the head pose last: display_sample_head)
  *   session_draw     layout, the menu's meshes, every view, present
+ *   session_prepare  between frames: the next step readied (a run of a series)
  *
  * session_update only produces state and session_apply/session_draw only consume it, so a
  * second session fed the same frame states draws the same pictures (a cluster's render nodes,
@@ -67,6 +68,8 @@ struct session_desc {
                                   decided as that run decided them (the sun could move) */
     bool count_rays;           /* count what the views' rays do (renderer_set_counting; the
                                   counts go to the stats at session_collect_timings(s, true)) */
+    bool unstaged;             /* a run's step changes upload and build in their own frame,
+                                  without session_prepare (the playback bench's yardstick) */
     bool probe;                /* the probe can be used (run, a script, --menu; every rank of
                                   a cluster): a second reader of the data and the extinction
                                   of the step on screen kept on the CPU */
@@ -90,12 +93,24 @@ bool session_update(struct session *s, const struct input_queue *window_events, 
 
 /* Makes the GPU state match F: the volume of F's time step (and with effects.temporal the
  * next one) when it is loaded (scripted renders wait for it), the sun and the temporal blend
- * of the eye pass.  *CHANGED (may be NULL) is set when a volume was uploaded. */
+ * of the eye pass.  *CHANGED (may be NULL) is set when a volume was uploaded or a staged one
+ * swapped in (session_prepare). */
 bool session_apply(struct session *s, const struct frame_state *f, bool *changed);
 
 /* Builds the light map if its key changed since the last build (once for every view); first
  * moves the view and build times that arrived into the stats (never waiting). */
 bool session_light(struct session *s);
+
+/* Between frames (after session_draw): readies the step after the one shown, so that its step
+ * change is a swap: its volume copied into a pixel buffer off the render thread, uploaded from
+ * there in slabs, its light map built; as many of those pieces as need not wait for the copy,
+ * for about as long as the last frame took (the light build is one piece, however long).
+ * Playback moves onto that step only once it is ready (a stall, not a slow frame).  *MORE:
+ * call again soon (work is in flight).  No-op but for runs of a series (session_desc
+ * interactive and playback).  A step that cannot be readied (GPU memory, most likely) is
+ * warned about once and turns staging off: step changes then upload in their frame.  Returns
+ * true (false is kept for failures the frame loop must end on; there are none yet). */
+bool session_prepare(struct session *s, bool *more);
 
 /* Places D's views for F, the menu's panel and ray, draws every view and presents them. */
 bool session_draw(struct session *s, struct display *d, const struct frame_state *f);

@@ -84,6 +84,8 @@ bool session_stats_json(const struct session_stats *st, int rank, const char *wa
             st->volume_uploads, st->load_ms, st->convert_ms);
     fprintf(f, "  \"wait_ms\": %.3f,\n  \"upload_ms_total\": %.3f,\n", st->wait_ms,
             st->upload_ms_total);
+    fprintf(f, "  \"volume_swaps\": %u,\n  \"prepare_ms\": %.3f,\n", st->volume_swaps,
+            st->prepare_ms);
     fprintf(f, "  \"frame_ms_max\": %.3f,\n  \"loop_ms\": %.3f,\n  \"first_frame_ms\": %.3f,\n",
             st->frame_ms_max, st->loop_ms, st->first_frame_ms);
     fprintf(f, "  \"upload_bytes\": %.0f,\n", st->upload_bytes);

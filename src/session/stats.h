@@ -34,7 +34,10 @@ struct session_stats {
                                  rank was still loading the wanted one */
     unsigned volume_uploads;  /* volumes uploaded after the first (with effects.temporal
                                  also each next step's, into the second texture) */
+    unsigned volume_swaps;    /* staged playback: step changes that swapped in a next volume
+                                 readied between frames (nothing uploaded in their frame) */
     double load_ms, convert_ms, wait_ms, upload_ms_total;
+    double prepare_ms;        /* staged playback: time readying the next step between frames */
     double frame_ms_max;      /* longest frame of the loop */
     double loop_ms;           /* the frame loop, start to end (total_ms less the start) */
     double first_frame_ms;    /* its first frame (shaders compiled, the first light map) */

@@ -67,6 +67,18 @@ check "scale table: the ratios" grep -q "The empty box's view ÷ the storm's" "$
 # The empty box marches no ray and samples no voxel.
 check "scale table: the empty box reads nothing" \
     grep -q '^| empty box 48x48x24 | 100 % | [0-9]* | [0-9]* | [0-9.]*x | 0 % | 0.0 |' "$tmp/s/scale-table.md"
+# Playback: a small WRF series played staged and with each step change in its frame.  The
+# counts are the device-independent part: staged step changes upload and build nothing.
+expect_exit 2 "bench: --playback-only excludes --load-only" "$anvil" bench --playback-only --load-only
+TMPDIR="$tmp" "$anvil" bench --quick --playback-only -o "$tmp/p" >"$tmp/out" 2>"$tmp/err"
+check "playback bench exits 0" test $? -eq 0
+check "playback table: nothing uploaded in staged step changes" \
+    grep -q '^| bytes uploaded in step-change frames | [1-9][0-9]* | 0 |$' "$tmp/p/playback-table.md"
+check "playback table: nothing built in staged step changes" \
+    grep -q '^| light maps built in step-change frames | [0-9]* | 0 |$' "$tmp/p/playback-table.md"
+check "playback table: every step shown" \
+    grep -q '^| frames played / step changes among them | [0-9]* / 3 | [0-9]* / 3 |$' "$tmp/p/playback-table.md"
+check "playback series removed" test -z "$(ls "$tmp" | grep anvil-bench-playback)"
 expect_exit 0 "gpu bench" "$anvil" bench --quick --gpu -o "$tmp/g"
 check "gpu table written" test -s "$tmp/g/gpu-table.md"
 check "gpu table: an HMD frame of two views and a CAVE frame of eight" \

@@ -1,0 +1,313 @@
+/* Staged playback: a run of a series readies the next step between frames (session_prepare),
+ * so that the frame of a step change uploads nothing and builds no light map; the pictures
+ * after each swap are those a session that uploads the step directly draws; the same with
+ * effects.temporal (the blended pair) and with a layer's field and a slice beside the
+ * extinction, which travel with the swap. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "testutil.h"
+
+#include "common/log.h"
+#include "config/display_config.h"
+#include "display/display.h"
+#include "gpu/gpu.h"
+#include "session/frame.h"
+#include "session/scene.h"
+#include "session/session.h"
+
+static struct gpu_context *ctx;
+static char series_cfg[1024], fields_cfg[1024];
+
+static struct display *open_display(const struct config *cfg, const struct display_config *dcfg)
+{
+    struct display_desc dd = {.offscreen = true, .context = ctx, .height = cfg->render.height};
+    scene_camera(cfg, &dd.camera);
+    struct display *d = display_create(dcfg, &dd);
+    assert_non_null(d);
+    assert_true(display_update(d, 0.0));
+    return d;
+}
+
+/* A run's session.  The reference the pictures are compared with is one too (the same effects
+ * decided) that is never given the time between frames: every step it shows it uploads and
+ * builds in the frame. */
+static struct session *make(const struct config *cfg, const struct display_config *dcfg,
+                            bool interactive)
+{
+    int rc;
+    struct session *s = session_create(cfg,
+                                       &(struct session_desc){
+                                           .command = interactive ? "run" : "render",
+                                           .display = dcfg,
+                                           .views_move = true,
+                                           .interactive = interactive,
+                                           .playback = true,
+                                           .probe = true, /* as anvil run has it */
+                                       },
+                                       &rc);
+    assert_non_null(s);
+    return s;
+}
+
+struct counts {
+    uint64_t bytes;
+    unsigned builds, uploads, swaps;
+};
+
+static void counts_of(struct session *s, struct counts *c)
+{
+    c->bytes = renderer_stats(session_renderer(s))->upload_bytes;
+    c->builds = session_stats(s)->light_builds;
+    c->uploads = session_stats(s)->volume_uploads;
+    c->swaps = session_stats(s)->volume_swaps;
+}
+
+/* Plays the series through on a run's session, frame by frame with the preparation between
+ * frames, and checks every step change; each new step's picture is compared with the
+ * reference's of the same frame state.  Returns the step changes seen; *MOVED counts the
+ * frames whose picture changed while the step did not (the blend). */
+static int play(const char *path, const char *const *sets, int n_sets, int *moved)
+{
+    struct config cfg;
+    const char *base[8] = {"render.width=40", "render.height=30",
+                           "lightmap.resolution=[16,16,16]", "overlay.when=\"never\""};
+    int n = 4;
+    for (int i = 0; i < n_sets; i++)
+        base[n++] = sets[i];
+    test_config_file(&cfg, path, base, n);
+    struct display_config dcfg;
+    display_config_defaults(&dcfg);
+    dcfg.type = DISPLAY_TYPE_ORBIT;
+    dcfg.window_size[0] = cfg.render.width;
+    dcfg.window_size[1] = cfg.render.height;
+    struct display *da = open_display(&cfg, &dcfg), *db = open_display(&cfg, &dcfg);
+    struct session *a = make(&cfg, &dcfg, true), *b = make(&cfg, &dcfg, true);
+    session_set_playing(a, true);
+    struct counts before, after, start;
+    counts_of(a, &start);
+    int changes = 0, shown = session_step_shown(a);
+    struct image prev = {0};
+    *moved = 0;
+    for (int frame = 0; frame < 400 && shown < session_step_count(a) - 1; frame++) {
+        struct frame_state f;
+        bool redraw;
+        assert_true(session_update(a, NULL, 0.1, 0.1 * frame, &f, &redraw));
+        counts_of(a, &before);
+        assert_true(session_apply(a, &f, NULL) && session_light(a) &&
+                    display_sample_head(da, f.time_s, &f.head) && session_draw(a, da, &f));
+        counts_of(a, &after);
+        if (frame > 0) {
+            /* No frame uploads or builds (the sun stands still): all of it is between
+             * frames. */
+            assert_int_equal(after.bytes, before.bytes);
+            assert_int_equal(after.builds, before.builds);
+        }
+        struct image now;
+        assert_true(renderer_read(&display_view(da, 0)->target, &now));
+        size_t image_bytes = sizeof(float) * 4 * (size_t)now.width * (size_t)now.height;
+        if (prev.rgba && session_step_shown(a) == shown &&
+            memcmp(prev.rgba, now.rgba, image_bytes) != 0)
+            (*moved)++;
+        image_finish(&prev);
+        prev = now;
+        if (frame == 0 || session_step_shown(a) != shown) {
+            /* The frame of the step change: a swap of what was readied between frames. */
+            if (frame > 0) {
+            shown = session_step_shown(a);
+            changes++;
+            assert_int_equal(after.bytes, before.bytes);
+            assert_int_equal(after.builds, before.builds);
+            assert_int_equal(after.uploads, before.uploads);
+            assert_int_equal(after.swaps, before.swaps + 1);
+            }
+            /* The same picture as a session that uploads and builds that step itself. */
+            struct frame_state g = f;
+            for (int k = 0; k < 500 && session_step_shown(b) != session_step_shown(a); k++) {
+                assert_true(session_apply(b, &g, NULL));
+                usleep(2000);
+            }
+            assert_true(session_apply(b, &g, NULL) && session_light(b) &&
+                        session_draw(b, db, &g));
+            assert_int_equal(session_step_shown(b), shown);
+            struct image ia, ib;
+            assert_true(renderer_read(&display_view(da, 0)->target, &ia));
+            assert_true(renderer_read(&display_view(db, 0)->target, &ib));
+            size_t bytes = sizeof(float) * 4 * (size_t)ia.width * (size_t)ia.height;
+            if (memcmp(ia.rgba, ib.rgba, bytes) != 0)
+                fail_msg("step %d: the swapped-in step draws another picture", shown);
+            image_finish(&ia);
+            image_finish(&ib);
+        }
+        /* Between frames: until nothing is in flight (the copy runs on its own thread), so
+         * that the next frame finds the step readied however loaded the machine is: the
+         * blend then shows between step changes. */
+        for (int k = 0; k < 5000; k++) {
+            bool more = false;
+            assert_true(session_prepare(a, &more));
+            if (!more)
+                break;
+            usleep(2000);
+        }
+    }
+    assert_int_equal(shown, session_step_count(a) - 1); /* played to the end */
+    image_finish(&prev);
+    /* The uploads and builds did happen, between frames. */
+    counts_of(a, &after);
+    assert_true(after.bytes > start.bytes);
+    assert_true(after.builds > start.builds);
+    session_destroy(a);
+    session_destroy(b);
+    display_destroy(da);
+    display_destroy(db);
+    return changes;
+}
+
+static void test_plain(void **state)
+{
+    (void)state;
+    int moved;
+    const char *sets[] = {"effects.temporal=\"off\""};
+    assert_int_equal(play(series_cfg, sets, 1, &moved), 3);
+    assert_int_equal(moved, 0); /* one picture per step */
+}
+
+static void test_temporal(void **state)
+{
+    (void)state;
+    const char *sets[] = {"effects.temporal=\"on\""};
+    int moved;
+    assert_int_equal(play(series_cfg, sets, 1, &moved), 3);
+    assert_true(moved > 0); /* the staged next step is blended in between step changes */
+}
+
+static void test_fields(void **state)
+{
+    (void)state;
+    int moved;
+    const char *sets[] = {"effects.temporal=\"off\""};
+    assert_int_equal(play(fields_cfg, sets, 1, &moved), 3);
+    assert_int_equal(moved, 0);
+}
+
+/* The renderer's stage alone: a volume copied on the stage's thread, uploaded in slabs of a
+ * budget (several calls), swapped in: the texture holds the volume exactly (in half floats,
+ * clamped to their largest value), and the call that finishes the upload is the first to say
+ * ready. */
+static void stage_in_slabs(bool half)
+{
+    struct renderer *r = renderer_create();
+    assert_non_null(r);
+    renderer_set_half(r, half);
+    struct grid3 g = {.n = {12, 10, 9}, .spacing = {1.0, 1.0, 1.0}};
+    struct ext_volume first = {0}, vol = {0};
+    assert_true(ext_volume_init(&first, &g) && ext_volume_init(&vol, &g));
+    size_t n = grid3_count(&g);
+    for (size_t i = 0; i < 2 * n; i++)
+        vol.beta[i] = 1e-4f * (float)(i % 977) + (i == 5 ? 1e6f : 0.0f);
+    vol.tint = malloc(4 * n);
+    assert_non_null(vol.tint);
+    memset(vol.tint, 200, 4 * n);
+    assert_true(renderer_set_volume(r, &first));
+    bool started = false, ready = false;
+    float *also = malloc(2 * n * sizeof(float));
+    assert_non_null(also);
+    assert_true(renderer_stage_next(r, &vol, also, &started));
+    assert_true(started);
+    assert_false(renderer_has_next(r));
+    const size_t layer = (size_t)12 * 10 * 8; /* one z layer of RG32F */
+    int calls = 0;
+    for (int k = 0; k < 10000 && !ready; k++) {
+        assert_true(renderer_stage_step(r, 2 * layer, &ready));
+        if (!ready && renderer_stage_busy(r))
+            calls++;
+        usleep(200);
+    }
+    assert_true(ready);
+    assert_true(calls >= 9 / 2); /* the extinction alone takes five calls of two layers */
+    assert_true(renderer_swap_next(r));
+    assert_false(renderer_swap_next(r)); /* nothing staged any more */
+    float *back = malloc(2 * n * sizeof(float));
+    assert_non_null(back);
+    gpu_texture_read(renderer_volume_texture(r), back, 2 * n * sizeof(float));
+    for (size_t i = 0; i < 2 * n; i++) {
+        float want = vol.beta[i] > RENDER_HALF_MAX && half ? RENDER_HALF_MAX : vol.beta[i];
+        if (half)
+            assert_float_equal(back[i], want, 1e-3f * want + 1e-7f);
+        else
+            assert_true(back[i] == want);
+    }
+    assert_memory_equal(also, vol.beta, 2 * n * sizeof(float)); /* the CPU copy, unclamped */
+    free(also);
+    free(back);
+    ext_volume_finish(&first);
+    ext_volume_finish(&vol);
+    renderer_destroy(r);
+}
+
+static void test_stage_floats(void **state)
+{
+    (void)state;
+    stage_in_slabs(false);
+}
+
+static void test_stage_half(void **state)
+{
+    (void)state;
+    stage_in_slabs(true);
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    ctx = test_gl_context_or_skip();
+    const char *bin = getenv("ANVIL_BIN");
+    char cmd[2048];
+    snprintf(cmd, sizeof(cmd),
+             "'%s' --quiet synth -o '%s' --steps 4 --size 16x16x8 --extent 16x16x8", bin,
+             test_tmp_path("series.nc"));
+    if (system(cmd) != 0)
+        return -1;
+    static const char text[] =
+        "scene = { kind = \"data\"; };\n"
+        "data = { format = \"wrf\"; files = [\"series.nc\"]; };\n"
+        "playback = { speed = 5.0; loop = false; };\n"
+        "camera = { position = [-6.0, -10.0, 6.0]; target = [8.0, 8.0, 3.0]; };\n";
+    snprintf(series_cfg, sizeof(series_cfg), "%s", test_write_file("series.cfg", text));
+    char fields[2048];
+    snprintf(fields, sizeof(fields),
+             "%slook = {\n"
+             "    layers = ( { field = \"temperature\"; mode = \"tint\"; opacity = 1.0; } );\n"
+             "    slices = ( { field = \"wind\"; axis = \"z\"; position = 3.0; "
+             "opacity = 1.0; } );\n"
+             "};\n",
+             text);
+    snprintf(fields_cfg, sizeof(fields_cfg), "%s", test_write_file("fields.cfg", fields));
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    gpu_context_destroy(ctx);
+    return 0;
+}
+
+int main(void)
+{
+    log_set_level(LOG_WARN);
+    if (!getenv("ANVIL_BIN")) {
+        fprintf(stderr, "ANVIL_BIN is not set: the synthetic series cannot be written\n");
+        return TEST_SKIP;
+    }
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_stage_floats),
+        cmocka_unit_test(test_stage_half),
+        cmocka_unit_test(test_plain),
+        cmocka_unit_test(test_temporal),
+        cmocka_unit_test(test_fields),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
