@@ -12,7 +12,8 @@ static int usage(FILE *out)
 {
     fprintf(out,
             "usage: anvil bench [--quick] [--views-only | --quality-only | --movie-only |\n"
-            "                   --scale-only | --gpu | --cluster-only | --load-only]\n"
+            "                   --scale-only | --gpu | --cluster-only | --load-only |\n"
+            "                   --volume-only]\n"
             "                   [-o DIR]\n"
             "                   [--cache DIR]\n"
             "                   [--configs DIR] [--spp N] [--scene sphere|storm|katrina]...\n"
@@ -35,6 +36,10 @@ static int usage(FILE *out)
             "           $TMPDIR or /tmp, then removed) loaded to extinction against the\n"
             "           plain NetCDF read of its variables, side by side, with the peak\n"
             "           memory of each (load-table.md; not part of the default run)\n"
+            "  --volume-only  the layer from 16 directions and the wall under 4 suns with\n"
+            "           the 3-D diffuse light volume (effects.multiple = \"volume\"), drawn\n"
+            "           on the CPU, against Monte Carlo; its build time beside the light\n"
+            "           map's CPU build (volume-table.md; not part of the default run)\n"
             "  --gpu    the storm on 500 x 500 x 100 voxels as an HMD frame (2 x 1440 x 1600)\n"
             "           and as displays/cave4.cfg (8 x 1280 x 1024) sharing one light map: GPU\n"
             "           ms per frame, the rebuild, fetches per second against the device's\n"
@@ -69,6 +74,7 @@ static int parse(int argc, char **argv, struct bench_options *o)
         {"movie-only", no_argument, NULL, 'M'},   {"help", no_argument, NULL, 'h'},
         {"scale-only", no_argument, NULL, 'S'},   {"gpu", no_argument, NULL, 'G'},
         {"cluster-only", no_argument, NULL, 'L'}, {"load-only", no_argument, NULL, 'D'},
+        {"volume-only", no_argument, NULL, 'W'},
         {NULL, 0, NULL, 0},
     };
     bench_options_defaults(o);
@@ -108,6 +114,11 @@ static int parse(int argc, char **argv, struct bench_options *o)
         case 'D':
             o->views = o->quality = o->movie = o->scale = o->cluster = false;
             o->load = true;
+            only++;
+            break;
+        case 'W':
+            o->views = o->quality = o->movie = o->scale = o->cluster = false;
+            o->volume = true;
             only++;
             break;
         case 'G':
@@ -155,7 +166,7 @@ static int parse(int argc, char **argv, struct bench_options *o)
     }
     if (only > 1) {
         log_error("bench: --views-only, --quality-only, --movie-only, --scale-only, "
-                  "--cluster-only, --load-only and --gpu exclude each other");
+                  "--cluster-only, --load-only, --volume-only and --gpu exclude each other");
         return EXIT_USAGE;
     }
     if (o->paraview && !o->views) {

@@ -31,10 +31,16 @@ static bool scene_means(const struct bench_experiments_desc *d, struct renderer 
         goto done;
     if (!bench_reference(&sc, d->spp, d->cache_dir, &ref, &err, NULL))
         goto done;
-    struct bench_variant def;
-    if (bench_variants(&sc, true, &def, 1) != 1 || !renderer_set_optics(r, &cfg.optics.params) ||
-        !renderer_set_volume(r, &vol) || !bench_render(r, lg, &sc, &def, &img))
-        goto done;
+    if (d->cpu_volume) {
+        if (!bench_volume_image(&sc, &img, d->timing))
+            goto done;
+    } else {
+        struct bench_variant def;
+        if (bench_variants(&sc, true, &def, 1) != 1 ||
+            !renderer_set_optics(r, &cfg.optics.params) || !renderer_set_volume(r, &vol) ||
+            !bench_render(r, lg, &sc, &def, &img))
+            goto done;
+    }
     double a = 0.0, b = 0.0, var = 0.0;
     for (int i = 0; i < w * h; i++) {
         for (int c = 0; c < 3; c++) {

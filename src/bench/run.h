@@ -34,6 +34,9 @@ struct bench_options {
     bool load;            /* --load-only: a 500 x 500 x 100 WRF step loaded against the plain
                              NetCDF read of its variables (bench/load.h, load-table.md); not
                              part of the default run */
+    bool volume;          /* --volume-only: the layer and the wall of the experiments with the
+                             diffuse light volume, pictures and Monte Carlo both on the CPU
+                             (bench_volume_image, volume-table.md); no GL */
     bool device;          /* --gpu: the Isabel-sized storm on an HMD and a CAVE frame
                              (bench/device.h, gpu-table.md) */
     const char *displays; /* folder of cave4.cfg and cave6.cfg (the cluster and device
