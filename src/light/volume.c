@@ -16,6 +16,10 @@
  * an isotropic field being phi / 4 each way, so that a surface facing empty space lets out
  * J = phi / 2. */
 #define MARSHAK_R 2.0
+/* The least resistance of a half cell: clear air conducts diffuse light as a medium of
+ * transport optical depth 1/150 per cell would, nearly freely, without making the system
+ * singular where two clear cells meet. */
+#define HALF_CELL_R_MIN 0.01
 
 void light_volume_desc_defaults(struct light_volume_desc *d, const struct ext_volume *vol)
 {
@@ -78,6 +82,7 @@ static double cone_first_moment(double g, double psi)
  * (1 - g) beta. */
 struct cell_terms {
     double q0, q1[3], sigma;
+    double dq[3]; /* Q0 times the offset of the source's centroid from the cell's centre */
 };
 
 static void cell_terms(const struct ext_volume *vol, const struct light_map *map,
@@ -87,7 +92,8 @@ static void cell_terms(const struct ext_volume *vol, const struct light_map *map
 {
     const double *sp = v->grid.spacing;
     double h = fmin(sp[0], fmin(sp[1], sp[2])) / sub;
-    double q0 = 0.0, q1 = 0.0, sigma = 0.0;
+    const int ijk[3] = {ci, cj, ck};
+    double q0 = 0.0, q1 = 0.0, sigma = 0.0, dq[3] = {0.0, 0.0, 0.0};
     for (int c = 0; c < sub; c++) {
         for (int b = 0; b < sub; b++) {
             for (int a = 0; a < sub; a++) {
@@ -108,18 +114,58 @@ static void cell_terms(const struct ext_volume *vol, const struct light_map *map
                     pa[i] = p[i] - 0.5 * h * sdir[i];
                     pb[i] = p[i] + 0.5 * h * sdir[i];
                 }
-                double q = fmax(beam_at(map, pa) - beam_at(map, pb), 0.0) / h;
+                double la = beam_at(map, pa), lb = beam_at(map, pb);
+                double q = fmax(la - lb, 0.0) / h;
                 double lw = loss[0] * water, li = loss[1] * ice;
                 q0 += q;
                 q1 += q * (lw * gs[0] + li * gs[1]) / (lw + li);
+                /* Where on the stretch the beam loses it: the centroid of an exponential
+                 * fall from la to lb, at pa when the stretch is opaque. */
+                double s_bar = 0.5 * h;
+                if (q > 0.0) {
+                    double kh = lb > 0.0 ? log(la / lb) : INFINITY;
+                    if (kh > 50.0)
+                        s_bar = h / kh;
+                    else if (kh > 1e-4)
+                        s_bar = h * (1.0 / kh - 1.0 / expm1(kh));
+                }
+                for (int i = 0; i < 3; i++) {
+                    double centre = v->grid.origin[i] + (ijk[i] + 0.5) * sp[i];
+                    dq[i] += q * (pa[i] + s_bar * sdir[i] - centre);
+                }
             }
         }
     }
     double n = (double)sub * sub * sub;
     out->q0 = q0 / n;
-    for (int i = 0; i < 3; i++)
+    for (int i = 0; i < 3; i++) {
         out->q1[i] = q1 / n * sdir[i];
+        out->dq[i] = dq[i] / n;
+    }
     out->sigma = sigma / n;
+}
+
+/* Resistance of half a cell of transport extinction SIGMA and length DX across the face:
+ * dx / (2 D), D = 1 / (3 sigma). */
+static double half_r(double sigma, double dx)
+{
+    return fmax(1.5 * sigma * dx, HALF_CELL_R_MIN);
+}
+
+/* What cell T adds, in fluence, to the push of the net flux along +A through its face on
+ * SIDE (0 the lower, 1 the upper), R its half cell's resistance across it, DX the cell's
+ * length: the drift of the source's first moment through the half cell, R Q1 / sigma_tr =
+ * 1.5 dx Q1 (none in clear air), and the source's place in the cell.  A cell's source is
+ * injected at its centre; where it lies off the centre (an opaque cell lit on one face keeps
+ * all of it in its first optical depths) the equivalent is a push 2 R delta Q0 in the half
+ * cell the centroid lies in, delta its offset (a current source moved across part of a
+ * resistor is a voltage source in series with it).  Without it an opaque cell would hold its
+ * source half a cell deep, and a slab of optical depth 1e4 on four cells let a tenth of the
+ * light through. */
+static double face_push(const struct cell_terms *t, int a, int side, double r, double dx)
+{
+    double shift = side ? fmax(t->dq[a], 0.0) : fmin(t->dq[a], 0.0);
+    return 1.5 * dx * t->q1[a] + 2.0 * r * shift;
 }
 
 static size_t cell_index(const int n[3], int i, int j, int k)
@@ -312,29 +358,30 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
                 int idx[3] = {i, j, k};
                 sys.rhs[c] += t->q0;
                 for (int a = 0; a < 3; a++) {
-                    double ra = 1.5 * t->sigma * dx[a], ca = 1.0 / (1.0 + ra);
-                    /* The faces on the box: down to 0 beyond. */
+                    double ra = half_r(t->sigma, dx[a]), ca = 1.0 / (1.0 + ra);
+                    /* The faces on the box: down to 0 beyond.  Out through the lower face
+                     * the flux is -(flux along +a). */
                     for (int side = 0; side < 2; side++) {
                         bool edge = side == 0 ? idx[a] == 0 : idx[a] == n[a] - 1;
                         if (!edge)
                             continue;
                         double g = 1.0 / (ra + MARSHAK_R) / dx[a];
-                        double nout = side == 0 ? -1.0 : 1.0;
+                        double push = face_push(t, a, side, ra, dx[a]) * (side ? 1.0 : -1.0);
                         sys.diag[c] += g;
-                        sys.rhs[c] -= g * 1.5 * dx[a] * t->q1[a] * nout;
+                        sys.rhs[c] -= g * push;
                     }
                     if (idx[a] + 1 >= n[a])
                         continue;
                     size_t o = c + stride[a];
                     const struct cell_terms *u = &terms[o];
-                    double rb = 1.5 * u->sigma * dx[a], cb = 1.0 / (1.0 + rb);
+                    double rb = half_r(u->sigma, dx[a]), cb = 1.0 / (1.0 + rb);
                     double g = 1.0 / (ra + rb + MARSHAK_R * fabs(ca - cb)) / dx[a];
-                    double b = 1.5 * dx[a] * (t->q1[a] + u->q1[a]);
+                    double b = face_push(t, a, 1, ra, dx[a]) + face_push(u, a, 0, rb, dx[a]);
                     sys.off[a][c] = -g;
                     sys.diag[c] += g;
                     sys.diag[o] += g;
-                    sys.rhs[c] -= g * b;  /* flux out of c along +a */
-                    sys.rhs[o] += g * b;  /* the same flux into o */
+                    sys.rhs[c] -= g * b; /* flux out of c along +a */
+                    sys.rhs[o] += g * b; /* the same flux into o */
                 }
             }
         }
@@ -357,14 +404,14 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
                 float *f = out->field + 4 * c;
                 f[0] = (float)phi[c];
                 for (int a = 0; a < 3; a++) {
-                    double ra = 1.5 * t->sigma * dx[a], ca = 1.0 / (1.0 + ra);
+                    double ra = half_r(t->sigma, dx[a]), ca = 1.0 / (1.0 + ra);
                     double area = volume_cell / dx[a];
                     double face[2]; /* the flux along +a through the lower and upper face */
                     for (int side = 0; side < 2; side++) {
                         bool edge = side == 0 ? idx[a] == 0 : idx[a] == n[a] - 1;
                         if (edge) {
                             double nout = side == 0 ? -1.0 : 1.0;
-                            double fo = (phi[c] + 1.5 * dx[a] * t->q1[a] * nout) /
+                            double fo = (phi[c] + face_push(t, a, side, ra, dx[a]) * nout) /
                                         (ra + MARSHAK_R);
                             out->leak += fo * area;
                             face[side] = fo * nout;
@@ -372,10 +419,14 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
                         }
                         size_t o = side == 0 ? c - stride[a] : c + stride[a];
                         const struct cell_terms *u = &terms[o];
-                        double rb = 1.5 * u->sigma * dx[a], cb = 1.0 / (1.0 + rb);
+                        double rb = half_r(u->sigma, dx[a]), cb = 1.0 / (1.0 + rb);
                         double r = ra + rb + MARSHAK_R * fabs(ca - cb);
-                        double lo = side == 0 ? phi[o] : phi[c], hi = side == 0 ? phi[c] : phi[o];
-                        face[side] = (lo - hi + 1.5 * dx[a] * (t->q1[a] + u->q1[a])) / r;
+                        /* lower cell L, upper cell U of the face */
+                        const struct cell_terms *tl = side == 0 ? u : t, *tu = side == 0 ? t : u;
+                        double rl = side == 0 ? rb : ra, ru = side == 0 ? ra : rb;
+                        double pl = side == 0 ? phi[o] : phi[c], pu = side == 0 ? phi[c] : phi[o];
+                        face[side] = (pl - pu + face_push(tl, a, 1, rl, dx[a]) +
+                                      face_push(tu, a, 0, ru, dx[a])) / r;
                     }
                     f[1 + a] = (float)(0.5 * (face[0] + face[1]));
                 }
