@@ -77,6 +77,13 @@ struct image;
 bool bench_volume_image(const struct bench_scene *sc, struct image *out,
                         struct bench_volume_timing *timing);
 
+/* The CPU builds of the default storm (the quick run's smaller one when QUICK; CONFIGS as
+ * bench_scene_config's) at its default light map: the light map with the columns' diffuse
+ * pass, then the diffuse light volume over it, once each, into OUT; the volume's cells into
+ * CELLS.  False (logged) on failure.  No GL. */
+bool bench_volume_time_storm(const char *configs, bool quick, struct bench_volume_timing *out,
+                             int cells[3]);
+
 /* Runs the layer from every direction, then the wall under every sun, into OUT.  R and LG are
  * the caller's; R's volume and optics are replaced.  Progress goes to the log.  False
  * (logged) on the first failure. */

@@ -299,10 +299,21 @@ static bool run_volume(const struct bench_options *o)
                                        .timing = &t};
     if (!bench_angles_measure(NULL, NULL, &d, &a))
         return false;
+    struct bench_volume_timing storm;
+    int cells[3];
+    if (!bench_volume_time_storm(o->configs, o->quick, &storm, cells))
+        return false;
     char *buf = NULL;
     size_t len = 0;
     FILE *f = open_memstream(&buf, &len);
     bench_table_head(f, o->quick, "volume");
+    fprintf(f, "The default storm%s at its default light map, one CPU thread: the light map's "
+               "build with the columns' diffuse pass %.0f ms, the diffuse light volume's "
+               "(%d x %d x %d cells, %d conjugate gradient iterations) %.0f ms on top, %.2f "
+               "times.\n\n",
+            o->quick ? " (the quick run's)" : "", storm.map_ms, cells[0], cells[1], cells[2],
+            storm.iterations, storm.volume_ms,
+            storm.map_ms > 0.0 ? storm.volume_ms / storm.map_ms : 0.0);
     fprintf(f, "The diffuse light volume (docs/lightmap.md, \"The diffuse light volume\"): the "
                "light map's beam, its losses the source of a diffusion solve on a grid of half "
                "the volume's resolution, both drawn by a fine CPU ray march.  Over the %d "

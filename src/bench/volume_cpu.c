@@ -7,6 +7,8 @@
 
 #include "bench/bench.h"
 #include "bench/experiments.h"
+#include "bench/scenes.h"
+#include "config/config.h"
 #include "common/log.h"
 #include "light/light.h"
 #include "light/light_volume.h"
@@ -225,5 +227,40 @@ done:
     light_volume_finish(&lv);
     if (!ok)
         image_finish(out);
+    return ok;
+}
+
+bool bench_volume_time_storm(const char *configs, bool quick, struct bench_volume_timing *out,
+                             int cells[3])
+{
+    memset(out, 0, sizeof(*out));
+    struct config cfg;
+    if (!bench_scene_config("storm", configs, quick, NULL, 0, &cfg))
+        return false;
+    struct ext_volume vol = {0};
+    struct bench_scene sc;
+    struct light_map map = {0};
+    struct light_volume lv = {0};
+    bool ok = false;
+    if (!bench_scene_prepare("storm", &cfg, 64, 48, &vol, &sc))
+        goto done;
+    double t0 = time_now_ms();
+    if (!light_map_build(sc.vol, sc.sun, &sc.light, &map))
+        goto done;
+    double t1 = time_now_ms();
+    if (!light_volume_build(sc.vol, &map, &sc.light, NULL, &lv))
+        goto done;
+    double t2 = time_now_ms();
+    out->map_ms = t1 - t0;
+    out->volume_ms = t2 - t1;
+    out->builds = 1;
+    out->iterations = lv.iterations;
+    for (int a = 0; a < 3; a++)
+        cells[a] = lv.grid.n[a];
+    ok = true;
+done:
+    light_map_finish(&map);
+    light_volume_finish(&lv);
+    ext_volume_finish(&vol);
     return ok;
 }

@@ -52,6 +52,15 @@ check "load table: 64 x 64 x 20 and its peak memory" \
     grep -q '64 × 64 × 20 WRF series' "$tmp/l/load-table.md"
 check "load table: peak memory" grep -q '^| peak memory above the process' "$tmp/l/load-table.md"
 check "load bench leaves no file behind" test -z "$(ls "$tmp"/anvil-bench-load-* 2>/dev/null)"
+# The diffuse light volume's experiments (no GL): the layer and the wall against Monte Carlo.
+expect_exit 2 "bench: --volume-only excludes --load-only" "$anvil" bench --volume-only --load-only
+"$anvil" bench --quick --volume-only -o "$tmp/v" --cache "$tmp/v-cache" >"$tmp/out" 2>"$tmp/err"
+check "volume bench exits 0" test $? -eq 0
+check "volume table: the layer's 12 degree row" \
+    grep -q '^| 12 | [0-9.]* ± [0-9.]* (152°) |' "$tmp/v/volume-table.md"
+check "volume table: the wall under a 10 degree sun" \
+    grep -q '^| 10 | [0-9.]* ± [0-9.]* | [0-9.]* ± ' "$tmp/v/volume-table.md"
+check "volume table: both builds timed" grep -q "volume's [0-9]* ms on top" "$tmp/v/volume-table.md"
 expect_exit 1 "bench: unknown scene" "$anvil" bench --scene nowhere
 expect_exit 2 "bench: exclusive options" "$anvil" bench --views-only --quality-only
 
