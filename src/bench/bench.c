@@ -93,6 +93,10 @@ int bench_variants(const struct bench_scene *sc, bool quick, struct bench_varian
     ADD(snprintf(v->knob, sizeof(v->knob), "multiple"); snprintf(v->value, sizeof(v->value),
         "%s", sc->light.multiple ? "off" : "on (two-stream)");
         v->light.multiple = !sc->light.multiple);
+    if (sc->light.multiple && !sc->light.volume)
+        ADD(snprintf(v->knob, sizeof(v->knob), "multiple");
+            snprintf(v->value, sizeof(v->value), "volume (3-D diffusion)");
+            v->light.volume = true);
     struct light_grid grid;
     if (sc->light.grid == LIGHT_GRID_AUTO &&
         light_grid_init(&grid, sc->sun, &sc->vol->grid, sc->light.resolution, LIGHT_GRID_AUTO) &&

@@ -22,7 +22,7 @@
 
 /* Zero means default. */
 struct light_volume_desc {
-    int resolution[3];   /* cells along x, y, z; 0 = the volume's voxels / 2, within [2, 64] */
+    int resolution[3];   /* cells along x, y, z; 0 = the volume's voxels / 2, within [2, 32] */
     int substeps;        /* samples of the source and the extinction per cell and axis; 0 = 3 */
     double tolerance;    /* relative residual the solve stops at; 0 = 1e-6 */
     int max_iterations;  /* 0 = 4000 */
@@ -42,8 +42,15 @@ struct light_volume {
                             converged: albedo 1, nothing is absorbed) */
 };
 
-/* Fills the defaults of D's zero fields for the volume VOL. */
-void light_volume_desc_defaults(struct light_volume_desc *d, const struct ext_volume *vol);
+/* Fills the defaults of D's zero fields for a volume on GRID. */
+void light_volume_desc_defaults(struct light_volume_desc *d, const struct grid3 *grid);
+
+/* The per-phase terms of the source ([0] water, [1] ice) for the settings S and the sun SUN:
+ * TR = 1 - g, LOSS the share of the extinction that leaves the beam (what the forward cone
+ * and ring do not keep), GS the mean cosine of what leaves it (the phase's first moment less
+ * the cone's, over LOSS). */
+void light_volume_phase_terms(const struct light_settings *s, const double sun[3], double tr[2],
+                              double loss[2], double gs[2]);
 
 /* Builds the diffuse light volume of VOL lit by the beam of MAP (light_map_build's, any
  * storage of the settings S: forward, peripheral and the phases' terms are read from S) into

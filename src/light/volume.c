@@ -21,12 +21,12 @@
  * singular where two clear cells meet. */
 #define HALF_CELL_R_MIN 0.01
 
-void light_volume_desc_defaults(struct light_volume_desc *d, const struct ext_volume *vol)
+void light_volume_desc_defaults(struct light_volume_desc *d, const struct grid3 *grid)
 {
     for (int a = 0; a < 3; a++) {
         if (d->resolution[a] <= 0) {
-            int n = (vol->grid.n[a] + 1) / 2;
-            d->resolution[a] = n < 2 ? 2 : n > 64 ? 64 : n;
+            int n = (grid->n[a] + 1) / 2;
+            d->resolution[a] = n < 2 ? 2 : n > 32 ? 32 : n;
         }
     }
     if (d->substeps <= 0)
@@ -75,6 +75,22 @@ static double cone_first_moment(double g, double psi)
         s += (i == 0 || i == n) ? f : (i % 2 ? 4.0 : 2.0) * f;
     }
     return s * h / 3.0;
+}
+
+void light_volume_phase_terms(const struct light_settings *s, const double sun[3], double tr[2],
+                              double loss[2], double gs[2])
+{
+    struct light_diffuse_terms dt;
+    light_diffuse_terms_init(s, sun, &dt);
+    const bool fwd = s->forward, per = s->forward && s->peripheral;
+    double psi = !fwd ? 0.0 : (per ? 0.5 : 0.25) * s->forward_angle_deg * (PI / 180.0);
+    const double csg[2] = {s->cp.water_cs_g, s->cp.ice_cs_g};
+    for (int p = 0; p < 2; p++) {
+        tr[p] = 4.0 * dt.gamma[p] / 3.0;
+        loss[p] = dt.loss[p];
+        double g = 1.0 - tr[p];
+        gs[p] = fmax(-1.0, fmin(1.0, (g - cone_first_moment(csg[p], psi)) / loss[p]));
+    }
 }
 
 /* Per cell, averaged over its sub-samples: the source Q0 (per metre: the beam's loss rate
@@ -289,7 +305,7 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
 {
     assert(vol && map && s && out);
     struct light_volume_desc d = desc ? *desc : (struct light_volume_desc){0};
-    light_volume_desc_defaults(&d, vol);
+    light_volume_desc_defaults(&d, &vol->grid);
     float *field_keep = out->field;
     size_t keep_count = out->field ? grid3_count(&out->grid) : 0;
     memset(out, 0, sizeof(*out));
@@ -324,20 +340,8 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
     const double *sun = map->grid.sun;
     double len = sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2]);
     const double sdir[3] = {-sun[0] / len, -sun[1] / len, -sun[2] / len};
-    /* Per phase ([0] water, [1] ice): 1 - g, the share of the extinction that leaves the beam,
-     * and the mean cosine of what leaves it (the phase's first moment less the cone's). */
-    struct light_diffuse_terms dt;
-    light_diffuse_terms_init(s, sun, &dt);
-    const bool fwd = s->forward, per = s->forward && s->peripheral;
-    double psi = !fwd ? 0.0 : (per ? 0.5 : 0.25) * s->forward_angle_deg * (PI / 180.0);
-    const double csg[2] = {s->cp.water_cs_g, s->cp.ice_cs_g};
     double tr[2], loss[2], gs[2];
-    for (int p = 0; p < 2; p++) {
-        tr[p] = 4.0 * dt.gamma[p] / 3.0;
-        loss[p] = dt.loss[p];
-        double g = 1.0 - tr[p];
-        gs[p] = fmax(-1.0, fmin(1.0, (g - cone_first_moment(csg[p], psi)) / loss[p]));
-    }
+    light_volume_phase_terms(s, sun, tr, loss, gs);
 
     const int *n = sys.n;
     for (int k = 0; k < n[2]; k++) {
