@@ -62,6 +62,12 @@ done:
     return ok;
 }
 
+/* The renderer's diffuse light: the default, or the volume with D->volume. */
+static char *multiple_set(const struct bench_experiments_desc *d)
+{
+    return d->volume ? "effects.multiple=volume" : "effects.multiple=auto";
+}
+
 static bool layer_angle(const struct bench_experiments_desc *d, struct renderer *r,
                         struct light_gpu *lg, double elevation, double rel_azimuth,
                         struct bench_angle_result *out)
@@ -80,7 +86,7 @@ static bool layer_angle(const struct bench_experiments_desc *d, struct renderer 
     char *sets[] = {"scene.kind=slab", "scene.size=[64,64,16]", "scene.extent=[480,480,2]",
                     "scene.tau=20", "scene.phase=water", sun_set[0], sun_set[1], cam_set,
                     "camera.target=[240,240,1]", "camera.fov=8", "camera.far=5000",
-                    "render.sky=[0,0,0]", "render.ground_on=false"};
+                    "render.sky=[0,0,0]", "render.ground_on=false", multiple_set(d)};
     int w = d->quick ? 16 : 32, h = d->quick ? 12 : 24;
     if (!scene_means(d, r, lg, "layer", sets, (int)(sizeof(sets) / sizeof(sets[0])), w, h, out))
         return false;
@@ -101,7 +107,7 @@ static bool wall_sun(const struct bench_experiments_desc *d, struct renderer *r,
                     "scene.extent=[2,60,10]", "scene.tau=100", "scene.phase=water",
                     "light.azimuth=270", sun_set, "camera.position=[-50,30,13.8164]",
                     "camera.target=[0,30,5]", "camera.fov=8", "camera.far=5000",
-                    "render.sky=[0,0,0]", "render.ground_on=false"};
+                    "render.sky=[0,0,0]", "render.ground_on=false", multiple_set(d)};
     int w = d->quick ? 16 : 32, h = d->quick ? 12 : 24;
     if (!scene_means(d, r, lg, "wall", sets, (int)(sizeof(sets) / sizeof(sets[0])), w, h, out))
         return false;

@@ -57,12 +57,14 @@ struct bench_volume_timing {
 /* How the experiments are run: QUICK halves the images (16 x 12 instead of 32 x 24) and the
  * wall's grid; SPP reference samples per pixel; references cached in CACHE_DIR.  CPU_VOLUME:
  * the model's pictures come from bench_volume_image (the diffuse light volume, CPU only; the
- * renderer and light map arguments may be NULL), whose times add up in TIMING (may be NULL). */
+ * renderer and light map arguments may be NULL), whose times add up in TIMING (may be NULL).
+ * VOLUME: the renderer draws with effects.multiple = "volume" (else its default). */
 struct bench_experiments_desc {
     bool quick;
     int spp;
     const char *cache_dir;
     bool cpu_volume;
+    bool volume;
     struct bench_volume_timing *timing;
 };
 

@@ -324,8 +324,32 @@ static bool run_volume(const struct bench_options *o)
             t.iterations);
     bench_write_angles_table(f, &a, "CPU (the volume's pictures drawn by bench_volume_image)",
                              o->spp);
+    /* The same with the renderer's eye pass reading the GPU's volume, where GL can be had. */
+    struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){.backend = "egl"});
+    bool ok = true;
+    if (ctx) {
+        struct renderer *r = renderer_create();
+        struct light_gpu *lg = light_gpu_create();
+        struct bench_experiments_desc g = {
+            .quick = o->quick, .spp = o->spp, .cache_dir = o->cache, .volume = true};
+        ok = r && lg && bench_angles_measure(r, lg, &g, &a);
+        if (ok) {
+            fprintf(f, "\n## The renderer with effects.multiple = \"volume\"\n\nThe same "
+                       "scenes drawn by the eye pass, reading the volume the GPU built.  ");
+            bench_write_angles_table(f, &a, gpu_renderer_name(), o->spp);
+        }
+        light_gpu_destroy(lg);
+        renderer_destroy(r);
+        gpu_context_destroy(ctx);
+    } else {
+        fprintf(f, "\n(No GL context: the renderer's pictures with the volume are left out.)\n");
+    }
     fclose(f);
-    bool ok = write_text(o, "volume-table.md", buf, len);
+    if (!ok) {
+        free(buf);
+        return false;
+    }
+    ok = write_text(o, "volume-table.md", buf, len);
     echo(o, "%.*s", (int)len, buf);
     free(buf);
     return ok;

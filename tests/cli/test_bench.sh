@@ -34,6 +34,10 @@ if [ -f "$data/wrf/katrina_2005_mercator_wsm3.nc" ]; then
     check "katrina: water phase for all" stdout_has "the water phase for all"
     check "katrina: four time steps" stdout_has "4 steps"
 fi
+expect_exit 0 "the diffuse light volume" "$anvil" effects --set effects.multiple=volume
+check "volume: multiple on, from the volume" stdout_has "multiple       on   (volume) volume in the config"
+check "volume: lateral escape is the columns'" stdout_has "lateral        off  (auto) the diffuse light volume"
+expect_exit 1 "volume is for multiple only" "$anvil" effects --set effects.forward=volume
 expect_exit 1 "bad effect value" "$anvil" effects --set effects.forward=maybe
 printf 'light = { elevation = 20.0; };\n' >"$tmp/a.cfg"
 cp "$tmp/a.cfg" "$tmp/b.cfg"

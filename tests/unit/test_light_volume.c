@@ -227,6 +227,29 @@ static void test_scattered_light_toward_the_eye(void **state)
     assert_float_equal(f[0], 1.0, 1e-7);
 }
 
+/* The volume is part of the light map's key: switching it rebuilds; it means nothing without
+ * multiple scattering. */
+static void test_volume_is_in_the_key(void **state)
+{
+    (void)state;
+    struct grid3 box = {.n = {4, 4, 4}, .spacing = {1e3, 1e3, 1e3}};
+    double sun[3] = {0.3, 0.2, 0.9};
+    struct light_settings a, b;
+    light_settings_defaults(&a);
+    a.multiple = true;
+    b = a;
+    b.volume = true;
+    struct light_key ka, kb;
+    light_key_init(&ka, &box, sun, 1, 1, &a);
+    light_key_init(&kb, &box, sun, 1, 1, &b);
+    assert_false(light_key_equal(&ka, &kb));
+    assert_true(light_key_hash(&ka) != light_key_hash(&kb));
+    a.multiple = b.multiple = false;
+    light_key_init(&ka, &box, sun, 1, 1, &a);
+    light_key_init(&kb, &box, sun, 1, 1, &b);
+    assert_true(light_key_equal(&ka, &kb));
+}
+
 int main(void)
 {
     log_set_level(LOG_ERROR);
@@ -236,6 +259,7 @@ int main(void)
         cmocka_unit_test(test_storm_conserves_energy),
         cmocka_unit_test(test_hard_cases_stay_finite),
         cmocka_unit_test(test_scattered_light_toward_the_eye),
+        cmocka_unit_test(test_volume_is_in_the_key),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
