@@ -48,7 +48,10 @@ layout(std430, binding = BIND_VOLUME_BUF_SCALARS) buffer volume_scalars {
 };
 
 #define MARSHAK_R 2.0
+// volume.c: the least half-cell resistance in cloud and in clear air.
 #define HALF_CELL_R_MIN 0.01
+#define HALF_CELL_R_AIR 0.25
+#define CLEAR_SIGMA 1e-6
 
 int cells_count()
 {
@@ -74,7 +77,7 @@ int stride_of(int a)
 
 float half_r(float sigma, float dx)
 {
-    return max(1.5 * sigma * dx, HALF_CELL_R_MIN);
+    return max(1.5 * sigma * dx, sigma < CLEAR_SIGMA ? HALF_CELL_R_AIR : HALF_CELL_R_MIN);
 }
 
 // What cell C adds to the push of the flux along +A through its face on SIDE (volume.c,

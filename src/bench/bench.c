@@ -411,7 +411,8 @@ static bool same_build_work(const struct bench_variant *a, const struct bench_va
     return a->mode == b->mode &&
            memcmp(x->resolution, y->resolution, sizeof(x->resolution)) == 0 &&
            x->forward == y->forward && per_x == per_y && x->multiple == y->multiple &&
-           (!x->multiple || x->lateral == y->lateral) && x->grid == y->grid &&
+           (!x->multiple || (x->lateral == y->lateral && x->volume == y->volume)) &&
+           x->grid == y->grid &&
            x->substeps == y->substeps &&
            light_settings_phases_equal(x) == light_settings_phases_equal(y) &&
            (a->mode == LIGHT_GPU_DENSE || x->epsilon == y->epsilon);
