@@ -281,7 +281,8 @@ static const struct config_field settings[] = {
     EFFECT("effects.peripheral", EFFECT_PERIPHERAL,
            "peripheral forward scattering; auto: as effects.forward"),
     {.path = "effects.multiple", .type = T_ENUM, .n = 1,
-     .offset = OFF(effects.mode[EFFECT_MULTIPLE]), .names = multiple_mode_names, .def = {EFFECT_AUTO},
+     .offset = OFF(effects.mode[EFFECT_MULTIPLE]), .names = multiple_mode_names,
+     .def = {EFFECT_AUTO},
      .help = "multiple scattering: diffuse light from a two-stream pass down each light column, "
              "solved as a layer lit at the sun's elevation (docs/lightmap.md); \"volume\": "
              "from a diffusion solve over the whole volume instead, light crossing columns "

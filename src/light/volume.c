@@ -21,10 +21,10 @@
  * is below CLEAR_SIGMA, 1e-6 per metre: about LIGHT_CLEAR_BETA), 0.25: diffusion cannot hold
  * light streaming away from a cloud, whose fluence falls off faster than a diffusion's 1 / r,
  * and air that conducts freely spreads what leaves a tower evenly through the whole box and
- * out of it.  0.25 was chosen on the bench's scenes (docs/accuracy.md, "The diffuse light
- * volume": against 0.01 the storm's RMSE falls from 1.30 to 1.08 and Katrina's from 0.255 to
- * 0.213, the thin sphere's rises from 0.16 to 0.24); it is per cell, so it depends on the
- * grid. */
+ * out of it.  0.25 was chosen on the bench's scenes (docs/lightmap.md, "The diffuse light
+ * volume", "Clear air": against 0.01 the storm's RMSE falls from 1.30 to 1.08 and Katrina's
+ * from 0.255 to 0.213, the thin sphere's rises from 0.16 to 0.24); it is per cell, so it
+ * depends on the grid. */
 #define HALF_CELL_R_MIN 0.01
 #define HALF_CELL_R_AIR 0.25
 #define CLEAR_SIGMA 1e-6
