@@ -80,6 +80,12 @@ float half_r(float sigma, float dx)
     return max(1.5 * sigma * dx, sigma < CLEAR_SIGMA ? HALF_CELL_R_AIR : HALF_CELL_R_MIN);
 }
 
+// volume.c, clearness: 1 in clear air, 0 in opaque cloud, from the cell's own optical depth.
+float clearness(float sigma, float dx)
+{
+    return 1.0 / (1.0 + 1.5 * sigma * dx);
+}
+
 // What cell C adds to the push of the flux along +A through its face on SIDE (volume.c,
 // face_push).
 float face_push(int c, int a, int side, float r, float dx)
@@ -272,7 +278,7 @@ void main()
         vec3 off = vec3(0.0);
         for (int a = 0; a < 3; a++) {
             float dx = cell_size[a];
-            float ra = half_r(t1.x, dx), ca = 1.0 / (1.0 + ra);
+            float ra = half_r(t1.x, dx), ca = clearness(t1.x, dx);
             for (int side = 0; side < 2; side++) {
                 bool edge = side == 0 ? idx[a] == 0 : idx[a] == cells_n[a] - 1;
                 if (edge) {
@@ -283,7 +289,7 @@ void main()
                     continue;
                 }
                 int o = side == 0 ? c - stride_of(a) : c + stride_of(a);
-                float rb = half_r(terms[2 * o + 1].x, dx), cb = 1.0 / (1.0 + rb);
+                float rb = half_r(terms[2 * o + 1].x, dx), cb = clearness(terms[2 * o + 1].x, dx);
                 float g = 1.0 / (ra + rb + MARSHAK_R * abs(ca - cb)) / dx;
                 diag += g;
                 // the flux along +a through this face, lower cell first
@@ -410,7 +416,7 @@ void main()
     vec3 flux;
     for (int a = 0; a < 3; a++) {
         float dx = cell_size[a];
-        float ra = half_r(t1.x, dx), ca = 1.0 / (1.0 + ra);
+        float ra = half_r(t1.x, dx), ca = clearness(t1.x, dx);
         float face[2];
         for (int side = 0; side < 2; side++) {
             bool edge = side == 0 ? idx[a] == 0 : idx[a] == cells_n[a] - 1;
@@ -421,7 +427,7 @@ void main()
                 continue;
             }
             int o = side == 0 ? c - stride_of(a) : c + stride_of(a);
-            float rb = half_r(terms[2 * o + 1].x, dx), cb = 1.0 / (1.0 + rb);
+            float rb = half_r(terms[2 * o + 1].x, dx), cb = clearness(terms[2 * o + 1].x, dx);
             float r = ra + rb + MARSHAK_R * abs(ca - cb);
             int lo = side == 0 ? o : c, hi = side == 0 ? c : o;
             float rl = side == 0 ? rb : ra, rh = side == 0 ? ra : rb;

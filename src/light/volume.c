@@ -192,6 +192,14 @@ static double face_push(const struct cell_terms *t, int a, int side, double r, d
     return 1.5 * dx * t->q1[a] + 2.0 * r * shift;
 }
 
+/* How clear a cell of transport extinction SIGMA is across DX, 1 / (1 + 1.5 sigma dx): 1 in
+ * clear air, 0 in opaque cloud.  From the cell's own optical depth, not the floored
+ * resistance, so that a thick cloud's face toward air gets the whole Marshak jump. */
+static double clearness(double sigma, double dx)
+{
+    return 1.0 / (1.0 + 1.5 * sigma * dx);
+}
+
 static size_t cell_index(const int n[3], int i, int j, int k)
 {
     return (size_t)i + (size_t)n[0] * ((size_t)j + (size_t)n[1] * (size_t)k);
@@ -202,7 +210,7 @@ static size_t cell_index(const int n[3], int i, int j, int k)
  * and the right-hand side.  Face between cells a and b along an axis of cell length dx, per
  * unit area: F = (phi_a - phi_b + 1.5 dx (Q1_a + Q1_b).e) / (R_a + R_b + R_int), the half
  * cells' resistances R = dx / (2 D) = 1.5 sigma_tr dx in series with the jump between thick
- * and clear R_int = 2 |c_a - c_b|, c = 1 / (1 + R) (1 in clear air); a box face lets out
+ * and clear R_int = 2 |c_a - c_b| (clearness, below); a box face lets out
  * F = (phi_a + 1.5 dx Q1_a.n) / (R_a + 2). */
 struct system {
     int n[3];
@@ -370,7 +378,7 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
                 int idx[3] = {i, j, k};
                 sys.rhs[c] += t->q0;
                 for (int a = 0; a < 3; a++) {
-                    double ra = half_r(t->sigma, dx[a]), ca = 1.0 / (1.0 + ra);
+                    double ra = half_r(t->sigma, dx[a]), ca = clearness(t->sigma, dx[a]);
                     /* The faces on the box: down to 0 beyond.  Out through the lower face
                      * the flux is -(flux along +a). */
                     for (int side = 0; side < 2; side++) {
@@ -386,7 +394,7 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
                         continue;
                     size_t o = c + stride[a];
                     const struct cell_terms *u = &terms[o];
-                    double rb = half_r(u->sigma, dx[a]), cb = 1.0 / (1.0 + rb);
+                    double rb = half_r(u->sigma, dx[a]), cb = clearness(u->sigma, dx[a]);
                     double g = 1.0 / (ra + rb + MARSHAK_R * fabs(ca - cb)) / dx[a];
                     double b = face_push(t, a, 1, ra, dx[a]) + face_push(u, a, 0, rb, dx[a]);
                     sys.off[a][c] = -g;
@@ -416,7 +424,7 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
                 float *f = out->field + 4 * c;
                 f[0] = (float)phi[c];
                 for (int a = 0; a < 3; a++) {
-                    double ra = half_r(t->sigma, dx[a]), ca = 1.0 / (1.0 + ra);
+                    double ra = half_r(t->sigma, dx[a]), ca = clearness(t->sigma, dx[a]);
                     double area = volume_cell / dx[a];
                     double face[2]; /* the flux along +a through the lower and upper face */
                     for (int side = 0; side < 2; side++) {
@@ -431,7 +439,7 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
                         }
                         size_t o = side == 0 ? c - stride[a] : c + stride[a];
                         const struct cell_terms *u = &terms[o];
-                        double rb = half_r(u->sigma, dx[a]), cb = 1.0 / (1.0 + rb);
+                        double rb = half_r(u->sigma, dx[a]), cb = clearness(u->sigma, dx[a]);
                         double r = ra + rb + MARSHAK_R * fabs(ca - cb);
                         /* lower cell L, upper cell U of the face */
                         const struct cell_terms *tl = side == 0 ? u : t, *tu = side == 0 ? t : u;
