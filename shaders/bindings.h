@@ -21,7 +21,9 @@
  * the eye pass and the opaque pass. */
 #define BIND_LIGHTMAP_TEX_LIGHT 2          /* LIGHTMAP 1: dense light volume, R32F */
 #define BIND_LIGHTMAP_TEX_LIGHT_NEXT 8     /* ... of step k + 1 */
-#define BIND_LIGHTMAP_TEX_DIFFUSE 9        /* MULTIPLE 1 and LIGHTMAP 1: diffuse light M, N */
+#define BIND_LIGHTMAP_TEX_DIFFUSE 9        /* MULTIPLE 1 and LIGHTMAP 1: diffuse light M, N;
+                                              MULTIPLE 2 (either LIGHTMAP): the diffuse light
+                                              volume, phi and F (RGBA32F) */
 #define BIND_LIGHTMAP_TEX_DIFFUSE_NEXT 10  /* ... of step k + 1 */
 #define BIND_LIGHTMAP_BUF_COLUMNS 0        /* LIGHTMAP 2: first node and count per column (of
                                               the light, then of the diffuse light) */
@@ -90,6 +92,15 @@
 #define BIND_LATERAL_TEX_BETA 0   /* the volume's extinction, texelFetch only */
 #define BIND_LATERAL_IMG_RATES 0  /* RG32F rates along x and y, read and written */
 #define BIND_LATERAL_BUF_CELLS 0  /* SKIP 1: the volume's macro cells (cells.glsl) */
+
+/* ---- light build: the diffuse light volume (shaders/light_volume.comp) ---------------- */
+#define BIND_VOLUME_TEX_BETA 0      /* PASS 1: the volume's extinction, texelFetch only */
+#define BIND_VOLUME_TEX_LIGHT 1     /* PASS 1: the dense light map, texelFetch only */
+#define BIND_VOLUME_IMG_FIELD 0     /* PASS 7: RGBA32F phi and net flux per cell, written */
+#define BIND_VOLUME_BUF_TERMS 0     /* per cell: source, its moments, transport extinction */
+#define BIND_VOLUME_BUF_SYSTEM 1    /* per cell: diagonal and conductances */
+#define BIND_VOLUME_BUF_VECTORS 2   /* the solve's vectors b, x, r, z, p, q */
+#define BIND_VOLUME_BUF_SCALARS 3   /* the solve's scalars and partial sums */
 
 /* ---- the peak fetch rate of anvil bench --gpu (shaders/fetch_peak.comp) -------------- */
 #define BIND_PEAK_TEX_VOLUME 0

@@ -13,6 +13,10 @@
 //               dense, an RG volume at BIND_LIGHTMAP_TEX_DIFFUSE (step k + 1: *_NEXT);
 //               compressed, its columns of (depth, M, N) nodes after the light's in the same
 //               two buffers; lightmap_diffuse() reads it (0 beside the light columns).
+//   MULTIPLE 2 (effects.multiple = "volume"): the diffuse light is the 3-D volume instead
+//               (light_volume.h): phi and the net flux F per cell over the volume box, an
+//               RGBA volume at BIND_LIGHTMAP_TEX_DIFFUSE (step k + 1: *_NEXT) in either
+//               storage; lightmap_volume() reads it (0 outside the box).
 
 #include "bindings.h"
 
@@ -168,7 +172,7 @@ float lightmap_light(vec3 p)
 #endif
 #endif
 
-#if LIGHTMAP == 1 && MULTIPLE
+#if LIGHTMAP == 1 && MULTIPLE == 1
 layout(binding = BIND_LIGHTMAP_TEX_DIFFUSE) uniform sampler3D diffuse_tex;
 #if LIGHTMAP_PAIR
 layout(binding = BIND_LIGHTMAP_TEX_DIFFUSE_NEXT) uniform sampler3D diffuse_tex_next;
@@ -185,7 +189,7 @@ vec2 lightmap_diffuse(vec3 p)
 #endif
     return d;
 }
-#elif LIGHTMAP == 2 && MULTIPLE
+#elif LIGHTMAP == 2 && MULTIPLE == 1
 // The diffuse light's columns follow the light's in the columns buffer (from word
 // light_diffuse_columns on), its nodes (depth, M, N) the light's in the nodes buffer (from
 // light_diffuse_nodes on): light_compressed_sample_diffuse.
@@ -255,7 +259,45 @@ vec2 lightmap_diffuse(vec3 p)
 }
 #endif
 
-#if LIGHTMAP != 0 && MULTIPLE
+#if LIGHTMAP != 0 && MULTIPLE == 2
+layout(binding = BIND_LIGHTMAP_TEX_DIFFUSE) uniform sampler3D volume_tex;
+uniform vec3 volume_box_min, volume_box_size;
+#if LIGHTMAP_PAIR
+layout(binding = BIND_LIGHTMAP_TEX_DIFFUSE_NEXT) uniform sampler3D volume_tex_next;
+uniform vec3 volume_box_min_next, volume_box_size_next;
+#endif
+
+vec4 volume_at(sampler3D tex, vec3 lo, vec3 size, vec3 p)
+{
+    vec3 t = (p - lo) / size;
+    bool inside = all(greaterThanEqual(t, vec3(0.0))) && all(lessThanEqual(t, vec3(1.0)));
+    return inside ? texture(tex, t) : vec4(0.0);
+}
+
+// phi and F at P (light_volume_sample; cell centres at the texel centres).
+vec4 lightmap_volume(vec3 p)
+{
+    vec4 f = volume_at(volume_tex, volume_box_min, volume_box_size, p);
+#if LIGHTMAP_PAIR
+    f = mix(f, volume_at(volume_tex_next, volume_box_min_next, volume_box_size_next, p),
+            temporal_f);
+#endif
+    return f;
+}
+
+// light_volume_scattered: what the field F scatters toward the eye (TO_EYE, unit) through a
+// phase of mean cosine G, |F| capped at 0.1 phi (LIGHT_VOLUME_ANISOTROPY).
+float volume_scattered(vec4 f, float g, vec3 to_eye)
+{
+    float fd = dot(f.yzw, to_eye), fm = length(f.yzw);
+    float cap = 0.1 * max(f.x, 0.0);
+    if (fm > cap)
+        fd = fm > 0.0 ? fd * (cap / fm) : 0.0;
+    return max(f.x + 3.0 * g * fd, 0.0);
+}
+#endif
+
+#if LIGHTMAP != 0 && MULTIPLE == 1
 // The diffuse light scattered toward the eye by a phase of mean cosine G, as a multiple of the
 // sun radiance scale: with the Eddington radiance I0 + I1 mu (mu the cosine with the axis of
 // the diffuse light's anisotropy, diffuse_mu_eye) and the phase's first moment,
@@ -297,9 +339,14 @@ float ground_light(vec3 p)
 // Eddington field I0 + I1 mu (mu along the vertical away from the sun's side) gives an
 // upward-facing surface the irradiance pi I0 +- (2 pi / 3) I1 = E (M +- N) / 4 (+ when the
 // sun is up), so a Lambertian ground of albedo rho reflects rho sun_radiance (M +- N).
+// With the volume (MULTIPLE 2) the irradiance from above is the P1 half-range flux
+// E (phi / 4 - F_z / 2), so the ground reflects rho sun_radiance (phi - 2 F_z).
 float ground_diffuse(vec3 p, float sun_z)
 {
-#if LIGHTMAP != 0 && GROUND_SHADOW != 0 && MULTIPLE
+#if LIGHTMAP != 0 && GROUND_SHADOW != 0 && MULTIPLE == 2
+    vec4 f = lightmap_volume(p);
+    return max(f.x - 2.0 * f.w, 0.0);
+#elif LIGHTMAP != 0 && GROUND_SHADOW != 0 && MULTIPLE
     vec2 d = lightmap_diffuse(p);
     return max(d.x + (sun_z >= 0.0 ? d.y : -d.y), 0.0);
 #else

@@ -13,7 +13,8 @@
 // TEMPORAL 1 = temporal interpolation (effects.temporal): beta = mix(beta_k, beta_k+1,
 // temporal_f) from a second extinction texture (the light map pair is LIGHTMAP_PAIR).
 // MULTIPLE 1 = multiple scattering (effects.multiple): the light map's diffuse light (an
-// Eddington field along the light) is scattered toward the eye beside the sun's.
+// Eddington field along the light) is scattered toward the eye beside the sun's; MULTIPLE 2
+// the diffuse light volume's (effects.multiple = "volume") instead.
 // LAYERS N (0 to 4) = N colour-mapped layers (docs/analysis.md): each step samples every
 // layer's field (trilinear), classifies it by its colour map (post-classification) and either
 // adds an emitting, absorbing medium of the map's colour (emit) or tints the clouds' scattered
@@ -395,8 +396,12 @@ void march_medium(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
     vec3 q = origin + dir * (ta + scattering_depth(tau) * ds);
     float beam = lightmap_light(q);
     float g = (b.r * mean_cosine.x + b.g * mean_cosine.y) / beta;
+#if MULTIPLE == 2
+    float diffuse = volume_scattered(lightmap_volume(q), g, -dir);
+#else
     float diffuse = diffuse_scattered(lightmap_diffuse(q), g,
                                       diffuse_mu_eye(dir, sun_dir, beam, g));
+#endif
     float light = (1.0 - ts) * (pv * beam + diffuse);
 #else
     float light = pv * beam_step(lightmap_light(origin + dir * ta),

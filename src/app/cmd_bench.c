@@ -13,7 +13,7 @@ static int usage(FILE *out)
     fprintf(out,
             "usage: anvil bench [--quick] [--views-only | --quality-only | --movie-only |\n"
             "                   --scale-only | --gpu | --cluster-only | --load-only |\n"
-            "                   --playback-only]\n"
+            "                   --playback-only | --volume-only]\n"
             "                   [-o DIR]\n"
             "                   [--cache DIR]\n"
             "                   [--configs DIR] [--spp N] [--scene sphere|storm|katrina]...\n"
@@ -41,6 +41,10 @@ static int usage(FILE *out)
             "           with each step change uploading and building in its frame, side by\n"
             "           side: step rate, frame times, stalls (playback-table.md; not part of\n"
             "           the default run)\n"
+            "  --volume-only  the layer from 16 directions and the wall under 4 suns with\n"
+            "           the 3-D diffuse light volume (effects.multiple = \"volume\"), drawn\n"
+            "           on the CPU, against Monte Carlo; its build time beside the light\n"
+            "           map's CPU build (volume-table.md; not part of the default run)\n"
             "  --gpu    the storm on 500 x 500 x 100 voxels as an HMD frame (2 x 1440 x 1600)\n"
             "           and as displays/cave4.cfg (8 x 1280 x 1024) sharing one light map: GPU\n"
             "           ms per frame, the rebuild, fetches per second against the device's\n"
@@ -76,6 +80,7 @@ static int parse(int argc, char **argv, struct bench_options *o)
         {"scale-only", no_argument, NULL, 'S'},   {"gpu", no_argument, NULL, 'G'},
         {"cluster-only", no_argument, NULL, 'L'}, {"load-only", no_argument, NULL, 'D'},
         {"playback-only", no_argument, NULL, 'Y'},
+        {"volume-only", no_argument, NULL, 'W'},
         {NULL, 0, NULL, 0},
     };
     bench_options_defaults(o);
@@ -120,6 +125,11 @@ static int parse(int argc, char **argv, struct bench_options *o)
         case 'Y':
             o->views = o->quality = o->movie = o->scale = o->cluster = false;
             o->playback = true;
+            only++;
+            break;
+        case 'W':
+            o->views = o->quality = o->movie = o->scale = o->cluster = false;
+            o->volume = true;
             only++;
             break;
         case 'G':
@@ -167,7 +177,8 @@ static int parse(int argc, char **argv, struct bench_options *o)
     }
     if (only > 1) {
         log_error("bench: --views-only, --quality-only, --movie-only, --scale-only, "
-                  "--cluster-only, --load-only, --playback-only and --gpu exclude each other");
+                  "--cluster-only, --load-only, --playback-only, --volume-only and --gpu "
+                  "exclude each other");
         return EXIT_USAGE;
     }
     if (o->paraview && !o->views) {

@@ -90,9 +90,10 @@ int cmd_effects(int argc, char **argv)
     printf("effects of %s%s%s%s:\n", what, !config && cfg.data.file_count > 1 ? " ..." : "",
            display ? " on " : "", display ? display : "");
     for (int i = 0; i < EFFECT_COUNT; i++) {
-        const char *mode = cfg.effects.mode[i] == EFFECT_AUTO ? "auto"
-                           : cfg.effects.mode[i] == EFFECT_ON ? "on"
-                                                              : "off";
+        const char *mode = cfg.effects.mode[i] == EFFECT_AUTO     ? "auto"
+                           : cfg.effects.mode[i] == EFFECT_ON     ? "on"
+                           : cfg.effects.mode[i] == EFFECT_VOLUME ? "volume"
+                                                                  : "off";
         printf("  %-14s %-3s  (%s) %s\n", effects_name(i), e->on[i] ? "on" : "off", mode,
                e->reason[i]);
     }

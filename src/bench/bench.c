@@ -93,6 +93,10 @@ int bench_variants(const struct bench_scene *sc, bool quick, struct bench_varian
     ADD(snprintf(v->knob, sizeof(v->knob), "multiple"); snprintf(v->value, sizeof(v->value),
         "%s", sc->light.multiple ? "off" : "on (two-stream)");
         v->light.multiple = !sc->light.multiple);
+    if (sc->light.multiple && !sc->light.volume)
+        ADD(snprintf(v->knob, sizeof(v->knob), "multiple");
+            snprintf(v->value, sizeof(v->value), "volume (3-D diffusion)");
+            v->light.volume = true);
     struct light_grid grid;
     if (sc->light.grid == LIGHT_GRID_AUTO &&
         light_grid_init(&grid, sc->sun, &sc->vol->grid, sc->light.resolution, LIGHT_GRID_AUTO) &&
@@ -407,7 +411,8 @@ static bool same_build_work(const struct bench_variant *a, const struct bench_va
     return a->mode == b->mode &&
            memcmp(x->resolution, y->resolution, sizeof(x->resolution)) == 0 &&
            x->forward == y->forward && per_x == per_y && x->multiple == y->multiple &&
-           (!x->multiple || x->lateral == y->lateral) && x->grid == y->grid &&
+           (!x->multiple || (x->lateral == y->lateral && x->volume == y->volume)) &&
+           x->grid == y->grid &&
            x->substeps == y->substeps &&
            light_settings_phases_equal(x) == light_settings_phases_equal(y) &&
            (a->mode == LIGHT_GPU_DENSE || x->epsilon == y->epsilon);

@@ -31,10 +31,16 @@ static bool scene_means(const struct bench_experiments_desc *d, struct renderer 
         goto done;
     if (!bench_reference(&sc, d->spp, d->cache_dir, &ref, &err, NULL))
         goto done;
-    struct bench_variant def;
-    if (bench_variants(&sc, true, &def, 1) != 1 || !renderer_set_optics(r, &cfg.optics.params) ||
-        !renderer_set_volume(r, &vol) || !bench_render(r, lg, &sc, &def, &img))
-        goto done;
+    if (d->cpu_volume) {
+        if (!bench_volume_image(&sc, &img, d->timing))
+            goto done;
+    } else {
+        struct bench_variant def;
+        if (bench_variants(&sc, true, &def, 1) != 1 ||
+            !renderer_set_optics(r, &cfg.optics.params) || !renderer_set_volume(r, &vol) ||
+            !bench_render(r, lg, &sc, &def, &img))
+            goto done;
+    }
     double a = 0.0, b = 0.0, var = 0.0;
     for (int i = 0; i < w * h; i++) {
         for (int c = 0; c < 3; c++) {
@@ -56,6 +62,12 @@ done:
     return ok;
 }
 
+/* The renderer's diffuse light: the default, or the volume with D->volume. */
+static char *multiple_set(const struct bench_experiments_desc *d)
+{
+    return d->volume ? "effects.multiple=volume" : "effects.multiple=auto";
+}
+
 static bool layer_angle(const struct bench_experiments_desc *d, struct renderer *r,
                         struct light_gpu *lg, double elevation, double rel_azimuth,
                         struct bench_angle_result *out)
@@ -74,7 +86,7 @@ static bool layer_angle(const struct bench_experiments_desc *d, struct renderer 
     char *sets[] = {"scene.kind=slab", "scene.size=[64,64,16]", "scene.extent=[480,480,2]",
                     "scene.tau=20", "scene.phase=water", sun_set[0], sun_set[1], cam_set,
                     "camera.target=[240,240,1]", "camera.fov=8", "camera.far=5000",
-                    "render.sky=[0,0,0]", "render.ground_on=false"};
+                    "render.sky=[0,0,0]", "render.ground_on=false", multiple_set(d)};
     int w = d->quick ? 16 : 32, h = d->quick ? 12 : 24;
     if (!scene_means(d, r, lg, "layer", sets, (int)(sizeof(sets) / sizeof(sets[0])), w, h, out))
         return false;
@@ -95,7 +107,7 @@ static bool wall_sun(const struct bench_experiments_desc *d, struct renderer *r,
                     "scene.extent=[2,60,10]", "scene.tau=100", "scene.phase=water",
                     "light.azimuth=270", sun_set, "camera.position=[-50,30,13.8164]",
                     "camera.target=[0,30,5]", "camera.fov=8", "camera.far=5000",
-                    "render.sky=[0,0,0]", "render.ground_on=false"};
+                    "render.sky=[0,0,0]", "render.ground_on=false", multiple_set(d)};
     int w = d->quick ? 16 : 32, h = d->quick ? 12 : 24;
     if (!scene_means(d, r, lg, "wall", sets, (int)(sizeof(sets) / sizeof(sets[0])), w, h, out))
         return false;

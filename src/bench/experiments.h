@@ -46,13 +46,45 @@ struct bench_angles {
     struct bench_angle_result wall[BENCH_WALL_SUNS];
 };
 
+/* The CPU times of the diffuse light volume's pictures (bench_volume_image), summed. */
+struct bench_volume_timing {
+    double map_ms;    /* the light map's CPU build, with the columns' diffuse pass */
+    double volume_ms; /* the diffuse light volume's build on top of it */
+    int builds;
+    int iterations;   /* the solves' conjugate gradient iterations, summed */
+};
+
 /* How the experiments are run: QUICK halves the images (16 x 12 instead of 32 x 24) and the
- * wall's grid; SPP reference samples per pixel; references cached in CACHE_DIR. */
+ * wall's grid; SPP reference samples per pixel; references cached in CACHE_DIR.  CPU_VOLUME:
+ * the model's pictures come from bench_volume_image (the diffuse light volume, CPU only; the
+ * renderer and light map arguments may be NULL), whose times add up in TIMING (may be NULL).
+ * VOLUME: the renderer draws with effects.multiple = "volume" (else its default). */
 struct bench_experiments_desc {
     bool quick;
     int spp;
     const char *cache_dir;
+    bool cpu_volume;
+    bool volume;
+    struct bench_volume_timing *timing;
 };
+
+struct bench_scene;
+struct image;
+
+/* The picture of SC with the diffuse light of the 3-D volume (light/light_volume.h) in place
+ * of the light map's columns, drawn on the CPU (bench/volume_cpu.c): the CPU light map of SC's
+ * settings, the volume over it, and a fine ray march through both that scatters the sun's
+ * P_v(psi) L and the volume's max(phi + 3 g F.w, 0) toward the eye, as the eye pass does with
+ * the columns'.  OUT is initialised here; times add to TIMING (may be NULL).  No GL. */
+bool bench_volume_image(const struct bench_scene *sc, struct image *out,
+                        struct bench_volume_timing *timing);
+
+/* The CPU builds of the default storm (the quick run's smaller one when QUICK; CONFIGS as
+ * bench_scene_config's) at its default light map: the light map with the columns' diffuse
+ * pass, then the diffuse light volume over it, once each, into OUT; the volume's cells into
+ * CELLS.  False (logged) on failure.  No GL. */
+bool bench_volume_time_storm(const char *configs, bool quick, struct bench_volume_timing *out,
+                             int cells[3]);
 
 /* Runs the layer from every direction, then the wall under every sun, into OUT.  R and LG are
  * the caller's; R's volume and optics are replaced.  Progress goes to the log.  False

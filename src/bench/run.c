@@ -288,6 +288,74 @@ static bool run_angles(const struct bench_options *o, const char *device, struct
     return ok;
 }
 
+/* The layer and the wall with the diffuse light volume, all on the CPU (volume-table.md). */
+static bool run_volume(const struct bench_options *o)
+{
+    struct bench_angles a;
+    struct bench_volume_timing t = {0};
+    struct bench_experiments_desc d = {.quick = o->quick,
+                                       .spp = o->spp,
+                                       .cache_dir = o->cache,
+                                       .cpu_volume = true,
+                                       .timing = &t};
+    if (!bench_angles_measure(NULL, NULL, &d, &a))
+        return false;
+    struct bench_volume_timing storm;
+    int cells[3];
+    if (!bench_volume_time_storm(o->configs, o->quick, &storm, cells))
+        return false;
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    bench_table_head(f, o->quick, "volume");
+    fprintf(f, "The default storm%s at its default light map, one CPU thread: the light map's "
+               "build with the columns' diffuse pass %.0f ms, the diffuse light volume's "
+               "(%d x %d x %d cells, %d conjugate gradient iterations) %.0f ms on top, %.2f "
+               "times.\n\n",
+            o->quick ? " (the quick run's)" : "", storm.map_ms, cells[0], cells[1], cells[2],
+            storm.iterations, storm.volume_ms,
+            storm.map_ms > 0.0 ? storm.volume_ms / storm.map_ms : 0.0);
+    fprintf(f, "The diffuse light volume (docs/lightmap.md, \"The diffuse light volume\"): the "
+               "light map's beam, its losses the source of a diffusion solve on a grid of half "
+               "the volume's resolution, both drawn by a fine CPU ray march.  Over the %d "
+               "scenes below the light map's CPU build (with the columns' diffuse pass) took "
+               "%.0f ms and the volume's %.0f ms on top (%.2f times; %d conjugate gradient "
+               "iterations in all).\n\n",
+            t.builds, t.map_ms, t.volume_ms, t.map_ms > 0.0 ? t.volume_ms / t.map_ms : 0.0,
+            t.iterations);
+    bench_write_angles_table(f, &a, "CPU (the volume's pictures drawn by bench_volume_image)",
+                             o->spp);
+    /* The same with the renderer's eye pass reading the GPU's volume, where GL can be had. */
+    struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){.backend = "egl"});
+    bool ok = true;
+    if (ctx) {
+        struct renderer *r = renderer_create();
+        struct light_gpu *lg = light_gpu_create();
+        struct bench_experiments_desc g = {
+            .quick = o->quick, .spp = o->spp, .cache_dir = o->cache, .volume = true};
+        ok = r && lg && bench_angles_measure(r, lg, &g, &a);
+        if (ok) {
+            fprintf(f, "\n## The renderer with effects.multiple = \"volume\"\n\nThe same "
+                       "scenes drawn by the eye pass, reading the volume the GPU built.  ");
+            bench_write_angles_table(f, &a, gpu_renderer_name(), o->spp);
+        }
+        light_gpu_destroy(lg);
+        renderer_destroy(r);
+        gpu_context_destroy(ctx);
+    } else {
+        fprintf(f, "\n(No GL context: the renderer's pictures with the volume are left out.)\n");
+    }
+    fclose(f);
+    if (!ok) {
+        free(buf);
+        return false;
+    }
+    ok = write_text(o, "volume-table.md", buf, len);
+    echo(o, "%.*s", (int)len, buf);
+    free(buf);
+    return ok;
+}
+
 /* ---- scale ------------------------------------------------------------------------------ */
 
 static bool run_scale(const struct bench_options *o, const char *device)
@@ -375,7 +443,7 @@ enum bench_status bench_run(const struct bench_options *opts)
 {
     assert(opts && opts->out && opts->configs);
     assert(opts->views || opts->quality || opts->movie || opts->scale || opts->cluster ||
-           opts->device || opts->load || opts->playback);
+           opts->device || opts->load || opts->playback || opts->volume);
     assert(!(opts->cluster || opts->device) || opts->displays);
     assert(!opts->paraview || opts->paraview_script);
     struct bench_options o = *opts;
@@ -402,6 +470,8 @@ enum bench_status bench_run(const struct bench_options *opts)
         return BENCH_FAILED;
     if (o.load && !o.views && !o.quality && !o.movie && !o.scale && !o.cluster && !o.device)
         return run_load(&o) ? BENCH_DONE : BENCH_FAILED; /* no GL needed */
+    if (o.volume && !o.views && !o.quality && !o.movie && !o.scale && !o.cluster && !o.device)
+        return run_volume(&o) ? BENCH_DONE : BENCH_FAILED; /* no GL needed */
     struct gpu_context *ctx = gpu_context_create(&(struct gpu_context_desc){.backend = "egl"});
     if (!ctx)
         return BENCH_NO_GPU;

@@ -37,6 +37,9 @@ struct bench_options {
     bool playback;        /* --playback-only: a 500 x 500 x 100 WRF series played with and
                              without staged step changes (bench/playback.h,
                              playback-table.md); not part of the default run */
+    bool volume;          /* --volume-only: the layer and the wall of the experiments with the
+                             diffuse light volume, pictures and Monte Carlo both on the CPU
+                             (bench_volume_image, volume-table.md); no GL */
     bool device;          /* --gpu: the Isabel-sized storm on an HMD and a CAVE frame
                              (bench/device.h, gpu-table.md) */
     const char *displays; /* folder of cave4.cfg and cave6.cfg (the cluster and device

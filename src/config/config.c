@@ -34,6 +34,8 @@ static const char *const lightmap_mode_names[] = {"dense", "compressed", NULL};
 static const char *const precision_names[] = {"float", "half", NULL}; /* render_precision */
 static const char *const lightmap_grid_names[] = {"auto", "upright", NULL}; /* light_grid_kind */
 static const char *const effect_mode_names[] = {"auto", "on", "off", NULL};
+/* effects.multiple: the modes above, and the diffuse light volume in place of the columns'. */
+static const char *const multiple_mode_names[] = {"auto", "on", "off", "volume", NULL};
 static const char *const phase_names[] = {"water", "ice", NULL};
 static const char *const coast_res_names[] = {"crude", "low", "intermediate", NULL};
 static const char *const overlay_when_names[] = {"run", "always", "never", NULL};
@@ -278,10 +280,14 @@ static const struct config_field settings[] = {
            "along the light"),
     EFFECT("effects.peripheral", EFFECT_PERIPHERAL,
            "peripheral forward scattering; auto: as effects.forward"),
-    EFFECT("effects.multiple", EFFECT_MULTIPLE,
-           "multiple scattering: diffuse light from a two-stream pass down each light column, "
-           "solved as a layer lit at the sun's elevation (docs/lightmap.md); auto: on unless "
-           "optically thin along the light"),
+    {.path = "effects.multiple", .type = T_ENUM, .n = 1,
+     .offset = OFF(effects.mode[EFFECT_MULTIPLE]), .names = multiple_mode_names,
+     .def = {EFFECT_AUTO},
+     .help = "multiple scattering: diffuse light from a two-stream pass down each light column, "
+             "solved as a layer lit at the sun's elevation (docs/lightmap.md); \"volume\": "
+             "from a diffusion solve over the whole volume instead, light crossing columns "
+             "(costlier to build); auto: the columns, on unless optically thin along the "
+             "light"},
     EFFECT("effects.lateral", EFFECT_LATERAL,
            "lateral escape: multiple scattering lets diffuse light out of the sides of clouds "
            "narrower than a few transport mean free paths (docs/lightmap.md); auto: on when "

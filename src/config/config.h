@@ -55,7 +55,8 @@ enum effect {
     EFFECT_COUNT
 };
 
-enum effect_mode { EFFECT_AUTO, EFFECT_ON, EFFECT_OFF };
+/* EFFECT_VOLUME: effects.multiple only, the 3-D diffuse light volume (docs/lightmap.md). */
+enum effect_mode { EFFECT_AUTO, EFFECT_ON, EFFECT_OFF, EFFECT_VOLUME };
 
 enum phase_choice { PHASE_WATER, PHASE_ICE };
 
@@ -226,7 +227,8 @@ struct config_probe {
 };
 
 struct config_effects {
-    enum effect_mode mode[EFFECT_COUNT]; /* effects.<name>: "auto" | "on" | "off" */
+    enum effect_mode mode[EFFECT_COUNT]; /* effects.<name>: "auto" | "on" | "off"; multiple
+                                            also "volume" */
 };
 
 struct config {

@@ -73,6 +73,7 @@ static void visit_key(struct visit *v, const struct light_key *k)
     visit_double(v, s->cp.ice_per, t->cp.ice_per);
     visit_u64(v, s->multiple, t->multiple);
     visit_u64(v, s->multiple && s->lateral, t->multiple && t->lateral);
+    visit_u64(v, s->multiple && s->volume, t->multiple && t->volume);
     visit_u64(v, (uint64_t)s->grid, (uint64_t)t->grid);
     visit_double(v, s->cp.water_cs_g, t->cp.water_cs_g);
     visit_double(v, s->cp.ice_cs_g, t->cp.ice_cs_g);

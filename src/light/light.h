@@ -97,6 +97,10 @@ struct light_settings {
     bool peripheral;          /* peripheral ring theta/4 .. theta/2 on (needs forward) */
     bool multiple;            /* multiple scattering: the diffuse light of the two-stream
                                  column pass (light_map.diffuse) */
+    bool volume;              /* with multiple: the GPU build makes the 3-D diffuse light
+                                 volume (light_volume.h) in place of the columns' diffuse
+                                 light (effects.multiple = "volume"); light_map_build, the
+                                 columns' CPU reference, ignores it */
     bool lateral;             /* with multiple: diffuse light escapes through the sides of
                                  clouds narrower than the plane-parallel column assumes */
     enum light_grid_kind grid; /* auto: sheared for flat boxes; upright: never sheared */

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "common/log.h"
+#include "light/light_volume_gpu.h"
 #include "shaders/bindings.h"
 
 struct light_gpu {
@@ -31,7 +32,9 @@ struct light_gpu {
     unsigned rates_beta;        /* its texture, identity and generation */
     uint64_t rates_volume, rates_generation;
     struct gpu_texture adding;  /* RG32F build scratch of the column pass, freed after it */
-    bool built_multiple;
+    bool built_multiple;        /* the columns' diffuse light was built */
+    struct light_volume_gpu volume; /* effects.multiple = "volume": the 3-D diffuse light */
+    bool built_volume;          /* the last build made it (and not the columns') */
     struct gpu_buffer columns, nodes;
     struct light_grid grid;
     struct light_cache cache;
@@ -54,7 +57,18 @@ void light_gpu_bind(const struct light_gpu *lg, const struct gpu_program *prog, 
     gpu_uniform_mat4(prog, next ? "light_world_to_tex_next" : "light_world_to_tex",
                      lg->grid.world_to_tex);
     gpu_uniform_ivec3(prog, next ? "light_n_next" : "light_n", lg->grid.n);
-    if (lg->built_multiple && lg->built_mode == LIGHT_GPU_DENSE) {
+    if (lg->built_volume) {
+        const struct grid3 *vg = &lg->volume.grid;
+        float lo[3], size[3];
+        for (int a = 0; a < 3; a++) {
+            lo[a] = (float)vg->origin[a];
+            size[a] = (float)(vg->n[a] * vg->spacing[a]);
+        }
+        gpu_texture_bind(&lg->volume.field,
+                         next ? BIND_LIGHTMAP_TEX_DIFFUSE_NEXT : BIND_LIGHTMAP_TEX_DIFFUSE);
+        gpu_uniform_vec3(prog, next ? "volume_box_min_next" : "volume_box_min", lo);
+        gpu_uniform_vec3(prog, next ? "volume_box_size_next" : "volume_box_size", size);
+    } else if (lg->built_multiple && lg->built_mode == LIGHT_GPU_DENSE) {
         gpu_texture_bind(&lg->diffuse,
                          next ? BIND_LIGHTMAP_TEX_DIFFUSE_NEXT : BIND_LIGHTMAP_TEX_DIFFUSE);
     } else if (lg->built_multiple) {
@@ -217,6 +231,7 @@ void light_gpu_destroy(struct light_gpu *lg)
     gpu_texture_finish(&lg->adding);
     gpu_buffer_finish(&lg->columns);
     gpu_buffer_finish(&lg->nodes);
+    light_volume_gpu_finish(&lg->volume);
     gpu_timer_queue_finish(&lg->timers);
     free(lg);
 }
@@ -533,7 +548,18 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
         gpu_timer_queue_begin(&lg->timers);
     /* Half floats are a storage of the dense map: a compressed build stays in floats. */
     bool half = lg->half && mode == LIGHT_GPU_DENSE;
-    bool ok = build_dense(lg, src, sun, settings, half);
+    /* With the diffuse light volume the columns' diffuse pass is not needed: the beam alone,
+     * then the volume from it (before compression frees the dense beam). */
+    bool volume = settings->multiple && settings->volume;
+    struct light_settings beam = *settings;
+    if (volume)
+        beam.multiple = false;
+    bool ok = build_dense(lg, src, sun, &beam, half);
+    if (ok && volume)
+        ok = light_volume_gpu_build(&lg->volume, src->beta, src->grid, &lg->light, &lg->grid,
+                                    settings, NULL);
+    else if (!volume)
+        gpu_texture_finish(&lg->volume.field);
     if (ok && mode == LIGHT_GPU_COMPRESSED) {
         ok = build_compressed(lg, settings->epsilon);
     } else {
@@ -552,10 +578,11 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
     lg->have_key_mode = true;
     lg->built_mode = mode;
     lg->built_epsilon = settings->epsilon;
-    lg->built_multiple = settings->multiple;
+    lg->built_multiple = beam.multiple;
+    lg->built_volume = volume;
     lg->built_half = lg->half;
     snprintf(lg->defines, sizeof(lg->defines), "#define LIGHTMAP %d\n#define MULTIPLE %d\n",
-             mode == LIGHT_GPU_DENSE ? 1 : 2, settings->multiple ? 1 : 0);
+             mode == LIGHT_GPU_DENSE ? 1 : 2, volume ? 2 : settings->multiple ? 1 : 0);
     if (built)
         *built = true;
     return true;
@@ -605,6 +632,12 @@ void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compress
     if (lg->built_half && lg->built_mode == LIGHT_GPU_DENSE)
         *dense /= 2;
     *compressed = lg->compressed_bytes;
+    if (lg->built_volume) {
+        size_t field = grid3_count(&lg->volume.grid) * 4 * sizeof(float);
+        *dense += field;
+        if (*compressed)
+            *compressed += field;
+    }
 }
 
 bool light_gpu_read_compressed(const struct light_gpu *lg, struct light_compressed *out)
@@ -643,4 +676,11 @@ bool light_gpu_read_compressed(const struct light_gpu *lg, struct light_compress
                         out->diffuse_node_count * 3 * sizeof(float), out->diffuse_nodes);
     }
     return true;
+}
+
+bool light_gpu_read_volume(const struct light_gpu *lg, struct light_volume *out)
+{
+    if (!lg->built_volume)
+        return false;
+    return light_volume_gpu_read(&lg->volume, out);
 }

@@ -78,7 +78,8 @@ bool light_gpu_last_build_ms(struct light_gpu *lg, double *ms);
 /* Bytes of the dense map (the light volume, and the diffuse one when the last build had
  * multiple scattering; floats, halves when stored so: in compressed mode what it would take in
  * floats) and of the compressed map
- * (0 in dense mode: the columns, the nodes and the half-resolution diffuse light). */
+ * (0 in dense mode: the columns, the nodes and the half-resolution diffuse light); with the
+ * diffuse light volume its field is in both. */
 void light_gpu_bytes(const struct light_gpu *lg, size_t *dense, size_t *compressed);
 
 /* Reads the compressed map (compressed mode) back into OUT (initialised here, finish with
@@ -96,5 +97,11 @@ bool light_gpu_sample(const struct light_gpu *lg, const double p[3], float *beam
  * (initialised here, finish with light_map_finish): the same layout as the CPU reference.  Dense mode only: compressed mode
  * frees the dense volume once its columns are compressed. */
 bool light_gpu_read(const struct light_gpu *lg, struct light_map *map);
+
+/* The diffuse light volume of the last build (settings.multiple and settings.volume) read back
+ * into OUT (zeroed or finished; finish with light_volume_finish): light_volume_build's layout.
+ * False when the last build made none. */
+struct light_volume;
+bool light_gpu_read_volume(const struct light_gpu *lg, struct light_volume *out);
 
 #endif

@@ -316,7 +316,15 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
      * fluxes relative to the sun.  In an optically thin column the diffuse light is at most
      * what was scattered out of the beam, 1 - e^-tau <= tau, so the eye pass gains at most
      * 2 tau_max of the sun (docs/effects.md). */
-    if (!decide_fixed(out, EFFECT_MULTIPLE, mode[EFFECT_MULTIPLE], EFFECT_SHADOWS, shadows)) {
+    if (mode[EFFECT_MULTIPLE] == EFFECT_VOLUME && shadows) {
+        out->multiple_volume = true;
+        say(out, EFFECT_MULTIPLE, true,
+            "volume in the config: the diffuse light of a diffusion solve over the whole "
+            "volume (light crossing columns; docs/lightmap.md), not the columns'");
+    } else if (mode[EFFECT_MULTIPLE] == EFFECT_VOLUME) {
+        say(out, EFFECT_MULTIPLE, false, "needs effects.%s, which is off", names[EFFECT_SHADOWS]);
+    } else if (!decide_fixed(out, EFFECT_MULTIPLE, mode[EFFECT_MULTIPLE], EFFECT_SHADOWS,
+                             shadows)) {
         double bound = 2.0 * tau;
         if (!facts->volume_known)
             say(out, EFFECT_MULTIPLE, true, "auto: volume not measured, on");
@@ -336,7 +344,11 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
 
     /* Lateral escape: only narrow cloud loses diffuse light through its sides. */
     bool multiple = out->on[EFFECT_MULTIPLE];
-    if (!decide_fixed(out, EFFECT_LATERAL, mode[EFFECT_LATERAL], EFFECT_MULTIPLE, multiple)) {
+    if (out->multiple_volume) {
+        say(out, EFFECT_LATERAL, false, "the diffuse light volume lets light out of every "
+            "side itself (effects.multiple = \"volume\"): escape is the columns'");
+    } else if (!decide_fixed(out, EFFECT_LATERAL, mode[EFFECT_LATERAL], EFFECT_MULTIPLE,
+                             multiple)) {
         double share = facts->narrow_share;
         if (!facts->volume_known)
             say(out, EFFECT_LATERAL, true, "auto: volume not measured, on");
@@ -470,6 +482,7 @@ void effects_light_settings(const struct config *cfg, const struct effects *e,
     s->forward = e->on[EFFECT_FORWARD];
     s->peripheral = e->on[EFFECT_PERIPHERAL];
     s->multiple = e->on[EFFECT_MULTIPLE];
+    s->volume = e->on[EFFECT_MULTIPLE] && e->multiple_volume;
     s->lateral = e->on[EFFECT_LATERAL];
     s->grid = (enum light_grid_kind)cfg->lightmap.grid; /* names in enum order */
     s->epsilon = cfg->lightmap.epsilon;

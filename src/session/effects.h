@@ -95,6 +95,7 @@ struct effects {
     bool on[EFFECT_COUNT];
     char reason[EFFECT_COUNT][200];
     bool single_phase_ice;
+    bool multiple_volume; /* with EFFECT_MULTIPLE on: the diffuse light volume, not the columns */
     char light_builds[200]; /* how often the light map is built, and why */
 };
 

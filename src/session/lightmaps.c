@@ -79,8 +79,10 @@ static bool build(struct lightmaps *al, int which, const struct light_gpu_source
              mode != LIGHT_GPU_DENSE ? "compressed" : half ? "dense, half floats" : "dense",
              s->forward ? (s->peripheral ? ", forward and peripheral" : ", forward")
                         : ", shadow only",
-             s->multiple ? (s->lateral ? ", diffuse light with lateral escape" : ", diffuse light")
-                         : "",
+             !s->multiple ? ""
+             : s->volume  ? ", diffuse light volume"
+             : s->lateral ? ", diffuse light with lateral escape"
+                          : ", diffuse light",
              one_phase ? ", one phase" : "");
     return true;
 }

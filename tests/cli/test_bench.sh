@@ -34,6 +34,10 @@ if [ -f "$data/wrf/katrina_2005_mercator_wsm3.nc" ]; then
     check "katrina: water phase for all" stdout_has "the water phase for all"
     check "katrina: four time steps" stdout_has "4 steps"
 fi
+expect_exit 0 "the diffuse light volume" "$anvil" effects --set effects.multiple=volume
+check "volume: multiple on, from the volume" stdout_has "multiple       on   (volume) volume in the config"
+check "volume: lateral escape is the columns'" stdout_has "lateral        off  (auto) the diffuse light volume"
+expect_exit 1 "volume is for multiple only" "$anvil" effects --set effects.forward=volume
 expect_exit 1 "bad effect value" "$anvil" effects --set effects.forward=maybe
 printf 'light = { elevation = 20.0; };\n' >"$tmp/a.cfg"
 cp "$tmp/a.cfg" "$tmp/b.cfg"
@@ -52,6 +56,15 @@ check "load table: 64 x 64 x 20 and its peak memory" \
     grep -q '64 × 64 × 20 WRF series' "$tmp/l/load-table.md"
 check "load table: peak memory" grep -q '^| peak memory above the process' "$tmp/l/load-table.md"
 check "load bench leaves no file behind" test -z "$(ls "$tmp"/anvil-bench-load-* 2>/dev/null)"
+# The diffuse light volume's experiments (no GL): the layer and the wall against Monte Carlo.
+expect_exit 2 "bench: --volume-only excludes --load-only" "$anvil" bench --volume-only --load-only
+"$anvil" bench --quick --volume-only -o "$tmp/v" --cache "$tmp/v-cache" >"$tmp/out" 2>"$tmp/err"
+check "volume bench exits 0" test $? -eq 0
+check "volume table: the layer's 12 degree row" \
+    grep -q '^| 12 | [0-9.]* ± [0-9.]* (152°) |' "$tmp/v/volume-table.md"
+check "volume table: the wall under a 10 degree sun" \
+    grep -q '^| 10 | [0-9.]* ± [0-9.]* | [0-9.]* ± ' "$tmp/v/volume-table.md"
+check "volume table: both builds timed" grep -q "volume's [0-9]* ms on top" "$tmp/v/volume-table.md"
 expect_exit 1 "bench: unknown scene" "$anvil" bench --scene nowhere
 expect_exit 2 "bench: exclusive options" "$anvil" bench --views-only --quality-only
 

@@ -71,6 +71,11 @@ static void test_programs_do_not_collide(void **state)
     DISTINCT("compression buffers", MIN_STORAGE_BLOCKS, BIND_COMPRESS_BUF_COLUMNS,
              BIND_COMPRESS_BUF_NODES);
     DISTINCT("scan buffers", MIN_STORAGE_BLOCKS, BIND_SCAN_BUF_COLUMNS);
+    DISTINCT("volume pass textures", MIN_TEXTURE_UNITS, BIND_VOLUME_TEX_BETA,
+             BIND_VOLUME_TEX_LIGHT);
+    DISTINCT("volume pass images", MIN_IMAGE_UNITS, BIND_VOLUME_IMG_FIELD);
+    DISTINCT("volume pass buffers", MIN_STORAGE_BLOCKS, BIND_VOLUME_BUF_TERMS,
+             BIND_VOLUME_BUF_SYSTEM, BIND_VOLUME_BUF_VECTORS, BIND_VOLUME_BUF_SCALARS);
     DISTINCT("lateral pass textures", MIN_TEXTURE_UNITS, BIND_LATERAL_TEX_BETA);
     DISTINCT("lateral pass images", MIN_IMAGE_UNITS, BIND_LATERAL_IMG_RATES);
     DISTINCT("lateral pass buffers", MIN_STORAGE_BLOCKS, BIND_LATERAL_BUF_CELLS);

@@ -237,6 +237,24 @@ static void test_multiple_modes(void **state)
     assert_true(e.on[EFFECT_MULTIPLE]);
     effects_light_settings(&cfg, &e, &s);
     assert_true(s.multiple && !s.forward);
+    assert_false(s.volume); /* auto is the columns */
+    /* volume: the diffuse light volume in place of the columns, lateral escape off (it is the
+     * columns'); never without shadows; "volume" is no value for the other effects. */
+    config_defaults(&cfg);
+    known_thick(&f);
+    assert_true(config_set(&cfg, "effects.multiple=volume"));
+    effects_decide(&cfg, &f, &e);
+    assert_true(e.on[EFFECT_MULTIPLE] && e.multiple_volume);
+    assert_non_null(strstr(e.reason[EFFECT_MULTIPLE], "volume in the config"));
+    assert_false(e.on[EFFECT_LATERAL]);
+    effects_light_settings(&cfg, &e, &s);
+    assert_true(s.multiple && s.volume && !s.lateral);
+    assert_true(config_set(&cfg, "effects.shadows=off"));
+    effects_decide(&cfg, &f, &e);
+    assert_false(e.on[EFFECT_MULTIPLE]);
+    effects_light_settings(&cfg, &e, &s);
+    assert_false(s.multiple);
+    assert_false(config_set(&cfg, "effects.lateral=volume"));
 }
 
 static void test_a_changing_scene_keeps_effects_on(void **state)

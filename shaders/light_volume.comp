@@ -1,0 +1,441 @@
+// The diffuse light volume on the GPU (src/light/volume_gpu.c): the passes of
+// light_volume_build() in src/light/volume.c, in float32.  The contract is the converged
+// solution of the discrete diffusion system, not the iteration; the CPU solves it in double
+// by Jacobi-preconditioned conjugate gradients, these passes by the same method in floats,
+// every scalar of the iteration kept on the GPU.
+//   PASS 1 (terms): per cell the source Q0, its first moment Q1, the transport extinction and
+//     the source's offset from the cell centre, from 3^3 samples of the extinction and the
+//     dense light map (both read with texelFetch and the CPU's trilinear weights).
+//   PASS 2 (assemble): per cell the diagonal, the conductances to the +x, +y, +z neighbours and
+//     the right-hand side; x = 0, r = b, z = r / diag, p = z; partial sums of r.z and b.b.
+//   PASS 3 (spmv): q = A p; partial sums of p.q.
+//   PASS 4 (reduce): one work group sums the partial sums: WHAT 0 the start (rz, bb), 1 p.q
+//     (alpha = rz / pq), 2 the update's (beta = rz' / rz, the residual).
+//   PASS 5 (update): x += alpha p, r -= alpha q, z = r / diag; partial sums of r.z and r.r.
+//   PASS 6 (direction): p = z + beta p.
+//   PASS 7 (field): phi = x and the net flux per cell, the mean of its two face fluxes per
+//     axis, into the RGBA32F field image.
+
+#include "bindings.h"
+
+#ifndef PASS
+#define PASS 1
+#endif
+
+#define GROUP 256
+layout(local_size_x = GROUP) in;
+
+uniform ivec3 cells_n;   // cells along x, y, z
+uniform vec3 cell_size;  // metres
+uniform vec3 box_origin; // the volume box's minimum corner, metres
+
+// Per cell: [q0, q1.x, q1.y, q1.z] and [sigma_tr, dq.x, dq.y, dq.z].
+layout(std430, binding = BIND_VOLUME_BUF_TERMS) buffer volume_terms {
+    vec4 terms[];
+};
+// Per cell: [diag, off_x, off_y, off_z] (off: -G / dx to the +axis neighbour).
+layout(std430, binding = BIND_VOLUME_BUF_SYSTEM) buffer volume_system {
+    vec4 sys[];
+};
+// Six vectors of cells_count floats: b, x, r, z, p, q.
+layout(std430, binding = BIND_VOLUME_BUF_VECTORS) buffer volume_vectors {
+    float cg[];
+};
+// [0] rz, [1] bb, [2] pq, [3] alpha, [4] beta, [5] rr, [6] relative residual, [7] unused;
+// from [8] on two partial sums per work group.
+layout(std430, binding = BIND_VOLUME_BUF_SCALARS) buffer volume_scalars {
+    float scal[];
+};
+
+#define MARSHAK_R 2.0
+// volume.c: the least half-cell resistance in cloud and in clear air.
+#define HALF_CELL_R_MIN 0.01
+#define HALF_CELL_R_AIR 0.25
+#define CLEAR_SIGMA 1e-6
+
+int cells_count()
+{
+    return cells_n.x * cells_n.y * cells_n.z;
+}
+
+#define B(c) cg[(c)]
+#define X(c) cg[cells_count() + (c)]
+#define R(c) cg[2 * cells_count() + (c)]
+#define Z(c) cg[3 * cells_count() + (c)]
+#define P(c) cg[4 * cells_count() + (c)]
+#define Q(c) cg[5 * cells_count() + (c)]
+
+ivec3 cell_of(int c)
+{
+    return ivec3(c % cells_n.x, (c / cells_n.x) % cells_n.y, c / (cells_n.x * cells_n.y));
+}
+
+int stride_of(int a)
+{
+    return a == 0 ? 1 : a == 1 ? cells_n.x : cells_n.x * cells_n.y;
+}
+
+float half_r(float sigma, float dx)
+{
+    return max(1.5 * sigma * dx, sigma < CLEAR_SIGMA ? HALF_CELL_R_AIR : HALF_CELL_R_MIN);
+}
+
+// volume.c, clearness: 1 in clear air, 0 in opaque cloud, from the cell's own optical depth.
+float clearness(float sigma, float dx)
+{
+    return 1.0 / (1.0 + 1.5 * sigma * dx);
+}
+
+// What cell C adds to the push of the flux along +A through its face on SIDE (volume.c,
+// face_push).
+float face_push(int c, int a, int side, float r, float dx)
+{
+    vec4 t0 = terms[2 * c], t1 = terms[2 * c + 1];
+    float dq = t1[1 + a];
+    float shift = side == 1 ? max(dq, 0.0) : min(dq, 0.0);
+    return 1.5 * dx * t0[1 + a] + 2.0 * r * shift;
+}
+
+shared float part0[GROUP], part1[GROUP];
+
+// Sums V0 and V1 over the work group into scal[8 + 2 group] and the next.
+void group_sums(float v0, float v1)
+{
+    uint l = gl_LocalInvocationID.x;
+    part0[l] = v0;
+    part1[l] = v1;
+    barrier();
+    for (uint s = GROUP / 2u; s > 0u; s >>= 1u) {
+        if (l < s) {
+            part0[l] += part0[l + s];
+            part1[l] += part1[l + s];
+        }
+        barrier();
+    }
+    if (l == 0u) {
+        scal[8u + 2u * gl_WorkGroupID.x] = part0[0];
+        scal[9u + 2u * gl_WorkGroupID.x] = part1[0];
+    }
+}
+
+#if PASS == 1
+layout(binding = BIND_VOLUME_TEX_BETA) uniform sampler3D beta_tex;   // texelFetch only
+layout(binding = BIND_VOLUME_TEX_LIGHT) uniform sampler3D light_tex; // texelFetch only
+uniform ivec3 vol_n;
+uniform vec3 vol_origin;
+uniform vec3 vol_inv_spacing;
+uniform mat4 light_world_to_tex;
+uniform ivec3 light_n;
+uniform vec3 sdir;      // the direction the light travels
+uniform vec2 tr;        // 1 - g: water, ice
+uniform vec2 loss;      // the share of the extinction that leaves the beam: water, ice
+uniform vec2 gs;        // the mean cosine of what leaves it: water, ice
+uniform int sub;        // samples per cell and axis
+
+int axis_weight(float x, int n, out float t)
+{
+    float f = x - 0.5;
+    if (n < 2 || f <= 0.0) {
+        t = 0.0;
+        return 0;
+    }
+    if (f >= float(n - 1)) {
+        t = 1.0;
+        return n - 2;
+    }
+    int i = int(f);
+    t = f - float(i);
+    return i;
+}
+
+// light_sample_beta: ice, water.
+vec2 sample_beta(vec3 p)
+{
+    vec3 x = (p - vol_origin) * vol_inv_spacing;
+    for (int a = 0; a < 3; a++) {
+        if (!(x[a] >= 0.0 && x[a] <= float(vol_n[a])))
+            return vec2(0.0);
+    }
+    vec3 t;
+    ivec3 i0, d;
+    for (int a = 0; a < 3; a++) {
+        float ta;
+        i0[a] = axis_weight(x[a], vol_n[a], ta);
+        t[a] = ta;
+        d[a] = vol_n[a] > 1 ? 1 : 0;
+    }
+    vec2 c000 = texelFetch(beta_tex, i0, 0).rg;
+    vec2 c100 = texelFetch(beta_tex, i0 + ivec3(d.x, 0, 0), 0).rg;
+    vec2 c010 = texelFetch(beta_tex, i0 + ivec3(0, d.y, 0), 0).rg;
+    vec2 c110 = texelFetch(beta_tex, i0 + ivec3(d.x, d.y, 0), 0).rg;
+    vec2 c001 = texelFetch(beta_tex, i0 + ivec3(0, 0, d.z), 0).rg;
+    vec2 c101 = texelFetch(beta_tex, i0 + ivec3(d.x, 0, d.z), 0).rg;
+    vec2 c011 = texelFetch(beta_tex, i0 + ivec3(0, d.y, d.z), 0).rg;
+    vec2 c111 = texelFetch(beta_tex, i0 + d, 0).rg;
+    vec2 c00 = c000 + t.x * (c100 - c000);
+    vec2 c10 = c010 + t.x * (c110 - c010);
+    vec2 c01 = c001 + t.x * (c101 - c001);
+    vec2 c11 = c011 + t.x * (c111 - c011);
+    vec2 c0 = c00 + t.y * (c10 - c00);
+    vec2 c1 = c01 + t.y * (c11 - c01);
+    vec2 v = c0 + t.z * (c1 - c0);
+    return vec2(v.x >= 0.0 ? min(v.x, 1e30) : 0.0, v.y >= 0.0 ? min(v.y, 1e30) : 0.0);
+}
+
+int tex_node(float tex, int n, out float t)
+{
+    float x = tex * float(n) - 0.5;
+    if (!(x > 0.0)) {
+        t = 0.0;
+        return 0;
+    }
+    if (x >= float(n - 1)) {
+        t = 1.0;
+        return n - 2;
+    }
+    int i = int(x);
+    t = x - float(i);
+    return i;
+}
+
+// The beam at P (light_map_sample; 1 beside the light columns).
+float beam_at(vec3 p)
+{
+    vec3 tex = (light_world_to_tex * vec4(p, 1.0)).xyz;
+    if (!(tex.x >= 0.0 && tex.x <= 1.0 && tex.y >= 0.0 && tex.y <= 1.0))
+        return 1.0;
+    ivec3 i;
+    vec3 t;
+    for (int a = 0; a < 3; a++) {
+        float ta;
+        i[a] = tex_node(tex[a], light_n[a], ta);
+        t[a] = ta;
+    }
+    float c[4];
+    for (int dk = 0; dk < 2; dk++) {
+        for (int dj = 0; dj < 2; dj++) {
+            float a0 = texelFetch(light_tex, ivec3(i.x, i.y + dj, i.z + dk), 0).r;
+            float a1 = texelFetch(light_tex, ivec3(i.x + 1, i.y + dj, i.z + dk), 0).r;
+            c[2 * dk + dj] = a0 + t.x * (a1 - a0);
+        }
+    }
+    float c0 = c[0] + t.y * (c[1] - c[0]);
+    float c1 = c[2] + t.y * (c[3] - c[2]);
+    return c0 + t.z * (c1 - c0);
+}
+
+void main()
+{
+    int c = int(gl_GlobalInvocationID.x);
+    if (c >= cells_count())
+        return;
+    ivec3 ijk = cell_of(c);
+    float h = min(cell_size.x, min(cell_size.y, cell_size.z)) / float(sub);
+    vec3 centre = box_origin + (vec3(ijk) + 0.5) * cell_size;
+    float q0 = 0.0, q1 = 0.0, sigma = 0.0;
+    vec3 dq = vec3(0.0);
+    for (int k = 0; k < sub; k++) {
+        for (int j = 0; j < sub; j++) {
+            for (int i = 0; i < sub; i++) {
+                vec3 p = box_origin + (vec3(ijk) + (vec3(i, j, k) + 0.5) / float(sub)) * cell_size;
+                vec2 b = sample_beta(p);
+                float ice = b.x, water = b.y;
+                sigma += tr.y * ice + tr.x * water;
+                if (!(ice + water > 0.0))
+                    continue;
+                vec3 pa = p - 0.5 * h * sdir, pb = p + 0.5 * h * sdir;
+                float la = beam_at(pa), lb = beam_at(pb);
+                float q = max(la - lb, 0.0) / h;
+                float lw = loss.x * water, li = loss.y * ice;
+                q0 += q;
+                q1 += q * (lw * gs.x + li * gs.y) / (lw + li);
+                float s_bar = 0.5 * h;
+                if (q > 0.0) {
+                    float kh = lb > 0.0 ? log(la / lb) : 1e30;
+                    if (kh > 50.0)
+                        s_bar = h / kh;
+                    else if (kh > 1e-4)
+                        s_bar = h * (1.0 / kh - 1.0 / (exp(kh) - 1.0));
+                }
+                dq += q * (pa + s_bar * sdir - centre);
+            }
+        }
+    }
+    float n = float(sub * sub * sub);
+    terms[2 * c] = vec4(q0 / n, q1 / n * sdir);
+    terms[2 * c + 1] = vec4(sigma / n, dq / n);
+}
+
+#elif PASS == 2
+void main()
+{
+    int c = int(gl_GlobalInvocationID.x);
+    float v0 = 0.0, v1 = 0.0;
+    if (c < cells_count()) {
+        ivec3 idx = cell_of(c);
+        vec4 t0 = terms[2 * c], t1 = terms[2 * c + 1];
+        float diag = 0.0, rhs = t0.x;
+        vec3 off = vec3(0.0);
+        for (int a = 0; a < 3; a++) {
+            float dx = cell_size[a];
+            float ra = half_r(t1.x, dx), ca = clearness(t1.x, dx);
+            for (int side = 0; side < 2; side++) {
+                bool edge = side == 0 ? idx[a] == 0 : idx[a] == cells_n[a] - 1;
+                if (edge) {
+                    float g = 1.0 / (ra + MARSHAK_R) / dx;
+                    float push = face_push(c, a, side, ra, dx) * (side == 1 ? 1.0 : -1.0);
+                    diag += g;
+                    rhs -= g * push;
+                    continue;
+                }
+                int o = side == 0 ? c - stride_of(a) : c + stride_of(a);
+                float rb = half_r(terms[2 * o + 1].x, dx), cb = clearness(terms[2 * o + 1].x, dx);
+                float g = 1.0 / (ra + rb + MARSHAK_R * abs(ca - cb)) / dx;
+                diag += g;
+                // the flux along +a through this face, lower cell first
+                int lo = side == 0 ? o : c, hi = side == 0 ? c : o;
+                float rl = side == 0 ? rb : ra, rh = side == 0 ? ra : rb;
+                float b = face_push(lo, a, 1, rl, dx) + face_push(hi, a, 0, rh, dx);
+                rhs += side == 0 ? g * b : -g * b;
+                if (side == 1)
+                    off[a] = -g;
+            }
+        }
+        sys[c] = vec4(diag, off);
+        B(c) = rhs;
+        X(c) = 0.0;
+        R(c) = rhs;
+        float z = rhs / diag;
+        Z(c) = z;
+        P(c) = z;
+        v0 = rhs * z;
+        v1 = rhs * rhs;
+    }
+    group_sums(v0, v1);
+}
+
+#elif PASS == 3
+void main()
+{
+    int c = int(gl_GlobalInvocationID.x);
+    float v0 = 0.0;
+    if (c < cells_count()) {
+        ivec3 idx = cell_of(c);
+        vec4 s = sys[c];
+        float v = s.x * P(c);
+        for (int a = 0; a < 3; a++) {
+            int st = stride_of(a);
+            if (idx[a] + 1 < cells_n[a])
+                v += s[1 + a] * P(c + st);
+            if (idx[a] > 0)
+                v += sys[c - st][1 + a] * P(c - st);
+        }
+        Q(c) = v;
+        v0 = P(c) * v;
+    }
+    group_sums(v0, 0.0);
+}
+
+#elif PASS == 4
+uniform int groups; // work groups whose partial sums to add
+uniform int what;   // 0 the start, 1 p.q, 2 the update's sums
+void main()
+{
+    uint l = gl_LocalInvocationID.x;
+    float v0 = 0.0, v1 = 0.0;
+    for (int g = int(l); g < groups; g += GROUP) {
+        v0 += scal[8 + 2 * g];
+        v1 += scal[9 + 2 * g];
+    }
+    part0[l] = v0;
+    part1[l] = v1;
+    barrier();
+    for (uint s = GROUP / 2u; s > 0u; s >>= 1u) {
+        if (l < s) {
+            part0[l] += part0[l + s];
+            part1[l] += part1[l + s];
+        }
+        barrier();
+    }
+    if (l != 0u)
+        return;
+    if (what == 0) {
+        scal[0] = part0[0];
+        scal[1] = part1[0];
+        scal[5] = part1[0];
+        scal[6] = part1[0] > 0.0 ? 1.0 : 0.0;
+    } else if (what == 1) {
+        float pq = part0[0];
+        scal[2] = pq;
+        scal[3] = pq > 0.0 ? scal[0] / pq : 0.0;
+    } else {
+        float rz = part0[0];
+        scal[4] = scal[0] > 0.0 ? rz / scal[0] : 0.0;
+        scal[0] = rz;
+        scal[5] = part1[0];
+        scal[6] = scal[1] > 0.0 ? sqrt(max(part1[0], 0.0) / scal[1]) : 0.0;
+    }
+}
+
+#elif PASS == 5
+void main()
+{
+    int c = int(gl_GlobalInvocationID.x);
+    float v0 = 0.0, v1 = 0.0;
+    if (c < cells_count()) {
+        float alpha = scal[3];
+        X(c) += alpha * P(c);
+        float r = R(c) - alpha * Q(c);
+        R(c) = r;
+        float z = r / sys[c].x;
+        Z(c) = z;
+        v0 = r * z;
+        v1 = r * r;
+    }
+    group_sums(v0, v1);
+}
+
+#elif PASS == 6
+void main()
+{
+    int c = int(gl_GlobalInvocationID.x);
+    if (c < cells_count())
+        P(c) = Z(c) + scal[4] * P(c);
+}
+
+#elif PASS == 7
+layout(rgba32f, binding = BIND_VOLUME_IMG_FIELD) uniform writeonly image3D field_img;
+void main()
+{
+    int c = int(gl_GlobalInvocationID.x);
+    if (c >= cells_count())
+        return;
+    ivec3 idx = cell_of(c);
+    float phi = X(c);
+    vec4 t1 = terms[2 * c + 1];
+    vec3 flux;
+    for (int a = 0; a < 3; a++) {
+        float dx = cell_size[a];
+        float ra = half_r(t1.x, dx), ca = clearness(t1.x, dx);
+        float face[2];
+        for (int side = 0; side < 2; side++) {
+            bool edge = side == 0 ? idx[a] == 0 : idx[a] == cells_n[a] - 1;
+            if (edge) {
+                float nout = side == 0 ? -1.0 : 1.0;
+                float fo = (phi + face_push(c, a, side, ra, dx) * nout) / (ra + MARSHAK_R);
+                face[side] = fo * nout;
+                continue;
+            }
+            int o = side == 0 ? c - stride_of(a) : c + stride_of(a);
+            float rb = half_r(terms[2 * o + 1].x, dx), cb = clearness(terms[2 * o + 1].x, dx);
+            float r = ra + rb + MARSHAK_R * abs(ca - cb);
+            int lo = side == 0 ? o : c, hi = side == 0 ? c : o;
+            float rl = side == 0 ? rb : ra, rh = side == 0 ? ra : rb;
+            face[side] = (X(lo) - X(hi) + face_push(lo, a, 1, rl, dx) +
+                          face_push(hi, a, 0, rh, dx)) / r;
+        }
+        flux[a] = 0.5 * (face[0] + face[1]);
+    }
+    imageStore(field_img, idx, vec4(phi, flux));
+}
+#endif

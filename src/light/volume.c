@@ -1,0 +1,528 @@
+/* The diffuse light volume: a P1 (diffusion) solve on a coarse grid, fed by the beam's losses
+ * (light_volume.h, docs/lightmap.md "The diffuse light volume"). */
+#include "light/light_volume.h"
+
+#include <assert.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/log.h"
+
+#define PI 3.14159265358979323846
+
+/* Resistance to the net flux of the jump from optically thick to clear (per unit area, in
+ * units of 1 / flux per fluence): Marshak's vacuum condition, the outgoing half-range flux of
+ * an isotropic field being phi / 4 each way, so that a surface facing empty space lets out
+ * J = phi / 2. */
+#define MARSHAK_R 2.0
+/* The least resistance of a half cell.  In cloud, 0.01: nearly free conduction without making
+ * the system singular where thin cells meet.  In clear air (a cell whose transport extinction
+ * is below CLEAR_SIGMA, 1e-6 per metre: about LIGHT_CLEAR_BETA), 0.25: diffusion cannot hold
+ * light streaming away from a cloud, whose fluence falls off faster than a diffusion's 1 / r,
+ * and air that conducts freely spreads what leaves a tower evenly through the whole box and
+ * out of it.  0.25 was chosen on the bench's scenes (docs/lightmap.md, "The diffuse light
+ * volume", "Clear air": against 0.01 the storm's RMSE falls from 1.30 to 1.08 and Katrina's
+ * from 0.255 to 0.213, the thin sphere's rises from 0.16 to 0.24); it is per cell, so it
+ * depends on the grid. */
+#define HALF_CELL_R_MIN 0.01
+#define HALF_CELL_R_AIR 0.25
+#define CLEAR_SIGMA 1e-6
+
+void light_volume_desc_defaults(struct light_volume_desc *d, const struct grid3 *grid)
+{
+    for (int a = 0; a < 3; a++) {
+        if (d->resolution[a] <= 0) {
+            int n = (grid->n[a] + 1) / 2;
+            d->resolution[a] = n < 2 ? 2 : n > 32 ? 32 : n;
+        }
+    }
+    if (d->substeps <= 0)
+        d->substeps = 3;
+    if (!(d->tolerance > 0.0))
+        d->tolerance = 1e-6;
+    if (d->max_iterations <= 0)
+        d->max_iterations = 4000;
+}
+
+void light_volume_finish(struct light_volume *v)
+{
+    if (!v)
+        return;
+    free(v->field);
+    memset(v, 0, sizeof(*v));
+}
+
+size_t light_volume_bytes(const struct light_volume *v)
+{
+    return v->field ? grid3_count(&v->grid) * 4 * sizeof(float) : 0;
+}
+
+/* The beam at world point P: outside the light columns nothing shadows it (1). */
+static double beam_at(const struct light_map *map, const double p[3])
+{
+    double t[3];
+    light_grid_world_to_tex(&map->grid, p, t);
+    if (!(t[0] >= 0.0 && t[0] <= 1.0 && t[1] >= 0.0 && t[1] <= 1.0))
+        return 1.0;
+    float tf[3] = {(float)t[0], (float)t[1], (float)t[2]};
+    return light_map_sample(map, tf);
+}
+
+/* Integral over the cone of half-angle PSI of cos(psi') times the CS phase G (normalised to 1
+ * over the sphere): the first moment of the light the beam keeps.  Simpson's rule. */
+static double cone_first_moment(double g, double psi)
+{
+    if (!(psi > 0.0))
+        return 0.0;
+    const int n = 256;
+    double h = psi / n, s = 0.0;
+    for (int i = 0; i <= n; i++) {
+        double a = i * h, mu = cos(a);
+        double f = 2.0 * PI * sin(a) * mu * phase_cs(g, mu);
+        s += (i == 0 || i == n) ? f : (i % 2 ? 4.0 : 2.0) * f;
+    }
+    return s * h / 3.0;
+}
+
+void light_volume_phase_terms(const struct light_settings *s, const double sun[3], double tr[2],
+                              double loss[2], double gs[2])
+{
+    struct light_diffuse_terms dt;
+    light_diffuse_terms_init(s, sun, &dt);
+    const bool fwd = s->forward, per = s->forward && s->peripheral;
+    double psi = !fwd ? 0.0 : (per ? 0.5 : 0.25) * s->forward_angle_deg * (PI / 180.0);
+    const double csg[2] = {s->cp.water_cs_g, s->cp.ice_cs_g};
+    for (int p = 0; p < 2; p++) {
+        tr[p] = 4.0 * dt.gamma[p] / 3.0;
+        loss[p] = dt.loss[p];
+        double g = 1.0 - tr[p];
+        gs[p] = fmax(-1.0, fmin(1.0, (g - cone_first_moment(csg[p], psi)) / loss[p]));
+    }
+}
+
+/* Per cell, averaged over its sub-samples: the source Q0 (per metre: the beam's loss rate
+ * -dL/ds), its first moment Q1 (a vector), and the transport extinction sigma_tr =
+ * (1 - g) beta. */
+struct cell_terms {
+    double q0, q1[3], sigma;
+    double dq[3]; /* Q0 times the offset of the source's centroid from the cell's centre */
+};
+
+static void cell_terms(const struct ext_volume *vol, const struct light_map *map,
+                       const struct light_volume *v, int sub, const double sdir[3],
+                       const double tr[2], const double loss[2], const double gs[2], int ci,
+                       int cj, int ck, struct cell_terms *out)
+{
+    const double *sp = v->grid.spacing;
+    double h = fmin(sp[0], fmin(sp[1], sp[2])) / sub;
+    const int ijk[3] = {ci, cj, ck};
+    double q0 = 0.0, q1 = 0.0, sigma = 0.0, dq[3] = {0.0, 0.0, 0.0};
+    for (int c = 0; c < sub; c++) {
+        for (int b = 0; b < sub; b++) {
+            for (int a = 0; a < sub; a++) {
+                double p[3] = {v->grid.origin[0] + (ci + (a + 0.5) / sub) * sp[0],
+                               v->grid.origin[1] + (cj + (b + 0.5) / sub) * sp[1],
+                               v->grid.origin[2] + (ck + (c + 0.5) / sub) * sp[2]};
+                float pf[3] = {(float)p[0], (float)p[1], (float)p[2]}, beta[2];
+                light_sample_beta(vol, pf, beta);
+                double ice = beta[0], water = beta[1];
+                sigma += tr[1] * ice + tr[0] * water;
+                if (!(ice + water > 0.0))
+                    continue;
+                /* What the beam loses over a short stretch through P: in a medium that
+                 * varies across the light this is the net of the beam's loss and the
+                 * peripheral light it gains, the light that leaves it for good. */
+                double pa[3], pb[3];
+                for (int i = 0; i < 3; i++) {
+                    pa[i] = p[i] - 0.5 * h * sdir[i];
+                    pb[i] = p[i] + 0.5 * h * sdir[i];
+                }
+                double la = beam_at(map, pa), lb = beam_at(map, pb);
+                double q = fmax(la - lb, 0.0) / h;
+                double lw = loss[0] * water, li = loss[1] * ice;
+                q0 += q;
+                q1 += q * (lw * gs[0] + li * gs[1]) / (lw + li);
+                /* Where on the stretch the beam loses it: the centroid of an exponential
+                 * fall from la to lb, at pa when the stretch is opaque. */
+                double s_bar = 0.5 * h;
+                if (q > 0.0) {
+                    double kh = lb > 0.0 ? log(la / lb) : INFINITY;
+                    if (kh > 50.0)
+                        s_bar = h / kh;
+                    else if (kh > 1e-4)
+                        s_bar = h * (1.0 / kh - 1.0 / expm1(kh));
+                }
+                for (int i = 0; i < 3; i++) {
+                    double centre = v->grid.origin[i] + (ijk[i] + 0.5) * sp[i];
+                    dq[i] += q * (pa[i] + s_bar * sdir[i] - centre);
+                }
+            }
+        }
+    }
+    double n = (double)sub * sub * sub;
+    out->q0 = q0 / n;
+    for (int i = 0; i < 3; i++) {
+        out->q1[i] = q1 / n * sdir[i];
+        out->dq[i] = dq[i] / n;
+    }
+    out->sigma = sigma / n;
+}
+
+/* Resistance of half a cell of transport extinction SIGMA and length DX across the face:
+ * dx / (2 D), D = 1 / (3 sigma). */
+static double half_r(double sigma, double dx)
+{
+    return fmax(1.5 * sigma * dx, sigma < CLEAR_SIGMA ? HALF_CELL_R_AIR : HALF_CELL_R_MIN);
+}
+
+/* What cell T adds, in fluence, to the push of the net flux along +A through its face on
+ * SIDE (0 the lower, 1 the upper), R its half cell's resistance across it, DX the cell's
+ * length: the drift of the source's first moment through the half cell, R Q1 / sigma_tr =
+ * 1.5 dx Q1 (none in clear air), and the source's place in the cell.  A cell's source is
+ * injected at its centre; where it lies off the centre (an opaque cell lit on one face keeps
+ * all of it in its first optical depths) the equivalent is a push 2 R delta Q0 in the half
+ * cell the centroid lies in, delta its offset (a current source moved across part of a
+ * resistor is a voltage source in series with it).  Without it an opaque cell would hold its
+ * source half a cell deep, and a slab of optical depth 1e4 on four cells let a tenth of the
+ * light through. */
+static double face_push(const struct cell_terms *t, int a, int side, double r, double dx)
+{
+    double shift = side ? fmax(t->dq[a], 0.0) : fmin(t->dq[a], 0.0);
+    return 1.5 * dx * t->q1[a] + 2.0 * r * shift;
+}
+
+/* How clear a cell of transport extinction SIGMA is across DX, 1 / (1 + 1.5 sigma dx): 1 in
+ * clear air, 0 in opaque cloud.  From the cell's own optical depth, not the floored
+ * resistance, so that a thick cloud's face toward air gets the whole Marshak jump. */
+static double clearness(double sigma, double dx)
+{
+    return 1.0 / (1.0 + 1.5 * sigma * dx);
+}
+
+static size_t cell_index(const int n[3], int i, int j, int k)
+{
+    return (size_t)i + (size_t)n[0] * ((size_t)j + (size_t)n[1] * (size_t)k);
+}
+
+/* The discrete system: per cell the conductances of its six faces divided by the cell's
+ * length across them (G / dx, 0 for a face on the box's boundary other than in the diagonal)
+ * and the right-hand side.  Face between cells a and b along an axis of cell length dx, per
+ * unit area: F = (phi_a - phi_b + 1.5 dx (Q1_a + Q1_b).e) / (R_a + R_b + R_int), the half
+ * cells' resistances R = dx / (2 D) = 1.5 sigma_tr dx in series with the jump between thick
+ * and clear R_int = 2 |c_a - c_b| (clearness, below); a box face lets out
+ * F = (phi_a + 1.5 dx Q1_a.n) / (R_a + 2). */
+struct system {
+    int n[3];
+    size_t count;
+    double *diag, *off[3]; /* off[a][c]: -G / dx between c and its neighbour c + e_a */
+    double *rhs;
+};
+
+static void system_finish(struct system *s)
+{
+    free(s->diag);
+    for (int a = 0; a < 3; a++)
+        free(s->off[a]);
+    free(s->rhs);
+}
+
+static void apply(const struct system *s, const double *x, double *y)
+{
+    const int *n = s->n;
+    const size_t stride[3] = {1, (size_t)n[0], (size_t)n[0] * n[1]};
+    for (int k = 0; k < n[2]; k++) {
+        for (int j = 0; j < n[1]; j++) {
+            for (int i = 0; i < n[0]; i++) {
+                size_t c = cell_index(n, i, j, k);
+                int idx[3] = {i, j, k};
+                double v = s->diag[c] * x[c];
+                for (int a = 0; a < 3; a++) {
+                    if (idx[a] + 1 < n[a])
+                        v += s->off[a][c] * x[c + stride[a]];
+                    if (idx[a] > 0)
+                        v += s->off[a][c - stride[a]] * x[c - stride[a]];
+                }
+                y[c] = v;
+            }
+        }
+    }
+}
+
+static double dot(const double *a, const double *b, size_t n)
+{
+    double s = 0.0;
+    for (size_t i = 0; i < n; i++)
+        s += a[i] * b[i];
+    return s;
+}
+
+/* Jacobi-preconditioned conjugate gradients from x = 0. */
+static bool solve(const struct system *s, double tol, int max_it, double *x, int *iterations,
+                  double *residual)
+{
+    size_t n = s->count;
+    double *r = malloc(n * sizeof(double)), *z = malloc(n * sizeof(double));
+    double *p = malloc(n * sizeof(double)), *q = malloc(n * sizeof(double));
+    bool ok = false;
+    if (!r || !z || !p || !q) {
+        log_error("light volume: out of memory for the solver (%zu cells)", n);
+        goto done;
+    }
+    memset(x, 0, n * sizeof(double));
+    memcpy(r, s->rhs, n * sizeof(double));
+    double bnorm = sqrt(dot(r, r, n));
+    *iterations = 0;
+    *residual = 0.0;
+    if (!(bnorm > 0.0)) {
+        ok = true;
+        goto done;
+    }
+    for (size_t i = 0; i < n; i++)
+        p[i] = z[i] = r[i] / s->diag[i];
+    double rz = dot(r, z, n);
+    for (int it = 1; it <= max_it; it++) {
+        apply(s, p, q);
+        double pq = dot(p, q, n);
+        if (!(pq > 0.0))
+            break;
+        double alpha = rz / pq;
+        for (size_t i = 0; i < n; i++) {
+            x[i] += alpha * p[i];
+            r[i] -= alpha * q[i];
+        }
+        *iterations = it;
+        *residual = sqrt(dot(r, r, n)) / bnorm;
+        if (*residual <= tol) {
+            ok = true;
+            goto done;
+        }
+        for (size_t i = 0; i < n; i++)
+            z[i] = r[i] / s->diag[i];
+        double rz_new = dot(r, z, n);
+        double beta = rz_new / rz;
+        rz = rz_new;
+        for (size_t i = 0; i < n; i++)
+            p[i] = z[i] + beta * p[i];
+    }
+    log_error("light volume: the diffusion solve stopped at a relative residual of %.3g after "
+              "%d iterations (wanted %.3g)", *residual, *iterations, tol);
+done:
+    free(r);
+    free(z);
+    free(p);
+    free(q);
+    return ok;
+}
+
+bool light_volume_build(const struct ext_volume *vol, const struct light_map *map,
+                        const struct light_settings *s, const struct light_volume_desc *desc,
+                        struct light_volume *out)
+{
+    assert(vol && map && s && out);
+    struct light_volume_desc d = desc ? *desc : (struct light_volume_desc){0};
+    light_volume_desc_defaults(&d, &vol->grid);
+    float *field_keep = out->field;
+    size_t keep_count = out->field ? grid3_count(&out->grid) : 0;
+    memset(out, 0, sizeof(*out));
+    for (int a = 0; a < 3; a++) {
+        out->grid.n[a] = d.resolution[a];
+        out->grid.origin[a] = vol->grid.origin[a];
+        out->grid.spacing[a] = vol->grid.n[a] * vol->grid.spacing[a] / d.resolution[a];
+    }
+    const size_t count = grid3_count(&out->grid);
+    if (field_keep && keep_count == count) {
+        out->field = field_keep;
+    } else {
+        free(field_keep);
+        out->field = malloc(count * 4 * sizeof(float));
+    }
+    struct system sys = {.n = {d.resolution[0], d.resolution[1], d.resolution[2]},
+                         .count = count};
+    struct cell_terms *terms = malloc(count * sizeof(*terms));
+    double *phi = malloc(count * sizeof(double));
+    sys.diag = calloc(count, sizeof(double));
+    sys.rhs = calloc(count, sizeof(double));
+    for (int a = 0; a < 3; a++)
+        sys.off[a] = calloc(count, sizeof(double));
+    if (!out->field || !terms || !phi || !sys.diag || !sys.rhs || !sys.off[0] || !sys.off[1] ||
+        !sys.off[2]) {
+        log_error("light volume: out of memory for %d x %d x %d cells", d.resolution[0],
+                  d.resolution[1], d.resolution[2]);
+        goto error;
+    }
+
+    /* The light travels along -sun. */
+    const double *sun = map->grid.sun;
+    double len = sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2]);
+    const double sdir[3] = {-sun[0] / len, -sun[1] / len, -sun[2] / len};
+    double tr[2], loss[2], gs[2];
+    light_volume_phase_terms(s, sun, tr, loss, gs);
+
+    const int *n = sys.n;
+    for (int k = 0; k < n[2]; k++) {
+        for (int j = 0; j < n[1]; j++) {
+            for (int i = 0; i < n[0]; i++)
+                cell_terms(vol, map, out, d.substeps, sdir, tr, loss, gs, i, j, k,
+                           &terms[cell_index(n, i, j, k)]);
+        }
+    }
+
+    const double *dx = out->grid.spacing;
+    const size_t stride[3] = {1, (size_t)n[0], (size_t)n[0] * n[1]};
+    for (int k = 0; k < n[2]; k++) {
+        for (int j = 0; j < n[1]; j++) {
+            for (int i = 0; i < n[0]; i++) {
+                size_t c = cell_index(n, i, j, k);
+                const struct cell_terms *t = &terms[c];
+                int idx[3] = {i, j, k};
+                sys.rhs[c] += t->q0;
+                for (int a = 0; a < 3; a++) {
+                    double ra = half_r(t->sigma, dx[a]), ca = clearness(t->sigma, dx[a]);
+                    /* The faces on the box: down to 0 beyond.  Out through the lower face
+                     * the flux is -(flux along +a). */
+                    for (int side = 0; side < 2; side++) {
+                        bool edge = side == 0 ? idx[a] == 0 : idx[a] == n[a] - 1;
+                        if (!edge)
+                            continue;
+                        double g = 1.0 / (ra + MARSHAK_R) / dx[a];
+                        double push = face_push(t, a, side, ra, dx[a]) * (side ? 1.0 : -1.0);
+                        sys.diag[c] += g;
+                        sys.rhs[c] -= g * push;
+                    }
+                    if (idx[a] + 1 >= n[a])
+                        continue;
+                    size_t o = c + stride[a];
+                    const struct cell_terms *u = &terms[o];
+                    double rb = half_r(u->sigma, dx[a]), cb = clearness(u->sigma, dx[a]);
+                    double g = 1.0 / (ra + rb + MARSHAK_R * fabs(ca - cb)) / dx[a];
+                    double b = face_push(t, a, 1, ra, dx[a]) + face_push(u, a, 0, rb, dx[a]);
+                    sys.off[a][c] = -g;
+                    sys.diag[c] += g;
+                    sys.diag[o] += g;
+                    sys.rhs[c] -= g * b; /* flux out of c along +a */
+                    sys.rhs[o] += g * b; /* the same flux into o */
+                }
+            }
+        }
+    }
+
+    if (!solve(&sys, d.tolerance, d.max_iterations, phi, &out->iterations, &out->residual))
+        goto error;
+
+    /* The flux through each face; per cell the mean of its two faces along each axis. */
+    double volume_cell = dx[0] * dx[1] * dx[2];
+    out->source = 0.0;
+    out->leak = 0.0;
+    for (int k = 0; k < n[2]; k++) {
+        for (int j = 0; j < n[1]; j++) {
+            for (int i = 0; i < n[0]; i++) {
+                size_t c = cell_index(n, i, j, k);
+                const struct cell_terms *t = &terms[c];
+                int idx[3] = {i, j, k};
+                out->source += t->q0 * volume_cell;
+                float *f = out->field + 4 * c;
+                f[0] = (float)phi[c];
+                for (int a = 0; a < 3; a++) {
+                    double ra = half_r(t->sigma, dx[a]), ca = clearness(t->sigma, dx[a]);
+                    double area = volume_cell / dx[a];
+                    double face[2]; /* the flux along +a through the lower and upper face */
+                    for (int side = 0; side < 2; side++) {
+                        bool edge = side == 0 ? idx[a] == 0 : idx[a] == n[a] - 1;
+                        if (edge) {
+                            double nout = side == 0 ? -1.0 : 1.0;
+                            double fo = (phi[c] + face_push(t, a, side, ra, dx[a]) * nout) /
+                                        (ra + MARSHAK_R);
+                            out->leak += fo * area;
+                            face[side] = fo * nout;
+                            continue;
+                        }
+                        size_t o = side == 0 ? c - stride[a] : c + stride[a];
+                        const struct cell_terms *u = &terms[o];
+                        double rb = half_r(u->sigma, dx[a]), cb = clearness(u->sigma, dx[a]);
+                        double r = ra + rb + MARSHAK_R * fabs(ca - cb);
+                        /* lower cell L, upper cell U of the face */
+                        const struct cell_terms *tl = side == 0 ? u : t, *tu = side == 0 ? t : u;
+                        double rl = side == 0 ? rb : ra, ru = side == 0 ? ra : rb;
+                        double pl = side == 0 ? phi[o] : phi[c], pu = side == 0 ? phi[c] : phi[o];
+                        face[side] = (pl - pu + face_push(tl, a, 1, rl, dx[a]) +
+                                      face_push(tu, a, 0, ru, dx[a])) / r;
+                    }
+                    f[1 + a] = (float)(0.5 * (face[0] + face[1]));
+                }
+            }
+        }
+    }
+    free(terms);
+    free(phi);
+    system_finish(&sys);
+    return true;
+
+error:
+    free(terms);
+    free(phi);
+    system_finish(&sys);
+    light_volume_finish(out);
+    return false;
+}
+
+/* Cell coordinate of X along an axis of N cells -> lower cell and the upper one's weight,
+ * clamped to the edge cells. */
+static int axis_cell(double x, int n, double *t)
+{
+    double f = x - 0.5;
+    if (n < 2 || f <= 0.0) {
+        *t = 0.0;
+        return 0;
+    }
+    if (f >= n - 1) {
+        *t = 1.0;
+        return n - 2;
+    }
+    int i = (int)f;
+    *t = f - i;
+    return i;
+}
+
+void light_volume_sample(const struct light_volume *v, const double p[3], float out[4])
+{
+    const int *n = v->grid.n;
+    double x[3], t[3];
+    int i0[3];
+    for (int a = 0; a < 3; a++) {
+        x[a] = (p[a] - v->grid.origin[a]) / v->grid.spacing[a];
+        if (!v->field || !(x[a] >= 0.0 && x[a] <= n[a])) {
+            out[0] = out[1] = out[2] = out[3] = 0.0f;
+            return;
+        }
+        i0[a] = axis_cell(x[a], n[a], &t[a]);
+    }
+    for (int c = 0; c < 4; c++) {
+        double s = 0.0;
+        for (int dk = 0; dk < 2; dk++) {
+            for (int dj = 0; dj < 2; dj++) {
+                for (int di = 0; di < 2; di++) {
+                    double w = (di ? t[0] : 1.0 - t[0]) * (dj ? t[1] : 1.0 - t[1]) *
+                               (dk ? t[2] : 1.0 - t[2]);
+                    if (w == 0.0)
+                        continue;
+                    int ii = i0[0] + (n[0] > 1 ? di : 0), jj = i0[1] + (n[1] > 1 ? dj : 0);
+                    int kk = i0[2] + (n[2] > 1 ? dk : 0);
+                    s += w * v->field[4 * cell_index(n, ii, jj, kk) + c];
+                }
+            }
+        }
+        out[c] = (float)s;
+    }
+}
+
+float light_volume_scattered(const float field[4], float g, const double dir[3])
+{
+    double fd = field[1] * dir[0] + field[2] * dir[1] + field[3] * dir[2];
+    double fm = sqrt(field[1] * field[1] + field[2] * field[2] + field[3] * field[3]);
+    double cap = LIGHT_VOLUME_ANISOTROPY * fmax(field[0], 0.0);
+    if (fm > cap)
+        fd = fm > 0.0 ? fd * (cap / fm) : 0.0;
+    double v = field[0] + 3.0 * g * fd;
+    return v > 0.0 ? (float)v : 0.0f;
+}

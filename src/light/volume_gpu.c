@@ -1,0 +1,211 @@
+/* The diffuse light volume on the GPU (light_volume_gpu.h). */
+#include "light/light_volume_gpu.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/log.h"
+#include "shaders/bindings.h"
+
+#define GROUP 256
+#define SCALARS_HEAD 8
+/* Iterations between two reads of the residual: each read waits for the GPU. */
+#define CHECK_EVERY 16
+
+static const struct gpu_program *pass(struct light_volume_gpu *v, int k)
+{
+    struct gpu_program *p = &v->pass[k - 1];
+    if (!p->id) {
+        char defines[32];
+        snprintf(defines, sizeof(defines), "#define PASS %d\n", k);
+        if (!gpu_program_init(p, "light_volume.comp", defines))
+            return NULL;
+    }
+    return p;
+}
+
+static void scratch_finish(struct light_volume_gpu *v)
+{
+    gpu_buffer_finish(&v->terms);
+    gpu_buffer_finish(&v->system);
+    gpu_buffer_finish(&v->vectors);
+    gpu_buffer_finish(&v->scalars);
+}
+
+void light_volume_gpu_finish(struct light_volume_gpu *v)
+{
+    for (int k = 0; k < 7; k++)
+        gpu_program_finish(&v->pass[k]);
+    gpu_texture_finish(&v->field);
+    scratch_finish(v);
+    memset(v, 0, sizeof(*v));
+}
+
+static void common_uniforms(const struct light_volume_gpu *v, const struct gpu_program *p)
+{
+    float size[3], origin[3];
+    for (int a = 0; a < 3; a++) {
+        size[a] = (float)v->grid.spacing[a];
+        origin[a] = (float)v->grid.origin[a];
+    }
+    gpu_uniform_ivec3(p, "cells_n", v->grid.n);
+    gpu_uniform_vec3(p, "cell_size", size);
+    gpu_uniform_vec3(p, "box_origin", origin);
+}
+
+static void bind_buffers(const struct light_volume_gpu *v)
+{
+    gpu_buffer_bind(&v->terms, BIND_VOLUME_BUF_TERMS);
+    gpu_buffer_bind(&v->system, BIND_VOLUME_BUF_SYSTEM);
+    gpu_buffer_bind(&v->vectors, BIND_VOLUME_BUF_VECTORS);
+    gpu_buffer_bind(&v->scalars, BIND_VOLUME_BUF_SCALARS);
+}
+
+static void reduce(struct light_volume_gpu *v, const struct gpu_program *p, int groups, int what)
+{
+    gpu_program_use(p);
+    common_uniforms(v, p);
+    gpu_uniform_int(p, "groups", groups);
+    gpu_uniform_int(p, "what", what);
+    gpu_dispatch(p, GROUP, 1, 1);
+}
+
+bool light_volume_gpu_build(struct light_volume_gpu *v, const struct gpu_texture *beta,
+                            const struct grid3 *vol_grid, const struct gpu_texture *light,
+                            const struct light_grid *lgrid, const struct light_settings *s,
+                            const struct light_volume_desc *desc)
+{
+    struct light_volume_desc d = desc ? *desc : (struct light_volume_desc){0};
+    light_volume_desc_defaults(&d, vol_grid);
+    double tol = fmax(d.tolerance, 1e-5);
+    const struct gpu_program *p[7];
+    for (int k = 1; k <= 7; k++) {
+        if (!(p[k - 1] = pass(v, k)))
+            return false;
+    }
+    for (int a = 0; a < 3; a++) {
+        v->grid.n[a] = d.resolution[a];
+        v->grid.origin[a] = vol_grid->origin[a];
+        v->grid.spacing[a] = vol_grid->n[a] * vol_grid->spacing[a] / d.resolution[a];
+    }
+    const int count = (int)grid3_count(&v->grid);
+    const int groups = (count + GROUP - 1) / GROUP;
+    if (!v->field.id || memcmp(v->field.size, v->grid.n, sizeof(v->grid.n)) != 0) {
+        gpu_texture_finish(&v->field);
+        if (!gpu_texture_init(&v->field, 3, v->grid.n, GPU_RGBA32F, NULL))
+            return false;
+    }
+    if (!gpu_buffer_init(&v->terms, (size_t)count * 8 * sizeof(float), NULL) ||
+        !gpu_buffer_init(&v->system, (size_t)count * 4 * sizeof(float), NULL) ||
+        !gpu_buffer_init(&v->vectors, (size_t)count * 6 * sizeof(float), NULL) ||
+        !gpu_buffer_init(&v->scalars, (size_t)(SCALARS_HEAD + 2 * groups) * sizeof(float),
+                         NULL)) {
+        scratch_finish(v);
+        return false;
+    }
+    bind_buffers(v);
+
+    /* PASS 1: the source and the extinction per cell. */
+    double sun_len = sqrt(lgrid->sun[0] * lgrid->sun[0] + lgrid->sun[1] * lgrid->sun[1] +
+                          lgrid->sun[2] * lgrid->sun[2]);
+    float sdir[3], vol_origin[3], vol_inv[3];
+    for (int a = 0; a < 3; a++) {
+        sdir[a] = (float)(-lgrid->sun[a] / sun_len);
+        vol_origin[a] = (float)vol_grid->origin[a];
+        vol_inv[a] = (float)(1.0 / vol_grid->spacing[a]);
+    }
+    double tr[2], loss[2], gs[2];
+    light_volume_phase_terms(s, lgrid->sun, tr, loss, gs);
+    const float trf[2] = {(float)tr[0], (float)tr[1]}, lossf[2] = {(float)loss[0], (float)loss[1]};
+    const float gsf[2] = {(float)gs[0], (float)gs[1]};
+    gpu_program_use(p[0]);
+    common_uniforms(v, p[0]);
+    gpu_texture_bind(beta, BIND_VOLUME_TEX_BETA);
+    gpu_texture_bind(light, BIND_VOLUME_TEX_LIGHT);
+    gpu_uniform_ivec3(p[0], "vol_n", vol_grid->n);
+    gpu_uniform_vec3(p[0], "vol_origin", vol_origin);
+    gpu_uniform_vec3(p[0], "vol_inv_spacing", vol_inv);
+    gpu_uniform_mat4(p[0], "light_world_to_tex", lgrid->world_to_tex);
+    gpu_uniform_ivec3(p[0], "light_n", lgrid->n);
+    gpu_uniform_vec3(p[0], "sdir", sdir);
+    gpu_uniform_vec2(p[0], "tr", trf);
+    gpu_uniform_vec2(p[0], "loss", lossf);
+    gpu_uniform_vec2(p[0], "gs", gsf);
+    gpu_uniform_int(p[0], "sub", d.substeps);
+    gpu_dispatch(p[0], count, 1, 1);
+
+    /* PASS 2: the system, and the iteration's start. */
+    gpu_program_use(p[1]);
+    common_uniforms(v, p[1]);
+    gpu_dispatch(p[1], count, 1, 1);
+    reduce(v, p[3], groups, 0);
+    float head[SCALARS_HEAD];
+    gpu_buffer_read(&v->scalars, 0, sizeof(head), head);
+    bool ok = true;
+    v->iterations = 0;
+    v->residual = 0.0f;
+    if (head[1] > 0.0f) {
+        ok = false;
+        for (int it = 1; it <= d.max_iterations; it++) {
+            gpu_program_use(p[2]);
+            common_uniforms(v, p[2]);
+            gpu_dispatch(p[2], count, 1, 1);
+            reduce(v, p[3], groups, 1);
+            gpu_program_use(p[4]);
+            common_uniforms(v, p[4]);
+            gpu_dispatch(p[4], count, 1, 1);
+            reduce(v, p[3], groups, 2);
+            gpu_program_use(p[5]);
+            common_uniforms(v, p[5]);
+            gpu_dispatch(p[5], count, 1, 1);
+            v->iterations = it;
+            if (it % CHECK_EVERY == 0 || it == d.max_iterations) {
+                gpu_buffer_read(&v->scalars, 0, sizeof(head), head);
+                v->residual = head[6];
+                if (!isfinite(head[6]))
+                    break;
+                if (head[6] <= tol) {
+                    ok = true;
+                    break;
+                }
+            }
+        }
+    }
+    if (!ok) {
+        log_error("light volume (GPU): the diffusion solve stopped at a relative residual of "
+                  "%.3g after %d iterations (wanted %.3g)", (double)v->residual, v->iterations,
+                  tol);
+        scratch_finish(v);
+        return false;
+    }
+
+    log_info("light volume: %dx%dx%d cells, %d iterations to a relative residual of %.2g",
+             v->grid.n[0], v->grid.n[1], v->grid.n[2], v->iterations, (double)v->residual);
+    /* PASS 7: the field. */
+    gpu_program_use(p[6]);
+    common_uniforms(v, p[6]);
+    gpu_image_bind(&v->field, BIND_VOLUME_IMG_FIELD, true);
+    gpu_dispatch(p[6], count, 1, 1);
+    scratch_finish(v);
+    return true;
+}
+
+bool light_volume_gpu_read(const struct light_volume_gpu *v, struct light_volume *out)
+{
+    light_volume_finish(out);
+    if (!v->field.id)
+        return false;
+    out->grid = v->grid;
+    size_t bytes = grid3_count(&v->grid) * 4 * sizeof(float);
+    out->field = malloc(bytes);
+    if (!out->field) {
+        log_error("light volume (GPU): out of memory for reading back %zu bytes", bytes);
+        return false;
+    }
+    gpu_texture_read(&v->field, out->field, bytes);
+    out->iterations = v->iterations;
+    out->residual = v->residual;
+    return true;
+}
