@@ -44,6 +44,7 @@
 #define BIND_EYE_TEX_SLICES 13          /* SLICES > 0: RGBA32F 3D, slice i's field in channel i */
 #define BIND_EYE_TEX_SLICE_SURFACES 14  /* SLICES > 0: RGBA32F 2D, slice i's level surface (world
                                            z at each column) in channel i */
+#define BIND_EYE_TEX_ZMAP 15            /* STRETCHED 1: the volume's height table (zmap.glsl) */
 #define BIND_EYE_IMG_OUT 0              /* RGBA32F radiance and transmittance */
 #define BIND_EYE_BUF_CELLS 4            /* SKIP 1: the macro-cell pyramid (cells.glsl) */
 #define BIND_EYE_BUF_COUNTERS 5         /* COUNT 1: what the rays did */
@@ -69,6 +70,7 @@
 #define BIND_SLICES_TEX_RATES 1  /* MULTIPLE and LATERAL: lateral escape rates */
 #define BIND_SLICES_IMG_SLICE 0  /* each slice's tau, ice share (escape rates), written */
 #define BIND_SLICES_BUF_CELLS 0  /* SKIP 1: the volume's macro cells (cells.glsl) */
+#define BIND_SLICES_TEX_ZMAP 2   /* STRETCHED 1: the volume's height table (zmap.glsl) */
 
 /* ---- light build: the beam's sweep from the sun (shaders/light_build.comp) ------------ */
 #define BIND_BUILD_TEX_SLICE 0  /* the slices of light_slices.comp, texelFetch only */
