@@ -66,17 +66,16 @@ bool render_zmap_upload(const struct grid3 *grid, struct gpu_texture *tex,
                         const struct gpu_program *prog)
 {
     int n = grid3_zmap_entries(grid);
-    float *t = malloc((size_t)n * 3 * sizeof(float));
+    float *t = malloc((size_t)n * 4 * sizeof(float));
     if (!t) {
         log_error("out of memory for the height table");
         return false;
     }
-    float *u = t + 2 * (size_t)n, *dz = t + n;
+    float *u = t + 2 * (size_t)n, *dz = t + 3 * (size_t)n;
     grid3_zmap_fill(grid, n, u, dz);
-    for (int i = n - 1; i >= 0; i--) { /* interleave: r the coordinate, g the thickness */
-        float a = u[i], b = dz[i];
-        t[2 * i] = a;
-        t[2 * i + 1] = b;
+    for (int i = 0; i < n; i++) { /* interleaved: r the coordinate, g the thickness */
+        t[2 * i] = u[i];
+        t[2 * i + 1] = dz[i];
     }
     const int size[3] = {n, 1, 1};
     bool ok = true;
