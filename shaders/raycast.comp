@@ -619,8 +619,9 @@ void main()
         if (step_len <= 0.0) {
             // On the model's levels each step is half the distance in which the ray crosses
             // the level it starts in (or the one it would reach, if thinner), or a horizontal
-            // voxel: thin low levels get short steps, the thick ones aloft long ones.  An
-            // optically thick step is cut to one light map node, as above.
+            // voxel, and ends where the ray crosses a level centre: thin low levels get short
+            // steps, the thick ones aloft long ones.  An optically thick step is cut to one
+            // light map node, as above.
             vec3 cross = voxel_size / max(abs(dir), vec3(1e-6));
             float step_xy = 0.5 * min(cross.x, cross.y);
             float per_dz = 0.5 / max(abs(dir.z), 1e-6);
@@ -638,6 +639,10 @@ void main()
                 float d = min(step_xy, zmap_dz(za, box_min.z, voxel_size.z) * per_dz);
                 d = min(d, zmap_dz(za + dir.z * d, box_min.z, voxel_size.z) * per_dz);
                 d = min(d, left);
+                // Cut at the next level centre: each step then sees a linear extinction in
+                // height, which its midpoint sample integrates exactly.
+                d = min(d, zmap_next_centre(za, dir.z, box_min.z, box_size.z / voxel_size.z,
+                                            1e-3 * d));
 #if SKIP
                 // A step wholly in clear cells adds nothing: on to where they end.
                 if (t + d > t_clear && t >= t_occupied)
