@@ -8,6 +8,7 @@
 #include "thin_layer.h"
 
 #include "common/log.h"
+#include "data/extfile.h"
 #include "data/volume.h"
 #include "data/wrf.h"
 #include "reference/reference.h"
@@ -161,11 +162,41 @@ static void test_native_keeps_the_layer(void **state)
     ext_volume_finish(&ev);
 }
 
+/* An extinction file written from the model's levels reads back on the same levels. */
+static void test_extinction_file_keeps_the_levels(void **state)
+{
+    (void)state;
+    struct field_volume fv;
+    struct ext_volume ev, back;
+    read_layer(true, &fv, &ev);
+    const char *path = test_tmp_path("thin-ext.nc");
+    struct extfile_writer *w = extfile_writer_create(path, &ev.grid, "test", "test", NULL);
+    assert_non_null(w);
+    assert_true(extfile_writer_add(w, &ev, "2005-08-28_00:00:00"));
+    assert_true(extfile_writer_finish(w));
+    struct extfile *f = extfile_open(path, 0.0);
+    assert_non_null(f);
+    const struct grid3 *g = extfile_grid(f);
+    assert_true(grid3_stretched(g));
+    assert_int_equal(g->n[2], ev.grid.n[2]);
+    assert_true(fabs(g->origin[2] - ev.grid.origin[2]) < 1e-6);
+    assert_true(fabs(g->spacing[2] - ev.grid.spacing[2]) < 1e-6);
+    for (int k = 0; k < g->n[2]; k++)
+        assert_true(fabs(g->z_centre[k] - ev.grid.z_centre[k]) < 1e-6);
+    assert_true(extfile_read_step(f, 0, &back, NULL));
+    assert_memory_equal(back.beta, ev.beta, 2 * grid3_count(&ev.grid) * sizeof(float));
+    extfile_close(f);
+    ext_volume_finish(&back);
+    field_volume_finish(&fv);
+    ext_volume_finish(&ev);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mapping),
         cmocka_unit_test(test_native_keeps_the_layer),
+        cmocka_unit_test(test_extinction_file_keeps_the_levels),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
