@@ -65,24 +65,18 @@ _Static_assert((GRID3_LEVELS_MAX + RENDER_CELL_VOXELS - 1) / RENDER_CELL_VOXELS 
 bool render_zmap_upload(const struct grid3 *grid, struct gpu_texture *tex,
                         const struct gpu_program *prog)
 {
-    /* The table's N entries, then the levels' centre heights (r; zmap.glsl). */
-    int n = grid3_zmap_entries(grid), nz = grid->n[2];
-    float *t = malloc(((size_t)n * 4 + 2 * (size_t)nz) * sizeof(float));
+    int n = grid3_zmap_entries(grid);
+    float *t = malloc((size_t)n * 4 * sizeof(float));
     if (!t) {
         log_error("out of memory for the height table");
         return false;
     }
-    float *u = t + 2 * ((size_t)n + nz), *dz = u + n;
+    float *u = t + 2 * (size_t)n, *dz = u + n;
     grid3_zmap_fill(grid, n, u, dz);
     for (int i = 0; i < n; i++) { /* interleaved: r the coordinate, g the thickness */
         t[2 * i] = u[i];
         t[2 * i + 1] = dz[i];
     }
-    for (int k = 0; k < nz; k++) {
-        t[2 * (n + k)] = (float)grid3_centre_z(grid, k);
-        t[2 * (n + k) + 1] = 0.0f;
-    }
-    n += nz;
     const int size[3] = {n, 1, 1};
     bool ok = true;
     if (tex->id && tex->size[0] == n && tex->format == GPU_RG32F) {
@@ -100,7 +94,7 @@ bool render_zmap_upload(const struct grid3 *grid, struct gpu_texture *tex,
 void render_zmap_uniforms(const struct grid3 *grid, const struct gpu_texture *tex,
                           const struct gpu_program *prog)
 {
-    gpu_uniform_int(prog, "zmap_n", tex->size[0] - grid->n[2]);
+    gpu_uniform_int(prog, "zmap_n", tex->size[0]);
     gpu_uniform_float(prog, "zmap_inv_height", (float)(1.0 / (grid->n[2] * grid->spacing[2])));
 }
 

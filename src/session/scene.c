@@ -264,7 +264,7 @@ void scene_detail_desc(const struct config *cfg, struct detail_desc *out)
 
 bool scene_domain_box(const struct config *cfg, double lo[3], double hi[3])
 {
-    struct grid3 g;
+    struct grid3 g = {0};
     if (cfg->scene.kind == SCENE_DATA) {
         const char *files[CONFIG_MAX_FILES];
         struct data_source_desc desc;
