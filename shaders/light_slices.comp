@@ -43,7 +43,12 @@ layout(std430, binding = BIND_SLICES_BUF_CELLS) readonly buffer macro_cells
 };
 #include "cells.glsl"
 #endif
-#define ZMAP_BINDING BIND_SLICES_TEX_ZMAP
+#ifndef STRETCHED
+#define STRETCHED 0
+#endif
+#if STRETCHED
+layout(binding = BIND_SLICES_TEX_ZMAP) uniform sampler1D zmap_tex; // texelFetch only
+#endif
 #include "zmap.glsl"
 
 uniform ivec3 vol_n;

@@ -70,7 +70,12 @@ layout(rgba32f, binding = BIND_EYE_IMG_OUT) uniform writeonly image2D out_image;
 // r: ice-phase beta, g: water-phase beta [1/m]; r: ice, g: water eye phase over psi in [0, pi]
 layout(binding = BIND_EYE_TEX_BETA) uniform sampler3D beta_tex;
 layout(binding = BIND_EYE_TEX_PHASE) uniform sampler1D phase_tex;
-#define ZMAP_BINDING BIND_EYE_TEX_ZMAP
+#ifndef STRETCHED
+#define STRETCHED 0
+#endif
+#if STRETCHED
+layout(binding = BIND_EYE_TEX_ZMAP) uniform sampler1D zmap_tex; // texelFetch only
+#endif
 #include "zmap.glsl"
 
 uniform mat4 inv_view_proj; // clip space -> world (metres)

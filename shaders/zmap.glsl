@@ -3,15 +3,15 @@
 // model's own levels, read from the table grid3_zmap_fill makes (ZMAP_N values of the
 // voxel coordinate over n_z at evenly spaced heights of the box, r, and the level thickness
 // there, g), linear between its entries with the same float operations as the CPU light map
-// build (src/light/transport.c, sampler_z).  The including program binds the table at
-// ZMAP_BINDING and sets zmap_n and zmap_inv_height (1 / the box's height, 1/m).
+// build (src/light/transport.c, sampler_z).  With STRETCHED 1 the including program declares
+// `uniform sampler1D zmap_tex` at its own binding and sets zmap_n and zmap_inv_height (1 / the
+// box's height, 1/m).
 
 #ifndef STRETCHED
 #define STRETCHED 0
 #endif
 
 #if STRETCHED
-layout(binding = ZMAP_BINDING) uniform sampler1D zmap_tex; // texelFetch only
 uniform int zmap_n;
 uniform float zmap_inv_height;
 #endif

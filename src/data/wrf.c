@@ -895,6 +895,18 @@ static bool output_grid(const struct wrf *w, const struct wrf_desc *d, const str
         lo = fmax(lo, zc[0] - 0.5 * (zc[1] - zc[0]));
         hi = fmin(hi, zc[s->nz - 1] + 0.5 * (zc[s->nz - 1] - zc[s->nz - 2]));
     }
+    /* Levels already even (a file on height levels, anvil synth's) make the uniform grid they
+     * are: nothing to map, the same picture as data.vertical = "uniform". */
+    double dz = (hi - lo) / s->nz;
+    bool even = true;
+    for (int k = 0; k < s->nz && even; k++)
+        even = fabs(zc[k] - (lo + (k + 0.5) * dz)) <= 1e-3 * dz;
+    if (even) {
+        g->n[2] = s->nz;
+        g->spacing[2] = dz;
+        g->origin[2] = lo;
+        return true;
+    }
     return grid3_set_levels(g, zc, s->nz, lo, hi);
 }
 
