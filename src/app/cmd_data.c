@@ -21,6 +21,7 @@
 #include "data/extfile.h"
 #include "data/hgrid_write.h"
 #include "data/isabel.h"
+#include "data/nest.h"
 #include "data/synth.h"
 #include "data/wrf.h"
 #include "data/wrf_write.h"
@@ -85,11 +86,9 @@ static int info_extinction(const char *path, double memory_mb)
     return rc;
 }
 
-static int info_wrf(const char *const *paths, int count, double memory_mb)
+/* One domain's series; W stays the caller's. */
+static int info_wrf_series(struct wrf *w, const char *const *paths, int count, double memory_mb)
 {
-    struct wrf *w = wrf_open(paths, count, memory_mb);
-    if (!w)
-        return EXIT_BAD_INPUT;
     const struct wrf_meta *m = wrf_get_meta(w);
     for (int i = 0; i < count; i++)
         printf("%s%s", i ? ", " : "", paths[i]);
@@ -149,6 +148,49 @@ static int info_wrf(const char *const *paths, int count, double memory_mb)
             print_range(wrf_var_name((enum wrf_var)k), &st.var[k]);
         field_volume_finish(&v);
     }
+    return rc;
+}
+
+/* A parent and its nests (data/nest.h): how they are placed, then each domain. */
+static int info_nests(struct nest_set *n, double memory_mb)
+{
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    struct nest_layout l;
+    if (!nest_layout(n, &d, &l))
+        return EXIT_BAD_INPUT;
+    printf("%d WRF domains in one scene, composed on %d x %d columns of %.6g m (the outermost's "
+           "extent at the finest spacing):\n",
+           nest_domain_count(n), l.grid.n[0], l.grid.n[1], l.grid.spacing[0]);
+    for (int i = 0; i < nest_domain_count(n); i++) {
+        char line[1024];
+        nest_describe(n, i, line, sizeof(line));
+        printf("  %s\n", line);
+    }
+    int rc = EXIT_OK;
+    for (int i = 0; i < nest_domain_count(n) && rc == EXIT_OK; i++) {
+        const struct nest_domain *dom = nest_domain(n, i);
+        printf("\n");
+        rc = info_wrf_series(dom->wrf, &dom->path, 1, memory_mb);
+    }
+    return rc;
+}
+
+static int info_wrf(const char *const *paths, int count, double memory_mb)
+{
+    bool single;
+    struct nest_set *n = nest_open(paths, count, memory_mb, &single);
+    if (n) {
+        int rc = info_nests(n, memory_mb);
+        nest_close(n);
+        return rc;
+    }
+    if (!single)
+        return EXIT_BAD_INPUT;
+    struct wrf *w = wrf_open(paths, count, memory_mb);
+    if (!w)
+        return EXIT_BAD_INPUT;
+    int rc = info_wrf_series(w, paths, count, memory_mb);
     wrf_close(w);
     return rc;
 }
@@ -382,10 +424,16 @@ static void synth_usage(FILE *out)
                  "                   [--steps N] [--extent XxYxZ] [--seed N]\n"
                  "                   [--start YYYY-MM-DD_hh:mm:ss] [--interval MIN]\n"
                  "                   [--center LAT,LON]\n"
+                 "                   [--nest NEST.nc [--nest-ratio R] [--nest-box I,J,NI,NJ]\n"
+                 "                    [--nest-latlon]]\n"
                  "  Writes the procedural storm as WRF-convention NetCDF (or CM1's convention,\n"
                  "  or CF on height levels), evolving over the steps.  Defaults: --format wrf\n"
                  "  --size 128x128x64 --steps 1 --extent 60x60x16 (km) --seed 1\n"
-                 "  --start 2000-01-01_00:00:00 --interval 10 --center 25,-89.\n");
+                 "  --start 2000-01-01_00:00:00 --interval 10 --center 25,-89.\n"
+                 "  --nest also writes a WRF nest (GRID_ID 2) of the same storm R times finer\n"
+                 "  (default 3) over NI x NJ parent columns from column I, J (1-based; default\n"
+                 "  the middle third), with PARENT_ID, I/J_PARENT_START and PARENT_GRID_RATIO\n"
+                 "  (--nest-latlon: without them, placed by its XLAT/XLONG).\n");
 }
 
 /* Adds SECONDS to a WRF date (no time zones, proleptic Gregorian). */
@@ -445,6 +493,78 @@ static int synth_hgrid(enum hgrid_kind kind, const char *out, struct synth_desc 
     return EXIT_OK;
 }
 
+/* The storm as a parent (OUT) and its nest (NEST): made once at the nest's spacing over the
+ * whole domain, the parent's columns cut from it (nest_cut), so both sample one field. */
+static int synth_nest(const char *out, const char *nest, struct synth_desc *sd, int ratio,
+                      const int box_in[4], bool latlon, int steps, const char *start,
+                      double interval_min, double lat, double lon)
+{
+    int box[4] = {box_in[0], box_in[1], box_in[2], box_in[3]};
+    if (box[2] == 0) { /* the middle third */
+        for (int a = 0; a < 2; a++) {
+            box[2 + a] = sd->n[a] / 3 > 2 ? sd->n[a] / 3 : 2;
+            box[a] = 1 + (sd->n[a] - box[2 + a]) / 2;
+        }
+    }
+    if (box[0] - 1 + box[2] > sd->n[0] || box[1] - 1 + box[3] > sd->n[1]) {
+        log_error("synth: --nest-box %d,%d,%d,%d: beyond the parent's %d x %d columns", box[0],
+                  box[1], box[2], box[3], sd->n[0], sd->n[1]);
+        return EXIT_USAGE;
+    }
+    struct synth_desc fine = *sd;
+    fine.n[0] *= ratio;
+    fine.n[1] *= ratio;
+    double dx = sd->extent_m[0] / sd->n[0], dy = sd->extent_m[1] / sd->n[1];
+    struct wrf_write_desc pd = {.cen_lat = lat, .cen_lon = lon, .grid_id = 1, .parent_id = 1,
+                                .i_parent_start = 1, .j_parent_start = 1,
+                                .parent_grid_ratio = 1,
+                                .map_corner_m = {-0.5 * sd->extent_m[0], -0.5 * sd->extent_m[1]}};
+    struct wrf_write_desc nd = pd;
+    nd.grid_id = 2;
+    nd.i_parent_start = box[0];
+    nd.j_parent_start = box[1];
+    nd.parent_grid_ratio = ratio;
+    nd.latlon_only = latlon;
+    nd.map_corner_m[0] += (box[0] - 1) * dx;
+    nd.map_corner_m[1] += (box[1] - 1) * dy;
+    int fbox[4] = {(box[0] - 1) * ratio, (box[1] - 1) * ratio, box[2] * ratio, box[3] * ratio};
+    struct wrf_writer *pw = NULL, *nw = NULL;
+    int rc = EXIT_OK;
+    for (int s = 0; s < steps && rc == EXIT_OK; s++) {
+        fine.time = steps > 1 ? (double)s / (steps - 1) : 0.0;
+        struct field_volume fv, pv, nv;
+        if (!synth_storm_fields(&fine, &fv))
+            return EXIT_BAD_INPUT;
+        bool ok = nest_cut(&fv, ratio, NULL, &pv) && nest_cut(&fv, ratio, fbox, &nv);
+        field_volume_finish(&fv);
+        if (ok && !pw)
+            pw = wrf_writer_create(out, &pv.grid, &pd);
+        if (ok && !nw)
+            nw = wrf_writer_create(nest, &nv.grid, &nd);
+        char date[32];
+        date_add(start, s * interval_min * 60.0, date);
+        ok = ok && pw && nw && wrf_writer_add(pw, &pv, date) && wrf_writer_add(nw, &nv, date);
+        field_volume_finish(&pv);
+        field_volume_finish(&nv);
+        if (!ok)
+            rc = EXIT_FAILED;
+        else
+            log_info("synth: step %d/%d (%s) written", s + 1, steps, date);
+    }
+    if (rc != EXIT_OK) {
+        wrf_writer_destroy(pw);
+        wrf_writer_destroy(nw);
+        return rc;
+    }
+    bool ok = wrf_writer_finish(pw);
+    ok = wrf_writer_finish(nw) && ok;
+    if (!ok)
+        return EXIT_FAILED;
+    log_info("synth: %s: %d x %d x %d; nest %s: %d x %d columns of %g m from column %d, %d", out,
+             sd->n[0], sd->n[1], sd->n[2], nest, fbox[2], fbox[3], dx / ratio, box[0], box[1]);
+    return EXIT_OK;
+}
+
 int cmd_synth(int argc, char **argv)
 {
     const char *out = NULL, *start = "2000-01-01_00:00:00";
@@ -452,12 +572,19 @@ int cmd_synth(int argc, char **argv)
     double extent_km[3] = {60.0, 60.0, 16.0}, interval_min = 10.0, lat = 25.0, lon = -89.0;
     unsigned seed = 1;
     int format = 0; /* 0 WRF, 1 + enum hgrid_kind */
+    const char *nest = NULL;
+    int nest_ratio = 3, nest_box[4] = {0, 0, 0, 0};
+    bool nest_latlon = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             synth_usage(stdout);
             return EXIT_OK;
+        }
+        if (!strcmp(a, "--nest-latlon")) {
+            nest_latlon = true;
+            continue;
         }
         if (!v) {
             log_error("synth: %s needs a value", a);
@@ -511,6 +638,22 @@ int cmd_synth(int argc, char **argv)
                 log_error("synth: --interval %s: expected minutes > 0", v);
                 return EXIT_USAGE;
             }
+        } else if (!strcmp(a, "--nest")) {
+            nest = v;
+        } else if (!strcmp(a, "--nest-ratio")) {
+            if (sscanf(v, "%d%c", &nest_ratio, &tail) != 1 || nest_ratio < 2 || nest_ratio > 7) {
+                log_error("synth: --nest-ratio %s: expected a whole ratio from 2 to 7", v);
+                return EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--nest-box")) {
+            if (sscanf(v, "%d,%d,%d,%d%c", &nest_box[0], &nest_box[1], &nest_box[2],
+                       &nest_box[3], &tail) != 4 || nest_box[0] < 1 || nest_box[1] < 1 ||
+                nest_box[2] < 2 || nest_box[3] < 2) {
+                log_error("synth: --nest-box %s: expected I,J,NI,NJ: the first parent column "
+                          "(from 1) and at least 2 x 2 columns",
+                          v);
+                return EXIT_USAGE;
+            }
         } else if (!strcmp(a, "--center")) {
             if (sscanf(v, "%lf,%lf%c", &lat, &lon, &tail) != 2 || fabs(lat) > 80 ||
                 fabs(lon) > 360) {
@@ -544,9 +687,17 @@ int cmd_synth(int argc, char **argv)
             return EXIT_BAD_INPUT;
         }
     }
+    if (format && nest) {
+        log_error("synth: --nest writes WRF nests: not with --format %s",
+                  format == 1 + HGRID_CM1 ? "cm1" : "cf");
+        return EXIT_USAGE;
+    }
     if (format)
         return synth_hgrid((enum hgrid_kind)(format - 1), out, &sd, steps, start, interval_min,
                            lat, lon);
+    if (nest)
+        return synth_nest(out, nest, &sd, nest_ratio, nest_box, nest_latlon, steps, start,
+                          interval_min, lat, lon);
     struct wrf_write_desc wd = {.cen_lat = lat, .cen_lon = lon};
     struct wrf_writer *w = NULL;
     double t0 = time_now_ms();

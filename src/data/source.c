@@ -10,10 +10,12 @@
 #include "data/cm1.h"
 #include "data/extfile.h"
 #include "data/geo.h"
+#include "data/nest.h"
 
 struct data_source {
     struct data_source_desc desc;
-    struct wrf *wrf;
+    struct wrf *wrf;        /* the outermost domain's where there are nests (owned by nest) */
+    struct nest_set *nest;  /* NULL unless the files are several domains (data/nest.h) */
     struct extfile *ext;
     struct hgrid *hg;
     int isabel_steps;
@@ -45,11 +47,23 @@ struct data_source *data_source_open(const struct data_source_desc *d)
     }
     s->desc = *d;
     switch (d->format) {
-    case DATA_SOURCE_WRF:
-        s->wrf = wrf_open(d->files, d->file_count, d->wrf.memory_mb);
+    case DATA_SOURCE_WRF: {
+        bool single;
+        s->nest = nest_open(d->files, d->file_count, d->wrf.memory_mb, &single);
+        if (!s->nest && !single)
+            goto error;
+        s->wrf = s->nest ? nest_outer(s->nest) : wrf_open(d->files, d->file_count,
+                                                           d->wrf.memory_mb);
         if (!s->wrf)
             goto error;
+        /* The selection is checked now rather than at the first step. */
+        struct nest_layout l;
+        if (s->nest && !nest_layout(s->nest, &d->wrf, &l)) {
+            nest_close(s->nest);
+            goto error;
+        }
         break;
+    }
     case DATA_SOURCE_ISABEL:
         s->desc.isabel.dir = d->files[0];
         s->isabel_steps = isabel_step_count(&s->desc.isabel);
@@ -85,7 +99,10 @@ void data_source_close(struct data_source *s)
 {
     if (!s)
         return;
-    wrf_close(s->wrf);
+    if (s->nest)
+        nest_close(s->nest);
+    else
+        wrf_close(s->wrf);
     extfile_close(s->ext);
     hgrid_close(s->hg);
     free(s);
@@ -116,6 +133,23 @@ const char *data_source_step_date(const struct data_source *s, int step)
 struct wrf *data_source_wrf(struct data_source *s)
 {
     return s->wrf;
+}
+
+enum wrf_point_result data_source_read_point(struct data_source *s, int step, const double p[3],
+                                             struct wrf_point *out)
+{
+    if (s->nest)
+        return nest_read_point(s->nest, step, &s->desc.wrf, p, out);
+    if (s->wrf)
+        return wrf_read_point(s->wrf, step, &s->desc.wrf, p, out);
+    memset(out, 0, sizeof(*out));
+    log_error("%s: only WRF output is read at a point", s->desc.files[0]);
+    return WRF_POINT_ERROR;
+}
+
+struct nest_set *data_source_nests(struct data_source *s)
+{
+    return s->nest;
 }
 
 struct hgrid *data_source_hgrid(struct data_source *s)
@@ -183,7 +217,8 @@ static bool load_fields(struct data_source *s, int step, bool qvapor, bool tempe
         d.wind_components = d.wind_components || components;
         d.level_heights = d.level_heights || levels;
         struct wrf_stats st;
-        if (!wrf_read_step(s->wrf, step, &d, out, &st))
+        if (s->nest ? !nest_read_step(s->nest, step, &d, out, &st)
+                    : !wrf_read_step(s->wrf, step, &d, out, &st))
             return false;
         warn_empty_step(s, step, &st);
         return true;
@@ -291,8 +326,14 @@ bool data_source_grid(const struct data_source *s, struct grid3 *out)
 {
     switch (s->desc.format) {
     case DATA_SOURCE_WRF:
-        if (!wrf_grid(s->wrf, &s->desc.wrf, out))
+        if (s->nest) {
+            struct nest_layout l;
+            if (!nest_layout(s->nest, &s->desc.wrf, &l))
+                return false;
+            *out = l.grid;
+        } else if (!wrf_grid(s->wrf, &s->desc.wrf, out)) {
             return false;
+        }
         break;
     case DATA_SOURCE_ISABEL:
         isabel_grid(&s->desc.isabel, out);

@@ -90,6 +90,15 @@ bool data_file_is_netcdf(const char *path);
 
 /* The WRF reader behind S, or NULL for other formats (for metadata: lat/lon, terrain). */
 struct wrf *data_source_wrf(struct data_source *s);
+/* The WRF domains behind S when its files are a parent and its nests (data/nest.h; then
+ * data_source_wrf is the outermost domain's reader and a step is their composite), else NULL. */
+struct nest_set;
+struct nest_set *data_source_nests(struct data_source *s);
+/* WRF: what the files hold at P for STEP (wrf_read_point with the description's selection; with
+ * nests, the finest domain there, nest_read_point).  WRF_POINT_ERROR (logged) for other
+ * formats. */
+enum wrf_point_result data_source_read_point(struct data_source *s, int step, const double p[3],
+                                             struct wrf_point *out);
 /* The CM1 or CF reader behind S, or NULL for other formats. */
 struct hgrid *data_source_hgrid(struct data_source *s);
 

@@ -829,7 +829,9 @@ static int native_levels(const struct wrf *w, double bottom, double top, double 
 static bool make_selection(const struct wrf *w, const struct wrf_desc *d, struct selection *s)
 {
     s->levels = d->levels > 0 ? d->levels : w->meta.nz;
-    if (d->native_levels) {
+    if (d->native_levels && d->native_from) {
+        s->levels = d->native_from->n[2];
+    } else if (d->native_levels) {
         double top = d->top_m > 0 ? d->top_m : w->auto_top;
         s->levels = native_levels(w, d->bottom_m, top, NULL);
         if (s->levels < 1) {
@@ -885,7 +887,15 @@ static bool output_grid(const struct wrf *w, const struct wrf_desc *d, const str
                   GRID3_LEVELS_MAX * 4);
         return false;
     }
-    native_levels(w, bottom, top, all);
+    if (d->native_from) { /* another file's levels (nests: the outermost domain's) */
+        const struct grid3 *f = d->native_from;
+        for (int k = 0; k < f->n[2]; k++)
+            all[k] = grid3_centre_z(f, k);
+        bottom = f->origin[2];
+        top = f->origin[2] + f->n[2] * f->spacing[2];
+    } else {
+        native_levels(w, bottom, top, all);
+    }
     for (int k = 0; k < s->nz; k++)
         zc[k] = all[s->z0 + k * s->sz];
     int first = s->z0, last = s->z0 + (s->nz - 1) * s->sz;

@@ -37,6 +37,9 @@ struct wrf_desc {
                            between bottom_m and top_m, each column resampled onto their
                            heights; LEVELS is then unused, crop and stride along z select from
                            them */
+    const struct grid3 *native_from; /* with native_levels: read onto this stretched grid's
+                                        levels (and box) instead of this file's own (nests
+                                        on their outermost domain's); borrowed, NULL = own */
     double top_m;     /* top of the height grid above sea level, m; 0 = the highest model top
                          (staggered top level) over all columns of the first time step, so
                          that every step of the series has the same grid */

@@ -239,6 +239,15 @@ static bool define(struct wrf_writer *w, const struct field_volume *v, const cha
     float_att(nc, "MOAD_CEN_LAT", w->desc.cen_lat);
     float_att(nc, "STAND_LON", w->desc.cen_lon);
     int_att(nc, "MAP_PROJ", 3);
+    if (w->desc.grid_id > 0) {
+        int_att(nc, "GRID_ID", w->desc.grid_id);
+        if (!w->desc.latlon_only) {
+            int_att(nc, "PARENT_ID", w->desc.parent_id);
+            int_att(nc, "I_PARENT_START", w->desc.i_parent_start);
+            int_att(nc, "J_PARENT_START", w->desc.j_parent_start);
+            int_att(nc, "PARENT_GRID_RATIO", w->desc.parent_grid_ratio);
+        }
+    }
     text_att(nc, NC_GLOBAL, "MAP_PROJ_CHAR", "Mercator");
     st = nc_enddef(nc);
     if (st != NC_NOERR) {
@@ -271,11 +280,15 @@ static bool write_2d(struct wrf_writer *w, size_t t)
     double k = cos(w->desc.cen_lat * DEG) * EARTH_RADIUS;
     double y0 = k * log(tan(0.25 * PI + 0.5 * w->desc.cen_lat * DEG));
     float *lat = w->plane, *lon = w->plane + plane;
+    /* The grid's west and south edge from the map centre. */
+    bool placed = w->desc.grid_id > 0;
     for (int j = 0; j < g->n[1]; j++) {
-        double y = y0 + (j + 0.5 - 0.5 * g->n[1]) * g->spacing[1];
+        double y = y0 + (placed ? w->desc.map_corner_m[1] + (j + 0.5) * g->spacing[1]
+                                : (j + 0.5 - 0.5 * g->n[1]) * g->spacing[1]);
         double phi = 2.0 * atan(exp(y / k)) - 0.5 * PI;
         for (int i = 0; i < g->n[0]; i++) {
-            double x = (i + 0.5 - 0.5 * g->n[0]) * g->spacing[0];
+            double x = placed ? w->desc.map_corner_m[0] + (i + 0.5) * g->spacing[0]
+                              : (i + 0.5 - 0.5 * g->n[0]) * g->spacing[0];
             lat[(size_t)j * g->n[0] + i] = (float)(phi / DEG);
             lon[(size_t)j * g->n[0] + i] = (float)(w->desc.cen_lon + x / k / DEG);
         }

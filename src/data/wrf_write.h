@@ -37,6 +37,15 @@ struct wrf_write_desc {
     int mp_physics;          /* MP_PHYSICS; 0 = 8 (Thompson) when an ice species is present,
                                 else 3 (WSM3) */
     const char *title;       /* TITLE; default "OUTPUT FROM ANVIL SYNTH" */
+    /* A domain of a nested run (data/nest.h): grid_id > 0 writes GRID_ID and, unless
+     * latlon_only, PARENT_ID, I_PARENT_START, J_PARENT_START (1-based parent columns) and
+     * PARENT_GRID_RATIO as given; XLAT/XLONG then place the grid's west and south edge
+     * map_corner_m metres east and north of the map centre (cen_lat, cen_lon), so that a
+     * parent and its nests share one map.  grid_id 0: none of these, the grid centred on the
+     * map centre. */
+    int grid_id, parent_id, i_parent_start, j_parent_start, parent_grid_ratio;
+    bool latlon_only;
+    double map_corner_m[2];
 };
 
 struct wrf_writer;

@@ -160,7 +160,7 @@ bool probe_read(struct probe *p, int step, const double world[3], struct probe_v
         return true; /* an extinction file or a test scene: extinction and light only */
     if (p->kind == KIND_WRF) {
         struct wrf_point wp;
-        switch (wrf_read_point(data_source_wrf(p->src), step, &p->desc.wrf, out->data, &wp)) {
+        switch (data_source_read_point(p->src, step, out->data, &wp)) {
         case WRF_POINT_OK:
             out->fields = true;
             probe_sample_from_wrf(&wp, out->data[2], &out->s);

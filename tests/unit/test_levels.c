@@ -2,6 +2,8 @@
  * mapping, a synthetic WRF file's thin layer read where the model put it, and the CPU
  * reference's transmittance through it; the uniform 439 m grid misses it. */
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "testutil.h"
@@ -9,6 +11,7 @@
 
 #include "common/log.h"
 #include "data/extfile.h"
+#include "data/nest.h"
 #include "data/volume.h"
 #include "data/wrf.h"
 #include "reference/reference.h"
@@ -191,12 +194,85 @@ static void test_extinction_file_keeps_the_levels(void **state)
     ext_volume_finish(&ev);
 }
 
+/* A parent and its nest on uneven levels of their own (the nest's 3 % higher), a field linear
+ * in height: on the model's own levels both are read onto the parent's (the nest's values
+ * there, not at its own heights), and the composite is on them. */
+static void test_nest_on_the_parents_levels(void **state)
+{
+    (void)state;
+    const double faces[7] = {0.0, 60.0, 150.0, 300.0, 600.0, 1200.0, 3000.0};
+    double zp[6], zn[6];
+    for (int k = 0; k < 6; k++) {
+        zp[k] = 0.5 * (faces[k] + faces[k + 1]);
+        zn[k] = 1.03 * zp[k];
+    }
+    struct grid3 pg = {.n = {12, 12, 0}, .spacing = {3000.0, 3000.0, 0.0}};
+    struct grid3 ng = {.n = {12, 12, 0}, .spacing = {1000.0, 1000.0, 0.0}};
+    assert_true(grid3_set_levels(&pg, zp, 6, 0.0, 3000.0));
+    assert_true(grid3_set_levels(&ng, zn, 6, 0.0, 3090.0));
+    double ex = 12 * 3000.0;
+    struct wrf_write_desc pd = {.cen_lat = 25.0, .cen_lon = -89.0, .grid_id = 1, .parent_id = 1,
+                                .i_parent_start = 1, .j_parent_start = 1,
+                                .parent_grid_ratio = 1, .map_corner_m = {-0.5 * ex, -0.5 * ex}};
+    struct wrf_write_desc nd = pd;
+    nd.grid_id = 2;
+    nd.i_parent_start = 5;
+    nd.j_parent_start = 5;
+    nd.parent_grid_ratio = 3;
+    nd.map_corner_m[0] += 4 * 3000.0;
+    nd.map_corner_m[1] += 4 * 3000.0;
+    char a[512], b[512];
+    snprintf(a, sizeof(a), "%s", test_tmp_path("lv_d01.nc"));
+    snprintf(b, sizeof(b), "%s", test_tmp_path("lv_d02.nc"));
+    const struct grid3 *grids[2] = {&pg, &ng};
+    const struct wrf_write_desc *descs[2] = {&pd, &nd};
+    const char *paths[2] = {a, b};
+    for (int d = 0; d < 2; d++) {
+        struct field_volume fv = {.grid = *grids[d]};
+        size_t n = grid3_count(grids[d]);
+        fv.q[SPECIES_CLOUD] = calloc(n, sizeof(float));
+        size_t plane = 144; /* linear in height, the nest's 1e-4 more */
+        for (size_t i = 0; i < n; i++)
+            fv.q[SPECIES_CLOUD][i] =
+                (float)(1e-7 * grids[d]->z_centre[i / plane] + (d ? 1e-4 : 0.0));
+        struct wrf_writer *w = wrf_writer_create(paths[d], grids[d], descs[d]);
+        assert_non_null(w);
+        assert_true(wrf_writer_add(w, &fv, "2005-08-28_12:00:00"));
+        assert_true(wrf_writer_finish(w));
+        field_volume_finish(&fv);
+    }
+    bool single = true;
+    struct nest_set *set = nest_open(paths, 2, 0.0, &single);
+    assert_non_null(set);
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    d.native_levels = true;
+    struct field_volume out;
+    log_set_level(LOG_ERROR);
+    assert_true(nest_read_step(set, 0, &d, &out, NULL));
+    log_set_level(LOG_INFO);
+    assert_true(grid3_stretched(&out.grid));
+    for (int k = 0; k < 6; k++)
+        assert_true(fabs(out.grid.z_centre[k] - zp[k]) < 0.05);
+    /* Inside the nest its own value (read onto the parent's levels), outside the parent's. */
+    size_t plane = (size_t)out.grid.n[0] * out.grid.n[1];
+    float inside = out.q[SPECIES_CLOUD][plane * 3 + grid3_index(&out.grid, 18, 18, 0)];
+    float outside = out.q[SPECIES_CLOUD][plane * 3 + grid3_index(&out.grid, 2, 2, 0)];
+    print_message("level 3 at %.1f m: nest %.4g (expected %.4g), parent %.4g (expected %.4g)\n",
+                  zp[3], (double)inside, 1e-7 * zp[3] + 1e-4, (double)outside, 1e-7 * zp[3]);
+    assert_true(fabs(inside - (1e-7 * zp[3] + 1e-4)) < 1e-8);
+    assert_true(fabs(outside - 1e-7 * zp[3]) < 1e-8);
+    field_volume_finish(&out);
+    nest_close(set);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mapping),
         cmocka_unit_test(test_native_keeps_the_layer),
         cmocka_unit_test(test_extinction_file_keeps_the_levels),
+        cmocka_unit_test(test_nest_on_the_parents_levels),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
