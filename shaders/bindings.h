@@ -46,6 +46,7 @@
 #define BIND_EYE_TEX_SLICES 13          /* SLICES > 0: RGBA32F 3D, slice i's field in channel i */
 #define BIND_EYE_TEX_SLICE_SURFACES 14  /* SLICES > 0: RGBA32F 2D, slice i's level surface (world
                                            z at each column) in channel i */
+#define BIND_EYE_TEX_ZMAP 15            /* STRETCHED 1: the volume's height table (zmap.glsl) */
 #define BIND_EYE_IMG_OUT 0              /* RGBA32F radiance and transmittance */
 #define BIND_EYE_BUF_CELLS 4            /* SKIP 1: the macro-cell pyramid (cells.glsl) */
 #define BIND_EYE_BUF_COUNTERS 5         /* COUNT 1: what the rays did */
@@ -71,6 +72,7 @@
 #define BIND_SLICES_TEX_RATES 1  /* MULTIPLE and LATERAL: lateral escape rates */
 #define BIND_SLICES_IMG_SLICE 0  /* each slice's tau, ice share (escape rates), written */
 #define BIND_SLICES_BUF_CELLS 0  /* SKIP 1: the volume's macro cells (cells.glsl) */
+#define BIND_SLICES_TEX_ZMAP 2   /* STRETCHED 1: the volume's height table (zmap.glsl) */
 
 /* ---- light build: the beam's sweep from the sun (shaders/light_build.comp) ------------ */
 #define BIND_BUILD_TEX_SLICE 0  /* the slices of light_slices.comp, texelFetch only */
@@ -96,6 +98,7 @@
 /* ---- light build: the diffuse light volume (shaders/light_volume.comp) ---------------- */
 #define BIND_VOLUME_TEX_BETA 0      /* PASS 1: the volume's extinction, texelFetch only */
 #define BIND_VOLUME_TEX_LIGHT 1     /* PASS 1: the dense light map, texelFetch only */
+#define BIND_VOLUME_TEX_ZMAP 2      /* PASS 1, STRETCHED 1: the volume's height table (zmap.glsl) */
 #define BIND_VOLUME_IMG_FIELD 0     /* PASS 7: RGBA32F phi and net flux per cell, written */
 #define BIND_VOLUME_BUF_TERMS 0     /* per cell: source, its moments, transport extinction */
 #define BIND_VOLUME_BUF_SYSTEM 1    /* per cell: diagonal and conductances */

@@ -5,11 +5,16 @@
 // volume like the sampler.  NaN and negative values read as 0, as the eye pass and the light
 // build read them, so a cell holding 0 is one where every sample is exactly 0.
 // TEMPORAL 1: the largest of two volumes of one grid (step k and step k + 1).
+// STRETCHED 1: the volume's levels are the model's (data/volume.h) and the cells even in
+// height, CELL_VOXELS mean levels tall: each cell row reads the levels cell_levels gives.
 
 #include "bindings.h"
 
 #ifndef TEMPORAL
 #define TEMPORAL 0
+#endif
+#ifndef STRETCHED
+#define STRETCHED 0
 #endif
 
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
@@ -25,6 +30,9 @@ layout(std430, binding = BIND_CELLS_BUF_CELLS) buffer macro_cells {
 };
 
 uniform ivec3 vol_n;
+#if STRETCHED
+uniform ivec2 cell_levels[32]; // per cell row: the first and last level it reads
+#endif
 
 float clean(vec2 b)
 {
@@ -40,6 +48,10 @@ void main()
     int b = cell_header.y;
     ivec3 lo = max(c * b - 1, ivec3(0));
     ivec3 hi = min(c * b + b, vol_n - 1);
+#if STRETCHED
+    lo.z = cell_levels[c.z].x;
+    hi.z = cell_levels[c.z].y;
+#endif
     float m = 0.0;
     for (int z = lo.z; z <= hi.z; z++)
         for (int y = lo.y; y <= hi.y; y++)

@@ -6,7 +6,8 @@
 // between voxel centres with the CPU's weights, 0 outside the box.
 // Variants: MULTIPLE 1 = also each slice's lateral escape rates (LATERAL 1), in an RGBA
 // slice image (else RG: optical depth and ice share); SKIP 1 = a sample in an empty macro
-// cell (render/cells.c) reads 0 without reading a voxel, exactly what the voxels would give.
+// cell (render/cells.c) reads 0 without reading a voxel, exactly what the voxels would give;
+// STRETCHED 1 = the volume's levels are the model's (zmap.glsl).
 
 #include "bindings.h"
 
@@ -42,6 +43,13 @@ layout(std430, binding = BIND_SLICES_BUF_CELLS) readonly buffer macro_cells
 };
 #include "cells.glsl"
 #endif
+#ifndef STRETCHED
+#define STRETCHED 0
+#endif
+#if STRETCHED
+layout(binding = BIND_SLICES_TEX_ZMAP) uniform sampler1D zmap_tex; // texelFetch only
+#endif
+#include "zmap.glsl"
 
 uniform ivec3 vol_n;
 uniform vec3 vol_origin;
@@ -78,9 +86,10 @@ vec2 sample_voxels(sampler3D tex, vec3 p, bool cells)
             return vec2(0.0);
     }
 #if SKIP
-    if (cells && cell_clear_at_voxel(x))
+    if (cells && cell_clear_at_voxel(x)) // cells are even in height (render/cells.c)
         return vec2(0.0);
 #endif
+    x.z = zmap_voxel(p.z, vol_origin.z, float(vol_n.z), x.z);
     vec3 t;
     ivec3 i0, d;
     for (int a = 0; a < 3; a++) {

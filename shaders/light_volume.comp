@@ -131,6 +131,10 @@ uniform vec2 tr;        // 1 - g: water, ice
 uniform vec2 loss;      // the share of the extinction that leaves the beam: water, ice
 uniform vec2 gs;        // the mean cosine of what leaves it: water, ice
 uniform int sub;        // samples per cell and axis
+#if STRETCHED
+layout(binding = BIND_VOLUME_TEX_ZMAP) uniform sampler1D zmap_tex; // texelFetch only
+#endif
+#include "zmap.glsl"
 
 int axis_weight(float x, int n, out float t)
 {
@@ -156,6 +160,7 @@ vec2 sample_beta(vec3 p)
         if (!(x[a] >= 0.0 && x[a] <= float(vol_n[a])))
             return vec2(0.0);
     }
+    x.z = zmap_voxel(p.z, vol_origin.z, float(vol_n.z), x.z); // the model's levels
     vec3 t;
     ivec3 i0, d;
     for (int a = 0; a < 3; a++) {

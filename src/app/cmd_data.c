@@ -130,11 +130,19 @@ static int info_wrf_series(struct wrf *w, const char *const *paths, int count, d
             break;
         }
         if (s == 0)
-            printf("  extent      %.4g x %.4g x %.4g km (height grid: %d levels of %.4g m, "
+            printf("  extent      %.4g x %.4g x %.4g km (uniform grid: %d levels of %.4g m, "
                    "top at the highest model top)\n",
                    v.grid.n[0] * v.grid.spacing[0] / 1e3, v.grid.n[1] * v.grid.spacing[1] / 1e3,
                    (v.grid.origin[2] + v.grid.n[2] * v.grid.spacing[2]) / 1e3, v.grid.n[2],
                    v.grid.spacing[2]);
+        struct wrf_desc nd = d;
+        nd.native_levels = true;
+        struct grid3 ng;
+        if (s == 0 && wrf_grid(w, &nd, &ng))
+            printf("  own levels  %d, centres %.0f to %.0f m, the thinnest %.0f m (data.vertical = "
+                   "\"native\", the default)\n",
+                   ng.n[2], grid3_centre_z(&ng, 0), grid3_centre_z(&ng, ng.n[2] - 1),
+                   grid3_min_dz(&ng));
         printf("  %3d %s  (%s)\n", s, wrf_step_date(w, s), wrf_step_path(w, s));
         for (int k = 0; k < WRF_VAR_COUNT; k++)
             print_range(wrf_var_name((enum wrf_var)k), &st.var[k]);

@@ -16,6 +16,7 @@
 /* Enums are stored through int pointers. */
 static_assert(sizeof(enum scene_kind) == sizeof(int), "enum size");
 static_assert(sizeof(enum data_format) == sizeof(int), "enum size");
+static_assert(sizeof(enum data_vertical) == sizeof(int), "enum size");
 static_assert(sizeof(enum lightmap_mode) == sizeof(int), "enum size");
 static_assert(sizeof(enum render_precision) == sizeof(int), "enum size");
 static_assert(sizeof(enum phase_choice) == sizeof(int), "enum size");
@@ -30,6 +31,7 @@ static const char *const scene_kind_names[] = {
 };
 static const char *const data_format_names[] = {"wrf", "isabel", "extinction", "cm1", "cf",
                                                 NULL};
+static const char *const data_vertical_names[] = {"native", "uniform", NULL};
 static const char *const lightmap_mode_names[] = {"dense", "compressed", NULL};
 static const char *const precision_names[] = {"float", "half", NULL}; /* render_precision */
 static const char *const lightmap_grid_names[] = {"auto", "upright", NULL}; /* light_grid_kind */
@@ -181,8 +183,12 @@ static const struct config_field settings[] = {
      .help = "input files, relative to the config file that names them; a glob pattern "
              "must match a file and is expanded by the reader (WRF steps ordered by Times)"},
     INT("data.step", data.step, 0, 1000000, 0, "time step to show, counted over all files"),
+    ENUM("data.vertical", data.vertical, data_vertical_names, DATA_VERTICAL_NATIVE,
+         "WRF vertical grid: the model's own levels on the domain's mean column (stretched), "
+         "or uniform levels (data.levels > 0 always means uniform)"),
     INT("data.levels", data.levels, 0, 4096, 0,
-        "regular height levels to resample to; 0 = as many as the model has"),
+        "regular height levels to resample to; 0 = as many as the model has (uniform grid) or "
+        "the model's own levels (data.vertical = native)"),
     DBL("data.top", data.top_km, 0, 100, 0, 0.0, "top of the height grid, km; 0 = automatic"),
     INT3("data.stride", data.stride, 1, 64, 1, 1, 1, "keep every n-th voxel along x, y, z"),
     {.path = "data.crop", .type = T_INT, .n = 6, .offset = OFF(data.crop), .min = -1,

@@ -32,6 +32,7 @@ enum scene_kind {
 };
 
 enum data_format { DATA_WRF, DATA_ISABEL, DATA_EXTINCTION, DATA_CM1, DATA_CF };
+enum data_vertical { DATA_VERTICAL_NATIVE, DATA_VERTICAL_UNIFORM };
 
 /* How the light map is stored; whether there is one at all is effects.shadows. */
 enum lightmap_mode { LIGHTMAP_DENSE, LIGHTMAP_COMPRESSED };
@@ -77,6 +78,7 @@ struct config_data {
     char files[CONFIG_MAX_FILES][CONFIG_PATH_MAX]; /* data.files (resolved against the config) */
     int file_count;
     int step;                                 /* data.step: time step index to show */
+    enum data_vertical vertical;              /* data.vertical: native or uniform levels */
     int levels;                               /* data.levels: regular height levels */
     double top_km;                            /* data.top: top of the height grid, km (0 = auto) */
     int stride[3];                            /* data.stride: subsampling per axis */

@@ -94,7 +94,7 @@ void derived_field(const struct field_volume *fv, enum transfer_field field, flo
     }
     size_t idx = 0, layer = (size_t)g->n[0] * (size_t)g->n[1];
     for (int k = 0; k < g->n[2]; k++) {
-        double z = g->origin[2] + (k + 0.5) * g->spacing[2];
+        double z = grid3_centre_z(g, k);
         double vapour_std = 0.010 * exp(-z / 2500.0), t_std, p_std;
         wrf_std_atmosphere(z, &t_std, &p_std);
         for (size_t ij = 0; ij < layer; ij++, idx++) {

@@ -102,7 +102,7 @@ static void voxel_centre(const struct grid3 *g, int i, int j, int k, double p[3]
 {
     p[0] = g->origin[0] + (i + 0.5) * g->spacing[0];
     p[1] = g->origin[1] + (j + 0.5) * g->spacing[1];
-    p[2] = g->origin[2] + (k + 0.5) * g->spacing[2];
+    p[2] = grid3_centre_z(g, k);
 }
 
 void detail_apply_fields(const struct detail_desc *d, struct field_volume *v)

@@ -203,6 +203,16 @@ static bool define(struct extfile_writer *w, const char *date)
             b[2 * i] = g->origin[a] + i * g->spacing[a];
             b[2 * i + 1] = g->origin[a] + (i + 1) * g->spacing[a];
         }
+        if (a == 2 && grid3_stretched(g)) {
+            /* The model's levels: their centres, cells half way between them (the box's
+             * bottom and top outside), as the reader takes them back. */
+            double top = g->origin[2] + n * g->spacing[2];
+            for (int i = 0; i < n; i++) {
+                c[i] = g->z_centre[i];
+                b[2 * i] = i ? 0.5 * (g->z_centre[i - 1] + g->z_centre[i]) : g->origin[2];
+                b[2 * i + 1] = i < n - 1 ? 0.5 * (g->z_centre[i] + g->z_centre[i + 1]) : top;
+            }
+        }
         bool ok = nc_ok(nc_put_var_double(nc, vax[a], c), p, axis_names[a]) &&
                   nc_ok(nc_put_var_double(nc, vbnds[a], b), p, bnds_names[a]);
         free(c);
@@ -219,6 +229,11 @@ static bool same_grid(const struct grid3 *a, const struct grid3 *b)
             fabs(a->origin[i] - b->origin[i]) > 1e-6 * a->spacing[i])
             return false;
     }
+    if (a->z_levels != b->z_levels)
+        return false;
+    for (int k = 0; k < a->z_levels; k++)
+        if (fabs(a->z_centre[k] - b->z_centre[k]) > 1e-6 * a->spacing[2])
+            return false;
     return true;
 }
 
@@ -309,6 +324,46 @@ struct extfile {
     float *layer;
 };
 
+/* Heights whose centres are not even (a file written from the model's own levels) make the
+ * grid stretched: the centres from z, the box from the first and last cell bounds. */
+static bool read_levels(struct extfile *f)
+{
+    struct grid3 *g = &f->grid;
+    int n = g->n[2], vz, vb;
+    double *c = malloc((size_t)n * sizeof(double)), last[2];
+    size_t s[2] = {(size_t)n - 1, 0}, cnt[2] = {1, 2};
+    if (!c) {
+        log_error("%s: out of memory", f->path);
+        return false;
+    }
+    bool ok = nc_inq_varid(f->ncid, "z", &vz) == NC_NOERR &&
+              nc_get_var_double(f->ncid, vz, c) == NC_NOERR &&
+              nc_inq_varid(f->ncid, "z_bnds", &vb) == NC_NOERR &&
+              nc_get_vara_double(f->ncid, vb, s, cnt, last) == NC_NOERR;
+    if (!ok) {
+        free(c);
+        log_error("%s: variables z, z_bnds: cannot read the level heights", f->path);
+        return false;
+    }
+    bool even = true;
+    for (int k = 0; k < n && even; k++)
+        even = fabs(c[k] - (g->origin[2] + (k + 0.5) * g->spacing[2])) <= 1e-4 * g->spacing[2];
+    if (!even) {
+        if (n > GRID3_LEVELS_MAX) {
+            log_error("%s: variable z: %d uneven levels: expected at most %d", f->path, n,
+                      GRID3_LEVELS_MAX);
+            ok = false;
+        } else if (!grid3_set_levels(g, c, n, g->origin[2], last[1])) {
+            log_error("%s: variables z, z_bnds: expected level heights increasing inside their "
+                      "cells",
+                      f->path);
+            ok = false;
+        }
+    }
+    free(c);
+    return ok;
+}
+
 static bool read_axis(struct extfile *f, int a, int dimid)
 {
     size_t n;
@@ -345,7 +400,7 @@ static bool read_axis(struct extfile *f, int a, int dimid)
         log_error("%s: variable %s: the first cell starts at %g m", f->path, bnds_names[a], b[0]);
         return false;
     }
-    return true;
+    return a < 2 || read_levels(f);
 }
 
 bool extfile_probe(const char *path)

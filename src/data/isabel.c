@@ -30,6 +30,7 @@ static void resolve(const struct isabel_desc *d, int n[3], double extent[3])
 
 void isabel_grid(const struct isabel_desc *d, struct grid3 *out)
 {
+    memset(out, 0, sizeof(*out)); /* uniform z */
     double extent[3];
     resolve(d, out->n, extent);
     for (int a = 0; a < 2; a++) {

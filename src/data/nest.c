@@ -496,6 +496,7 @@ bool nest_layout(const struct nest_set *s, const struct wrf_desc *d, struct nest
     out->levels = g.n[2];
     out->bottom_m = g.origin[2];
     out->top_m = g.origin[2] + g.n[2] * g.spacing[2];
+    out->heights = g;
     /* Along z as the reader crops; along x and y in composite columns. */
     struct wrf_desc zc = full;
     zc.crop[4] = d->crop[4];
@@ -550,6 +551,10 @@ static void nest_desc(const struct nest_layout *l, const struct wrf_desc *d, str
     out->levels = l->levels;
     out->bottom_m = l->bottom_m;
     out->top_m = l->top_m;
+    /* The model's own levels: the outermost's, not each nest's own mean column (their levels
+     * even: the uniform grid they are, as levels, bottom and top say). */
+    out->native_from = d->native_levels && grid3_stretched(&l->heights) ? &l->heights : NULL;
+    out->native_levels = out->native_from != NULL;
     for (int i = 0; i < 4; i++)
         out->crop[i] = -1;
 }

@@ -36,6 +36,8 @@ struct nest_layout {
                           the part of it data.crop keeps */
     int levels;        /* the heights every domain is read on (wrf_desc levels, bottom_m,
                           top_m): the outermost's before a crop along z */
+    struct grid3 heights; /* the outermost's grid before a crop along z: on the model's own
+                             levels (stretched) every domain is read onto its levels */
     double bottom_m, top_m;
     struct nest_place {
         int offset[2]; /* the domain's west and south edge, in composite columns from the

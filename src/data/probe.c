@@ -59,7 +59,7 @@ void probe_sample_from_wrf(const struct wrf_point *p, double z, struct probe_sam
 static bool cell_of(const struct grid3 *g, const double p[3], int i0[3], double t[3])
 {
     for (int a = 0; a < 3; a++) {
-        double rel = (p[a] - g->origin[a]) / g->spacing[a];
+        double rel = a < 2 ? (p[a] - g->origin[a]) / g->spacing[a] : grid3_z_to_voxel(g, p[a]);
         if (!(rel >= 0.0 && rel <= g->n[a]))
             return false;
         double f = rel - 0.5;
@@ -171,7 +171,8 @@ bool probe_first_visible(const struct ext_volume *v, const double o[3], const do
         }
         t0 = fmax(t0, ta);
         t1 = fmin(t1, tb);
-        crossing = fmax(crossing, fabs(d[a]) / v->grid.spacing[a]);
+        crossing = fmax(crossing, fabs(d[a]) / (a < 2 ? v->grid.spacing[a]
+                                                     : grid3_min_dz(&v->grid)));
     }
     if (!(t0 <= t1) || !(crossing > 0.0))
         return false;

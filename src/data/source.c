@@ -349,5 +349,7 @@ bool data_source_grid(const struct data_source *s, struct grid3 *out)
     double k = s->desc.height_scale > 0.0 ? s->desc.height_scale : 1.0;
     out->origin[2] *= k; /* as ext_volume_stretch_height */
     out->spacing[2] *= k;
+    for (int l = 0; l < out->z_levels; l++)
+        out->z_centre[l] *= k;
     return true;
 }

@@ -213,6 +213,7 @@ struct storm {
 
 static void grid_from_desc(const struct synth_desc *d, struct grid3 *g)
 {
+    memset(g, 0, sizeof(*g)); /* uniform z */
     for (int a = 0; a < 3; a++) {
         g->n[a] = d->n[a];
         g->spacing[a] = d->extent_m[a] / d->n[a];

@@ -8,6 +8,149 @@
 #include "common/log.h"
 #include "common/parallel.h"
 
+/* ---- the vertical coordinate ------------------------------------------------------------ */
+
+double grid3_z_to_voxel(const struct grid3 *g, double z)
+{
+    if (!grid3_stretched(g))
+        return (z - g->origin[2]) / g->spacing[2];
+    int n = g->z_levels;
+    const double *c = g->z_centre;
+    double bottom = g->origin[2], top = bottom + n * g->spacing[2];
+    if (!(z > c[0])) /* below the first centre (or NaN) */
+        return 0.5 * (z - bottom) / (c[0] - bottom);
+    if (z >= c[n - 1])
+        return n - 0.5 + 0.5 * (z - c[n - 1]) / (top - c[n - 1]);
+    int lo = 0, hi = n - 1; /* c[lo] < z <= c[hi] */
+    while (hi - lo > 1) {
+        int m = (lo + hi) / 2;
+        if (c[m] < z)
+            lo = m;
+        else
+            hi = m;
+    }
+    return lo + 0.5 + (z - c[lo]) / (c[hi] - c[lo]);
+}
+
+double grid3_voxel_to_z(const struct grid3 *g, double u)
+{
+    int n = g->n[2];
+    u = u < 0.0 ? 0.0 : u > n ? n : u;
+    if (!grid3_stretched(g))
+        return g->origin[2] + u * g->spacing[2];
+    const double *c = g->z_centre;
+    double bottom = g->origin[2], top = bottom + n * g->spacing[2];
+    if (u <= 0.5)
+        return bottom + 2.0 * u * (c[0] - bottom);
+    if (u >= n - 0.5)
+        return c[n - 1] + 2.0 * (u - (n - 0.5)) * (top - c[n - 1]);
+    int k = (int)(u - 0.5);
+    k = k > n - 2 ? n - 2 : k;
+    return c[k] + (u - 0.5 - k) * (c[k + 1] - c[k]);
+}
+
+double grid3_centre_z(const struct grid3 *g, int k)
+{
+    return grid3_stretched(g) ? g->z_centre[k] : g->origin[2] + (k + 0.5) * g->spacing[2];
+}
+
+double grid3_level_dz(const struct grid3 *g, int k)
+{
+    if (!grid3_stretched(g))
+        return g->spacing[2];
+    int n = g->z_levels;
+    double lo = k > 0 ? 0.5 * (g->z_centre[k - 1] + g->z_centre[k]) : g->origin[2];
+    double hi = k < n - 1 ? 0.5 * (g->z_centre[k] + g->z_centre[k + 1])
+                          : g->origin[2] + n * g->spacing[2];
+    return hi - lo;
+}
+
+double grid3_min_dz(const struct grid3 *g)
+{
+    double m = g->spacing[2];
+    for (int k = 0; k < g->z_levels; k++) {
+        double d = grid3_level_dz(g, k);
+        m = d < m ? d : m;
+    }
+    return m;
+}
+
+void grid3_z_voxel_range(const struct grid3 *g, double z0, double z1, int *k0, int *k1)
+{
+    /* A point at voxel coordinate u reads levels floor(u - 0.5) and the one above. */
+    int n = g->n[2];
+    int a = (int)floor(grid3_z_to_voxel(g, z0) - 0.5);
+    int b = (int)floor(grid3_z_to_voxel(g, z1) - 0.5) + 1;
+    *k0 = a < 0 ? 0 : a > n - 1 ? n - 1 : a;
+    *k1 = b < 0 ? 0 : b > n - 1 ? n - 1 : b;
+}
+
+bool grid3_set_levels(struct grid3 *g, const double *zc, int n, double bottom, double top)
+{
+    if (n < 1 || n > GRID3_LEVELS_MAX) {
+        log_error("%d levels: a stretched grid holds 1 to %d", n, GRID3_LEVELS_MAX);
+        return false;
+    }
+    for (int k = 0; k < n; k++) {
+        if (!(zc[k] > (k ? zc[k - 1] : bottom)) || !(zc[k] < top)) {
+            log_error("level %d at %g m: expected heights increasing upward inside [%g, %g] m",
+                      k, zc[k], bottom, top);
+            return false;
+        }
+    }
+    g->n[2] = n;
+    g->origin[2] = bottom;
+    g->spacing[2] = (top - bottom) / n;
+    g->z_levels = n;
+    memset(g->z_centre, 0, sizeof(g->z_centre));
+    memcpy(g->z_centre, zc, (size_t)n * sizeof(double));
+    return true;
+}
+
+bool grid3_equal(const struct grid3 *a, const struct grid3 *b)
+{
+    for (int i = 0; i < 3; i++)
+        if (a->n[i] != b->n[i] || a->spacing[i] != b->spacing[i] || a->origin[i] != b->origin[i])
+            return false;
+    if (a->z_levels != b->z_levels)
+        return false;
+    for (int k = 0; k < a->z_levels; k++)
+        if (a->z_centre[k] != b->z_centre[k])
+            return false;
+    return true;
+}
+
+/* The mapping is piecewise linear with a corner at each centre, so a table linear between its
+ * entries errs only in the entries holding a corner; 16 entries to the thinnest level keep
+ * that within a sixteenth of it. */
+#define ZMAP_PER_LEVEL 16
+#define ZMAP_MAX 16384
+
+int grid3_zmap_entries(const struct grid3 *g)
+{
+    if (!grid3_stretched(g))
+        return 2;
+    double e = ceil(ZMAP_PER_LEVEL * g->n[2] * g->spacing[2] / grid3_min_dz(g)) + 1.0;
+    return e > ZMAP_MAX ? ZMAP_MAX : e < 2.0 ? 2 : (int)e;
+}
+
+void grid3_zmap_fill(const struct grid3 *g, int entries, float *tex, float *dz)
+{
+    double h = g->n[2] * g->spacing[2];
+    for (int i = 0; i < entries; i++) {
+        double z = g->origin[2] + h * i / (entries - 1);
+        double u = grid3_z_to_voxel(g, z);
+        tex[i] = (float)(u / g->n[2]);
+        if (dz) {
+            int k = (int)u;
+            k = k < 0 ? 0 : k > g->n[2] - 1 ? g->n[2] - 1 : k;
+            dz[i] = (float)grid3_level_dz(g, k);
+        }
+    }
+}
+
+/* ---- volumes ----------------------------------------------------------------------------- */
+
 void field_volume_finish(struct field_volume *v)
 {
     if (!v)
@@ -82,7 +225,7 @@ static bool beta_planes(void *ctx, int share, size_t begin, size_t end)
     const float *rho_air = j->in->rho_air;
     size_t plane = (size_t)g->n[0] * (size_t)g->n[1];
     for (size_t k = begin; k < end; k++) {
-        double z = g->origin[2] + ((double)k + 0.5) * g->spacing[2];
+        double z = grid3_centre_z(g, (int)k);
         double rho_std = optics_std_atmosphere_density(z);
         for (size_t idx = plane * k; idx < plane * (k + 1); idx++) {
             double rho = rho_air ? rho_air[idx] : rho_std;
@@ -170,7 +313,7 @@ bool ext_volume_tint_from_fields(const struct field_volume *in,
         return false;
     size_t idx = 0;
     for (int k = 0; k < g->n[2]; k++) {
-        double rho_std = optics_std_atmosphere_density(g->origin[2] + (k + 0.5) * g->spacing[2]);
+        double rho_std = optics_std_atmosphere_density(grid3_centre_z(g, k));
         for (int j = 0; j < g->n[1]; j++) {
             for (int i = 0; i < g->n[0]; i++, idx++) {
                 double rho = in->rho_air ? in->rho_air[idx] : rho_std;
@@ -218,6 +361,8 @@ void ext_volume_stretch_height(struct ext_volume *v, double k)
         return;
     v->grid.origin[2] *= k;
     v->grid.spacing[2] *= k;
+    for (int l = 0; l < v->grid.z_levels; l++)
+        v->grid.z_centre[l] *= k;
     size_t plane = (size_t)v->grid.n[0] * (size_t)v->grid.n[1];
     for (int s = 0; s < TRANSFER_SLICE_MAX; s++)
         for (size_t i = 0; v->slice_surface[s] && i < plane; i++)

@@ -6,6 +6,11 @@
  * World frame: metres, x east, y north, z up; the ground (sea level) is z = 0.  A volume is a
  * box from ORIGIN to ORIGIN + N * SPACING; voxel (i, j, k) is centred at
  * origin + (i + 0.5, j + 0.5, k + 0.5) * spacing; x varies fastest: index = i + n0 (j + n1 k).
+ * A stretched grid (z_levels > 0: the model's own levels, docs/data.md "Heights") keeps the
+ * box (origin[2] to origin[2] + n[2] spacing[2], spacing[2] the mean level thickness) but puts
+ * the centre of level k at z_centre[k]; between centres values are linear in height, and
+ * grid3_z_to_voxel is the one mapping from height to the continuous voxel coordinate that
+ * every sampler (CPU and GPU) goes through.
  *
  * Must not know: GL, configs (callers fill the desc structs), views, the session.
  */
@@ -19,10 +24,17 @@
 #include "optics/optics.h"
 #include "optics/transfer.h"
 
+/* Most levels a stretched grid holds (WRF runs use 30 to 100). */
+#define GRID3_LEVELS_MAX 256
+
 struct grid3 {
     int n[3];          /* voxels along x, y, z */
-    double spacing[3]; /* metres; anisotropic in general */
+    double spacing[3]; /* metres; anisotropic in general; z: the mean on a stretched grid */
     double origin[3];  /* box minimum corner, metres */
+    /* 0: uniform z.  Else n[2]: the heights of the level centres, increasing, strictly inside
+     * the box; copied with the grid. */
+    int z_levels;
+    double z_centre[GRID3_LEVELS_MAX];
 };
 
 /* What a file's grid may be: outside these it is refused as damaged (a DX of 1e-30 m once
@@ -43,6 +55,42 @@ static inline size_t grid3_index(const struct grid3 *g, int i, int j, int k)
 {
     return (size_t)i + (size_t)g->n[0] * ((size_t)j + (size_t)g->n[1] * (size_t)k);
 }
+
+static inline bool grid3_stretched(const struct grid3 *g)
+{
+    return g->z_levels > 0;
+}
+
+/* Height Z (m) -> continuous voxel coordinate along z (0 at the box bottom, k + 0.5 at level
+ * k's centre, n[2] at the top): (z - origin) / spacing on a uniform grid; on a stretched one
+ * linear between the centres and between the outer centres and the box faces. */
+double grid3_z_to_voxel(const struct grid3 *g, double z);
+/* The inverse: the height of continuous voxel coordinate U, clamped to the box. */
+double grid3_voxel_to_z(const struct grid3 *g, double u);
+/* Height of level K's centre. */
+double grid3_centre_z(const struct grid3 *g, int k);
+/* The thickness of level K: half the distance between its neighbours' centres (the faces'
+ * distance at the box's ends). */
+double grid3_level_dz(const struct grid3 *g, int k);
+/* The thinnest level's thickness (spacing[2] on a uniform grid). */
+double grid3_min_dz(const struct grid3 *g);
+/* The voxel levels [*K0, *K1] trilinear interpolation reads anywhere in heights [Z0, Z1]
+ * (clamped to the volume). */
+void grid3_z_voxel_range(const struct grid3 *g, double z0, double z1, int *k0, int *k1);
+/* Makes G stretched with N levels centred at ZC (increasing) in the box [BOTTOM, TOP].  False
+ * (logged, G unchanged) when they do not fit: more than GRID3_LEVELS_MAX, not increasing, or
+ * not strictly inside the box. */
+bool grid3_set_levels(struct grid3 *g, const double *zc, int n, double bottom, double top);
+/* Whether A and B are the same grid (the same levels too). */
+bool grid3_equal(const struct grid3 *a, const struct grid3 *b);
+
+/* The GPU's and the CPU light map's height mapping (shaders/zmap.glsl): ENTRIES values of
+ * grid3_z_to_voxel / n[2] at heights origin + i / (ENTRIES - 1) of the box height, and each
+ * height's level thickness.  grid3_zmap_entries says how many resolve the thinnest level (at
+ * least 16 entries to it), 2 on a uniform grid. */
+int grid3_zmap_entries(const struct grid3 *g);
+/* Fills TEX (ENTRIES floats) and DZ (ENTRIES floats, m; NULL: not wanted). */
+void grid3_zmap_fill(const struct grid3 *g, int entries, float *tex, float *dz);
 
 /* Mass ratios as the model wrote them.  A species the data lacks has q[f] == NULL and reads
  * as zero.  rho_air == NULL means "use the standard atmosphere at the voxel's height". */
@@ -124,8 +172,8 @@ bool ext_volume_tint_from_fields(const struct field_volume *in,
                                  const struct species_select *sel,
                                  const struct species_tint *tint, struct ext_volume *out);
 
-/* Height exaggeration (Nes §5.5.2): multiplies the z origin and spacing (and the slices'
- * surfaces) by K (> 0) and divides
+/* Height exaggeration (Nes §5.5.2): multiplies the z origin and spacing (and the level
+ * centres, and the slices' surfaces) by K (> 0) and divides
  * the extinction by K, so the volume is K times taller and every vertical column keeps its
  * optical depth (the stretch moves the medium, it does not add any).  K = 1 leaves V as is. */
 void ext_volume_stretch_height(struct ext_volume *v, double k);

@@ -51,6 +51,8 @@ struct wrf {
     struct wrf_meta meta;
     int nzs;         /* bottom_top_stag */
     double auto_top; /* the highest model top of the first step, m: data.top = 0 */
+    double *mean_zw; /* nzs: each staggered level's mean height over the first step's columns,
+                        m (the native levels' mean column) */
 };
 
 const char *wrf_var_name(enum wrf_var v)
@@ -284,18 +286,38 @@ static bool compute_auto_top(struct wrf *w)
         log_error("%s: out of memory", f->path);
         return false;
     }
-    size_t start[4] = {(size_t)w->steps[0].index, (size_t)w->nzs - 1, 0, 0};
-    size_t count[4] = {1, 1, (size_t)w->meta.ny, (size_t)w->meta.nx};
-    int st = nc_get_vara_float(f->ncid, f->varid[WRF_PH], start, count, a);
-    if (st == NC_NOERR)
-        st = nc_get_vara_float(f->ncid, f->varid[WRF_PHB], start, count, b);
+    w->mean_zw = calloc((size_t)w->nzs, sizeof(double));
+    if (!w->mean_zw) {
+        free(a);
+        free(b);
+        log_error("%s: out of memory", f->path);
+        return false;
+    }
+    /* Every staggered level's mean height (the native levels' mean column), the top level's
+     * highest value the automatic top. */
+    int st = NC_NOERR;
     double top = 0.0, wild = 0.0;
-    for (size_t i = 0; st == NC_NOERR && i < plane; i++) {
-        double z = ((double)a[i] + (double)b[i]) / WRF_G;
-        if (isfinite(z) && (z < DATA_HEIGHT_MIN_M || z > DATA_HEIGHT_MAX_M) && wild == 0.0)
-            wild = z;
-        else if (isfinite(z) && z > top)
-            top = z;
+    for (int k = 0; k < w->nzs && st == NC_NOERR; k++) {
+        size_t start[4] = {(size_t)w->steps[0].index, (size_t)k, 0, 0};
+        size_t count[4] = {1, 1, (size_t)w->meta.ny, (size_t)w->meta.nx};
+        st = nc_get_vara_float(f->ncid, f->varid[WRF_PH], start, count, a);
+        if (st == NC_NOERR)
+            st = nc_get_vara_float(f->ncid, f->varid[WRF_PHB], start, count, b);
+        double sum = 0.0;
+        size_t used = 0;
+        for (size_t i = 0; st == NC_NOERR && i < plane; i++) {
+            double z = ((double)a[i] + (double)b[i]) / WRF_G;
+            bool out = z < DATA_HEIGHT_MIN_M || z > DATA_HEIGHT_MAX_M;
+            if (isfinite(z) && out && k == w->nzs - 1 && wild == 0.0) {
+                wild = z; /* other levels' wild heights are refused where a step is read */
+            } else if (isfinite(z) && !out) {
+                sum += z;
+                used++;
+                if (k == w->nzs - 1 && z > top)
+                    top = z;
+            }
+        }
+        w->mean_zw[k] = used ? sum / (double)used : NAN;
     }
     free(a);
     free(b);
@@ -725,6 +747,7 @@ void wrf_close(struct wrf *w)
     }
     free(w->files);
     free(w->steps);
+    free(w->mean_zw);
     free(w->meta.xlat);
     free(w->meta.xlong);
     free(w->meta.hgt);
@@ -755,12 +778,16 @@ const char *wrf_step_path(const struct wrf *w, int step)
 
 /* ---- reading a step -------------------------------------------------------------------- */
 
+struct selection;
+static bool output_grid(const struct wrf *w, const struct wrf_desc *d, const struct selection *s,
+                        struct grid3 *g);
+
 /* The selection a desc makes, in file columns and output levels. */
 struct selection {
     int x0, sx, nx; /* first column, stride, count */
     int y0, sy, ny;
-    int z0, sz, nz; /* first output level of the full regular grid, stride, count */
-    int levels;     /* full regular grid */
+    int z0, sz, nz; /* first output level of the full grid, stride, count */
+    int levels;     /* full grid: regular levels, or the native levels under the top */
 };
 
 static bool axis_select(const char *axis, int len, int lo, int hi, int stride, int *first,
@@ -782,15 +809,115 @@ static bool axis_select(const char *axis, int len, int lo, int hi, int stride, i
     return true;
 }
 
+/* The native levels: the mean column's mass levels, half way between its staggered levels,
+ * that lie inside the height grid (BOTTOM, TOP); their count, and their heights into ZC
+ * (NULL: only counted). */
+static int native_levels(const struct wrf *w, double bottom, double top, double *zc)
+{
+    int n = 0;
+    for (int k = 0; k < w->meta.nz; k++) {
+        double z = 0.5 * (w->mean_zw[k] + w->mean_zw[k + 1]);
+        if (z > bottom && z < top) {
+            if (zc)
+                zc[n] = z;
+            n++;
+        }
+    }
+    return n;
+}
+
 static bool make_selection(const struct wrf *w, const struct wrf_desc *d, struct selection *s)
 {
     s->levels = d->levels > 0 ? d->levels : w->meta.nz;
+    if (d->native_levels && d->native_from) {
+        s->levels = d->native_from->n[2];
+    } else if (d->native_levels) {
+        double top = d->top_m > 0 ? d->top_m : w->auto_top;
+        s->levels = native_levels(w, d->bottom_m, top, NULL);
+        if (s->levels < 1) {
+            log_error("%s: no model level between %.0f m and %.0f m (data.top)",
+                      w->files[w->steps[0].file].path, d->bottom_m, top);
+            return false;
+        }
+    }
     return axis_select("x", w->meta.nx, d->crop[0], d->crop[1], d->stride[0], &s->x0, &s->sx,
                        &s->nx) &&
            axis_select("y", w->meta.ny, d->crop[2], d->crop[3], d->stride[1], &s->y0, &s->sy,
                        &s->ny) &&
            axis_select("z", s->levels, d->crop[4], d->crop[5], d->stride[2], &s->z0, &s->sz,
                        &s->nz);
+}
+
+/* The grid a step is read onto: the selection's columns; the regular height levels, or the
+ * selected native levels (faces half way between the selected levels, the outer ones half
+ * way to the next level, or at the grid's bottom and top). */
+static bool output_grid(const struct wrf *w, const struct wrf_desc *d, const struct selection *s,
+                        struct grid3 *g)
+{
+    const char *path = w->files[w->steps[0].file].path;
+    double bottom = d->bottom_m;
+    double top = d->top_m > 0 ? d->top_m : w->auto_top;
+    if (!(top > bottom)) {
+        log_error("%s: height grid top %.0f m is not above its bottom %.0f m", path, top, bottom);
+        return false;
+    }
+    memset(g, 0, sizeof(*g));
+    g->n[0] = s->nx;
+    g->n[1] = s->ny;
+    g->spacing[0] = w->meta.dx * s->sx;
+    g->spacing[1] = w->meta.dy * s->sy;
+    g->origin[0] = (s->x0 + 0.5) * w->meta.dx - 0.5 * g->spacing[0];
+    g->origin[1] = (s->y0 + 0.5) * w->meta.dy - 0.5 * g->spacing[1];
+    if (!d->native_levels) {
+        double dzf = (top - bottom) / s->levels;
+        g->n[2] = s->nz;
+        g->spacing[2] = dzf * s->sz;
+        g->origin[2] = bottom + (s->z0 + 0.5) * dzf - 0.5 * g->spacing[2];
+        return true;
+    }
+    if (s->nz > GRID3_LEVELS_MAX) {
+        log_error("%s: %d model levels: native levels hold at most %d (data.stride or "
+                  "data.crop along z, or data.vertical = \"uniform\")",
+                  path, s->nz, GRID3_LEVELS_MAX);
+        return false;
+    }
+    double all[GRID3_LEVELS_MAX * 4], zc[GRID3_LEVELS_MAX];
+    if (s->levels > GRID3_LEVELS_MAX * 4) {
+        log_error("%s: %d model levels: native levels hold at most %d", path, s->levels,
+                  GRID3_LEVELS_MAX * 4);
+        return false;
+    }
+    if (d->native_from) { /* another file's levels (nests: the outermost domain's) */
+        const struct grid3 *f = d->native_from;
+        for (int k = 0; k < f->n[2]; k++)
+            all[k] = grid3_centre_z(f, k);
+        bottom = f->origin[2];
+        top = f->origin[2] + f->n[2] * f->spacing[2];
+    } else {
+        native_levels(w, bottom, top, all);
+    }
+    for (int k = 0; k < s->nz; k++)
+        zc[k] = all[s->z0 + k * s->sz];
+    int first = s->z0, last = s->z0 + (s->nz - 1) * s->sz;
+    double lo = first > 0 ? 0.5 * (all[first - 1] + all[first]) : bottom;
+    double hi = last < s->levels - 1 ? 0.5 * (all[last] + all[last + 1]) : top;
+    if (s->nz > 1) { /* with a stride the faces lie half way to the neighbours kept */
+        lo = fmax(lo, zc[0] - 0.5 * (zc[1] - zc[0]));
+        hi = fmin(hi, zc[s->nz - 1] + 0.5 * (zc[s->nz - 1] - zc[s->nz - 2]));
+    }
+    /* Levels already even (a file on height levels, anvil synth's) make the uniform grid they
+     * are: nothing to map, the same picture as data.vertical = "uniform". */
+    double dz = (hi - lo) / s->nz;
+    bool even = true;
+    for (int k = 0; k < s->nz && even; k++)
+        even = fabs(zc[k] - (lo + (k + 0.5) * dz)) <= 1e-3 * dz;
+    if (even) {
+        g->n[2] = s->nz;
+        g->spacing[2] = dz;
+        g->origin[2] = lo;
+        return true;
+    }
+    return grid3_set_levels(g, zc, s->nz, lo, hi);
 }
 
 static size_t arrays_out(const struct wrf *w, const struct wrf_desc *d)
@@ -1025,13 +1152,14 @@ static float resample_weight(double zt, double z0, double z1)
     return (float)((zt - z0) / (z1 - z0));
 }
 
-int wrf_resample_column(const double *z, const float *v, int nz, double z_ground, double z_top,
-                        double z0, double dz, int n, float outside, float *out, int *below)
+/* wrf_resample_column onto the N heights ZTS (increasing), TOL its closeness to a level. */
+static int resample_at(const double *z, const float *v, int nz, double z_ground, double z_top,
+                       const double *zts, int n, double tol, float outside, float *out,
+                       int *below)
 {
-    double tol = 1e-4 * fabs(dz);
     int k = 0, outside_count = 0, below_count = 0;
     for (int o = 0; o < n; o++) {
-        double zt = z0 + (o + 0.5) * dz;
+        double zt = zts[o];
         if (zt < z_ground - tol || zt > z_top + tol) {
             out[o] = outside;
             outside_count++;
@@ -1052,6 +1180,22 @@ int wrf_resample_column(const double *z, const float *v, int nz, double z_ground
             double t = resample_weight(zt, z[k], z[k + 1]);
             out[o] = (float)((1.0 - t) * v[k] + t * v[k + 1]);
         }
+    }
+    if (below)
+        *below = below_count;
+    return outside_count;
+}
+
+int wrf_resample_column(const double *z, const float *v, int nz, double z_ground, double z_top,
+                        double z0, double dz, int n, float outside, float *out, int *below)
+{
+    int outside_count = 0, below_count = 0;
+    for (int o = 0; o < n; o++) {
+        double zt = z0 + (o + 0.5) * dz;
+        int b = 0;
+        outside_count += resample_at(z, v, nz, z_ground, z_top, &zt, 1, 1e-4 * fabs(dz),
+                                     outside, out + o, &b);
+        below_count += b;
     }
     if (below)
         *below = below_count;
@@ -1121,7 +1265,8 @@ struct plan {
     size_t cols;
     int nz, no;
     const float *zw;     /* staggered heights, m: zw[k * cols + c] (while the plan is made) */
-    double z0, dz;       /* output level o is centred at z0 + (o + 0.5) dz */
+    const struct grid3 *g; /* the output grid (while the plan is made) */
+    double tol;          /* a target this close to a level takes its value */
     uint16_t *k;         /* [o * cols + c]: the lower mass level, or PLAN_OUTSIDE */
     float *t;            /* the weight of level k + 1; 0: level k's value as it is */
     size_t below, above; /* outputs below the model's ground, above its top */
@@ -1137,7 +1282,7 @@ static bool plan_blocks(void *ctx, int share, size_t begin, size_t end)
     uint16_t *kb = malloc((size_t)BLOCK * no * sizeof(uint16_t));
     float *tb = malloc((size_t)BLOCK * no * sizeof(float));
     bool ok = z && kb && tb;
-    double tol = 1e-4 * fabs(p->dz);
+    double tol = p->tol;
     size_t first = begin * BLOCK, last = end * BLOCK, below = 0, above = 0;
     if (last > p->cols)
         last = p->cols;
@@ -1152,7 +1297,7 @@ static bool plan_blocks(void *ctx, int share, size_t begin, size_t end)
             int k = 0;
             for (int o = 0; o < no; o++) {
                 /* wrf_resample_column's cases, in its order. */
-                double zt = p->z0 + (o + 0.5) * p->dz;
+                double zt = grid3_centre_z(p->g, o);
                 uint16_t kk;
                 float t = 0.0f;
                 if (zt < zg - tol || zt > ztop + tol) {
@@ -1203,12 +1348,13 @@ static void plan_finish(struct plan *p)
     memset(p, 0, sizeof(*p));
 }
 
-/* The plan of NO output levels centred at Z0 + (o + 0.5) DZ over COLS columns whose NZ + 1
- * staggered heights ZW hold.  False (logged) when out of memory. */
-static bool plan_make(struct plan *p, const float *zw, size_t cols, int nz, double z0, double dz,
-                      int no)
+/* The plan of the levels of grid G over COLS columns whose NZ + 1 staggered heights ZW hold.
+ * False (logged) when out of memory. */
+static bool plan_make(struct plan *p, const float *zw, size_t cols, int nz, const struct grid3 *g)
 {
-    *p = (struct plan){.cols = cols, .nz = nz, .no = no, .zw = zw, .z0 = z0, .dz = dz};
+    int no = g->n[2];
+    *p = (struct plan){.cols = cols, .nz = nz, .no = no, .zw = zw, .g = g,
+                       .tol = 1e-4 * fabs(grid3_min_dz(g))};
     if (nz >= PLAN_OUTSIDE) {
         log_error("%d mass levels: at most %d can be resampled", nz, PLAN_OUTSIDE - 1);
         return false;
@@ -1224,6 +1370,7 @@ static bool plan_make(struct plan *p, const float *zw, size_t cols, int nz, doub
         }
     }
     p->zw = NULL;
+    p->g = NULL;
     if (!ok) {
         log_error("out of memory resampling %d-level columns", nz);
         plan_finish(p);
@@ -1501,28 +1648,14 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
     }
 
     /* The output grid. */
-    double bottom = d->bottom_m;
-    double top = d->top_m > 0 ? d->top_m : w->auto_top;
-    if (!(top > bottom)) {
-        log_error("%s: height grid top %.0f m is not above its bottom %.0f m", path, top, bottom);
-        goto unlock;
-    }
-    double dzf = (top - bottom) / s.levels;
     struct grid3 *g = &out->grid;
-    g->n[0] = s.nx;
-    g->n[1] = s.ny;
-    g->n[2] = s.nz;
-    g->spacing[0] = w->meta.dx * s.sx;
-    g->spacing[1] = w->meta.dy * s.sy;
-    g->spacing[2] = dzf * s.sz;
-    g->origin[0] = (s.x0 + 0.5) * w->meta.dx - 0.5 * g->spacing[0];
-    g->origin[1] = (s.y0 + 0.5) * w->meta.dy - 0.5 * g->spacing[1];
-    g->origin[2] = bottom + (s.z0 + 0.5) * dzf - 0.5 * g->spacing[2];
+    if (!output_grid(w, d, &s, g))
+        goto unlock;
     size_t nout = grid3_count(g);
 
     /* Where every output voxel comes from, once for all the variables of the step; the
      * staggered heights are not needed after it. */
-    if (!plan_make(&plan, c.zw, c.cols, c.nz, g->origin[2], g->spacing[2], g->n[2]))
+    if (!plan_make(&plan, c.zw, c.cols, c.nz, g))
         goto unlock;
     stats->below_terrain = plan.below;
     stats->above_top = plan.above;
@@ -1785,7 +1918,7 @@ struct point_block {
     double wt[4];      /* the columns' bilinear weights */
     float *zw;         /* staggered heights, nzs x cols */
     double *zm;        /* each column's mass level heights, cols x nz */
-    double z0, dz;     /* the output levels: the first one's bottom and their spacing */
+    double tol;        /* the output grid's closeness to a level */
     int nk;            /* 1 or 2 output levels */
     double tk;         /* weight of the second */
     double zk[2];      /* their heights */
@@ -1804,9 +1937,8 @@ static double point_value(const struct point_block *b, const float *buf, float o
         for (int k = 0; k < b->nz; k++)
             b->one[k] = buf[(size_t)k * b->cols + c];
         float out[2];
-        wrf_resample_column(b->zm + (size_t)c * b->nz, b->one, b->nz, b->zw[c],
-                            b->zw[(size_t)b->nz * b->cols + c], b->z0, b->dz, b->nk, outside, out,
-                            NULL);
+        resample_at(b->zm + (size_t)c * b->nz, b->one, b->nz, b->zw[c],
+                    b->zw[(size_t)b->nz * b->cols + c], b->zk, b->nk, b->tol, outside, out, NULL);
         for (int k = 0; k < b->nk; k++) {
             if (fill_std && !isfinite(out[k])) {
                 double t, p;
@@ -1834,16 +1966,15 @@ enum wrf_point_result wrf_read_point(struct wrf *w, int step, const struct wrf_d
     if (!make_selection(w, d, &s))
         return WRF_POINT_ERROR;
     const struct wrf_meta *m = &w->meta;
-    /* The grid wrf_read_step makes (its origin and spacing). */
-    double bottom = d->bottom_m, top = d->top_m > 0 ? d->top_m : w->auto_top;
-    double dzf = (top - bottom) / s.levels;
-    double sp[3] = {m->dx * s.sx, m->dy * s.sy, dzf * s.sz};
-    double org[3] = {(s.x0 + 0.5) * m->dx - 0.5 * sp[0], (s.y0 + 0.5) * m->dy - 0.5 * sp[1],
-                     bottom + (s.z0 + 0.5) * dzf - 0.5 * sp[2]};
+    /* The grid wrf_read_step makes. */
+    struct grid3 og;
+    if (!output_grid(w, d, &s, &og))
+        return WRF_POINT_ERROR;
+    const double *sp = og.spacing, *org = og.origin;
     const int n[3] = {s.nx, s.ny, s.nz};
     double f[3];
     for (int a = 0; a < 3; a++) {
-        double rel = (p[a] - org[a]) / sp[a];
+        double rel = a < 2 ? (p[a] - org[a]) / sp[a] : grid3_z_to_voxel(&og, p[a]);
         if (!(rel >= -1e-9 && rel <= n[a] + 1e-9)) {
             if (a < 2)
                 return WRF_POINT_OUTSIDE;
@@ -1866,10 +1997,9 @@ enum wrf_point_result wrf_read_point(struct wrf *w, int step, const struct wrf_d
         for (int q = 0; q < b.nxb; q++)
             b.wt[q + b.nxb * r] = (b.nxb == 1 ? 1.0 : q ? tx : 1.0 - tx) *
                                   (b.nyb == 1 ? 1.0 : r ? ty : 1.0 - ty);
-    b.dz = sp[2];
-    b.z0 = org[2] + ka * sp[2];
+    b.tol = 1e-4 * fabs(grid3_min_dz(&og));
     for (int k = 0; k < b.nk; k++)
-        b.zk[k] = b.z0 + (k + 0.5) * b.dz;
+        b.zk[k] = grid3_centre_z(&og, ka + k);
     const struct wrf_file *file = &w->files[w->steps[step].file];
     int nz = b.nz, nzs = b.nzs, cols = b.cols;
     /* Scratch: two blocks of (nxb + 1) x (nyb + 1) columns on the staggered levels. */
@@ -2033,24 +2163,5 @@ bool wrf_grid(const struct wrf *w, const struct wrf_desc *d, struct grid3 *out)
 {
     /* The grid wrf_read_step puts the step on (its "output grid"), from the same selection. */
     struct selection s;
-    if (!make_selection(w, d, &s))
-        return false;
-    double bottom = d->bottom_m;
-    double top = d->top_m > 0 ? d->top_m : w->auto_top;
-    if (!(top > bottom)) {
-        log_error("%s: height grid top %.0f m is not above its bottom %.0f m",
-                  w->files[w->steps[0].file].path, top, bottom);
-        return false;
-    }
-    double dzf = (top - bottom) / s.levels;
-    out->n[0] = s.nx;
-    out->n[1] = s.ny;
-    out->n[2] = s.nz;
-    out->spacing[0] = w->meta.dx * s.sx;
-    out->spacing[1] = w->meta.dy * s.sy;
-    out->spacing[2] = dzf * s.sz;
-    out->origin[0] = (s.x0 + 0.5) * w->meta.dx - 0.5 * out->spacing[0];
-    out->origin[1] = (s.y0 + 0.5) * w->meta.dy - 0.5 * out->spacing[1];
-    out->origin[2] = bottom + (s.z0 + 0.5) * dzf - 0.5 * out->spacing[2];
-    return true;
+    return make_selection(w, d, &s) && output_grid(w, d, &s, out);
 }

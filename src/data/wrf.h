@@ -32,6 +32,14 @@
  * fills -1 there); call wrf_desc_defaults first and change what you need. */
 struct wrf_desc {
     int levels;       /* regular height levels; 0 = as many as the file's mass levels */
+    bool native_levels; /* instead of regular levels, the model's own (a stretched grid,
+                           data/volume.h): the mass levels of the first step's mean column
+                           between bottom_m and top_m, each column resampled onto their
+                           heights; LEVELS is then unused, crop and stride along z select from
+                           them */
+    const struct grid3 *native_from; /* with native_levels: read onto this stretched grid's
+                                        levels (and box) instead of this file's own (nests
+                                        on their outermost domain's); borrowed, NULL = own */
     double top_m;     /* top of the height grid above sea level, m; 0 = the highest model top
                          (staggered top level) over all columns of the first time step, so
                          that every step of the series has the same grid */

@@ -302,6 +302,18 @@ static bool write_2d(struct wrf_writer *w, size_t t)
     return put(w, V_HGT, s, c, lat) && put(w, V_LANDMASK, s, c, lon);
 }
 
+/* Staggered level K: the cell faces; on a stretched grid each centre half way between its two
+ * faces, from the box's bottom up (wrf_write.h). */
+static double face_z(const struct grid3 *g, int k)
+{
+    if (!grid3_stretched(g))
+        return g->origin[2] + k * g->spacing[2];
+    double f = g->origin[2];
+    for (int i = 0; i < k; i++)
+        f = 2.0 * g->z_centre[i] - f;
+    return f;
+}
+
 void wrf_synth_wind(const struct grid3 *g, double x, double y, double z, double *u, double *v,
                     double *wz)
 {
@@ -329,7 +341,7 @@ static bool write_wind(struct wrf_writer *w, size_t t)
     }
     bool ok = true;
     for (int k = 0; k <= g->n[2] && ok; k++) {
-        double zm = g->origin[2] + (k + 0.5) * g->spacing[2], zw = g->origin[2] + k * g->spacing[2];
+        double zm = grid3_centre_z(g, k < g->n[2] ? k : g->n[2] - 1), zw = face_z(g, k);
         double u, v, wz;
         size_t s1[4] = {t, (size_t)k, 0, 0};
         if (k < g->n[2]) {
@@ -376,7 +388,7 @@ static bool write_3d(struct wrf_writer *w, const struct field_volume *v, size_t 
     for (int k = 0; k <= g->n[2]; k++) {
         size_t s1[4] = {t, (size_t)k, 0, 0};
         /* Staggered: cell faces. */
-        double zw = g->origin[2] + k * g->spacing[2];
+        double zw = face_z(g, k);
         for (size_t i = 0; i < plane; i++) {
             a[i] = 0.0f;
             b[i] = (float)(WRF_G * zw);
@@ -386,7 +398,7 @@ static bool write_3d(struct wrf_writer *w, const struct field_volume *v, size_t 
         if (k == g->n[2])
             break;
         /* Mass levels: cell centres. */
-        double z = g->origin[2] + (k + 0.5) * g->spacing[2];
+        double z = grid3_centre_z(g, k);
         double temp, p;
         wrf_std_atmosphere(z, &temp, &p);
         for (size_t i = 0; i < plane; i++) {

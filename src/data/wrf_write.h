@@ -13,7 +13,10 @@
  * Vertical levels: the staggered levels are the volume's cell faces, origin_z + k dz, with
  * PHB = g z and PH = 0, so the mass levels sit exactly on the cell centres and reading the file
  * back with wrf_read_step (levels = nz, bottom = origin_z, top = automatic) returns the mass
- * ratios unchanged.  Pressure and temperature are the 1976 US standard atmosphere (PB = p(z),
+ * ratios unchanged.  A stretched grid (data/volume.h) gives the model's own uneven levels: the
+ * faces from origin_z up, each level's centre half way between its faces (so the faces are
+ * f[k + 1] = 2 z_centre[k] - f[k]; a grid whose centres are the midpoints of the faces wanted
+ * reads back with native_levels and top = automatic as it was written).  Pressure and temperature are the 1976 US standard atmosphere (PB = p(z),
  * P = 0); where the volume has rho_air, T is chosen so that P, PB, T give that density.
  * QVAPOR is the volume's or, when absent, 10 g/kg falling off with a 2.5 km scale height.
  * U, V and W are wrf_synth_wind on WRF's staggered points (U on the west/east cell faces, V on

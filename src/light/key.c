@@ -59,6 +59,10 @@ static void visit_key(struct visit *v, const struct light_key *k)
         visit_double(v, k->box.origin[a], o->box.origin[a]);
         visit_double(v, k->sun[a], o->sun[a]);
     }
+    /* A stretched box's levels (the same box on other levels is another map). */
+    visit_u64(v, (uint64_t)(int64_t)k->box.z_levels, (uint64_t)(int64_t)o->box.z_levels);
+    for (int l = 0; l < k->box.z_levels && l < o->box.z_levels; l++)
+        visit_double(v, k->box.z_centre[l], o->box.z_centre[l]);
     visit_u64(v, k->volume_id, o->volume_id);
     visit_u64(v, k->volume_generation, o->volume_generation);
     const struct light_settings *s = &k->settings, *t = &o->settings;

@@ -15,7 +15,8 @@ struct light_gpu {
      * slices by MULTIPLE (bit 0), LATERAL (bit 1) and SKIP (bit 2); the sweep by FORWARD
      * (bit 0), PERIPHERAL (bit 1), PHASE_MIX (bit 2); the diffuse column pass by PHASE_MIX
      * (bit 0) and LATERAL (bit 1). */
-    struct gpu_program slices[8];
+    struct gpu_program slices[16];      /* bit 3: STRETCHED */
+    struct gpu_texture zmap;            /* the volume's height table (STRETCHED) */
     struct gpu_program build[16];       /* bit 3: HALF */
     struct gpu_program diffuse_pass[8]; /* bit 2: HALF */
     struct gpu_program lateral_pass[2]; /* without and with SKIP */
@@ -112,14 +113,16 @@ static const struct gpu_program *build_program(struct light_gpu *lg, int v)
 }
 
 static const struct gpu_program *slices_program(struct light_gpu *lg, bool multiple,
-                                                bool lateral, bool skip)
+                                                bool lateral, bool skip, bool stretched)
 {
-    int v = (multiple ? 1 : 0) | (multiple && lateral ? 2 : 0) | (skip ? 4 : 0);
+    int v = (multiple ? 1 : 0) | (multiple && lateral ? 2 : 0) | (skip ? 4 : 0) |
+            (stretched ? 8 : 0);
     if (lg->slices[v].id)
         return &lg->slices[v];
     char defines[128];
-    snprintf(defines, sizeof(defines), "#define MULTIPLE %d\n#define LATERAL %d\n#define SKIP %d\n",
-             v & 1, (v >> 1) & 1, (v >> 2) & 1);
+    snprintf(defines, sizeof(defines),
+             "#define MULTIPLE %d\n#define LATERAL %d\n#define SKIP %d\n#define STRETCHED %d\n",
+             v & 1, (v >> 1) & 1, (v >> 2) & 1, v >> 3);
     if (!gpu_program_init(&lg->slices[v], "light_slices.comp", defines))
         return NULL;
     return &lg->slices[v];
@@ -198,7 +201,7 @@ struct light_gpu *light_gpu_create(void)
     struct light_gpu *lg = calloc(1, sizeof(*lg));
     if (!lg)
         return NULL;
-    if (!build_program(lg, 7) || !slices_program(lg, false, false, true)) {
+    if (!build_program(lg, 7) || !slices_program(lg, false, false, true, false)) {
         light_gpu_destroy(lg);
         return NULL;
     }
@@ -217,8 +220,10 @@ void light_gpu_destroy(struct light_gpu *lg)
         gpu_program_finish(&lg->build[v]);
     for (int v = 0; v < 8; v++) {
         gpu_program_finish(&lg->slices[v]);
+        gpu_program_finish(&lg->slices[8 + v]);
         gpu_program_finish(&lg->diffuse_pass[v]);
     }
+    gpu_texture_finish(&lg->zmap);
     gpu_texture_finish(&lg->light);
     gpu_texture_finish(&lg->diffuse);
     for (int v = 0; v < 4; v++)
@@ -289,7 +294,8 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
         lg->have_rates = false;
     }
     bool skip = src->cells && src->cells->levels > 0;
-    const struct gpu_program *sp = slices_program(lg, s->multiple, s->lateral, skip);
+    bool stretched = grid3_stretched(src->grid);
+    const struct gpu_program *sp = slices_program(lg, s->multiple, s->lateral, skip, stretched);
     const struct gpu_program *p = build_program(lg, build_variant(s) | (half ? 8 : 0));
     if (!sp || !p)
         return false;
@@ -303,6 +309,11 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
     gpu_uniform_ivec3(sp, "vol_n", src->grid->n);
     gpu_uniform_vec3(sp, "vol_origin", vol_origin);
     gpu_uniform_vec3(sp, "vol_inv_spacing", inv_spacing);
+    if (stretched) {
+        if (!render_zmap_upload(src->grid, &lg->zmap, sp))
+            return false;
+        gpu_texture_bind(&lg->zmap, BIND_SLICES_TEX_ZMAP);
+    }
     gpu_uniform_ivec3(sp, "grid_n", g->n);
     gpu_uniform_vec3(sp, "g_origin", g->origin);
     gpu_uniform_vec3(sp, "g_du", g->du);

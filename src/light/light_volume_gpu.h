@@ -17,7 +17,9 @@
 #include "light/light_volume.h"
 
 struct light_volume_gpu {
-    struct gpu_program pass[7];  /* PASS 1 .. 7, made on first use */
+    struct gpu_program pass[8];  /* PASS 1 .. 7, made on first use; [7] PASS 1 on the model's
+                                    own levels (STRETCHED) */
+    struct gpu_texture zmap;     /* the volume's height table, for [7] */
     struct gpu_texture field;    /* RGBA32F phi and F per cell over the volume box */
     struct gpu_buffer terms, system, vectors, scalars; /* build scratch, freed after it */
     struct grid3 grid;           /* the cells */

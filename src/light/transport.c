@@ -16,16 +16,56 @@ struct beta_sampler {
     int n[3];
     float origin[3];
     float inv_spacing[3];
+    /* A stretched grid's height mapping: the GPU's table (grid3_zmap_fill) when ZMAP is set,
+     * else grid3_z_to_voxel on GRID; GRID NULL on a uniform grid. */
+    const struct grid3 *grid;
+    float *zmap;
+    int zmap_n;
+    float zmap_inv_height; /* 1 / the box's height, 1/m */
 };
 
 static void sampler_init(struct beta_sampler *s, const struct ext_volume *vol)
 {
+    memset(s, 0, sizeof(*s));
     s->beta = vol->beta;
     for (int a = 0; a < 3; a++) {
         s->n[a] = vol->grid.n[a];
         s->origin[a] = (float)vol->grid.origin[a];
         s->inv_spacing[a] = (float)(1.0 / vol->grid.spacing[a]);
     }
+    if (grid3_stretched(&vol->grid))
+        s->grid = &vol->grid;
+}
+
+/* The light map build samples heights through the table the GPU reads, so that both builds
+ * see the same extinction.  False (logged) when out of memory. */
+static bool sampler_use_zmap(struct beta_sampler *s)
+{
+    if (!s->grid)
+        return true;
+    s->zmap_n = grid3_zmap_entries(s->grid);
+    s->zmap = malloc((size_t)s->zmap_n * sizeof(float));
+    if (!s->zmap) {
+        log_error("light map: out of memory for the height table");
+        return false;
+    }
+    grid3_zmap_fill(s->grid, s->zmap_n, s->zmap, NULL);
+    s->zmap_inv_height = (float)(1.0 / (s->grid->n[2] * s->grid->spacing[2]));
+    return true;
+}
+
+/* Height P2 inside the box -> continuous voxel coordinate along z on a stretched grid. */
+static float sampler_z(const struct beta_sampler *s, float p2)
+{
+    if (!s->zmap)
+        return (float)grid3_z_to_voxel(s->grid, p2);
+    /* As shaders/zmap.glsl reads the table, operation for operation. */
+    float h = fminf(fmaxf((p2 - s->origin[2]) * s->zmap_inv_height, 0.0f), 1.0f);
+    float f = h * (float)(s->zmap_n - 1);
+    int i = (int)f;
+    i = i > s->zmap_n - 2 ? s->zmap_n - 2 : i;
+    float t = f - (float)i;
+    return (s->zmap[i] + t * (s->zmap[i + 1] - s->zmap[i])) * (float)s->n[2];
 }
 
 /* Continuous voxel coordinate X (voxel units from the box minimum) -> lower voxel index and
@@ -56,6 +96,8 @@ static void sample_beta(const struct beta_sampler *s, const float p[3], float ou
             return;
         }
     }
+    if (s->grid) /* the box test above on the mean spacing, the weights on the levels */
+        x[2] = sampler_z(s, p[2]);
     float t[3];
     int i0[3], di[3];
     for (int a = 0; a < 3; a++) {
@@ -103,7 +145,7 @@ int light_auto_substeps(const struct light_grid *g, const struct grid3 *box)
     double cross = INFINITY;
     for (int a = 0; a < 3; a++) {
         if (fabs(g->w[a]) > 0.0)
-            cross = fmin(cross, box->spacing[a] / fabs(g->w[a]));
+            cross = fmin(cross, (a == 2 ? grid3_min_dz(box) : box->spacing[a]) / fabs(g->w[a]));
     }
     double m = ceil(g->step[2] / cross - 1e-9);
     return m < 1.0 ? 1 : m > 128.0 ? 128 : (int)m;
@@ -482,6 +524,10 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
 
     struct beta_sampler bs;
     sampler_init(&bs, vol);
+    if (!sampler_use_zmap(&bs)) {
+        light_map_finish(map);
+        return false;
+    }
     map->substeps = s->substeps > 0 ? s->substeps : light_auto_substeps(g, &vol->grid);
     const int sub = map->substeps;
     const float dsub = (float)(g->step[2] / sub);
@@ -513,6 +559,7 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
             free(rates);
             log_error("light map: out of memory for the diffuse light of %d x %d x %d nodes",
                       n0, n1, n2);
+            free(bs.zmap);
             light_map_finish(map);
             return false;
         }
@@ -576,6 +623,7 @@ bool light_map_build(const struct ext_volume *vol, const double sun[3],
         }
     }
     free(rates);
+    free(bs.zmap);
     if (slice) {
         float *col = malloc(9 * (size_t)n2 * sizeof(float));
         if (!col) {

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "common/log.h"
+#include "render/render.h" /* render_zmap_upload */
 #include "shaders/bindings.h"
 
 #define GROUP 256
@@ -14,12 +15,14 @@
 /* Iterations between two reads of the residual: each read waits for the GPU. */
 #define CHECK_EVERY 16
 
-static const struct gpu_program *pass(struct light_volume_gpu *v, int k)
+/* PASS K's program; STRETCHED (PASS 1 only): the one that samples through the height table. */
+static const struct gpu_program *pass(struct light_volume_gpu *v, int k, bool stretched)
 {
-    struct gpu_program *p = &v->pass[k - 1];
+    struct gpu_program *p = stretched ? &v->pass[7] : &v->pass[k - 1];
     if (!p->id) {
-        char defines[32];
-        snprintf(defines, sizeof(defines), "#define PASS %d\n", k);
+        char defines[64];
+        snprintf(defines, sizeof(defines), "#define PASS %d\n#define STRETCHED %d\n", k,
+                 stretched ? 1 : 0);
         if (!gpu_program_init(p, "light_volume.comp", defines))
             return NULL;
     }
@@ -36,9 +39,10 @@ static void scratch_finish(struct light_volume_gpu *v)
 
 void light_volume_gpu_finish(struct light_volume_gpu *v)
 {
-    for (int k = 0; k < 7; k++)
+    for (int k = 0; k < 8; k++)
         gpu_program_finish(&v->pass[k]);
     gpu_texture_finish(&v->field);
+    gpu_texture_finish(&v->zmap);
     scratch_finish(v);
     memset(v, 0, sizeof(*v));
 }
@@ -82,7 +86,7 @@ bool light_volume_gpu_build(struct light_volume_gpu *v, const struct gpu_texture
     double tol = fmax(d.tolerance, 1e-5);
     const struct gpu_program *p[7];
     for (int k = 1; k <= 7; k++) {
-        if (!(p[k - 1] = pass(v, k)))
+        if (!(p[k - 1] = pass(v, k, k == 1 && grid3_stretched(vol_grid))))
             return false;
     }
     for (int a = 0; a < 3; a++) {
@@ -134,6 +138,11 @@ bool light_volume_gpu_build(struct light_volume_gpu *v, const struct gpu_texture
     gpu_uniform_vec2(p[0], "loss", lossf);
     gpu_uniform_vec2(p[0], "gs", gsf);
     gpu_uniform_int(p[0], "sub", d.substeps);
+    if (grid3_stretched(vol_grid)) {
+        if (!render_zmap_upload(vol_grid, &v->zmap, p[0]))
+            return false;
+        gpu_texture_bind(&v->zmap, BIND_VOLUME_TEX_ZMAP);
+    }
     gpu_dispatch(p[0], count, 1, 1);
 
     /* PASS 2: the system, and the iteration's start. */

@@ -150,6 +150,10 @@ static void build_bounds(struct reference *r)
                     lo[a] = lo[a] < 0 ? 0 : lo[a];
                     hi[a] = hi[a] > g->n[a] - 1 ? g->n[a] - 1 : hi[a];
                 }
+                if (grid3_stretched(g)) { /* blocks are even in height, the levels are not */
+                    double z0 = r->box_min[2] + bz * r->block_m[2];
+                    grid3_z_voxel_range(g, z0, z0 + r->block_m[2], &lo[2], &hi[2]);
+                }
                 float mx = 0.0f, mn = INFINITY;
                 for (int k = lo[2]; k <= hi[2]; k++) {
                     for (int j = lo[1]; j <= hi[1]; j++) {
@@ -252,7 +256,9 @@ void reference_beta(const struct reference *r, const double p[3], double out[2])
             return;
         /* Continuous voxel coordinate with centres at integers, clamped to the edge centres;
          * the upper neighbour is one stride away (none along an axis of one voxel). */
-        double u = (p[a] - g->origin[a]) * r->inv_spacing[a] - 0.5;
+        double u = (a < 2 || !grid3_stretched(g) ? (p[a] - g->origin[a]) * r->inv_spacing[a]
+                                                  : grid3_z_to_voxel(g, p[a])) -
+                   0.5;
         double top = g->n[a] - 1;
         u = u < 0.0 ? 0.0 : u > top ? top : u;
         int i = (int)u;

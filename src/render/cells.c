@@ -4,6 +4,7 @@
  * levels' sizes, so that the eye pass and the light build read it without uniform arrays. */
 #include "render/render.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -19,12 +20,16 @@ bool render_cells_programs_init(struct render_cells_programs *p)
     memset(p, 0, sizeof(*p));
     return gpu_program_init(&p->build[0], "cells_build.comp", "#define TEMPORAL 0\n") &&
            gpu_program_init(&p->build[1], "cells_build.comp", "#define TEMPORAL 1\n") &&
+           gpu_program_init(&p->build[2], "cells_build.comp",
+                            "#define TEMPORAL 0\n#define STRETCHED 1\n") &&
+           gpu_program_init(&p->build[3], "cells_build.comp",
+                            "#define TEMPORAL 1\n#define STRETCHED 1\n") &&
            gpu_program_init(&p->reduce, "cells_reduce.comp", NULL);
 }
 
 void render_cells_programs_finish(struct render_cells_programs *p)
 {
-    for (int i = 0; i < 2; i++)
+    for (int i = 0; i < 4; i++)
         gpu_program_finish(&p->build[i]);
     gpu_program_finish(&p->reduce);
 }
@@ -53,8 +58,49 @@ void render_cells_layout(const int n[3], int cell_voxels, struct render_cells *c
     c->count = count;
 }
 
+/* A cell row's levels go to cells_build.comp in a uniform array of 32. */
+_Static_assert((GRID3_LEVELS_MAX + RENDER_CELL_VOXELS - 1) / RENDER_CELL_VOXELS <= 32,
+               "cell_levels[] holds every cell row");
+
+bool render_zmap_upload(const struct grid3 *grid, struct gpu_texture *tex,
+                        const struct gpu_program *prog)
+{
+    int n = grid3_zmap_entries(grid);
+    float *t = malloc((size_t)n * 4 * sizeof(float));
+    if (!t) {
+        log_error("out of memory for the height table");
+        return false;
+    }
+    float *u = t + 2 * (size_t)n, *dz = u + n;
+    grid3_zmap_fill(grid, n, u, dz);
+    for (int i = 0; i < n; i++) { /* interleaved: r the coordinate, g the thickness */
+        t[2 * i] = u[i];
+        t[2 * i + 1] = dz[i];
+    }
+    const int size[3] = {n, 1, 1};
+    bool ok = true;
+    if (tex->id && tex->size[0] == n && tex->format == GPU_RG32F) {
+        gpu_texture_upload(tex, t);
+    } else {
+        gpu_texture_finish(tex);
+        ok = gpu_texture_init(tex, 1, size, GPU_RG32F, t);
+    }
+    free(t);
+    if (ok && prog)
+        render_zmap_uniforms(grid, tex, prog);
+    return ok;
+}
+
+void render_zmap_uniforms(const struct grid3 *grid, const struct gpu_texture *tex,
+                          const struct gpu_program *prog)
+{
+    gpu_uniform_int(prog, "zmap_n", tex->size[0]);
+    gpu_uniform_float(prog, "zmap_inv_height", (float)(1.0 / (grid->n[2] * grid->spacing[2])));
+}
+
 bool render_cells_build(struct render_cells *c, const struct render_cells_programs *p,
-                        const struct gpu_texture *beta, const struct gpu_texture *next)
+                        const struct gpu_texture *beta, const struct gpu_texture *next,
+                        const struct grid3 *grid)
 {
     struct render_cells layout = {0};
     render_cells_layout(beta->size, RENDER_CELL_VOXELS, &layout);
@@ -75,8 +121,19 @@ bool render_cells_build(struct render_cells *c, const struct render_cells_progra
     header[4 * RENDER_CELL_LEVELS + 1] = c->cell_voxels;
     gpu_buffer_upload(&c->buf, 0, sizeof(header), header);
 
-    const struct gpu_program *b = &p->build[next ? 1 : 0];
+    bool stretched = grid && grid3_stretched(grid);
+    const struct gpu_program *b = &p->build[(next ? 1 : 0) | (stretched ? 2 : 0)];
     gpu_uniform_ivec3(b, "vol_n", beta->size);
+    for (int cz = 0; stretched && cz < c->dims[0][2]; cz++) {
+        /* The levels a trilinear sample within half a (mean) voxel of the cell reads. */
+        double h = c->cell_voxels * grid->spacing[2], z0 = grid->origin[2] + cz * h;
+        int range[2];
+        grid3_z_voxel_range(grid, z0 - 0.5 * grid->spacing[2], z0 + h + 0.5 * grid->spacing[2],
+                            &range[0], &range[1]);
+        char name[32];
+        snprintf(name, sizeof(name), "cell_levels[%d]", cz);
+        gpu_uniform_ivec2(b, name, range);
+    }
     gpu_texture_bind(beta, BIND_CELLS_TEX_BETA);
     if (next)
         gpu_texture_bind(next, BIND_CELLS_TEX_BETA_NEXT);

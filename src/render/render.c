@@ -42,6 +42,7 @@ struct renderer {
     bool have_tint;
     struct grid3 grid;
     bool have_volume;
+    struct gpu_texture zmap; /* the grid's height table, while it is stretched (STRETCHED 1) */
     struct gpu_texture layer_fields; /* RGBA32F 3D: the volume's layers' fields (LAYERS) */
     enum transfer_field layer_field[TRANSFER_LAYER_MAX];
     bool layer_held[TRANSFER_LAYER_MAX]; /* the volume has layer i's field */
@@ -165,6 +166,7 @@ void renderer_destroy(struct renderer *r)
     gpu_texture_finish(&r->slice_fields_next);
     gpu_texture_finish(&r->slice_surfaces_next);
     render_cells_finish(&r->next_cells);
+    gpu_texture_finish(&r->zmap);
     gpu_texture_finish(&r->tint);
     gpu_texture_finish(&r->layer_fields);
     gpu_texture_finish(&r->slice_fields);
@@ -536,6 +538,10 @@ bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
     if (!put_layer_fields(r, vol))
         return false;
     r->grid = vol->grid;
+    if (!grid3_stretched(&r->grid))
+        gpu_texture_finish(&r->zmap);
+    else if (!render_zmap_upload(&r->grid, &r->zmap, NULL))
+        return false;
     r->have_volume = true;
     r->pair_stale = true;
     size_t voxels = (size_t)n[0] * n[1] * n[2];
@@ -543,7 +549,7 @@ bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
                              (r->layer_fields.id ? voxels * 16 : 0) +
                              (r->slice_fields.id ? voxels * 16 : 0);
     r->stats.uploads++;
-    if (!render_cells_build(&r->cells, &r->cell_programs, &r->beta, NULL))
+    if (!render_cells_build(&r->cells, &r->cell_programs, &r->beta, NULL, &r->grid))
         return false;
     r->stats.upload_ms = time_now_ms() - start;
     return true;
@@ -727,7 +733,8 @@ bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
         return true;
     render_stage_release(&r->stage);
     r->stage_state = STAGE_IDLE;
-    if (!render_cells_build(&r->next_cells, &r->cell_programs, &r->beta_next, NULL))
+    if (!render_cells_build(&r->next_cells, &r->cell_programs, &r->beta_next, NULL,
+                            &r->stage_grid))
         return false;
     r->grid_next = r->stage_grid;
     r->next_held = r->stage_held;
@@ -762,6 +769,12 @@ bool renderer_swap_next(struct renderer *r)
     struct grid3 grid = r->grid;
     r->grid = r->grid_next;
     r->grid_next = grid;
+    /* The height table (a few KiB) follows the grid where the levels differ. */
+    if (!grid3_stretched(&r->grid))
+        gpu_texture_finish(&r->zmap);
+    else if (!grid3_equal(&r->grid, &r->grid_next) &&
+             !render_zmap_upload(&r->grid, &r->zmap, NULL))
+        return false;
     const struct held_fields *h = &r->next_held;
     r->have_tint = h->tint;
     for (int i = 0; i < TRANSFER_LAYER_MAX; i++) {
@@ -797,7 +810,8 @@ const struct render_cells *renderer_pair_cells(struct renderer *r)
         memcmp(r->beta.size, r->beta_next.size, sizeof(r->beta.size)) != 0)
         return NULL;
     if (r->pair_stale) {
-        if (!render_cells_build(&r->pair_cells, &r->cell_programs, &r->beta, &r->beta_next))
+        if (!render_cells_build(&r->pair_cells, &r->cell_programs, &r->beta, &r->beta_next,
+                                &r->grid))
             return NULL;
         r->pair_stale = false;
     }
@@ -953,6 +967,10 @@ static void eye_uniforms(struct renderer *r, const struct gpu_program *prog,
         gpu_uniform_float(prog, "temporal_f", s->temporal_f);
     if (cells)
         render_cells_bind(cells, prog, BIND_EYE_BUF_CELLS, g);
+    if (grid3_stretched(g)) {
+        render_zmap_uniforms(g, &r->zmap, prog);
+        gpu_texture_bind(&r->zmap, BIND_EYE_TEX_ZMAP);
+    }
     if (r->light && r->light->bind)
         r->light->bind(r->light, prog);
 }
@@ -1010,7 +1028,8 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
         cells = temporal ? renderer_pair_cells(r) : (r->cells.levels ? &r->cells : NULL);
     const struct gpu_program *progs[2] = {NULL, NULL};
     for (int pass = 0; pass < (cells ? 2 : 1); pass++) {
-        snprintf(defines, sizeof(defines), "%s%s%s%s%s%s%s%s%s#define PASS %d\n", light_defines,
+        snprintf(defines, sizeof(defines), "%s%s%s%s%s%s%s%s%s%s#define PASS %d\n",
+                 light_defines, grid3_stretched(&r->grid) ? "#define STRETCHED 1\n" : "",
                  opaque ? "#define OPAQUE 1\n" : "", phase,
                  s->no_ground_shadow ? "#define GROUND_SHADOW 0\n" : "",
                  r->have_tint ? "#define TINT 1\n" : "", temporal ? "#define TEMPORAL 1\n" : "",

@@ -272,7 +272,8 @@ struct render_cells {
 };
 
 struct render_cells_programs {
-    struct gpu_program build[2]; /* level 0 of one volume, of two (TEMPORAL) */
+    struct gpu_program build[4]; /* level 0 of one volume, of two (TEMPORAL, bit 0); on a
+                                    stretched grid (STRETCHED, bit 1) */
     struct gpu_program reduce;
 };
 
@@ -280,11 +281,21 @@ bool render_cells_programs_init(struct render_cells_programs *p);
 void render_cells_programs_finish(struct render_cells_programs *p);
 /* The levels' sizes for a volume of N voxels and cells of CELL_VOXELS (no GL; for tests). */
 void render_cells_layout(const int n[3], int cell_voxels, struct render_cells *c);
-/* Builds C (reusing its buffer when the size matches) from BETA, with NEXT (may be NULL, else
- * of BETA's size) the larger of the two.  False (logged) when the buffer cannot be made. */
+/* Builds C (reusing its buffer when the size matches) from BETA on GRID, with NEXT (may be
+ * NULL, else of BETA's size) the larger of the two.  Cells are even in height (cell_voxels
+ * times the mean level thickness): on a stretched grid each reads the levels it overlaps.
+ * False (logged) when the buffer cannot be made. */
 bool render_cells_build(struct render_cells *c, const struct render_cells_programs *p,
-                        const struct gpu_texture *beta, const struct gpu_texture *next);
+                        const struct gpu_texture *beta, const struct gpu_texture *next,
+                        const struct grid3 *grid);
 void render_cells_finish(struct render_cells *c);
+/* A stretched GRID's height table (shaders/zmap.glsl) into TEX (made or remade, RG32F 1-D),
+ * and PROG's (NULL: none) uniforms zmap_n and zmap_inv_height as render_zmap_uniforms sets
+ * them.  Needs the GL context.  False (logged) when the texture cannot be made. */
+bool render_zmap_upload(const struct grid3 *grid, struct gpu_texture *tex,
+                        const struct gpu_program *prog);
+void render_zmap_uniforms(const struct grid3 *grid, const struct gpu_texture *tex,
+                          const struct gpu_program *prog);
 /* Binds C's buffer at storage binding BINDING and sets PROG's uniform cell_size (a level-0
  * cell in metres on GRID). */
 void render_cells_bind(const struct render_cells *c, const struct gpu_program *prog,

@@ -124,7 +124,7 @@ bool effects_measure_volume(const struct ext_volume *vol, const double sun[3],
     double cross = INFINITY;
     for (int a = 0; a < 3; a++) {
         if (fabs(lg.w[a]) > 1e-12)
-            cross = fmin(cross, g->spacing[a] / fabs(lg.w[a]));
+            cross = fmin(cross, (a < 2 ? g->spacing[a] : grid3_min_dz(g)) / fabs(lg.w[a]));
     }
     double len = lg.hi[2] - lg.lo[2];
     int steps = (int)ceil(len / (0.5 * cross));

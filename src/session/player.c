@@ -245,7 +245,7 @@ static bool convert(struct player *p, struct field_volume *fv, const struct look
             } else {
                 int k = level <= g->n[2] ? level - 1 : g->n[2] - 1;
                 for (size_t c = 0; c < plane; c++)
-                    out->slice_surface[i][c] = (float)(g->origin[2] + (k + 0.5) * g->spacing[2]);
+                    out->slice_surface[i][c] = (float)grid3_centre_z(g, k);
             }
         }
     }

@@ -228,6 +228,7 @@ void scene_source_desc(const struct config *cfg, const char **file_ptrs,
     out->file_count = cd->file_count;
     wrf_desc_defaults(&out->wrf);
     out->wrf.levels = cd->levels;
+    out->wrf.native_levels = cd->vertical == DATA_VERTICAL_NATIVE && cd->levels == 0;
     out->wrf.top_m = cd->top_km * 1000.0;
     for (int a = 0; a < 3; a++)
         out->wrf.stride[a] = cd->stride[a];
@@ -263,7 +264,7 @@ void scene_detail_desc(const struct config *cfg, struct detail_desc *out)
 
 bool scene_domain_box(const struct config *cfg, double lo[3], double hi[3])
 {
-    struct grid3 g;
+    struct grid3 g = {0};
     if (cfg->scene.kind == SCENE_DATA) {
         const char *files[CONFIG_MAX_FILES];
         struct data_source_desc desc;

@@ -42,12 +42,36 @@ static void settings_of(const struct config *cfg, struct light_settings *s)
 /* Builds the light map of the scene SETS on the GPU and the CPU and returns the largest
  * |GPU - CPU| of the light; with MULTIPLE the diffuse volume is built and compared too, its
  * largest difference relative to max(1, |CPU|) in *DIFFUSE. */
+static double gpu_vs_cpu_on(const char **sets, int n, bool multiple, double *diffuse,
+                            bool stretched);
+
 static double gpu_vs_cpu(const char **sets, int n, bool multiple, double *diffuse)
+{
+    return gpu_vs_cpu_on(sets, n, multiple, diffuse, false);
+}
+
+/* STRETCHED: the scene's voxels put on uneven levels in the same box (the model's own levels
+ * of a WRF file, data/volume.h): faces at (k / n)^2 of the height, the lowest a sixtieth of a
+ * uniform level's thickness at n = 32, both builds sampling through the height table. */
+static double gpu_vs_cpu_on(const char **sets, int n, bool multiple, double *diffuse,
+                            bool stretched)
 {
     struct config cfg;
     struct ext_volume vol = {0};
     test_config_from(&cfg, sets, n);
-    test_upload_scene(renderer, &cfg, &vol);
+    assert_true(scene_build_volume(&cfg, &vol));
+    if (stretched) {
+        struct grid3 *g = &vol.grid;
+        int nz = g->n[2];
+        double h = nz * g->spacing[2], zc[GRID3_LEVELS_MAX];
+        for (int k = 0; k < nz; k++) {
+            double a = (double)k / nz, b = (double)(k + 1) / nz;
+            zc[k] = g->origin[2] + 0.5 * (a * a + b * b) * h;
+        }
+        assert_true(grid3_set_levels(g, zc, nz, g->origin[2], g->origin[2] + h));
+    }
+    assert_true(renderer_set_volume(renderer, &vol));
+    assert_true(renderer_set_optics(renderer, &cfg.optics.params));
     struct light_settings s;
     settings_of(&cfg, &s);
     s.multiple = multiple;
@@ -123,6 +147,26 @@ static void test_gpu_matches_cpu_storm(void **state)
     double err = gpu_vs_cpu(sets, 2, false, NULL);
     print_message("storm: max |GPU - CPU| = %.3g\n", err);
     assert_true(err <= GPU_CPU_TOLERANCE);
+}
+
+/* The same agreement on a stretched grid: both builds read the volume through the one height
+ * table (shaders/zmap.glsl, light/transport.c), with and without multiple scattering. */
+static void test_gpu_matches_cpu_stretched(void **state)
+{
+    const char *storm[] = {"scene.size=[64,64,32]", "lightmap.resolution=[64,64,64]"};
+    const char *sphere[] = {"scene.kind=sphere", "scene.size=[32,32,32]",
+                            "scene.extent=[10,10,10]", "scene.tau=30", "light.azimuth=60",
+                            "light.elevation=25", "lightmap.resolution=[48,48,64]"};
+    double diffuse = INFINITY;
+    double err = gpu_vs_cpu_on(storm, 2, false, NULL, true);
+    print_message("storm, stretched: max |GPU - CPU| = %.3g\n", err);
+    assert_true(err <= GPU_CPU_TOLERANCE);
+    err = gpu_vs_cpu_on(sphere, 7, true, &diffuse, true);
+    print_message("sphere, stretched, multiple scattering: max |GPU - CPU| light %.3g, "
+                  "diffuse %.3g\n",
+                  err, diffuse);
+    assert_true(err <= GPU_CPU_TOLERANCE);
+    assert_true(diffuse <= GPU_CPU_DIFFUSE_TOLERANCE);
 }
 
 /* Multiple scattering on the same three scenes: the column pass on the GPU
@@ -815,6 +859,7 @@ int main(void)
         cmocka_unit_test(test_gpu_matches_cpu_sphere),
         cmocka_unit_test(test_gpu_matches_cpu_slab),
         cmocka_unit_test(test_gpu_matches_cpu_storm),
+        cmocka_unit_test(test_gpu_matches_cpu_stretched),
         cmocka_unit_test(test_build_keeps_only_the_map),
         cmocka_unit_test(test_gpu_compression_matches_cpu),
         cmocka_unit_test(test_compressed_whole_map),

@@ -63,8 +63,10 @@ static void write_domain(const char *name, const struct grid3 *g, double x0, dou
  * same nest, its attributes saying it starts one parent column further east). */
 static void write_files(void)
 {
-    struct grid3 pg = {{NXP, NXP, NZ}, {DX, DX, DZ}, {0, 0, 0}};
-    struct grid3 ng = {{NNEST * RATIO, NNEST * RATIO, NZ}, {DX / RATIO, DX / RATIO, DZ}, {0, 0, 0}};
+    struct grid3 pg = {.n = {NXP, NXP, NZ}, .spacing = {DX, DX, DZ}, .origin = {0, 0, 0}};
+    struct grid3 ng = {.n = {NNEST * RATIO, NNEST * RATIO, NZ},
+                       .spacing = {DX / RATIO, DX / RATIO, DZ},
+                       .origin = {0, 0, 0}};
     double ex = NXP * DX;
     struct wrf_write_desc pd = {.cen_lat = 25.0,
                                 .cen_lon = -89.0,

@@ -1691,7 +1691,7 @@ static void test_key_and_cache(void **state)
     assert_true(c.node_count > 0);
 
     /* Each input that matters triggers exactly one rebuild. */
-    enum { CHANGES = 12 };
+    enum { CHANGES = 13 };
     struct light_key changed[CHANGES];
     for (int i = 0; i < CHANGES; i++)
         changed[i] = k;
@@ -1708,11 +1708,15 @@ static void test_key_and_cache(void **state)
     changed[9].settings.multiple = true;
     changed[10].settings.cp.water_cs_g += 0.01;
     changed[11].settings.cp.ice_gamma += 0.01;
+    /* The same box on the model's own levels (a stretched grid). */
+    const double zc[8] = {20.0, 60.0, 120.0, 200.0, 300.0, 450.0, 600.0, 750.0};
+    assert_true(grid3_set_levels(&changed[12].box, zc, 8, k.box.origin[2],
+                                 k.box.origin[2] + 8 * k.box.spacing[2]));
     for (int i = 0; i < CHANGES; i++) {
         assert_false(light_key_equal(&k, &changed[i]));
         assert_true(light_key_hash(&k) != light_key_hash(&changed[i]));
         unsigned before = cache.builds;
-        if (i == 7) { /* a different box must come with its volume */
+        if (i == 7 || i == 12) { /* a different box must come with its volume */
             assert_true(light_cache_stale(&cache, &changed[i]));
             continue;
         }

@@ -65,9 +65,10 @@ static void write_pair(const char *name, const struct pair *p_in)
     if (p_in)
         p = *p_in;
     char path[512];
-    struct grid3 pg = {{NXP, NXP, NZ}, {DX, DX, DZ}, {0, 0, 0}};
-    struct grid3 ng = {
-        {p.nnest * RATIO, p.nnest * RATIO, NZ}, {DX / RATIO, DX / RATIO, DZ}, {0, 0, 0}};
+    struct grid3 pg = {.n = {NXP, NXP, NZ}, .spacing = {DX, DX, DZ}, .origin = {0, 0, 0}};
+    struct grid3 ng = {.n = {p.nnest * RATIO, p.nnest * RATIO, NZ},
+                       .spacing = {DX / RATIO, DX / RATIO, DZ},
+                       .origin = {0, 0, 0}};
     double ex = NXP * DX;
     struct wrf_write_desc pd = {.cen_lat = 25.0,
                                 .cen_lon = -89.0,
@@ -122,13 +123,13 @@ static void test_compose_layout(void **state)
 {
     (void)state;
     struct nest_layout l = {.count = 2};
-    l.grid = (struct grid3){{12, 12, 2}, {1.0, 1.0, 1.0}, {0, 0, 0}};
+    l.grid = (struct grid3){.n = {12, 12, 2}, .spacing = {1.0, 1.0, 1.0}, .origin = {0, 0, 0}};
     l.place[0] = (struct nest_place){{0, 0}, 3, 0};
     l.place[1] = (struct nest_place){{3, 3}, 1, 3};
     struct field_volume in[2];
     memset(in, 0, sizeof(in));
-    in[0].grid = (struct grid3){{4, 4, 2}, {3.0, 3.0, 1.0}, {0, 0, 0}};
-    in[1].grid = (struct grid3){{9, 9, 2}, {1.0, 1.0, 1.0}, {3, 3, 0}};
+    in[0].grid = (struct grid3){.n = {4, 4, 2}, .spacing = {3.0, 3.0, 1.0}, .origin = {0, 0, 0}};
+    in[1].grid = (struct grid3){.n = {9, 9, 2}, .spacing = {1.0, 1.0, 1.0}, .origin = {3, 3, 0}};
     in[0].q[SPECIES_RAIN] = calloc(32, sizeof(float));
     in[1].q[SPECIES_RAIN] = calloc(162, sizeof(float));
     for (int i = 0; i < 32; i++)
@@ -291,7 +292,9 @@ static void test_attributes_against_latlon(void **state)
     (void)state;
     write_pair("two", NULL);
     /* The nest's lat/lon as written for IPS; its attributes say IPS + 2. */
-    struct grid3 ng = {{NNEST * RATIO, NNEST * RATIO, NZ}, {DX / RATIO, DX / RATIO, DZ}, {0, 0, 0}};
+    struct grid3 ng = {.n = {NNEST * RATIO, NNEST * RATIO, NZ},
+                       .spacing = {DX / RATIO, DX / RATIO, DZ},
+                       .origin = {0, 0, 0}};
     double ex = NXP * DX;
     struct wrf_write_desc nd = {
         .cen_lat = 25.0,
@@ -378,9 +381,9 @@ static void test_single_domain(void **state)
 static void test_three_levels(void **state)
 {
     (void)state;
-    struct grid3 g1 = {{NXP, NXP, NZ}, {DX, DX, DZ}, {0, 0, 0}};
-    struct grid3 g2 = {{18, 18, NZ}, {DX / 3, DX / 3, DZ}, {0, 0, 0}};
-    struct grid3 g3 = {{9, 12, NZ}, {DX / 9, DX / 9, DZ}, {0, 0, 0}};
+    struct grid3 g1 = {.n = {NXP, NXP, NZ}, .spacing = {DX, DX, DZ}, .origin = {0, 0, 0}};
+    struct grid3 g2 = {.n = {18, 18, NZ}, .spacing = {DX / 3, DX / 3, DZ}, .origin = {0, 0, 0}};
+    struct grid3 g3 = {.n = {9, 12, NZ}, .spacing = {DX / 9, DX / 9, DZ}, .origin = {0, 0, 0}};
     double ex = NXP * DX;
     struct wrf_write_desc d1 = {.cen_lat = 25.0,
                                 .cen_lon = -89.0,

@@ -193,7 +193,9 @@ static void test_katrina_grid_point(void **state)
      * float rounding (the volume holds floats). */
     double z = (bk + 0.5) * dz;
     char args[1024];
-    snprintf(args, sizeof(args), "'%s/configs/katrina.cfg' --at %.17g,%.17g,%.17g --step %d",
+    /* (The uniform height grid, whose voxel centres are these.) */
+    snprintf(args, sizeof(args),
+             "'%s/configs/katrina.cfg' --at %.17g,%.17g,%.17g --step %d --set data.vertical=uniform",
              ANVIL_SOURCE_DIR, (double)lat, (double)lon, z, t);
     const char *js = probe_json(args);
     assert_true(strstr(js, "\"valid\": true") != NULL);
@@ -226,7 +228,8 @@ static void test_katrina_grid_point(void **state)
     /* 30 % of the way up to the next voxel centre: linear between the two, as the eye pass
      * samples. */
     double z1 = z + 0.3 * dz;
-    snprintf(args, sizeof(args), "'%s/configs/katrina.cfg' --at %.17g,%.17g,%.17g --step %d",
+    snprintf(args, sizeof(args),
+             "'%s/configs/katrina.cfg' --at %.17g,%.17g,%.17g --step %d --set data.vertical=uniform",
              ANVIL_SOURCE_DIR, (double)lat, (double)lon, z1, t);
     js = probe_json(args);
     double cloud1 = mapped(&c, qc, z + dz);
@@ -273,7 +276,8 @@ static void test_lambert_wind_turned(void **state)
     double ug = mapped(&c, u, z), vg = mapped(&c, v, z);
     CHECK(nc_close(nc));
     char args[1024];
-    snprintf(args, sizeof(args), "'%s' --at %.17g,%.17g,%.17g", path, (double)lat, (double)lon, z);
+    snprintf(args, sizeof(args), "'%s' --at %.17g,%.17g,%.17g --set data.vertical=uniform", path,
+             (double)lat, (double)lon, z);
     const char *js = probe_json(args);
     assert_true(strstr(js, "\"earth_relative\": true") != NULL);
     assert_true(fabs(json_number(js, "u_m_s") - (ug * ca - vg * sa)) < 1e-4);
@@ -463,6 +467,7 @@ static void test_histogram_counts(void **state)
         struct wrf_desc d;
         wrf_desc_defaults(&d);
         d.qvapor = true;
+        d.native_levels = true; /* as the config (data.vertical's default) */
         d.temperature = pass == 1;
         struct field_volume fv;
         log_set_level(LOG_ERROR);

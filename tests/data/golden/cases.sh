@@ -6,8 +6,10 @@
 # four loops of old; menu.pfm again when panels came to show their own sRGB colours under the
 # Reinhard tone mapping (they had been made for an older 1 - exp(-x) one), and when the menu
 # gained its Probe page and Save view button, its Layers and Slices pages, and the Time page's
-# Frame button.  The data cases keep the cameras they were made with (a scene of data without
-# a camera is framed), the tracked displays their navigation.
+# Frame button.  katrina.pfm is on uniform levels, as it was made; katrina-native.pfm, made
+# when the model's own levels became the default, on those.  The data cases keep the cameras
+# they were made with (a scene of data without a camera is framed), the tracked displays their
+# navigation.
 #   sh tests/data/golden/cases.sh ANVIL_BINARY SOURCE_DIR OUT_DIR
 set -e
 anvil=$1
@@ -18,7 +20,11 @@ small="--set render.width=64 --set render.height=48"
 "$anvil" render -q "$src/configs/default.cfg" $small -o "$out/default.pfm"
 "$anvil" render -q "$src/configs/katrina.cfg" $small --set 'camera.position=[-60,-120,90]' \
     --set 'camera.target=[240,240,0]' --set camera.fov=45 --set camera.far=5000 \
-    -o "$out/katrina.pfm"
+    --set data.vertical=uniform -o "$out/katrina.pfm"
+# The same on the model's own levels (data.vertical's default since they came).
+"$anvil" render -q "$src/configs/katrina.cfg" $small --set 'camera.position=[-60,-120,90]' \
+    --set 'camera.target=[240,240,0]' --set camera.fov=45 --set camera.far=5000 \
+    -o "$out/katrina-native.pfm"
 # The tracked displays keep the navigation they were made with (without one the domain is fitted
 # to the room).
 "$anvil" render -q "$src/configs/default.cfg" --set render.height=32 \
