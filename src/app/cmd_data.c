@@ -227,6 +227,10 @@ static int info_hgrid(enum hgrid_kind kind, const char *const *paths, int count,
                "levels)\n",
                ng.n[2], grid3_centre_z(&ng, 0), grid3_centre_z(&ng, ng.n[2] - 1),
                grid3_min_dz(&ng));
+    else if (m->stretched)
+        printf("  own levels  not kept (more than %d, or a level on the lowest or highest face): "
+               "the even levels\n",
+               GRID3_LEVELS_MAX);
     printf("  variables  ");
     for (int v = 0; v < HGRID_VAR_COUNT; v++)
         if (m->field[v].varid >= 0)

@@ -1058,7 +1058,10 @@ static void resample(struct reader *r, const float *ml, float *out)
 bool hgrid_native(const struct hgrid *h, bool native_levels)
 {
     const struct hgrid_meta *m = &h->meta;
-    return native_levels && m->stretched && m->nz <= GRID3_LEVELS_MAX;
+    /* A stretched grid's centres lie strictly inside its box: a level on the lowest or
+     * highest face (CF bounds may say so) takes the even levels. */
+    return native_levels && m->stretched && m->nz <= GRID3_LEVELS_MAX &&
+           m->z[0] > m->bottom_m && m->z[m->nz - 1] < m->top_m;
 }
 
 void hgrid_grid(const struct hgrid *h, bool native_levels, struct grid3 *out)
@@ -1072,8 +1075,8 @@ void hgrid_grid(const struct hgrid *h, bool native_levels, struct grid3 *out)
     out->spacing[1] = m->dy;
     out->spacing[2] = (m->top_m - m->bottom_m) / m->nz;
     out->origin[2] = m->bottom_m;
-    /* The faces enclose the levels (checked at open), so the centres fit unless two of them
-     * sit on one face: then the even levels. */
+    /* The faces enclose the levels (checked at open) and hgrid_native keeps them off the
+     * box's faces, so the levels fit. */
     if (hgrid_native(h, native_levels))
         grid3_set_levels(out, m->z, m->nz, m->bottom_m, m->top_m);
 }

@@ -144,8 +144,8 @@ size_t hgrid_step_bytes(const struct hgrid *h, const struct hgrid_desc *d);
  * with NATIVE_LEVELS and uneven levels the file's own (a stretched grid, data/volume.h, its
  * centres the file's heights), else even ones. */
 void hgrid_grid(const struct hgrid *h, bool native_levels, struct grid3 *out);
-/* Whether hgrid_grid with NATIVE_LEVELS keeps the file's own levels: they are uneven and at
- * most GRID3_LEVELS_MAX. */
+/* Whether hgrid_grid with NATIVE_LEVELS keeps the file's own levels: they are uneven, at
+ * most GRID3_LEVELS_MAX, and none on the lowest or highest cell face. */
 bool hgrid_native(const struct hgrid *h, bool native_levels);
 
 /* Reads STEP into OUT (initialised here; finish with field_volume_finish): the species the

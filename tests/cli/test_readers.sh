@@ -163,6 +163,11 @@ if command -v ncgen >/dev/null; then
     check "the levels, not the 2 m height; t2m passed over" stdout_has "variables   rain=qr$"
     check "3 levels from 0 to 600 m" stdout_has "levels      0 to 600 m (even, m)"
     check "g/kg converted" stdout_has "qr  *0 \.\. 1e-06 "
+    # Uneven levels, the lowest on the ground face of its bounds: not a stretched grid's
+    # (whose centres lie inside the box), so the even levels, and info says why.
+    printf 'netcdf face {\ndimensions: x = 2 ; y = 2 ; z = 3 ; nv = 2 ;\nvariables:\n  double x(x) ; x:units = "km" ; x:axis = "X" ;\n  double y(y) ; y:units = "km" ; y:axis = "Y" ;\n  double z(z) ; z:units = "m" ; z:axis = "Z" ; z:bounds = "zb" ;\n  double zb(z, nv) ;\n  float qc(z, y, x) ; qc:standard_name = "mass_fraction_of_cloud_liquid_water_in_air" ;\ndata:\n  x = 0, 1 ; y = 0, 1 ; z = 0, 100, 300 ; zb = 0, 50, 50, 200, 200, 400 ;\n  qc = 0, 0, 0, 0, 1e-4, 1e-4, 1e-4, 1e-4, 0, 0, 0, 0 ;\n}\n' | ncgen -o "$tmp/face.nc"
+    expect_exit 0 "uneven levels, one on a face" "$anvil" info "$tmp/face.nc"
+    check "not kept, said" stdout_has "own levels  not kept (more than 256, or a level on the lowest or highest face): the even levels"
     expect_exit 1 "a wrong unit" "$anvil" info "$tmp/units.nc"
     check "variable and unit named" stderr_has "units.nc: variable qr: units \"furlongs\" are not a unit of rain"
     expect_exit 1 "a wrong unit, render" "$anvil" render --set scene.kind=data \
