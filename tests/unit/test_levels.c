@@ -1,6 +1,7 @@
 /* The model's own vertical levels (data.vertical = native): the stretched grid's height
  * mapping, a synthetic WRF file's thin layer read where the model put it, and the CPU
- * reference's transmittance through it; the uniform 439 m grid misses it. */
+ * reference's transmittance through it; the uniform 439 m grid misses it.  The same layer in
+ * CM1 and CF files kept on the file's own heights, values copied. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
