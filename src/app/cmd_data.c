@@ -215,10 +215,22 @@ static int info_hgrid(enum hgrid_kind kind, const char *const *paths, int count,
         printf("  origin      first column at x %.6g km, y %.6g km in the file (placed at the "
                "volume's west and south edge)\n",
                m->x0 / 1e3, m->y0 / 1e3);
-    printf("  levels      %.6g to %.6g m (%s%s, %s), resampled onto %d even levels of %.4g m\n",
+    printf("  levels      %.6g to %.6g m (%s%s, %s), uniform grid: %d even levels of %.4g m\n",
            m->bottom_m, m->top_m, m->stretched ? "stretched" : "even",
            m->reversed ? ", stored top down" : "", m->z_units, m->nz,
            (m->top_m - m->bottom_m) / m->nz);
+    struct grid3 ng;
+    hgrid_grid(h, true, &ng);
+    if (grid3_stretched(&ng))
+        printf("  own levels  %d, centres %.0f to %.0f m, the thinnest %.0f m, kept as they are "
+               "(data.vertical = \"native\", the default; \"uniform\" or data.levels: the even "
+               "levels)\n",
+               ng.n[2], grid3_centre_z(&ng, 0), grid3_centre_z(&ng, ng.n[2] - 1),
+               grid3_min_dz(&ng));
+    else if (m->stretched)
+        printf("  own levels  not kept (more than %d, or a level on the lowest or highest face): "
+               "the even levels\n",
+               GRID3_LEVELS_MAX);
     printf("  variables  ");
     for (int v = 0; v < HGRID_VAR_COUNT; v++)
         if (m->field[v].varid >= 0)
@@ -423,7 +435,7 @@ static void synth_usage(FILE *out)
     fprintf(out, "usage: anvil synth -o OUT.nc [--format wrf|cm1|cf] [--size NXxNYxNZ]\n"
                  "                   [--steps N] [--extent XxYxZ] [--seed N]\n"
                  "                   [--start YYYY-MM-DD_hh:mm:ss] [--interval MIN]\n"
-                 "                   [--center LAT,LON]\n"
+                 "                   [--center LAT,LON] [--stretch R]\n"
                  "                   [--nest NEST.nc [--nest-ratio R] [--nest-box I,J,NI,NJ]\n"
                  "                    [--nest-latlon]]\n"
                  "  Writes the procedural storm as WRF-convention NetCDF (or CM1's convention,\n"
@@ -433,7 +445,9 @@ static void synth_usage(FILE *out)
                  "  --nest also writes a WRF nest (GRID_ID 2) of the same storm R times finer\n"
                  "  (default 3) over NI x NJ parent columns from column I, J (1-based; default\n"
                  "  the middle third), with PARENT_ID, I/J_PARENT_START and PARENT_GRID_RATIO\n"
-                 "  (--nest-latlon: without them, placed by its XLAT/XLONG).\n");
+                 "  (--nest-latlon: without them, placed by its XLAT/XLONG).\n"
+                 "  --stretch R (cm1, cf): stretched levels over the same height, each R times\n"
+                 "  as thick as the one below (default 1: even).\n");
 }
 
 /* Adds SECONDS to a WRF date (no time zones, proleptic Gregorian). */
@@ -463,9 +477,80 @@ static void date_add(const char *start, double seconds, char out[32])
              (int)(rem / 3600) % 100, (int)(rem / 60 % 60), (int)(rem % 60));
 }
 
-/* The storm in CM1's or CF's convention. */
+/* The stretched levels of --stretch R over GRID's box: each level R times as thick as the one
+ * below (a model's grid finer near the ground); false (logged) when they do not fit. */
+static bool stretch_grid(const struct grid3 *grid, double r, struct grid3 *out)
+{
+    int n = grid->n[2];
+    double h = n * grid->spacing[2], zc[GRID3_LEVELS_MAX];
+    if (n > GRID3_LEVELS_MAX) {
+        log_error("synth: --stretch: %d levels, at most %d on a stretched grid", n,
+                  GRID3_LEVELS_MAX);
+        return false;
+    }
+    double total = 0.0, below = 0.0, t = 1.0;
+    for (int k = 0; k < n; k++, t *= r)
+        total += t;
+    t = 1.0;
+    for (int k = 0; k < n; k++, t *= r) {
+        zc[k] = grid->origin[2] + h * (below + 0.5 * t) / total;
+        below += t;
+    }
+    if (h / total < DATA_SPACING_MIN_M) {
+        log_error("synth: --stretch %g: the lowest level %g m thick, expected at least %g m", r,
+                  h / total, DATA_SPACING_MIN_M);
+        return false;
+    }
+    *out = *grid;
+    return grid3_set_levels(out, zc, n, grid->origin[2], grid->origin[2] + h);
+}
+
+/* V's arrays from its (uniform) grid onto the stretched grid TO of the same box and columns:
+ * each column linear in height between the uniform levels (the file then holds these). */
+static bool stretch_fields(struct field_volume *v, const struct grid3 *to)
+{
+    const struct grid3 *g = &v->grid;
+    size_t plane = (size_t)g->n[0] * g->n[1], cells = grid3_count(g);
+    float **arrays[SPECIES_COUNT + 3];
+    int count = 0;
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        arrays[count++] = &v->q[f];
+    arrays[count++] = &v->qvapor;
+    arrays[count++] = &v->temperature;
+    arrays[count++] = &v->rho_air;
+    for (int a = 0; a < count; a++) {
+        float *src = *arrays[a];
+        if (!src)
+            continue;
+        float *dst = malloc(cells * sizeof(float));
+        if (!dst) {
+            log_error("synth: out of memory");
+            return false;
+        }
+        for (int k = 0; k < g->n[2]; k++) {
+            double u = grid3_z_to_voxel(g, grid3_centre_z(to, k)) - 0.5;
+            int k0 = (int)floor(u);
+            double w = u - k0;
+            if (k0 < 0)
+                k0 = 0, w = 0.0;
+            if (k0 >= g->n[2] - 1)
+                k0 = g->n[2] - 1, w = 0.0;
+            int k1 = k0 + 1 < g->n[2] ? k0 + 1 : k0;
+            for (size_t c = 0; c < plane; c++)
+                dst[c + plane * k] = (float)((1.0 - w) * src[c + plane * k0] +
+                                             w * src[c + plane * k1]);
+        }
+        free(src);
+        *arrays[a] = dst;
+    }
+    v->grid = *to;
+    return true;
+}
+
+/* The storm in CM1's or CF's convention (on stretched levels with STRETCH > 1). */
 static int synth_hgrid(enum hgrid_kind kind, const char *out, struct synth_desc *sd, int steps,
-                       const char *start, double interval_min, double lat, double lon)
+                       const char *start, double interval_min, double lat, double lon,
+                       double stretch)
 {
     struct hgrid_write_desc wd = {.kind = kind, .start = start, .cen_lat = lat, .cen_lon = lon};
     struct hgrid_writer *w = NULL;
@@ -473,6 +558,13 @@ static int synth_hgrid(enum hgrid_kind kind, const char *out, struct synth_desc 
         sd->time = steps > 1 ? (double)s / (steps - 1) : 0.0;
         struct field_volume fv;
         if (!synth_storm_fields(sd, &fv)) {
+            hgrid_writer_destroy(w);
+            return EXIT_BAD_INPUT;
+        }
+        struct grid3 sg;
+        if (stretch > 1.0 && (!stretch_grid(&fv.grid, stretch, &sg) ||
+                              !stretch_fields(&fv, &sg))) {
+            field_volume_finish(&fv);
             hgrid_writer_destroy(w);
             return EXIT_BAD_INPUT;
         }
@@ -570,6 +662,7 @@ int cmd_synth(int argc, char **argv)
     const char *out = NULL, *start = "2000-01-01_00:00:00";
     int size[3] = {128, 128, 64}, steps = 1;
     double extent_km[3] = {60.0, 60.0, 16.0}, interval_min = 10.0, lat = 25.0, lon = -89.0;
+    double stretch = 1.0;
     unsigned seed = 1;
     int format = 0; /* 0 WRF, 1 + enum hgrid_kind */
     const char *nest = NULL;
@@ -638,6 +731,13 @@ int cmd_synth(int argc, char **argv)
                 log_error("synth: --interval %s: expected minutes > 0", v);
                 return EXIT_USAGE;
             }
+        } else if (!strcmp(a, "--stretch")) {
+            if (sscanf(v, "%lf%c", &stretch, &tail) != 1 || !(stretch >= 1.0 && stretch <= 2.0)) {
+                log_error("synth: --stretch %s: expected a ratio from 1 to 2 (each level that "
+                          "many times as thick as the one below)",
+                          v);
+                return EXIT_USAGE;
+            }
         } else if (!strcmp(a, "--nest")) {
             nest = v;
         } else if (!strcmp(a, "--nest-ratio")) {
@@ -692,9 +792,14 @@ int cmd_synth(int argc, char **argv)
                   format == 1 + HGRID_CM1 ? "cm1" : "cf");
         return EXIT_USAGE;
     }
+    if (stretch > 1.0 && !format) {
+        log_error("synth: --stretch is for --format cm1 or cf (WRF files have their own eta "
+                  "levels)");
+        return EXIT_USAGE;
+    }
     if (format)
         return synth_hgrid((enum hgrid_kind)(format - 1), out, &sd, steps, start, interval_min,
-                           lat, lon);
+                           lat, lon, stretch);
     if (nest)
         return synth_nest(out, nest, &sd, nest_ratio, nest_box, nest_latlon, steps, start,
                           interval_min, lat, lon);

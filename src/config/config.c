@@ -184,8 +184,9 @@ static const struct config_field settings[] = {
              "must match a file and is expanded by the reader (WRF steps ordered by Times)"},
     INT("data.step", data.step, 0, 1000000, 0, "time step to show, counted over all files"),
     ENUM("data.vertical", data.vertical, data_vertical_names, DATA_VERTICAL_NATIVE,
-         "WRF vertical grid: the model's own levels on the domain's mean column (stretched), "
-         "or uniform levels (data.levels > 0 always means uniform)"),
+         "vertical grid: the model's own levels (stretched; WRF: on the domain's mean column, "
+         "CM1 and CF: the file's heights), or uniform levels (data.levels > 0 always means "
+         "uniform)"),
     INT("data.levels", data.levels, 0, 4096, 0,
         "regular height levels to resample to; 0 = as many as the model has (uniform grid) or "
         "the model's own levels (data.vertical = native)"),

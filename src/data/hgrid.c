@@ -921,6 +921,7 @@ struct reader {
     float *raw;
     double *col_z;
     float *col_v;
+    bool native; /* the output grid is the file's own levels */
 };
 
 /* Reads quantity V of the step into RAW (its own, possibly staggered, shape), in SI, with bad
@@ -1030,11 +1031,16 @@ static void to_mass_levels(const struct hgrid_meta *m, const float *raw, int sta
     }
 }
 
-/* Each column of ML (mass levels) onto the output grid OUT (nz even levels). */
+/* Each column of ML (mass levels) onto the output grid OUT (nz even levels); on the file's
+ * own levels a copy (the values as the file holds them). */
 static void resample(struct reader *r, const float *ml, float *out)
 {
     const struct hgrid_meta *m = &r->h->meta;
     size_t plane = (size_t)m->nx * m->ny;
+    if (r->native) {
+        memcpy(out, ml, plane * (size_t)m->nz * sizeof(float));
+        return;
+    }
     double dz = (m->top_m - m->bottom_m) / m->nz;
     for (int k = 0; k < m->nz; k++)
         r->col_z[k] = m->z[k];
@@ -1049,7 +1055,16 @@ static void resample(struct reader *r, const float *ml, float *out)
     }
 }
 
-void hgrid_grid(const struct hgrid *h, struct grid3 *out)
+bool hgrid_native(const struct hgrid *h, bool native_levels)
+{
+    const struct hgrid_meta *m = &h->meta;
+    /* A stretched grid's centres lie strictly inside its box: a level on the lowest or
+     * highest face (CF bounds may say so) takes the even levels. */
+    return native_levels && m->stretched && m->nz <= GRID3_LEVELS_MAX &&
+           m->z[0] > m->bottom_m && m->z[m->nz - 1] < m->top_m;
+}
+
+void hgrid_grid(const struct hgrid *h, bool native_levels, struct grid3 *out)
 {
     const struct hgrid_meta *m = &h->meta;
     memset(out, 0, sizeof(*out));
@@ -1060,6 +1075,10 @@ void hgrid_grid(const struct hgrid *h, struct grid3 *out)
     out->spacing[1] = m->dy;
     out->spacing[2] = (m->top_m - m->bottom_m) / m->nz;
     out->origin[2] = m->bottom_m;
+    /* The faces enclose the levels (checked at open) and hgrid_native keeps them off the
+     * box's faces, so the levels fit. */
+    if (hgrid_native(h, native_levels))
+        grid3_set_levels(out, m->z, m->nz, m->bottom_m, m->top_m);
 }
 
 bool hgrid_read_step(struct hgrid *h, int step, const struct hgrid_desc *d,
@@ -1088,7 +1107,8 @@ bool hgrid_read_step(struct hgrid *h, int step, const struct hgrid_desc *d,
                        .index = h->steps[step].index, .stats = stats};
     if (!data_nc_still_whole(r.f->path, &r.f->layout))
         return false;
-    hgrid_grid(h, &out->grid);
+    hgrid_grid(h, d->native_levels, &out->grid);
+    r.native = grid3_stretched(&out->grid);
     size_t cells = grid3_count(&out->grid);
     size_t raw_n = (size_t)(m->nx + 1) * (m->ny + 1) * (m->nz + 1);
     r.raw = malloc(raw_n * sizeof(float));

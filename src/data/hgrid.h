@@ -4,8 +4,10 @@
  * variable of a file is which quantity, in which units and on which (staggered) dimensions;
  * this part orders the time steps of one or many files, checks that the files agree, and reads
  * a step into a struct field_volume on the regular height grid WRF steps are read onto:
- * mass ratios in kg/kg, absolute temperature, wind speed and air density, each column
- * resampled from the file's levels (which may be stretched) as wrf_resample_column does it.
+ * mass ratios in kg/kg, absolute temperature, wind speed and air density, on the file's own
+ * levels where they are uneven and the caller asks for them (copied, no column resampled:
+ * the levels are the same in every column), else each column resampled from the file's
+ * levels onto even ones as wrf_resample_column does it.
  *
  * Every file is opened through data_nc_open (the header checked before netcdf-c reads it), a
  * step is refused when its arrays exceed the memory budget, and grids outside the plausible
@@ -127,6 +129,7 @@ struct hgrid_desc {
     bool qvapor, temperature, wind;
     bool wind_components; /* with WIND: also keep u, v and w (field_volume u, v, w) */
     bool no_density;
+    bool native_levels; /* uneven levels stay the file's own (hgrid_grid) */
 };
 
 struct hgrid_stats {
@@ -137,9 +140,13 @@ struct hgrid_stats {
 size_t hgrid_step_bytes(const struct hgrid *h, const struct hgrid_desc *d);
 
 /* The grid hgrid_read_step puts every step on, from the files' coordinates (no step read):
- * nx x ny columns of dx x dy from (0, 0), nz even levels from the lowest to the highest cell
- * face. */
-void hgrid_grid(const struct hgrid *h, struct grid3 *out);
+ * nx x ny columns of dx x dy from (0, 0), nz levels from the lowest to the highest cell face:
+ * with NATIVE_LEVELS and uneven levels the file's own (a stretched grid, data/volume.h, its
+ * centres the file's heights), else even ones. */
+void hgrid_grid(const struct hgrid *h, bool native_levels, struct grid3 *out);
+/* Whether hgrid_grid with NATIVE_LEVELS keeps the file's own levels: they are uneven, at
+ * most GRID3_LEVELS_MAX, and none on the lowest or highest cell face. */
+bool hgrid_native(const struct hgrid *h, bool native_levels);
 
 /* Reads STEP into OUT (initialised here; finish with field_volume_finish): the species the
  * files hold (others NULL: zero), density (from the file's density, else from pressure and

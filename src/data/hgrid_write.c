@@ -76,11 +76,27 @@ struct hgrid_writer *hgrid_writer_create(const char *path, const struct grid3 *g
     return w;
 }
 
+/* Height of level K's centre (or of its lower face when FACE: half way between the centres
+ * on a stretched grid, the box's bottom and top at the ends), m. */
+static double level_z(const struct grid3 *g, int k, bool face)
+{
+    if (!grid3_stretched(g))
+        return g->origin[2] + (face ? k : k + 0.5) * g->spacing[2];
+    if (!face)
+        return grid3_centre_z(g, k);
+    if (k <= 0)
+        return g->origin[2];
+    if (k >= g->n[2])
+        return g->origin[2] + g->n[2] * g->spacing[2];
+    return 0.5 * (grid3_centre_z(g, k - 1) + grid3_centre_z(g, k));
+}
+
 /* Coordinate of point I on axis A (centres, or faces when FACE), in the file's units. */
 static double coord(const struct hgrid_writer *w, int a, double i, bool face)
 {
     const struct grid3 *g = &w->grid;
-    double m = g->origin[a] + (face ? i : i + 0.5) * g->spacing[a];
+    double m = a == 2 ? level_z(g, (int)i, face)
+                      : g->origin[a] + (face ? i : i + 0.5) * g->spacing[a];
     bool cf = w->desc.kind == HGRID_CF;
     if (cf && w->desc.latlon && a < 2) {
         double span_deg = g->spacing[a] / GEO_EARTH_RADIUS_M * 180.0 / M_PI;
@@ -242,7 +258,7 @@ static void fill(const struct hgrid_writer *w, const struct field_volume *v, int
                 size_t j = cf && w->desc.north_first ? n[1] - 1 - jw : jw;
                 double x = g->origin[0] + (i + (k == W_U && !cf ? 0.0 : 0.5)) * g->spacing[0];
                 double y = g->origin[1] + (j + (k == W_V && !cf ? 0.0 : 0.5)) * g->spacing[1];
-                double z = g->origin[2] + (lev + (k == W_W && !cf ? 0.0 : 0.5)) * g->spacing[2];
+                double z = level_z(g, (int)lev, k == W_W && !cf);
                 double val = 0.0, t, p;
                 if (k < SPECIES_COUNT || k == W_QV) {
                     const float *q = k == W_QV ? v->qvapor : v->q[k];

@@ -9,7 +9,8 @@
  * time in seconds.  CF: dimensions time, z, y, x with x, y, z (and z_bnds) coordinates, the
  * species and specific humidity by standard_name, air_temperature, air_pressure and the wind
  * components on the mass points; time in seconds since the start date.  The levels are the
- * volume's cell centres, so a reader gets the mass ratios back exactly.
+ * volume's cell centres (a stretched grid's own level centres, its faces half way between
+ * them), so a reader gets the mass ratios back exactly.
  *
  * No GL, no config.  NetCDF calls hold data_nc_lock.
  */

@@ -229,7 +229,8 @@ static bool load_fields(struct data_source *s, int step, bool qvapor, bool tempe
                                 .temperature = temperature || s->desc.wrf.temperature,
                                 .wind = wind || components || s->desc.wrf.wind,
                                 .wind_components = components,
-                                .no_density = s->desc.wrf.no_density};
+                                .no_density = s->desc.wrf.no_density,
+                                .native_levels = s->desc.wrf.native_levels};
         return hgrid_read_step(s->hg, step, &hd, out, NULL);
     }
     if (s->ext) {
@@ -343,7 +344,7 @@ bool data_source_grid(const struct data_source *s, struct grid3 *out)
         break;
     case DATA_SOURCE_CM1:
     case DATA_SOURCE_CF:
-        hgrid_grid(s->hg, out);
+        hgrid_grid(s->hg, s->desc.wrf.native_levels, out);
         break;
     }
     double k = s->desc.height_scale > 0.0 ? s->desc.height_scale : 1.0;

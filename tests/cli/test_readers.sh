@@ -1,8 +1,9 @@
 #!/bin/bash
 # CM1, CF and Isabel from the command line: synthetic files through `info` (grid, times,
 # variables) and `render` (non-blank, the same picture as the WRF synth file of the same
-# storm); wrong units and non-monotone heights are one message and exit 1; a folder of Isabel
-# bricks through `info` and `render`, placed on the contest's lat/lon box with no map block.
+# storm); stretched levels kept (info, render); wrong units and non-monotone heights are one
+# message and exit 1; a folder of Isabel bricks through `info` and `render`, placed on the
+# contest's lat/lon box with no map block.
 # Arguments: ANVIL_BINARY SOURCE_DIR SHARED_DATA_DIR.  Exits 77 when no GL context exists.
 . "$(dirname "$0")/lib.sh"
 small="--set render.width=96 --set render.height=72 --set lightmap.resolution=[32,32,32]"
@@ -82,6 +83,37 @@ else
     fail=1
 fi
 
+# Stretched levels (each 1.15 times as thick as the one below, CM1 zh/zf and CF z/z_bnds):
+# info names the own levels; `render FILE` keeps them (data.vertical = "native", the
+# default), and its picture differs from the even levels' ("uniform").
+for fmt in cm1 cf; do
+    expect_exit 0 "synth --format $fmt --stretch 1.15" "$anvil" synth --format $fmt $size \
+        --stretch 1.15 -o "$tmp/s$fmt.nc"
+    expect_exit 0 "info on stretched $fmt" "$anvil" info "$tmp/s$fmt.nc"
+    check "$fmt: stretched" stdout_has "levels      0 to 16000 m (stretched, "
+    check "$fmt: own levels said" stdout_has "own levels  16, centres 144 to 14[0-9]* m, the thinnest 298 m, kept as they are"
+    expect_exit 0 "render stretched $fmt" "$anvil" render "$tmp/s$fmt.nc" $small $flat \
+        -o "$tmp/s$fmt.pfm"
+    expect_exit 0 "render stretched $fmt, uniform" "$anvil" render "$tmp/s$fmt.nc" $small $flat \
+        --set data.vertical=uniform -o "$tmp/u$fmt.pfm"
+    expect_exit 0 "render stretched $fmt to PNG" "$anvil" render "$tmp/s$fmt.nc" $small $flat \
+        -o "$tmp/s$fmt.png"
+    check "$fmt: a PNG" test -s "$tmp/s$fmt.png"
+    if [ -f "$tmp/s$fmt.pfm" ] && [ -f "$tmp/u$fmt.pfm" ] && [ -f "$tmp/clear.pfm" ]; then
+        storm=$(pfm "$tmp/clear.pfm" "$tmp/s$fmt.pfm")
+        du=$(pfm "$tmp/s$fmt.pfm" "$tmp/u$fmt.pfm")
+        echo "stretched $fmt: against a clear sky $storm, own levels against even ones $du"
+        check "$fmt: the stretched picture is not blank" python3 -c "import sys; sys.exit(0 if $storm > 0.05 else 1)"
+        check "$fmt: own levels are not the even ones" python3 -c "import sys; sys.exit(0 if $du > 1e-3 else 1)"
+    fi
+done
+expect_exit 0 "synth --format cm1 --stretch 1 (even)" "$anvil" synth --format cm1 $size \
+    --stretch 1 -o "$tmp/e1.nc"
+expect_exit 0 "info on it" "$anvil" info "$tmp/e1.nc"
+check "even: no own levels" sh -c "! grep -q 'own levels' '$tmp/out'"
+expect_exit 2 "synth --stretch for WRF" "$anvil" synth $size --stretch 1.1 -o "$tmp/x.nc"
+expect_exit 2 "synth --stretch 3" "$anvil" synth --format cm1 $size --stretch 3 -o "$tmp/x.nc"
+
 # The probe's wind from CM1's staggered u, v, w and CF's eastward_wind, northward_wind and
 # upward_air_velocity: the same storm, so the same speed and direction.
 placed="--set map.use_origin=true --set map.origin=[30.0,-75.0]"
@@ -94,6 +126,15 @@ for f in c f; do
     grep "wind" "$tmp/out" >"$tmp/wind.$fmt"
 done
 check "CM1 and CF: the same wind" cmp "$tmp/wind.cm1" "$tmp/wind.cf"
+# On stretched levels too (the probe samples through the levels' height mapping).
+for fmt in cm1 cf; do
+    expect_exit 0 "probe stretched $fmt" "$anvil" probe --set scene.kind=data \
+        --set data.format=$fmt --set "data.files=[\"$tmp/s$fmt.nc\"]" $placed \
+        --at 30.05,-74.95,3000 --quiet
+    check "$fmt stretched: the wind" stdout_has "wind           [0-9.]* m/s from [0-9]* deg$"
+    grep "wind" "$tmp/out" >"$tmp/swind.$fmt"
+done
+check "CM1 and CF stretched: the same wind" cmp "$tmp/swind.cm1" "$tmp/swind.cf"
 
 # Bad input: a unit that is not one, heights that turn back.
 cdl() { # UNITS_OF_RAIN HEIGHTS
@@ -122,6 +163,11 @@ if command -v ncgen >/dev/null; then
     check "the levels, not the 2 m height; t2m passed over" stdout_has "variables   rain=qr$"
     check "3 levels from 0 to 600 m" stdout_has "levels      0 to 600 m (even, m)"
     check "g/kg converted" stdout_has "qr  *0 \.\. 1e-06 "
+    # Uneven levels, the lowest on the ground face of its bounds: not a stretched grid's
+    # (whose centres lie inside the box), so the even levels, and info says why.
+    printf 'netcdf face {\ndimensions: x = 2 ; y = 2 ; z = 3 ; nv = 2 ;\nvariables:\n  double x(x) ; x:units = "km" ; x:axis = "X" ;\n  double y(y) ; y:units = "km" ; y:axis = "Y" ;\n  double z(z) ; z:units = "m" ; z:axis = "Z" ; z:bounds = "zb" ;\n  double zb(z, nv) ;\n  float qc(z, y, x) ; qc:standard_name = "mass_fraction_of_cloud_liquid_water_in_air" ;\ndata:\n  x = 0, 1 ; y = 0, 1 ; z = 0, 100, 300 ; zb = 0, 50, 50, 200, 200, 400 ;\n  qc = 0, 0, 0, 0, 1e-4, 1e-4, 1e-4, 1e-4, 0, 0, 0, 0 ;\n}\n' | ncgen -o "$tmp/face.nc"
+    expect_exit 0 "uneven levels, one on a face" "$anvil" info "$tmp/face.nc"
+    check "not kept, said" stdout_has "own levels  not kept (more than 256, or a level on the lowest or highest face): the even levels"
     expect_exit 1 "a wrong unit" "$anvil" info "$tmp/units.nc"
     check "variable and unit named" stderr_has "units.nc: variable qr: units \"furlongs\" are not a unit of rain"
     expect_exit 1 "a wrong unit, render" "$anvil" render --set scene.kind=data \

@@ -17,6 +17,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     struct hgrid_desc d = {.memory_mb = 256.0, .qvapor = true, .temperature = true, .wind = true};
     for (int s = 0; s < hgrid_step_count(h) && s < 4; s++) {
         struct field_volume v;
+        d.native_levels = s % 2 == 0; /* the file's own levels, and the even ones */
         if (hgrid_read_step(h, s, &d, &v, NULL))
             field_volume_finish(&v);
     }

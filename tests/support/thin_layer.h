@@ -10,6 +10,7 @@
 
 #include <stdlib.h>
 
+#include "data/hgrid_write.h"
 #include "data/wrf_write.h"
 
 #define THIN_LAYER_LEVELS 12
@@ -45,6 +46,40 @@ static inline bool thin_layer_write(const char *path)
         ok = wrf_writer_finish(w); /* frees W */
     else
         wrf_writer_destroy(w);
+    field_volume_finish(&v);
+    return ok;
+}
+
+/* The same layer in CM1's or CF's convention (data/hgrid_write.h): its levels the same
+ * centres, its faces half way between them; level k's vapour is (k + 1) 1e-4 kg/kg, so a
+ * reader's values show which level they came from. */
+static inline bool thin_layer_write_hgrid(const char *path, enum hgrid_kind kind)
+{
+    struct grid3 g = {.n = {6, 6, 0}, .spacing = {1000.0, 1000.0, 0.0}};
+    double zc[THIN_LAYER_LEVELS];
+    for (int k = 0; k < THIN_LAYER_LEVELS; k++)
+        zc[k] = 0.5 * (THIN_LAYER_FACES[k] + THIN_LAYER_FACES[k + 1]);
+    if (!grid3_set_levels(&g, zc, THIN_LAYER_LEVELS, 0.0, THIN_LAYER_HEIGHT_M))
+        return false;
+    struct field_volume v = {.grid = g};
+    size_t plane = 36, n = plane * THIN_LAYER_LEVELS;
+    v.q[SPECIES_CLOUD] = calloc(n, sizeof(float));
+    v.qvapor = calloc(n, sizeof(float));
+    if (!v.q[SPECIES_CLOUD] || !v.qvapor) {
+        field_volume_finish(&v);
+        return false;
+    }
+    for (size_t c = 0; c < plane; c++) {
+        v.q[SPECIES_CLOUD][plane * THIN_LAYER_LEVEL + c] = (float)THIN_LAYER_Q;
+        for (int k = 0; k < THIN_LAYER_LEVELS; k++)
+            v.qvapor[plane * k + c] = (float)((k + 1) * 1e-4);
+    }
+    struct hgrid_writer *w = hgrid_writer_create(path, &g, &(struct hgrid_write_desc){.kind = kind});
+    bool ok = w && hgrid_writer_add(w, &v, 0.0);
+    if (ok)
+        ok = hgrid_writer_finish(w); /* frees W */
+    else
+        hgrid_writer_destroy(w);
     field_volume_finish(&v);
     return ok;
 }

@@ -1,6 +1,7 @@
 /* The model's own vertical levels (data.vertical = native): the stretched grid's height
  * mapping, a synthetic WRF file's thin layer read where the model put it, and the CPU
- * reference's transmittance through it; the uniform 439 m grid misses it. */
+ * reference's transmittance through it; the uniform 439 m grid misses it.  The same layer in
+ * CM1 and CF files kept on the file's own heights, values copied. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -10,8 +11,13 @@
 #include "thin_layer.h"
 
 #include "common/log.h"
+#include "data/cf.h"
+#include "data/cm1.h"
 #include "data/extfile.h"
+#include "data/hgrid.h"
+#include "data/hgrid_write.h"
 #include "data/nest.h"
+#include "data/source.h"
 #include "data/volume.h"
 #include "data/wrf.h"
 #include "reference/reference.h"
@@ -92,30 +98,31 @@ static void test_mapping(void **state)
     ext_volume_finish(&ev);
 }
 
-static void test_native_keeps_the_layer(void **state)
+/* The CPU reference's optical depth up the column at (2.5, 3.5) km through EV's lowest
+ * 2 km. */
+static double column_tau(const struct ext_volume *ev)
 {
-    (void)state;
-    struct field_volume fv;
-    struct ext_volume ev;
-    read_layer(true, &fv, &ev);
-    const struct grid3 *g = &fv.grid;
-    assert_int_equal(g->n[2], THIN_LAYER_LEVELS);
-    assert_true(grid3_stretched(g));
-    for (int k = 0; k < THIN_LAYER_LEVELS; k++) /* the model's levels, where it put them */
-        assert_true(fabs(g->z_centre[k] - 0.5 * (THIN_LAYER_FACES[k] + THIN_LAYER_FACES[k + 1])) <
-                    1e-2);
-    size_t plane = 36;
-    for (int k = 0; k < THIN_LAYER_LEVELS; k++)
-        assert_true(fv.q[SPECIES_CLOUD][plane * k + 7] ==
-                    (k == THIN_LAYER_LEVEL ? (float)THIN_LAYER_Q : 0.0f));
-    double tau = layer_tau(&ev);
-    assert_true(tau > 0.5 && tau < 4.0);
-
-    /* The CPU reference: its extinction integrates to tau up a column, and its transmittance
-     * (residual ratio tracking, unbiased) straight down is e^-tau. */
     struct reference_desc rd;
     reference_desc_defaults(&rd);
-    struct reference *ref = reference_create(&ev, &rd);
+    struct reference *ref = reference_create(ev, &rd);
+    assert_non_null(ref);
+    double sum = 0.0, dz = 0.01;
+    for (double z = 0.5 * dz; z < 2000.0; z += dz) {
+        double b[2];
+        reference_beta(ref, (const double[3]){2500.0, 3500.0, z}, b);
+        sum += (b[0] + b[1]) * dz;
+    }
+    reference_destroy(ref);
+    return sum;
+}
+
+/* The CPU reference on EV: its extinction integrates to TAU up a column at the layer's
+ * height, and its transmittance (residual ratio tracking, unbiased) straight down is e^-TAU. */
+static void reference_keeps_the_layer(const struct ext_volume *ev, double tau, const char *what)
+{
+    struct reference_desc rd;
+    reference_desc_defaults(&rd);
+    struct reference *ref = reference_create(ev, &rd);
     assert_non_null(ref);
     double sum = 0.0, dz = 0.01, cloud_lo = 1e9, cloud_hi = -1e9;
     for (double z = 0.5 * dz; z < 1000.0; z += dz) {
@@ -138,9 +145,31 @@ static void test_native_keeps_the_layer(void **state)
         tr += reference_transmittance(ref, (const double[3]){2500.0, 3500.0, 6000.0},
                                       (const double[3]){0.0, 0.0, -1.0}, 0.0, 1e4, &rng);
     tr /= paths;
-    print_message("native: tau %.4f, reference T %.5f, e^-tau %.5f\n", tau, tr, exp(-tau));
+    print_message("%s: tau %.4f, reference T %.5f, e^-tau %.5f\n", what, tau, tr, exp(-tau));
     assert_true(fabs(tr - exp(-tau)) < 1e-3);
     reference_destroy(ref);
+}
+
+static void test_native_keeps_the_layer(void **state)
+{
+    (void)state;
+    struct field_volume fv;
+    struct ext_volume ev;
+    read_layer(true, &fv, &ev);
+    const struct grid3 *g = &fv.grid;
+    assert_int_equal(g->n[2], THIN_LAYER_LEVELS);
+    assert_true(grid3_stretched(g));
+    for (int k = 0; k < THIN_LAYER_LEVELS; k++) /* the model's levels, where it put them */
+        assert_true(fabs(g->z_centre[k] - 0.5 * (THIN_LAYER_FACES[k] + THIN_LAYER_FACES[k + 1])) <
+                    1e-2);
+    size_t plane = 36;
+    for (int k = 0; k < THIN_LAYER_LEVELS; k++)
+        assert_true(fv.q[SPECIES_CLOUD][plane * k + 7] ==
+                    (k == THIN_LAYER_LEVEL ? (float)THIN_LAYER_Q : 0.0f));
+    double tau = layer_tau(&ev);
+    assert_true(tau > 0.5 && tau < 4.0);
+
+    reference_keeps_the_layer(&ev, tau, "native");
 
     /* On 439 m uniform levels the layer is smeared over the lowest cell and the next: the
      * optical depth up a column is far from the file's. */
@@ -148,21 +177,127 @@ static void test_native_keeps_the_layer(void **state)
     struct ext_volume eu;
     read_layer(false, &fu, &eu);
     assert_true(fabs(fu.grid.spacing[2] - THIN_LAYER_HEIGHT_M / 14.0) < 0.01); /* PHB in float */
-    ref = reference_create(&eu, &rd);
-    assert_non_null(ref);
-    double su = 0.0;
-    for (double z = 0.5 * dz; z < 2000.0; z += dz) {
-        double b[2];
-        reference_beta(ref, (const double[3]){2500.0, 3500.0, z}, b);
-        su += (b[0] + b[1]) * dz;
-    }
+    double su = column_tau(&eu);
     print_message("uniform 439 m: tau %.4f (file %.4f)\n", su, tau);
     assert_true(fabs(su - tau) > 0.2 * tau);
-    reference_destroy(ref);
     field_volume_finish(&fu);
     ext_volume_finish(&eu);
     field_volume_finish(&fv);
     ext_volume_finish(&ev);
+}
+
+/* The thin layer in CM1's and CF's convention: on the file's own levels (the default) the
+ * grid's levels are the file's and every value is the file's at its level (no column
+ * resampled); the layer keeps its optical depth, which the even levels lose; even levels stay
+ * a plain uniform grid; the data source's grid is the step's, height exaggeration included. */
+static void test_hgrid_native_levels(void **state)
+{
+    (void)state;
+    for (int kind = HGRID_CM1; kind <= HGRID_CF; kind++) {
+        const char *path = test_tmp_path(kind == HGRID_CM1 ? "thin_cm1.nc" : "thin_cf.nc");
+        assert_true(thin_layer_write_hgrid(path, (enum hgrid_kind)kind));
+        const char *files[] = {path};
+        struct hgrid *h = (kind == HGRID_CM1 ? cm1_open : cf_open)(files, 1, 1024.0);
+        assert_non_null(h);
+        assert_true(hgrid_get_meta(h)->stretched);
+        assert_true(hgrid_native(h, true) && !hgrid_native(h, false));
+        struct grid3 g;
+        hgrid_grid(h, true, &g);
+        struct hgrid_desc hd = {.memory_mb = 1024.0, .qvapor = true, .native_levels = true};
+        struct field_volume fv;
+        assert_true(hgrid_read_step(h, 0, &hd, &fv, NULL));
+        assert_true(grid3_equal(&g, &fv.grid)); /* hgrid_grid repeats the step's grid */
+        assert_true(grid3_stretched(&fv.grid));
+        assert_int_equal(fv.grid.n[2], THIN_LAYER_LEVELS);
+        assert_true(fabs(fv.grid.origin[2]) < 1e-3 &&
+                     fabs(fv.grid.origin[2] + THIN_LAYER_LEVELS * fv.grid.spacing[2] -
+                          THIN_LAYER_HEIGHT_M) < 1e-2);
+        size_t plane = 36;
+        for (int k = 0; k < THIN_LAYER_LEVELS; k++) {
+            /* The file's heights (CM1's in km as float) and its values, copied. */
+            assert_true(fabs(fv.grid.z_centre[k] - 0.5 * (THIN_LAYER_FACES[k] +
+                                                          THIN_LAYER_FACES[k + 1])) < 1e-2);
+            assert_true(fv.grid.z_centre[k] == hgrid_get_meta(h)->z[k]);
+            for (size_t c = 0; c < plane; c++) {
+                assert_true(fv.qvapor[plane * k + c] == (float)((k + 1) * 1e-4));
+                assert_true(fv.q[SPECIES_CLOUD][plane * k + c] ==
+                            (k == THIN_LAYER_LEVEL ? (float)THIN_LAYER_Q : 0.0f));
+            }
+        }
+        struct optics_params optics;
+        optics_params_defaults(&optics);
+        struct species_select sel;
+        species_select_defaults(&sel);
+        struct ext_volume ev;
+        assert_true(ext_volume_from_fields(&fv, &optics, &sel, &ev));
+        double tau = layer_tau(&ev);
+        assert_true(tau > 0.5 && tau < 4.0);
+        reference_keeps_the_layer(&ev, tau, kind == HGRID_CM1 ? "CM1 native" : "CF native");
+
+        /* data.vertical = "uniform": 12 even levels of 512 m, the layer smeared. */
+        hd.native_levels = false;
+        struct field_volume fu;
+        struct ext_volume eu;
+        assert_true(hgrid_read_step(h, 0, &hd, &fu, NULL));
+        assert_false(grid3_stretched(&fu.grid));
+        assert_true(fabs(fu.grid.spacing[2] - THIN_LAYER_HEIGHT_M / THIN_LAYER_LEVELS) < 0.01);
+        assert_true(ext_volume_from_fields(&fu, &optics, &sel, &eu));
+        double su = column_tau(&eu);
+        print_message("uniform 512 m: tau %.4f (file %.4f)\n", su, tau);
+        assert_true(fabs(su - tau) > 0.2 * tau);
+        assert_true(ext_volume_max_beta(&eu) < 0.5 * ext_volume_max_beta(&ev));
+
+        /* Through the data source (data_source_grid is the grid the steps load onto), with
+         * the heights exaggerated twice. */
+        struct data_source_desc sd = {.format = kind == HGRID_CM1 ? DATA_SOURCE_CM1
+                                                                  : DATA_SOURCE_CF,
+                                      .files = files, .file_count = 1, .height_scale = 2.0};
+        wrf_desc_defaults(&sd.wrf);
+        sd.wrf.native_levels = true;
+        optics_params_defaults(&sd.optics);
+        species_select_defaults(&sd.select);
+        struct data_source *src = data_source_open(&sd);
+        assert_non_null(src);
+        struct grid3 sg;
+        assert_true(data_source_grid(src, &sg));
+        struct ext_volume es;
+        assert_true(data_source_load(src, 0, &es, NULL, NULL));
+        assert_true(grid3_equal(&sg, &es.grid));
+        assert_true(grid3_stretched(&sg));
+        for (int k = 0; k < THIN_LAYER_LEVELS; k++)
+            assert_true(sg.z_centre[k] == 2.0 * fv.grid.z_centre[k]);
+        /* The column keeps its optical depth (the stretch moves the medium). */
+        size_t v = plane * THIN_LAYER_LEVEL + 2 + 6 * 3;
+        assert_true(fabs((es.beta[2 * v] + es.beta[2 * v + 1]) * 2.0 * 100.0 - tau) <
+                    1e-5 * tau);
+        ext_volume_finish(&es);
+        data_source_close(src);
+
+        ext_volume_finish(&eu);
+        field_volume_finish(&fu);
+        ext_volume_finish(&ev);
+        field_volume_finish(&fv);
+        hgrid_close(h);
+    }
+
+    /* Even levels stay a plain uniform grid on "native" too. */
+    const char *path = test_tmp_path("even_cm1.nc");
+    struct grid3 g = {.n = {4, 4, 5}, .spacing = {1000.0, 1000.0, 200.0}};
+    struct field_volume v = {.grid = g};
+    v.q[SPECIES_CLOUD] = calloc(grid3_count(&g), sizeof(float));
+    assert_non_null(v.q[SPECIES_CLOUD]);
+    struct hgrid_writer *w = hgrid_writer_create(path, &g, &(struct hgrid_write_desc){0});
+    assert_true(w && hgrid_writer_add(w, &v, 0.0) && hgrid_writer_finish(w));
+    field_volume_finish(&v);
+    const char *files[] = {path};
+    struct hgrid *h = cm1_open(files, 1, 1024.0);
+    assert_non_null(h);
+    assert_false(hgrid_native(h, true));
+    struct grid3 eg;
+    hgrid_grid(h, true, &eg);
+    assert_false(grid3_stretched(&eg));
+    assert_true(fabs(eg.spacing[2] - 200.0) < 1e-3);
+    hgrid_close(h);
 }
 
 /* An extinction file written from the model's levels reads back on the same levels. */
@@ -271,6 +406,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mapping),
         cmocka_unit_test(test_native_keeps_the_layer),
+        cmocka_unit_test(test_hgrid_native_levels),
         cmocka_unit_test(test_extinction_file_keeps_the_levels),
         cmocka_unit_test(test_nest_on_the_parents_levels),
     };
