@@ -32,6 +32,7 @@ layout(std430, binding = BIND_LATERAL_BUF_CELLS) readonly buffer macro_cells {
 #endif
 
 uniform ivec3 vol_n;
+uniform int base_z;       // the first level of this dispatch (a build in pieces)
 uniform int axis;         // 0: runs along x, 1: along y
 uniform float spacing;    // metres between voxels along the axis
 uniform float clear_beta; // LIGHT_CLEAR_BETA
@@ -46,7 +47,7 @@ void main()
 {
     // x: the row (y for runs along x, x for runs along y), y: the stretch, z: the level
     int len = vol_n[axis], rows = vol_n[1 - axis];
-    ivec3 id = ivec3(gl_GlobalInvocationID);
+    ivec3 id = ivec3(gl_GlobalInvocationID) + ivec3(0, 0, base_z);
     int start = id.y * SEGMENT;
     if (id.x >= rows || start >= len || id.z >= vol_n.z)
         return;

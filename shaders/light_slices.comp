@@ -57,6 +57,7 @@ uniform vec3 vol_inv_spacing;
 uniform ivec3 grid_n;
 uniform vec3 g_origin, g_du, g_dv, g_dw;
 uniform int substeps;
+uniform int base_z; // the first slice of this dispatch (a build in pieces)
 uniform float dsub; // metres per substep
 
 // Lower index and upper weight along one axis, clamped to the edge voxels (transport.c).
@@ -117,7 +118,7 @@ vec2 sample_voxels(sampler3D tex, vec3 p, bool cells)
 
 void main()
 {
-    ivec3 node = ivec3(gl_GlobalInvocationID);
+    ivec3 node = ivec3(gl_GlobalInvocationID) + ivec3(0, 0, base_z);
     int k = node.z + 1; // the slice ending at plane k
     if (node.x >= grid_n.x || node.y >= grid_n.y || k >= grid_n.z)
         return;

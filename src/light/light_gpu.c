@@ -9,6 +9,33 @@
 #include "light/light_volume_gpu.h"
 #include "shaders/bindings.h"
 
+/* A build in pieces: what it is for, and how far it got.  Each phase's work is cut along the
+ * volume's or the map's planes, every piece the same dispatches the one-piece build makes over
+ * part of the range (an invocation reads nothing another of the same dispatch writes, so the
+ * cut changes no value). */
+enum job_phase { JOB_RATES, JOB_SLICES, JOB_SWEEP, JOB_DIFFUSE, JOB_VOLUME, JOB_COMPRESS,
+                 JOB_DONE };
+
+struct light_gpu_job {
+    bool active;
+    enum job_phase phase;
+    int at;                       /* the first plane (level) of the phase not done yet */
+    struct light_gpu_source src;
+    double sun[3];
+    struct light_settings settings, beam; /* beam: without the columns' diffuse pass */
+    struct light_key key;
+    enum light_gpu_mode mode;
+    bool half, volume, skip, stretched;
+    int substeps;
+    double cpu_ms;                /* CPU time spent in its pieces so far */
+};
+
+/* What one piece of a phase covers: levels of the volume (both passes of the lateral rates),
+ * slices, planes of the sweep. */
+#define JOB_RATE_LEVELS 8 /* a multiple of light_lateral.comp's local_size_z */
+#define JOB_SLICE_PLANES 2
+#define JOB_SWEEP_PLANES 4
+
 struct light_gpu {
     struct render_light hook; /* first: the renderer's bind callback gets it back */
     /* Programs by variant, made on first use (an effect that is off is compiled out): the
@@ -51,6 +78,7 @@ struct light_gpu {
     struct gpu_timings *timing; /* where build times go; NULL: untimed */
     bool last_timed;            /* the last build was timed */
     char defines[64];
+    struct light_gpu_job job;   /* the build under way (light_gpu_build_begin) */
 };
 
 void light_gpu_bind(const struct light_gpu *lg, const struct gpu_program *prog, bool next)
@@ -147,15 +175,20 @@ static const struct gpu_program *diffuse_program(struct light_gpu *lg, bool mix,
 /* Voxels of a row one invocation of light_lateral.comp looks after (its SEGMENT). */
 #define LATERAL_SEGMENT 32
 
-/* The lateral escape rates of the volume (light_lateral.comp): one pass along x, one along
- * y, one invocation per stretch of a row (each walks the runs that start in it). */
-static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src)
+/* Whether the lateral escape rates in LG hold SRC's volume (a new sun, the same volume: the
+ * rates stand). */
+static bool rates_fresh(const struct light_gpu *lg, const struct light_gpu_source *src)
+{
+    return lg->rates.id && memcmp(lg->rates.size, src->grid->n, 3 * sizeof(int)) == 0 &&
+           lg->have_rates && lg->rates_beta == src->beta->id &&
+           lg->rates_volume == src->volume_id && lg->rates_generation == src->generation;
+}
+
+/* Readies the rates texture and its program for a new set of rates. */
+static bool rates_setup(struct light_gpu *lg, const struct light_gpu_source *src)
 {
     const int *n = src->grid->n;
     bool same_size = lg->rates.id && memcmp(lg->rates.size, n, 3 * sizeof(int)) == 0;
-    if (same_size && lg->have_rates && lg->rates_beta == src->beta->id &&
-        lg->rates_volume == src->volume_id && lg->rates_generation == src->generation)
-        return true; /* a new sun, the same volume: the rates stand */
     lg->have_rates = false;
     if (!same_size) {
         gpu_texture_finish(&lg->rates);
@@ -167,23 +200,37 @@ static bool build_rates(struct light_gpu *lg, const struct light_gpu_source *src
     if (!p->id && !gpu_program_init(p, "light_lateral.comp", skip ? "#define SKIP 1\n" : ""))
         return false;
     gpu_texture_clear(&lg->rates);
+    return true;
+}
+
+/* The lateral escape rates of the volume (light_lateral.comp) along AXIS (0: x, 1: y) on
+ * levels FROM .. FROM + COUNT - 1: one invocation per stretch of a row (each walks the runs that
+ * start in it).  Every binding is made again: a frame may have come between two pieces. */
+static void rates_levels(struct light_gpu *lg, const struct light_gpu_source *src, int axis,
+                         int from, int count)
+{
+    const int *n = src->grid->n;
+    bool skip = src->cells && src->cells->levels > 0;
+    const struct gpu_program *p = &lg->lateral_pass[skip ? 1 : 0];
     gpu_uniform_ivec3(p, "vol_n", n);
     gpu_uniform_float(p, "clear_beta", LIGHT_CLEAR_BETA);
     gpu_texture_bind(src->beta, BIND_LATERAL_TEX_BETA);
     gpu_image_bind_rw(&lg->rates, BIND_LATERAL_IMG_RATES);
     if (skip)
         gpu_buffer_bind(&src->cells->buf, BIND_LATERAL_BUF_CELLS);
-    for (int axis = 0; axis < 2; axis++) {
-        gpu_uniform_int(p, "axis", axis);
-        gpu_uniform_float(p, "spacing", (float)src->grid->spacing[axis]);
-        /* rows x stretches of LATERAL_SEGMENT voxels x levels */
-        gpu_dispatch(p, n[1 - axis], (n[axis] + LATERAL_SEGMENT - 1) / LATERAL_SEGMENT, n[2]);
-    }
+    gpu_uniform_int(p, "axis", axis);
+    gpu_uniform_int(p, "base_z", from);
+    gpu_uniform_float(p, "spacing", (float)src->grid->spacing[axis]);
+    /* rows x stretches of LATERAL_SEGMENT voxels x levels */
+    gpu_dispatch(p, n[1 - axis], (n[axis] + LATERAL_SEGMENT - 1) / LATERAL_SEGMENT, count);
+}
+
+static void rates_built(struct light_gpu *lg, const struct light_gpu_source *src)
+{
     lg->have_rates = true;
     lg->rates_beta = src->beta->id;
     lg->rates_volume = src->volume_id;
     lg->rates_generation = src->generation;
-    return true;
 }
 
 /* The sweep's variant for settings S: forward scattering, the peripheral ring, and the
@@ -277,60 +324,94 @@ static bool build_diffuse(struct light_gpu *lg, const double sun[3],
     return true;
 }
 
-static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src,
-                        const double sun[3], const struct light_settings *s, bool half)
+/* The dense build's textures and programs for job J (its beam settings), and its first phase:
+ * the lateral rates when they do not stand, else the slices. */
+static bool job_setup(struct light_gpu *lg, struct light_gpu_job *j)
 {
     const struct light_grid *g = &lg->grid;
-    if (!node_texture(&lg->light, g->n, half ? GPU_R16F : GPU_R32F) ||
+    const struct light_settings *s = &j->beam;
+    const struct light_gpu_source *src = &j->src;
+    if (!node_texture(&lg->light, g->n, j->half ? GPU_R16F : GPU_R32F) ||
         !node_texture(&lg->slice, g->n, s->multiple ? GPU_RGBA32F : GPU_RG32F))
         return false;
     if (!s->multiple)
         gpu_texture_finish(&lg->diffuse);
+    j->phase = JOB_SLICES;
     if (s->multiple && s->lateral) {
-        if (!build_rates(lg, src))
-            return false;
+        if (!rates_fresh(lg, src)) {
+            if (!rates_setup(lg, src))
+                return false;
+            j->phase = JOB_RATES;
+        }
     } else {
         gpu_texture_finish(&lg->rates);
         lg->have_rates = false;
     }
-    bool skip = src->cells && src->cells->levels > 0;
-    bool stretched = grid3_stretched(src->grid);
-    const struct gpu_program *sp = slices_program(lg, s->multiple, s->lateral, skip, stretched);
-    const struct gpu_program *p = build_program(lg, build_variant(s) | (half ? 8 : 0));
+    j->at = 0;
+    j->skip = src->cells && src->cells->levels > 0;
+    j->stretched = grid3_stretched(src->grid);
+    const struct gpu_program *sp =
+        slices_program(lg, s->multiple, s->lateral, j->skip, j->stretched);
+    const struct gpu_program *p = build_program(lg, build_variant(s) | (j->half ? 8 : 0));
     if (!sp || !p)
         return false;
-    int substeps = s->substeps > 0 ? s->substeps : light_auto_substeps(g, src->grid);
+    if (j->stretched && !render_zmap_upload(src->grid, &lg->zmap, sp))
+        return false;
+    j->substeps = s->substeps > 0 ? s->substeps : light_auto_substeps(g, src->grid);
+    return true;
+}
+
+/* The extinction of slices FROM .. FROM + COUNT - 1 (slice k - 1 .. k is slice k - 1): the
+ * costly part, all in parallel. */
+static void slices_range(struct light_gpu *lg, const struct light_gpu_job *j, int from, int count)
+{
+    const struct light_grid *g = &lg->grid;
+    const struct light_settings *s = &j->beam;
+    const struct light_gpu_source *src = &j->src;
+    const struct gpu_program *sp =
+        slices_program(lg, s->multiple, s->lateral, j->skip, j->stretched);
     float vol_origin[3], inv_spacing[3];
     for (int a = 0; a < 3; a++) {
         vol_origin[a] = (float)src->grid->origin[a];
         inv_spacing[a] = (float)(1.0 / src->grid->spacing[a]);
     }
-    /* Every slice's extinction at once: the costly part, all in parallel. */
     gpu_uniform_ivec3(sp, "vol_n", src->grid->n);
     gpu_uniform_vec3(sp, "vol_origin", vol_origin);
     gpu_uniform_vec3(sp, "vol_inv_spacing", inv_spacing);
-    if (stretched) {
-        if (!render_zmap_upload(src->grid, &lg->zmap, sp))
-            return false;
+    if (j->stretched)
         gpu_texture_bind(&lg->zmap, BIND_SLICES_TEX_ZMAP);
-    }
     gpu_uniform_ivec3(sp, "grid_n", g->n);
     gpu_uniform_vec3(sp, "g_origin", g->origin);
     gpu_uniform_vec3(sp, "g_du", g->du);
     gpu_uniform_vec3(sp, "g_dv", g->dv);
     gpu_uniform_vec3(sp, "g_dw", g->dw);
-    gpu_uniform_int(sp, "substeps", substeps);
-    gpu_uniform_float(sp, "dsub", (float)(g->step[2] / substeps));
+    gpu_uniform_int(sp, "substeps", j->substeps);
+    gpu_uniform_float(sp, "dsub", (float)(g->step[2] / j->substeps));
+    gpu_uniform_int(sp, "base_z", from);
     gpu_texture_bind(src->beta, BIND_SLICES_TEX_BETA);
     if (s->multiple && s->lateral)
         gpu_texture_bind(&lg->rates, BIND_SLICES_TEX_RATES);
-    if (skip)
+    if (j->skip)
         gpu_buffer_bind(&src->cells->buf, BIND_SLICES_BUF_CELLS);
     gpu_image_bind(&lg->slice, BIND_SLICES_IMG_SLICE, true);
-    gpu_dispatch(sp, g->n[0], g->n[1], g->n[2] - 1);
+    gpu_dispatch(sp, g->n[0], g->n[1], count);
+}
 
-    /* The sweep: a plane per dispatch with the peripheral ring (it reads the plane before's
-     * neighbours), else every column down to its end in one. */
+/* Whether the sweep may stop between planes without changing a value: with the peripheral ring
+ * it does anyway (a plane per dispatch); else a piece starts from the plane before as stored,
+ * which is the value carried only when the map holds floats. */
+static bool sweep_cuts(const struct light_gpu_job *j)
+{
+    return (j->beam.forward && j->beam.peripheral) || !j->half;
+}
+
+/* The sweep over planes FROM .. FROM + COUNT - 1: a plane per dispatch with the peripheral ring
+ * (it reads the plane before's neighbours), else every column through them in one. */
+static void sweep_range(struct light_gpu *lg, const struct light_gpu_job *j, int from, int count)
+{
+    const struct light_grid *g = &lg->grid;
+    const struct light_settings *s = &j->beam;
+    const struct gpu_program *p = build_program(lg, build_variant(s) | (j->half ? 8 : 0));
     double r = light_peripheral_offset(s->forward_angle_deg, g->step[2]);
     float per[2];
     light_grid_peripheral_taps(g, r, per);
@@ -341,17 +422,100 @@ static bool build_dense(struct light_gpu *lg, const struct light_gpu_source *src
     gpu_uniform_vec2(p, "per_offset", per);
     gpu_texture_bind(&lg->slice, BIND_BUILD_TEX_SLICE);
     gpu_image_bind_rw(&lg->light, BIND_BUILD_IMG_LIGHT);
-    int per_plane = s->forward && s->peripheral ? 1 : g->n[2];
+    int per_plane = s->forward && s->peripheral ? 1 : count;
     gpu_uniform_int(p, "planes", per_plane);
-    for (int k = 0; k < g->n[2]; k += per_plane) {
+    for (int k = from; k < from + count; k += per_plane) {
         gpu_uniform_int(p, "plane", k);
         gpu_dispatch(p, g->n[0], g->n[1], 1);
     }
-    bool ok = !s->multiple || build_diffuse(lg, sun, s, half);
-    /* The scratch served this build only: give its memory back. */
-    gpu_texture_finish(&lg->slice);
-    gpu_texture_finish(&lg->adding);
-    return ok;
+}
+
+static bool build_compressed(struct light_gpu *lg, double epsilon);
+
+/* Advances job J by one piece of its phase (WHOLE: the phase's rest at once, as the one-piece
+ * build does), moving to the next phase when its range is done. */
+static bool job_piece(struct light_gpu *lg, struct light_gpu_job *j, bool whole)
+{
+    const int *gn = lg->grid.n;
+    switch (j->phase) {
+    case JOB_RATES: {
+        int levels = j->src.grid->n[2];
+        int axis = j->at / levels, from = j->at % levels;
+        int count = whole ? levels - from : JOB_RATE_LEVELS;
+        if (count > levels - from)
+            count = levels - from;
+        rates_levels(lg, &j->src, axis, from, count);
+        j->at += count;
+        if (whole && axis == 0) {
+            rates_levels(lg, &j->src, 1, 0, levels);
+            j->at = 2 * levels;
+        }
+        if (j->at >= 2 * levels) {
+            rates_built(lg, &j->src);
+            j->phase = JOB_SLICES;
+            j->at = 0;
+        }
+        return true;
+    }
+    case JOB_SLICES: {
+        int total = gn[2] - 1;
+        int count = whole ? total - j->at : JOB_SLICE_PLANES;
+        if (count > total - j->at)
+            count = total - j->at;
+        if (count > 0)
+            slices_range(lg, j, j->at, count);
+        j->at += count;
+        if (j->at >= total) {
+            j->phase = JOB_SWEEP;
+            j->at = 0;
+        }
+        return true;
+    }
+    case JOB_SWEEP: {
+        int total = gn[2];
+        int count = whole || !sweep_cuts(j) ? total - j->at : JOB_SWEEP_PLANES;
+        if (count > total - j->at)
+            count = total - j->at;
+        sweep_range(lg, j, j->at, count);
+        j->at += count;
+        if (j->at >= total)
+            j->phase = JOB_DIFFUSE;
+        return true;
+    }
+    case JOB_DIFFUSE: {
+        bool ok = !j->beam.multiple || build_diffuse(lg, j->sun, &j->beam, j->half);
+        /* The scratch served this build only: give its memory back. */
+        gpu_texture_finish(&lg->slice);
+        gpu_texture_finish(&lg->adding);
+        j->phase = JOB_VOLUME;
+        return ok;
+    }
+    case JOB_VOLUME: {
+        bool ok = true;
+        if (j->volume)
+            ok = light_volume_gpu_build(&lg->volume, j->src.beta, j->src.grid, &lg->light,
+                                        &lg->grid, &j->settings, NULL);
+        else
+            gpu_texture_finish(&lg->volume.field);
+        j->phase = JOB_COMPRESS;
+        return ok;
+    }
+    case JOB_COMPRESS: {
+        bool ok = true;
+        if (j->mode == LIGHT_GPU_COMPRESSED) {
+            ok = build_compressed(lg, j->settings.epsilon);
+        } else {
+            gpu_buffer_finish(&lg->columns);
+            gpu_buffer_finish(&lg->nodes);
+            lg->compressed_bytes = 0;
+        }
+        j->phase = JOB_DONE;
+        return ok;
+    }
+    case JOB_DONE:
+        break;
+    }
+    return true;
 }
 
 /* Reads the light volume back, and the diffuse one too when WITH_DIFFUSE and it exists. */
@@ -538,6 +702,70 @@ static bool build_compressed(struct light_gpu *lg, double epsilon)
     return true;
 }
 
+/* The key of a build of SETTINGS for SRC and SUN, and whether LG's map is not that. */
+static bool stale_for(struct light_gpu *lg, const struct light_gpu_source *src,
+                      const double sun[3], const struct light_settings *settings,
+                      enum light_gpu_mode mode, struct light_key *key)
+{
+    light_key_init(key, src->grid, sun, src->volume_id, src->generation, settings);
+    return light_cache_stale(&lg->cache, key) || !lg->have_key_mode || lg->built_mode != mode ||
+           lg->built_half != lg->half ||
+           (mode == LIGHT_GPU_COMPRESSED && lg->built_epsilon != settings->epsilon);
+}
+
+/* Starts the job for KEY: the grid, its settings, the textures.  The map held until now is
+ * being overwritten from here on: the cache forgets it. */
+static bool job_start(struct light_gpu *lg, const struct light_gpu_source *src,
+                      const double sun[3], const struct light_settings *settings,
+                      enum light_gpu_mode mode, const struct light_key *key)
+{
+    struct light_gpu_job *j = &lg->job;
+    memset(j, 0, sizeof(*j));
+    light_cache_invalidate(&lg->cache);
+    if (!light_grid_init(&lg->grid, sun, src->grid, settings->resolution, settings->grid))
+        return false;
+    j->src = *src;
+    memcpy(j->sun, sun, sizeof(j->sun));
+    j->settings = *settings;
+    j->key = *key;
+    j->mode = mode;
+    /* Half floats are a storage of the dense map: a compressed build stays in floats. */
+    j->half = lg->half && mode == LIGHT_GPU_DENSE;
+    /* With the diffuse light volume the columns' diffuse pass is not needed: the beam alone,
+     * then the volume from it (before compression frees the dense beam). */
+    j->volume = settings->multiple && settings->volume;
+    j->beam = *settings;
+    if (j->volume)
+        j->beam.multiple = false;
+    if (!job_setup(lg, j))
+        return false;
+    j->active = true;
+    return true;
+}
+
+/* The finished job's map becomes LG's: its key, variant and defines. */
+static void job_finished(struct light_gpu *lg, double cpu_ms)
+{
+    struct light_gpu_job *j = &lg->job;
+    j->active = false;
+    /* The cache keeps the CPU time of the build; the GPU's arrives in the timing log. */
+    light_cache_built(&lg->cache, &j->key, cpu_ms);
+    lg->have_key_mode = true;
+    lg->built_mode = j->mode;
+    lg->built_epsilon = j->settings.epsilon;
+    lg->built_multiple = j->beam.multiple;
+    lg->built_volume = j->volume;
+    lg->built_half = lg->half;
+    snprintf(lg->defines, sizeof(lg->defines), "#define LIGHTMAP %d\n#define MULTIPLE %d\n",
+             j->mode == LIGHT_GPU_DENSE ? 1 : 2, j->volume ? 2 : j->settings.multiple ? 1 : 0);
+}
+
+static void job_failed(struct light_gpu *lg)
+{
+    lg->job.active = false;
+    light_cache_invalidate(&lg->cache);
+}
+
 bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
                       const double sun[3], const struct light_settings *settings,
                       enum light_gpu_mode mode, bool *built)
@@ -545,58 +773,93 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
     if (built)
         *built = false;
     struct light_key key;
-    light_key_init(&key, src->grid, sun, src->volume_id, src->generation, settings);
-    bool stale = light_cache_stale(&lg->cache, &key) || !lg->have_key_mode ||
-                 lg->built_mode != mode || lg->built_half != lg->half ||
-                 (mode == LIGHT_GPU_COMPRESSED && lg->built_epsilon != settings->epsilon);
+    bool stale = stale_for(lg, src, sun, settings, mode, &key);
     if (!stale)
         return true;
-    if (!light_grid_init(&lg->grid, sun, src->grid, settings->resolution, settings->grid))
-        return false;
     double cpu_start = time_now_ms();
     struct gpu_timings *log = lg->timing;
     if (log)
         gpu_timer_queue_begin(&lg->timers);
-    /* Half floats are a storage of the dense map: a compressed build stays in floats. */
-    bool half = lg->half && mode == LIGHT_GPU_DENSE;
-    /* With the diffuse light volume the columns' diffuse pass is not needed: the beam alone,
-     * then the volume from it (before compression frees the dense beam). */
-    bool volume = settings->multiple && settings->volume;
-    struct light_settings beam = *settings;
-    if (volume)
-        beam.multiple = false;
-    bool ok = build_dense(lg, src, sun, &beam, half);
-    if (ok && volume)
-        ok = light_volume_gpu_build(&lg->volume, src->beta, src->grid, &lg->light, &lg->grid,
-                                    settings, NULL);
-    else if (!volume)
-        gpu_texture_finish(&lg->volume.field);
-    if (ok && mode == LIGHT_GPU_COMPRESSED) {
-        ok = build_compressed(lg, settings->epsilon);
-    } else {
-        gpu_buffer_finish(&lg->columns);
-        gpu_buffer_finish(&lg->nodes);
-        lg->compressed_bytes = 0;
-    }
+    /* One piece: every phase whole (a build in pieces under way is dropped). */
+    bool ok = job_start(lg, src, sun, settings, mode, &key);
+    while (ok && lg->job.phase != JOB_DONE)
+        ok = job_piece(lg, &lg->job, true);
     unsigned number = log ? gpu_timer_queue_end(&lg->timers, log) : 0;
     lg->last_timed = number != 0;
     if (!ok) {
-        light_cache_invalidate(&lg->cache);
+        job_failed(lg);
         return false;
     }
-    /* The cache keeps the CPU time of the update; the GPU's arrives in the timing log. */
-    light_cache_built(&lg->cache, &key, time_now_ms() - cpu_start);
-    lg->have_key_mode = true;
-    lg->built_mode = mode;
-    lg->built_epsilon = settings->epsilon;
-    lg->built_multiple = beam.multiple;
-    lg->built_volume = volume;
-    lg->built_half = lg->half;
-    snprintf(lg->defines, sizeof(lg->defines), "#define LIGHTMAP %d\n#define MULTIPLE %d\n",
-             mode == LIGHT_GPU_DENSE ? 1 : 2, volume ? 2 : settings->multiple ? 1 : 0);
+    job_finished(lg, time_now_ms() - cpu_start);
     if (built)
         *built = true;
     return true;
+}
+
+bool light_gpu_build_begin(struct light_gpu *lg, const struct light_gpu_source *src,
+                           const double sun[3], const struct light_settings *settings,
+                           enum light_gpu_mode mode, bool *needed)
+{
+    struct light_key key;
+    bool stale = stale_for(lg, src, sun, settings, mode, &key);
+    struct light_gpu_job *j = &lg->job;
+    if (j->active && light_key_equal(&j->key, &key) && j->mode == mode &&
+        j->half == (lg->half && mode == LIGHT_GPU_DENSE)) {
+        j->src = *src; /* the same volume; its textures may have moved */
+        *needed = true;
+        return true;
+    }
+    *needed = stale;
+    if (!stale) {
+        j->active = false;
+        return true;
+    }
+    if (!job_start(lg, src, sun, settings, mode, &key)) {
+        job_failed(lg);
+        return false;
+    }
+    return true;
+}
+
+bool light_gpu_build_step(struct light_gpu *lg, double budget_ms, bool *done)
+{
+    struct light_gpu_job *j = &lg->job;
+    *done = !j->active;
+    if (!j->active)
+        return true;
+    /* Pieces while the next, as long as the last, still fits: each waited for, so that its
+     * cost is known (on a CPU rasteriser a dispatch runs when flushed). */
+    double t0 = time_now_ms();
+    for (;;) {
+        double t = time_now_ms();
+        bool ok = job_piece(lg, j, false);
+        gpu_finish();
+        double now = time_now_ms();
+        j->cpu_ms += now - t;
+        if (!ok) {
+            job_failed(lg);
+            return false;
+        }
+        if (j->phase == JOB_DONE)
+            break;
+        if (now - t0 + (now - t) > budget_ms)
+            return true;
+    }
+    /* Pieces spread over frames are not timed on the GPU (a query spans one stretch). */
+    lg->last_timed = false;
+    job_finished(lg, j->cpu_ms);
+    *done = true;
+    return true;
+}
+
+bool light_gpu_building(const struct light_gpu *lg)
+{
+    return lg->job.active;
+}
+
+void light_gpu_build_cancel(struct light_gpu *lg)
+{
+    lg->job.active = false;
 }
 
 const struct render_light *light_gpu_render_light(struct light_gpu *lg)

@@ -43,6 +43,23 @@ bool light_gpu_update(struct light_gpu *lg, const struct light_gpu_source *src,
                       const double sun[3], const struct light_settings *settings,
                       enum light_gpu_mode mode, bool *built);
 
+/* The same build in pieces, for building a map between frames while another is shown: the
+ * map is bit-identical to light_gpu_update's.  light_gpu_build_begin starts a build when the key
+ * changed (*NEEDED), or keeps the one under way for the same key (its pieces so far stand;
+ * SRC's textures are taken again); from the start the map LG held is gone.  Each
+ * light_gpu_build_step does pieces (a few slices, levels or planes of one pass, or one of the
+ * passes that stay whole: the columns' diffuse light, the diffuse light volume, compression),
+ * waiting for each, while the next, as long as the last, still fits into BUDGET_MS; at least
+ * one.  *DONE: the map is built (as a light_gpu_update that built it; a build in pieces is not
+ * timed on the GPU).  light_gpu_update drops a build under way, and so does
+ * light_gpu_build_cancel.  SRC's textures must live until the build is done or dropped. */
+bool light_gpu_build_begin(struct light_gpu *lg, const struct light_gpu_source *src,
+                           const double sun[3], const struct light_settings *settings,
+                           enum light_gpu_mode mode, bool *needed);
+bool light_gpu_build_step(struct light_gpu *lg, double budget_ms, bool *done);
+bool light_gpu_building(const struct light_gpu *lg);
+void light_gpu_build_cancel(struct light_gpu *lg);
+
 /* Stores the following dense maps in half floats (R16F light, RG16F diffuse light: half the
  * memory, about three decimal digits; the build's arithmetic stays in floats) or, HALF false
  * (the default), in floats.  A change rebuilds at the next update.  Compressed maps are

@@ -42,25 +42,12 @@ static void bind_pair(const struct render_light *light, const struct gpu_program
     light_gpu_bind(maps[1 - al->pair_first], prog, true);
 }
 
-/* Builds map WHICH (0 gpu, 1 spare) for SRC when stale; logs and counts a build.  Its time is
- * logged with it when known at once (software drivers, gpu.h), else when it arrives
- * (lightmaps_collect_timings). */
-static bool build(struct lightmaps *al, int which, const struct light_gpu_source *src,
-                  const double sun[3], const struct light_settings *s, enum light_gpu_mode mode,
-                  bool half, bool one_phase, struct session_stats *st)
+/* Logs and counts the build just made of map WHICH (LG).  Its time is logged with it when
+ * known at once (software drivers, gpu.h), else when it arrives (lightmaps_collect_timings). */
+static void built_one(struct lightmaps *al, int which, struct light_gpu *lg,
+                      const struct light_settings *s, enum light_gpu_mode mode, bool half,
+                      bool one_phase, struct session_stats *st)
 {
-    struct light_gpu *lg = which ? al->spare : al->gpu;
-    bool built = false;
-    light_gpu_set_timing(lg, al->timing);
-    light_gpu_set_half(lg, half);
-    if (!light_gpu_update(lg, src, sun, s, mode, &built)) {
-        log_error("lightmap.resolution [%d, %d, %d]: the light map could not be built (see "
-                  "above); a smaller resolution needs less GPU memory",
-                  s->resolution[0], s->resolution[1], s->resolution[2]);
-        return false;
-    }
-    if (!built)
-        return true;
     size_t dense, compressed;
     light_gpu_bytes(lg, &dense, &compressed);
     if (st) {
@@ -84,6 +71,55 @@ static bool build(struct lightmaps *al, int which, const struct light_gpu_source
              : s->lateral ? ", diffuse light with lateral escape"
                           : ", diffuse light",
              one_phase ? ", one phase" : "");
+}
+
+static void build_failed(const struct light_settings *s)
+{
+    log_error("lightmap.resolution [%d, %d, %d]: the light map could not be built (see "
+              "above); a smaller resolution needs less GPU memory",
+              s->resolution[0], s->resolution[1], s->resolution[2]);
+}
+
+/* Builds map WHICH (0 gpu, 1 spare) for SRC when stale; logs and counts a build. */
+static bool build(struct lightmaps *al, int which, const struct light_gpu_source *src,
+                  const double sun[3], const struct light_settings *s, enum light_gpu_mode mode,
+                  bool half, bool one_phase, struct session_stats *st)
+{
+    struct light_gpu *lg = which ? al->spare : al->gpu;
+    bool built = false;
+    light_gpu_set_timing(lg, al->timing);
+    light_gpu_set_half(lg, half);
+    if (!light_gpu_update(lg, src, sun, s, mode, &built)) {
+        build_failed(s);
+        return false;
+    }
+    if (built)
+        built_one(al, which, lg, s, mode, half, one_phase, st);
+    return true;
+}
+
+/* The same in pieces for about BUDGET_MS (light_gpu_build_step); *DONE once built. */
+static bool build_pieces(struct lightmaps *al, int which, const struct light_gpu_source *src,
+                         const double sun[3], const struct light_settings *s,
+                         enum light_gpu_mode mode, bool half, bool one_phase,
+                         double budget_ms, bool *done, struct session_stats *st)
+{
+    struct light_gpu *lg = which ? al->spare : al->gpu;
+    bool needed = false;
+    *done = false;
+    light_gpu_set_timing(lg, al->timing);
+    light_gpu_set_half(lg, half);
+    if (!light_gpu_build_begin(lg, src, sun, s, mode, &needed) ||
+        (needed && !light_gpu_build_step(lg, budget_ms, done))) {
+        build_failed(s);
+        return false;
+    }
+    if (!needed) {
+        *done = true;
+        return true;
+    }
+    if (*done)
+        built_one(al, which, lg, s, mode, half, one_phase, st);
     return true;
 }
 
@@ -103,7 +139,8 @@ static int serving_slot(const struct lightmaps *al, bool pair)
 /* The next volume's map: its own cells when it was staged whole, else the pair's (a cell
  * empty in the pair is empty in both). */
 static bool build_next(struct lightmaps *al, int slot, struct renderer *r,
-                       const struct lightmaps_params *p, struct session_stats *st)
+                       const struct lightmaps_params *p, double budget_ms, bool *done,
+                       struct session_stats *st)
 {
     const struct render_cells *cells = renderer_next_cells(r);
     struct light_gpu_source next = {
@@ -114,21 +151,30 @@ static bool build_next(struct lightmaps *al, int slot, struct renderer *r,
         .cells = cells ? cells : renderer_pair_cells(r),
     };
     al->held[slot] = 0;
-    if (!build(al, slot, &next, p->sun, &p->light, p->mode, p->half, p->one_phase, st))
+    *done = true;
+    if (budget_ms > 0.0) {
+        if (!build_pieces(al, slot, &next, p->sun, &p->light, p->mode, p->half, p->one_phase,
+                          budget_ms, done, st))
+            return false;
+    } else if (!build(al, slot, &next, p->sun, &p->light, p->mode, p->half, p->one_phase, st)) {
         return false;
-    al->held[slot] = al->next_id;
+    }
+    if (*done)
+        al->held[slot] = al->next_id;
     return true;
 }
 
 bool lightmaps_prepare_next(struct lightmaps *al, const struct lightmaps_params *p,
-                            struct renderer *r, struct session_stats *st)
+                            struct renderer *r, double budget_ms, bool *done,
+                            struct session_stats *st)
 {
+    *done = true;
     if (!al->gpu || !p->shadows || !al->temporal || al->step_id == 0 || al->next_id == 0 ||
         !renderer_has_next(r))
         return true;
     if (!al->spare && !(al->spare = light_gpu_create()))
         return false;
-    return build_next(al, 1 - serving_slot(al, true), r, p, st);
+    return build_next(al, 1 - serving_slot(al, true), r, p, budget_ms, done, st);
 }
 
 bool lightmaps_next_built(const struct lightmaps *al, uint64_t next_id)
@@ -163,7 +209,8 @@ static bool update_temporal(struct lightmaps *al, struct renderer *r,
         renderer_set_light(r, light_gpu_render_light(maps[cur]));
         return true;
     }
-    if (!build_next(al, 1 - cur, r, p, st))
+    bool done;
+    if (!build_next(al, 1 - cur, r, p, 0.0, &done, st))
         return false;
     al->pair_first = cur;
     /* Step k's variant (LIGHTMAP, MULTIPLE) and the pair: both maps are built alike. */

@@ -72,9 +72,12 @@ bool lightmaps_update_params(struct lightmaps *al, const struct lightmaps_params
                              struct renderer *r, struct session_stats *st);
 /* Staged playback and effects.temporal: builds the map of the renderer's next volume
  * (NEXT_ID) when stale, without touching what the views use, so that the step change finds
- * it built.  Meant for the time between frames.  No-op without a next volume. */
+ * it built.  Meant for the time between frames: with BUDGET_MS > 0 in pieces of about that
+ * long a call (light_gpu_build_step; *DONE once built, the calls after the first resume it),
+ * else whole.  No-op without a next volume. */
 bool lightmaps_prepare_next(struct lightmaps *al, const struct lightmaps_params *p,
-                            struct renderer *r, struct session_stats *st);
+                            struct renderer *r, double budget_ms, bool *done,
+                            struct session_stats *st);
 /* Whether the ring holds a map built for step NEXT_ID (true without light maps). */
 bool lightmaps_next_built(const struct lightmaps *al, uint64_t next_id);
 /* The same with the parameters of CFG, its sun and the decisions set (lightmaps_params_from). */

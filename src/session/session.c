@@ -1664,9 +1664,10 @@ bool session_light(struct session *s)
  * Isabel's size (191 MiB of extinction) goes up over a few calls. */
 #define STAGE_SLAB_BYTES ((size_t)64 << 20)
 
-/* One piece of readying the step after the one shown.  *PROGRESSED: the next piece can follow
- * at once (not waiting for the stage's thread); *MORE: work remains. */
-static bool prepare_piece(struct session *s, bool *progressed, bool *more)
+/* One piece of readying the step after the one shown, the light map's taking about BUDGET_MS
+ * (ms).  *PROGRESSED: the next piece can follow at once (not waiting for the stage's thread);
+ * *MORE: work remains. */
+static bool prepare_piece(struct session *s, double budget_ms, bool *progressed, bool *more)
 {
     *progressed = *more = false;
     int next = step_after(s, s->shown);
@@ -1694,11 +1695,16 @@ static bool prepare_piece(struct session *s, bool *progressed, bool *more)
             return true;
         struct lightmaps_params p;
         light_params(s, &p);
-        *progressed = true;
         /* The blend reads the pair's cells: made now, not in the first blended frame. */
         if (s->effects.on[EFFECT_TEMPORAL])
             renderer_pair_cells(s->renderer);
-        return lightmaps_prepare_next(&s->light, &p, s->renderer, &s->stats);
+        /* In pieces over as many calls as it takes (light_gpu_build_step). */
+        bool done = true;
+        bool ok = lightmaps_prepare_next(&s->light, &p, s->renderer,
+                                         budget_ms > 1.0 ? budget_ms : 1.0, &done, &s->stats);
+        *progressed = ok && done;
+        *more = ok && !done;
+        return ok;
     }
     if (!s->stage_src || player_next_step(s->player) != next) {
         int held = -1;
@@ -1726,12 +1732,12 @@ bool session_prepare(struct session *s, bool *more)
     *more = false;
     if (!s->staged)
         return true;
-    /* Pieces while they need not wait, for about as long as a frame takes (a light build is
-     * one piece, however long). */
+    /* Pieces while they need not wait, for about as long as a frame takes (the light build
+     * too: it goes in pieces of a few slices or planes, resumed at the next call). */
     double t0 = time_now_ms(), budget = s->frame_ms > 10.0 ? s->frame_ms : 10.0;
     bool ok = true, progressed = true;
     while (ok && progressed && time_now_ms() - t0 < budget)
-        ok = prepare_piece(s, &progressed, more);
+        ok = prepare_piece(s, budget - (time_now_ms() - t0), &progressed, more);
     s->stats.prepare_ms += time_now_ms() - t0;
     if (!ok) {
         /* Most likely GPU memory for the second set of volume textures: play on without. */
