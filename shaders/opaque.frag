@@ -16,7 +16,8 @@ layout(location = 1) out float out_distance;
 
 layout(binding = BIND_OPAQUE_TEX_MESH) uniform sampler2D mesh_texture;
 
-uniform mat4 inv_view_proj;
+uniform mat4 inv_proj; // clip -> view
+uniform mat4 inv_view; // view -> world
 uniform ivec2 image_size;
 uniform vec3 sun_dir;
 uniform vec3 sun_radiance;
@@ -42,10 +43,8 @@ void main()
         radiance = c.rgb * (sun_radiance * sun + sky_radiance);
     }
     vec2 ndc = gl_FragCoord.xy / vec2(image_size) * 2.0 - 1.0;
-    vec4 pn = inv_view_proj * vec4(ndc, -1.0, 1.0);
-    vec4 pf = inv_view_proj * vec4(ndc, 1.0, 1.0);
-    vec3 origin = pn.xyz / pn.w;
-    vec3 dir = normalize(pf.xyz / pf.w - origin);
+    vec3 origin, dir;
+    view_ray(inv_proj, inv_view, ndc, origin, dir);
     out_distance = dot(v_world - origin, dir);
     // Depth linear in the distance: a window depth of (f+n)/(f-n) - 2fn/((f-n)z) with a 10 m
     // near plane resolves only ~1 km at 500 km, and lines on the terrain would fight with it;

@@ -79,7 +79,8 @@ layout(binding = BIND_EYE_TEX_ZMAP) uniform sampler1D zmap_tex; // texelFetch on
 #endif
 #include "zmap.glsl"
 
-uniform mat4 inv_view_proj; // clip space -> world (metres)
+uniform mat4 inv_proj;      // clip space -> view space (inverted in double)
+uniform mat4 inv_view;      // view space -> world (metres)
 uniform ivec2 image_size;
 uniform ivec2 pixel_offset;  // this view's origin within a larger image (tiles), usually 0
 uniform int row_offset;      // the first row of this dispatch (a band of rows), usually 0
@@ -519,11 +520,9 @@ void main()
 #endif
 #endif
     vec2 ndc = (vec2(pix) + 0.5) / vec2(image_size) * 2.0 - 1.0;
-    vec4 pn = inv_view_proj * vec4(ndc, -1.0, 1.0);
-    vec4 pf = inv_view_proj * vec4(ndc, 1.0, 1.0);
     // Rays start at the near plane, so an eye inside the volume sees only what is in front.
-    vec3 origin = pn.xyz / pn.w;
-    vec3 dir = normalize(pf.xyz / pf.w - origin);
+    vec3 origin, dir;
+    view_ray(inv_proj, inv_view, ndc, origin, dir);
 
     // Opaque ground at z = 0 ends the ray.
     float t_ground = 1e30;

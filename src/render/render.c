@@ -888,16 +888,63 @@ static const struct gpu_program *opaque_program(struct renderer *r, const char *
     return &r->opaque[r->n_opaque++];
 }
 
+/* OUT = M^-1 (column-major), by Gauss-Jordan elimination in double: a perspective projection
+ * with far / near ~1e5 loses a float inverse's last digits, and the rays with them
+ * (shaders/common.glsl view_ray).  A singular M (a caller's mistake) gives the identity. */
+static void invert_double(const float m[16], float out[16])
+{
+    double a[4][8];
+    for (int r = 0; r < 4; r++) {
+        for (int c = 0; c < 4; c++) {
+            a[r][c] = m[c * 4 + r];
+            a[r][c + 4] = r == c ? 1.0 : 0.0;
+        }
+    }
+    for (int c = 0; c < 4; c++) {
+        int piv = c;
+        for (int r = c + 1; r < 4; r++) {
+            if (fabs(a[r][c]) > fabs(a[piv][c]))
+                piv = r;
+        }
+        if (a[piv][c] == 0.0) {
+            for (int i = 0; i < 16; i++)
+                out[i] = i % 5 == 0 ? 1.0f : 0.0f;
+            return;
+        }
+        for (int k = 0; k < 8; k++) {
+            double t = a[c][k];
+            a[c][k] = a[piv][k];
+            a[piv][k] = t;
+        }
+        double inv = 1.0 / a[c][c];
+        for (int k = 0; k < 8; k++)
+            a[c][k] *= inv;
+        for (int r = 0; r < 4; r++) {
+            if (r == c || a[r][c] == 0.0)
+                continue;
+            double f = a[r][c];
+            for (int k = 0; k < 8; k++)
+                a[r][k] -= f * a[c][k];
+        }
+    }
+    for (int r = 0; r < 4; r++) {
+        for (int c = 0; c < 4; c++)
+            out[c * 4 + r] = (float)a[r][c + 4];
+    }
+}
+
 /* Draws the visible meshes into the renderer's target: radiance and ray distance. */
 static bool draw_opaque(struct renderer *r, const struct render_settings *s,
-                        const struct render_view *view, mat4 vp, mat4 inv, const char *defines)
+                        const struct render_view *view, mat4 vp, const float inv_proj[16],
+                        const float inv_view[16], const char *defines)
 {
     const struct gpu_program *p = opaque_program(r, defines);
     if (!p || !gpu_target_ensure(&r->target, view->width, view->height))
         return false;
     int size[2] = {view->width, view->height};
     gpu_uniform_mat4(p, "view_proj", (const float *)vp);
-    gpu_uniform_mat4(p, "inv_view_proj", (const float *)inv);
+    gpu_uniform_mat4(p, "inv_proj", inv_proj);
+    gpu_uniform_mat4(p, "inv_view", inv_view);
     gpu_uniform_ivec2(p, "image_size", size);
     gpu_uniform_vec3(p, "sun_dir", s->sun_dir);
     gpu_uniform_vec3(p, "sun_radiance", s->sun_radiance);
@@ -926,7 +973,8 @@ static bool draw_opaque(struct renderer *r, const struct render_settings *s,
 /* The uniforms and units every eye pass program of a draw reads. */
 static void eye_uniforms(struct renderer *r, const struct gpu_program *prog,
                          const struct render_settings *s, const struct render_view *view,
-                         mat4 inv, const struct render_cells *cells)
+                         const float inv_proj[16], const float inv_view[16],
+                         const struct render_cells *cells)
 {
     const struct grid3 *g = &r->grid;
     float box_min[3], box_size[3];
@@ -941,7 +989,8 @@ static void eye_uniforms(struct renderer *r, const struct gpu_program *prog,
     float step = s->step_m > 0.0f ? s->step_m : 0.0f;
     int image_size[2] = {view->width, view->height};
 
-    gpu_uniform_mat4(prog, "inv_view_proj", (const float *)inv);
+    gpu_uniform_mat4(prog, "inv_proj", inv_proj);
+    gpu_uniform_mat4(prog, "inv_view", inv_view);
     gpu_uniform_vec3(prog, "box_min", box_min);
     gpu_uniform_vec3(prog, "box_size", box_size);
     gpu_uniform_float(prog, "step_len", step);
@@ -1041,13 +1090,16 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     }
 
     /* cglm's SIMD code needs aligned matrices; the caller's need not be. */
-    mat4 proj, viewm, vp, inv;
+    mat4 proj, viewm, vp;
     memcpy(proj, view->proj, sizeof(proj));
     memcpy(viewm, view->view, sizeof(viewm));
     glm_mat4_mul(proj, viewm, vp);
-    glm_mat4_inv(vp, inv);
+    /* Rays come from the two inverses apart (shaders/common.glsl view_ray). */
+    float inv_proj[16], inv_view[16];
+    invert_double(view->proj, inv_proj);
+    invert_double(view->view, inv_view);
     for (int pass = 0; pass < (cells ? 2 : 1); pass++) {
-        eye_uniforms(r, progs[pass], s, view, inv, cells);
+        eye_uniforms(r, progs[pass], s, view, inv_proj, inv_view, cells);
         if (layers > 0 || slices > 0)
             layer_uniforms(r, progs[pass], layers);
         if (slices > 0)
@@ -1080,7 +1132,7 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     if (r->timing)
         gpu_timer_queue_begin(&r->timers);
     if (opaque) {
-        if (!draw_opaque(r, s, view, vp, inv, light_defines))
+        if (!draw_opaque(r, s, view, vp, inv_proj, inv_view, light_defines))
             return false;
         gpu_texture_bind(&r->target.color, BIND_EYE_TEX_OPAQUE_COLOR);
         gpu_texture_bind(&r->target.value, BIND_EYE_TEX_OPAQUE_DISTANCE);

@@ -9,7 +9,8 @@
 # Frame button.  katrina.pfm is on uniform levels, as it was made; katrina-native.pfm, made
 # when the model's own levels became the default, on those.  The data cases keep the cameras
 # they were made with (a scene of data without a camera is framed), the tracked displays their
-# navigation.
+# navigation.  All were made again when the rays came from the projection and the view
+# inverted apart (shaders/common.glsl view_ray) instead of one float inverse of their product.
 #   sh tests/data/golden/cases.sh ANVIL_BINARY SOURCE_DIR OUT_DIR
 set -e
 anvil=$1
