@@ -10,6 +10,7 @@
 #include "bench/scenes.h"
 #include "config/config.h"
 #include "common/log.h"
+#include "common/mat4d.h"
 #include "light/light.h"
 #include "light/light_volume.h"
 #include "render/image.h"
@@ -20,45 +21,16 @@
 /* clip -> world (row-major) of the column-major VIEW and PROJ; false when singular. */
 static bool clip_to_world(const struct render_view *v, double out[16])
 {
-    double m[4][8];
+    double m[16];
     for (int i = 0; i < 4; i++) {
         for (int j = 0; j < 4; j++) {
             double s = 0.0;
             for (int k = 0; k < 4; k++)
                 s += (double)v->proj[4 * k + i] * v->view[4 * j + k];
-            m[i][j] = s;
-            m[i][j + 4] = i == j ? 1.0 : 0.0;
+            m[4 * i + j] = s;
         }
     }
-    for (int c = 0; c < 4; c++) {
-        int piv = c;
-        for (int r = c + 1; r < 4; r++) {
-            if (fabs(m[r][c]) > fabs(m[piv][c]))
-                piv = r;
-        }
-        if (fabs(m[piv][c]) < 1e-300)
-            return false;
-        for (int j = 0; j < 8; j++) {
-            double t = m[c][j];
-            m[c][j] = m[piv][j];
-            m[piv][j] = t;
-        }
-        double inv = 1.0 / m[c][c];
-        for (int j = 0; j < 8; j++)
-            m[c][j] *= inv;
-        for (int r = 0; r < 4; r++) {
-            if (r == c)
-                continue;
-            double f = m[r][c];
-            for (int j = 0; j < 8; j++)
-                m[r][j] -= f * m[c][j];
-        }
-    }
-    for (int i = 0; i < 4; i++) {
-        for (int j = 0; j < 4; j++)
-            out[4 * i + j] = m[i][j + 4];
-    }
-    return true;
+    return mat4d_invert(m, out);
 }
 
 static void unproject(const double inv[16], double x, double y, double z, double out[3])

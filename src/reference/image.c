@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "common/log.h"
+#include "common/mat4d.h"
 #include "common/progress.h"
 
 static void normalize3(double v[3])
@@ -24,47 +25,6 @@ static void normalize3(double v[3])
 }
 
 /* ---- images ------------------------------------------------------------------------------ */
-
-/* Inverse of a 4x4 matrix (row-major doubles) by Gauss-Jordan with partial pivoting. */
-static bool invert4(const double m[16], double out[16])
-{
-    double a[4][8];
-    for (int i = 0; i < 4; i++) {
-        for (int j = 0; j < 4; j++) {
-            a[i][j] = m[4 * i + j];
-            a[i][j + 4] = i == j;
-        }
-    }
-    for (int c = 0; c < 4; c++) {
-        int piv = c;
-        for (int i = c + 1; i < 4; i++) {
-            if (fabs(a[i][c]) > fabs(a[piv][c]))
-                piv = i;
-        }
-        if (a[piv][c] == 0.0)
-            return false;
-        for (int j = 0; j < 8; j++) {
-            double x = a[c][j];
-            a[c][j] = a[piv][j];
-            a[piv][j] = x;
-        }
-        double inv = 1.0 / a[c][c];
-        for (int j = 0; j < 8; j++)
-            a[c][j] *= inv;
-        for (int i = 0; i < 4; i++) {
-            if (i == c)
-                continue;
-            double f = a[i][c];
-            for (int j = 0; j < 8; j++)
-                a[i][j] -= f * a[c][j];
-        }
-    }
-    for (int i = 0; i < 4; i++) {
-        for (int j = 0; j < 4; j++)
-            out[4 * i + j] = a[i][j + 4];
-    }
-    return true;
-}
 
 struct render_job {
     const struct reference *ref;
@@ -169,7 +129,7 @@ bool reference_render(const struct reference *ref, const struct render_view *vie
             m[4 * i + j] = s;
         }
     }
-    if (!invert4(m, job.inv)) {
+    if (!mat4d_invert(m, job.inv)) {
         log_error("reference: the camera matrices are singular");
         return false;
     }

@@ -8,6 +8,7 @@
 #include <cglm/cglm.h>
 
 #include "common/log.h"
+#include "common/mat4d.h"
 #include "common/progress.h"
 #include "render/stage.h"
 #include "shaders/bindings.h"
@@ -893,44 +894,16 @@ static const struct gpu_program *opaque_program(struct renderer *r, const char *
  * (shaders/common.glsl view_ray).  A singular M (a caller's mistake) gives the identity. */
 static void invert_double(const float m[16], float out[16])
 {
-    double a[4][8];
-    for (int r = 0; r < 4; r++) {
-        for (int c = 0; c < 4; c++) {
-            a[r][c] = m[c * 4 + r];
-            a[r][c + 4] = r == c ? 1.0 : 0.0;
-        }
+    double d[16], inv[16];
+    for (int i = 0; i < 16; i++)
+        d[i] = m[i];
+    if (!mat4d_invert(d, inv)) {
+        for (int i = 0; i < 16; i++)
+            out[i] = i % 5 == 0 ? 1.0f : 0.0f;
+        return;
     }
-    for (int c = 0; c < 4; c++) {
-        int piv = c;
-        for (int r = c + 1; r < 4; r++) {
-            if (fabs(a[r][c]) > fabs(a[piv][c]))
-                piv = r;
-        }
-        if (a[piv][c] == 0.0) {
-            for (int i = 0; i < 16; i++)
-                out[i] = i % 5 == 0 ? 1.0f : 0.0f;
-            return;
-        }
-        for (int k = 0; k < 8; k++) {
-            double t = a[c][k];
-            a[c][k] = a[piv][k];
-            a[piv][k] = t;
-        }
-        double inv = 1.0 / a[c][c];
-        for (int k = 0; k < 8; k++)
-            a[c][k] *= inv;
-        for (int r = 0; r < 4; r++) {
-            if (r == c || a[r][c] == 0.0)
-                continue;
-            double f = a[r][c];
-            for (int k = 0; k < 8; k++)
-                a[r][k] -= f * a[c][k];
-        }
-    }
-    for (int r = 0; r < 4; r++) {
-        for (int c = 0; c < 4; c++)
-            out[c * 4 + r] = (float)a[r][c + 4];
-    }
+    for (int i = 0; i < 16; i++)
+        out[i] = (float)inv[i];
 }
 
 /* Draws the visible meshes into the renderer's target: radiance and ray distance. */
