@@ -43,6 +43,7 @@ struct widget {
     int rect[4]; /* x, y, w, h in panel pixels, y down */
     char label[64];
     bool disabled, selected;
+    bool small; /* its label in the small font */
     double lo, hi; /* sliders */
 };
 
@@ -287,14 +288,36 @@ static void layout(struct menu *m)
 {
     struct menu_model *md = &m->model;
     m->n_widgets = 0;
-    int tab_w = (m->w - 8 - 70) / MENU_PAGE_COUNT;
+    /* Each tab as wide as its title and the same margin (the row's spare width shared out),
+     * all titles in the menu's font where they fit the row, else all in the small one, so the
+     * row reads as one ("Transfer" never runs into "Light"). */
+    int avail = m->w - 8 - 70, title_w[MENU_PAGE_COUNT], titles = 0;
+    bool small_tabs = false;
+    for (int pass = 0; pass < 2; pass++) {
+        const struct menu_font *f = pass == 0 ? m->font : m->small;
+        if (!f)
+            break;
+        titles = 0;
+        for (int p = 0; p < MENU_PAGE_COUNT; p++) {
+            title_w[p] = menu_font_width(f, page_titles[p]) + 12;
+            titles += title_w[p];
+        }
+        small_tabs = pass == 1;
+        if (titles <= avail)
+            break;
+    }
+    int spare = titles <= avail ? (avail - titles) / MENU_PAGE_COUNT : -1, tab_x = 4;
     for (int p = 0; p < MENU_PAGE_COUNT; p++) {
         char name[NAME_LEN];
         snprintf(name, sizeof(name), "tab.%s", page_names[p]);
-        struct widget *wd = add(m, W_BUTTON, ID_TAB, p, name, 4 + p * tab_w, 4, tab_w - 4, 32,
+        int tab_w = spare >= 0 ? title_w[p] + spare : avail / MENU_PAGE_COUNT;
+        struct widget *wd = add(m, W_BUTTON, ID_TAB, p, name, tab_x, 4, tab_w - 4, 32,
                                 page_titles[p]);
-        if (wd)
+        if (wd) {
             wd->selected = (int)m->page == p;
+            wd->small = small_tabs;
+        }
+        tab_x += tab_w;
     }
     add(m, W_BUTTON, ID_RESET, 0, "reset", m->w - 70, 4, 66, 32, "Reset");
     int y = 48;
@@ -574,12 +597,20 @@ static void text(struct menu *m, int x, int y, const char *s, const uint8_t rgb[
     menu_font_draw(m->font, m->pixels, m->w, m->h, x, y, s, rgb);
 }
 
-static void text_centered(struct menu *m, const int r[4], const char *s, const uint8_t rgb[3])
+/* A label wider than its widget is drawn in the small font, so that it does not run into its
+ * neighbour. */
+static void text_centered(struct menu *m, const int r[4], const char *s, const uint8_t rgb[3],
+                          bool small)
 {
-    int tw = menu_font_width(m->font, s);
+    const struct menu_font *f = small && m->small ? m->small : m->font;
+    int tw = menu_font_width(f, s);
+    if (tw > r[2] - 6 && m->small) {
+        f = m->small;
+        tw = menu_font_width(f, s);
+    }
     int x = r[0] + (r[2] - tw) / 2;
-    int y = r[1] + (r[3] - menu_font_ascent(m->font)) / 2 - 2;
-    text(m, x, y, s, rgb);
+    int y = r[1] + (r[3] - menu_font_ascent(f)) / 2 - 2;
+    menu_font_draw(f, m->pixels, m->w, m->h, x, y, s, rgb);
 }
 
 static int hovered(const struct menu *m);
@@ -766,7 +797,7 @@ static void redraw(struct menu *m)
         switch (wd->kind) {
         case W_BUTTON:
             fill(m, r[0], r[1], r[2], r[3], bg);
-            text_centered(m, r, wd->label, fg);
+            text_centered(m, r, wd->label, fg, wd->small);
             break;
         case W_TOGGLE: {
             fill(m, r[0], r[1], r[2], r[3], i == hover ? c_hover : c_widget);

@@ -5,8 +5,8 @@
 # the file's own history names).  Made before the session and the one frame loop replaced the
 # four loops of old; menu.pfm again when panels came to show their own sRGB colours under the
 # Reinhard tone mapping (they had been made for an older 1 - exp(-x) one), and when the menu
-# gained its Probe page and Save view button, its Layers and Slices pages, and the Time page's
-# Frame button.  katrina.pfm is on uniform levels, as it was made; katrina-native.pfm, made
+# gained its Probe page and Save view button, its Layers and Slices pages, the Time page's
+# Frame button, and tabs as wide as their titles.  katrina.pfm is on uniform levels, as it was made; katrina-native.pfm, made
 # when the model's own levels became the default, on those.  The data cases keep the cameras
 # they were made with (a scene of data without a camera is framed), the tracked displays their
 # navigation.  All were made again when the rays came from the projection and the view
