@@ -1,6 +1,7 @@
 /* The scene a command line names (app.h): an optional config, then data files, folders and
  * glob patterns, each known by its content (data/detect.h). */
 #include <glob.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -234,5 +235,17 @@ bool app_frame_navigation(const struct config *cfg, struct display_config *dcfg,
              nv->scale, (hi[0] - lo[0]) * nv->scale, (hi[1] - lo[1]) * nv->scale,
              (hi[2] - lo[2]) * nv->scale, nv->origin_km[0], nv->origin_km[1], nv->origin_km[2],
              nv->position[0], nv->position[1], nv->position[2]);
+    /* A domain hundreds of kilometres wide and a few tall lies on the floor as a map a few
+     * centimetres thick: say how to lift it (a round factor that makes it about 0.25 m). */
+    double tall = (hi[2] - lo[2]) * nv->scale;
+    if (tall > 0.0 && tall < 0.1 && cfg->scene.height_exaggeration <= 1.0) {
+        double want = 0.25 / tall * fmax(cfg->scene.height_exaggeration, 1e-9), k = 1.0;
+        while (k * 10.0 <= want)
+            k *= 10.0;
+        k = want >= 5.0 * k ? 5.0 * k : want >= 2.0 * k ? 2.0 * k : k;
+        log_info("the domain stands %.0f mm tall in the room: --set scene.height_exaggeration=%g "
+                 "lifts it to %.0f mm (docs/displays.md, \"Fitted to the room\")",
+                 tall * 1e3, k, tall * 1e3 * k / fmax(cfg->scene.height_exaggeration, 1e-9));
+    }
     return true;
 }

@@ -107,6 +107,15 @@ check "cave4: the keys moved the world" \
     bash -c "! cmp -s '$tmp/c0/front-left.pfm' '$tmp/c1/front-left.pfm'"
 check "cave4: key frame fits it to the room again" \
     cmp -s "$tmp/c0/front-left.pfm" "$tmp/c2/front-left.pfm"
+# Katrina, 480 km wide and 6 km tall, is a map 23 mm thick on cave4's floor: the log says how
+# to lift it, and says nothing once it is lifted.
+katrina="$data/wrf/katrina_2005_mercator_wsm3.nc"
+expect_exit 0 "cave4: Katrina fitted to the room" "$anvil" render "$katrina" $cave -o "$tmp/k4"
+check "says the domain is flat and how to lift it" \
+    stderr_has "the domain stands 23 mm tall in the room: --set scene.height_exaggeration=10 lifts it to 228 mm"
+expect_exit 0 "cave4: Katrina lifted ten times" "$anvil" render "$katrina" $cave \
+    --set scene.height_exaggeration=10 -o "$tmp/k4"
+check "no hint once lifted" bash -c "! grep -q 'the domain stands' '$tmp/err'"
 
 # A bookmark of a session on files names them (after the config it includes).
 printf '0 key bookmark\n' >"$tmp/mark.txt"
