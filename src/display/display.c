@@ -630,7 +630,9 @@ static bool write_texture(const struct gpu_texture *tex, const char *dir, const 
     if (nonfinite)
         *nonfinite += image_count_nonfinite(&img);
     char path[1200];
-    snprintf(path, sizeof(path), "%s/%s.%s", dir, name, ext);
+    size_t dl = strlen(dir);
+    snprintf(path, sizeof(path), "%s%s%s.%s", dir, dl > 0 && dir[dl - 1] == '/' ? "" : "/", name,
+             ext); /* "-o out/" writes out/front-left.png, not out//front-left.png */
     bool ok = image_write(&img, path, exposure);
     if (ok)
         log_info("wrote %s (%dx%d)", path, img.width, img.height);
