@@ -14,6 +14,7 @@
 #include <cglm/cglm.h>
 
 #include "common/log.h"
+#include "common/mat4d.h"
 #include "display/display_impl.h"
 #include "shaders/bindings.h"
 
@@ -499,16 +500,18 @@ void display_watch_window(struct display *d, void *window)
     glfwSetWindowCloseCallback(window, on_close);
 }
 
-static void unproject(const float m[16], float x, float y, float z, float out[3])
+static void unproject(const double m[16], double x, double y, double z, double out[3])
 {
-    float v[4];
+    double v[4];
     for (int r = 0; r < 4; r++)
         v[r] = m[r] * x + m[4 + r] * y + m[8 + r] * z + m[12 + r];
     for (int i = 0; i < 3; i++)
         out[i] = v[i] / v[3];
 }
 
-/* The ray through the pointer in the first view, world space: the desktop wand. */
+/* The ray through the pointer in the first view, world space: the desktop wand.  The inverse
+ * view-projection in double, as the eye pass's rays (common/mat4d): a float one puts a pick
+ * at long range (far / near ~1e5) off the cloud under the pointer. */
 static void push_pointer(struct display *d, struct input_queue *q)
 {
     if (d->set.count < 1 || !(d->impl == &display_orbit_impl || d->impl == &display_desktop_impl ||
@@ -519,26 +522,33 @@ static void push_pointer(struct display *d, struct input_queue *q)
     glfwGetWindowSize(gpu_context_window(d->context), &ww, &wh);
     if (ww <= 0 || wh <= 0)
         return;
-    mat4 view, proj, vp, inv;
-    memcpy(view, v->rv.view, sizeof(view));
-    memcpy(proj, v->rv.proj, sizeof(proj));
-    glm_mat4_mul(proj, view, vp);
-    glm_mat4_inv(vp, inv);
-    float x = (float)((d->cursor[0] + 0.5) / ww * 2.0 - 1.0);
-    float y = (float)(1.0 - (d->cursor[1] + 0.5) / wh * 2.0);
-    struct input_event e = {.type = INPUT_POSE, .space = INPUT_SPACE_WORLD};
-    float far[3], len = 0.0f;
-    unproject((float *)inv, x, y, -1.0f, e.position);
-    unproject((float *)inv, x, y, 1.0f, far);
-    for (int i = 0; i < 3; i++) {
-        e.direction[i] = far[i] - e.position[i];
-        len += e.direction[i] * e.direction[i];
-    }
-    len = sqrtf(len);
-    if (!(len > 0.0f) || !isfinite(len))
+    double vp[16], inv[16];
+    for (int c = 0; c < 4; c++) /* column-major: vp = proj * view */
+        for (int r = 0; r < 4; r++) {
+            double sum = 0.0;
+            for (int k = 0; k < 4; k++)
+                sum += (double)v->rv.proj[4 * k + r] * (double)v->rv.view[4 * c + k];
+            vp[4 * c + r] = sum;
+        }
+    if (!mat4d_invert(vp, inv))
         return;
-    for (int i = 0; i < 3; i++)
-        e.direction[i] /= len;
+    double x = (d->cursor[0] + 0.5) / ww * 2.0 - 1.0;
+    double y = 1.0 - (d->cursor[1] + 0.5) / wh * 2.0;
+    double o[3], far[3], dir[3], len = 0.0;
+    unproject(inv, x, y, -1.0, o);
+    unproject(inv, x, y, 1.0, far);
+    for (int i = 0; i < 3; i++) {
+        dir[i] = far[i] - o[i];
+        len += dir[i] * dir[i];
+    }
+    len = sqrt(len);
+    if (!(len > 0.0) || !isfinite(len))
+        return;
+    struct input_event e = {.type = INPUT_POSE, .space = INPUT_SPACE_WORLD};
+    for (int i = 0; i < 3; i++) {
+        e.position[i] = (float)o[i];
+        e.direction[i] = (float)(dir[i] / len);
+    }
     input_queue_push(q, &e);
 }
 

@@ -110,14 +110,9 @@ void input_queue_push(struct input_queue *q, const struct input_event *e);
 
 struct input_source;
 
-/* What a frame tells the sources: its number (from 0), its time in seconds, and for the
- * desktop wand the camera that turns the mouse position into a world ray. */
+/* What a frame tells the sources: its number (from 0; scripts are timed by it). */
 struct input_frame {
     long frame;
-    double time;
-    bool have_camera;
-    float inv_view_proj[16]; /* clip -> world, column-major */
-    int width, height;       /* framebuffer pixels */
 };
 
 /* Appends the events that happened up to FRAME to Q.  False when the source failed (logged). */
