@@ -290,6 +290,23 @@ bool data_source_load(struct data_source *s, int step, struct ext_volume *out, d
         }
         return ok;
     }
+    if (s->wrf && !s->nest && !s->desc.detail.on) {
+        /* Straight to extinction, slab by slab: the step's fields are never held whole, and
+         * what extinction does not use is not read. */
+        struct wrf_stats st;
+        bool ok = wrf_read_step_ext(s->wrf, step, &s->desc.wrf, &s->desc.optics,
+                                    &s->desc.select, out, &st);
+        if (ok)
+            warn_empty_step(s, step, &st);
+        double t1 = time_now_ms();
+        if (ok)
+            ext_volume_stretch_height(out, k);
+        if (load_ms)
+            *load_ms = t1 - t0;
+        if (convert_ms)
+            *convert_ms = time_now_ms() - t1;
+        return ok;
+    }
     struct field_volume fv;
     bool ok = data_source_load_fields(s, step, &fv);
     double t1 = time_now_ms();

@@ -55,9 +55,11 @@ const char *data_source_step_date(const struct data_source *s, int step); /* "" 
  * step.  False (logged) when the description selects nothing. */
 bool data_source_grid(const struct data_source *s, struct grid3 *out);
 
-/* Loads STEP as extinction into OUT, with the description's detail and height scale applied (initialised here; the caller finishes it).  LOAD_MS and
- * CONVERT_MS (may be NULL) receive the milliseconds spent reading and converting.  Not to be
- * called from two threads at once on one source. */
+/* Loads STEP as extinction into OUT, with the description's detail and height scale applied
+ * (initialised here; the caller finishes it).  LOAD_MS and CONVERT_MS (may be NULL) receive
+ * the milliseconds spent reading and converting; WRF files without nests or detail are read
+ * straight to extinction (wrf_read_step_ext), and LOAD_MS then covers both.  Not to be called
+ * from two threads at once on one source. */
 bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,
                       double *convert_ms);
 
