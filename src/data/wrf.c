@@ -1305,7 +1305,7 @@ struct plan {
     size_t cols;
     int nz, no;
     const float *zw;     /* staggered heights, m: zw[k * cols + c] (while the plan is made) */
-    const struct grid3 *g; /* the output grid (while the plan is made) */
+    const double *zc;    /* the output levels' heights, m (while the plan is made) */
     double tol;          /* a target this close to a level takes its value */
     uint16_t *k;         /* [o * cols + c]: the lower mass level, or PLAN_OUTSIDE */
     float *t;            /* the weight of level k + 1; 0: level k's value as it is */
@@ -1337,7 +1337,7 @@ static bool plan_blocks(void *ctx, int share, size_t begin, size_t end)
             int k = 0;
             for (int o = 0; o < no; o++) {
                 /* wrf_resample_column's cases, in its order. */
-                double zt = grid3_centre_z(p->g, o);
+                double zt = p->zc[o];
                 uint16_t kk;
                 float t = 0.0f;
                 if (zt < zg - tol || zt > ztop + tol) {
@@ -1399,28 +1399,27 @@ struct apply {
     size_t out_stride; /* between the output's planes */
 };
 
+/* Output voxel I = o * cols + c of the mass levels BUF through the plan. */
+static inline float apply_one(const struct plan *p, const float *buf, float outside, size_t i,
+                              size_t c)
+{
+    uint16_t k = p->k[i];
+    if (k == PLAN_OUTSIDE)
+        return outside;
+    float v0 = buf[(size_t)k * p->cols + c];
+    double t = p->t[i];
+    return t == 0.0 ? v0 : (float)((1.0 - t) * v0 + t * buf[(size_t)(k + 1) * p->cols + c]);
+}
+
 static bool apply_planes(void *ctx, int share, size_t begin, size_t end)
 {
     const struct apply *a = ctx;
     const struct plan *p = a->p;
     size_t cols = p->cols;
     for (size_t o = begin; o < end; o++) {
-        const uint16_t *kp = p->k + cols * o;
-        const float *tp = p->t + cols * o;
         float *dst = a->out + a->out_stride * o;
-        for (size_t c = 0; c < cols; c++) {
-            uint16_t k = kp[c];
-            float r;
-            if (k == PLAN_OUTSIDE) {
-                r = a->outside;
-            } else {
-                float v0 = a->buf[(size_t)k * cols + c];
-                double t = tp[c];
-                r = t == 0.0 ? v0
-                             : (float)((1.0 - t) * v0 + t * a->buf[(size_t)(k + 1) * cols + c]);
-            }
-            dst[c] = r;
-        }
+        for (size_t c = 0; c < cols; c++)
+            dst[c] = apply_one(p, a->buf, a->outside, cols * o + c, c);
         if (a->fill) {
             for (size_t c = 0; c < cols; c++)
                 if (!isfinite(dst[c]))
@@ -1450,19 +1449,24 @@ struct air {
     bool density;
 };
 
+/* The density of air at pressure P (P + PB) and perturbation potential temperature T; NaN
+ * where they were bad. */
+static inline float air_density(float p, float t)
+{
+    double rho = optics_wrf_air_density_fast(p, (double)t + WRF_T0);
+    return (isfinite(rho) && rho > 0.0) ? (float)rho : NAN;
+}
+
 static bool air_range(void *ctx, int share, size_t begin, size_t end)
 {
     const struct air *a = ctx;
     for (size_t i = begin; i < end; i++) {
-        double p = a->p[i], theta = (double)a->theta[i] + WRF_T0;
         if (a->temperature) {
-            double t = optics_wrf_temperature_fast(p, theta);
+            double t = optics_wrf_temperature_fast(a->p[i], (double)a->theta[i] + WRF_T0);
             a->temperature[i] = t > 0.0 ? (float)t : NAN;
         }
-        if (a->density) {
-            double rho = optics_wrf_air_density_fast(p, theta);
-            a->p[i] = (isfinite(rho) && rho > 0.0) ? (float)rho : NAN;
-        }
+        if (a->density)
+            a->p[i] = air_density(a->p[i], a->theta[i]);
     }
     return true;
 }
@@ -1648,6 +1652,7 @@ struct step_job {
     const struct ext_beta *beta;        /* NULL: fields; else extinction into BETA_OUT, MASS
                                            being BETA's species */
     const double *rho_std;              /* per output level (extinction) */
+    const double *zc;                   /* per output level: its height */
     float *beta_out;
     struct plan *whole; /* NULL, or the step's plan, kept for the wind (read_wind) */
     struct slab_result *res; /* one per slab */
@@ -1672,6 +1677,50 @@ static void slab_apply(const struct plan *p, const float *buf, float outside, co
     apply_planes(&a, 0, 0, (size_t)p->no);
 }
 
+/* The air density of a slab for extinction into RHO, through plan P, from P + PB in PRES and T
+ * in THETA (mass levels): extinction needs it only where one of the NMASS resampled mass
+ * ratios Q (plane by plane, STRIDE floats apart) adds some, so only the mass levels those
+ * voxels are resampled from are worked out, and RHO is 0 elsewhere (where extinction is 0
+ * whatever the density).  MARK: scratch of a byte per mass-level and output value. */
+static void slab_density(const struct plan *p, const float *q, int nmass, size_t stride,
+                         float *pres, const float *theta, const float *fill, uint8_t *mark,
+                         float *rho)
+{
+    size_t sc = p->cols, no = (size_t)p->no, nm = sc * (size_t)p->nz;
+    uint8_t *need = mark + nm;
+    memset(mark, 0, nm);
+    for (size_t i = 0; i < sc * no; i++) {
+        bool any = false;
+        for (int m = 0; m < nmass; m++) {
+            float x = q[(size_t)m * stride + i];
+            any |= x > 0.0f && x <= FLT_MAX; /* ext_beta_run's test */
+        }
+        need[i] = any;
+        uint16_t k = p->k[i];
+        if (any && k != PLAN_OUTSIDE) {
+            size_t c = i % sc;
+            mark[(size_t)k * sc + c] = 1;
+            if (p->t[i] != 0.0f)
+                mark[(size_t)(k + 1) * sc + c] = 1;
+        }
+    }
+    for (size_t i = 0; i < nm; i++)
+        if (mark[i])
+            pres[i] = air_density(pres[i], theta[i]);
+    for (size_t o = 0; o < no; o++) {
+        for (size_t c = 0; c < sc; c++) {
+            size_t i = o * sc + c;
+            float r = 0.0f;
+            if (need[i]) {
+                r = apply_one(p, pres, NAN, i, c);
+                if (!isfinite(r))
+                    r = fill[o];
+            }
+            rho[i] = r;
+        }
+    }
+}
+
 /* Slabs [begin, end). */
 static bool step_slabs(void *ctx, int share, size_t begin, size_t end)
 {
@@ -1687,12 +1736,13 @@ static bool step_slabs(void *ctx, int share, size_t begin, size_t end)
     float *buf = malloc(scm * nz * sizeof(float)), *buf2 = phb;
     float *buf3 = j->temperature ? malloc(scm * nz * sizeof(float)) : NULL;
     float *slab_out = outs ? malloc(outs * scm * no * sizeof(float)) : NULL;
-    struct plan p = {.nz = j->nz, .no = j->no, .g = j->g,
+    struct plan p = {.nz = j->nz, .no = j->no, .zc = j->zc,
                      .tol = 1e-4 * fabs(grid3_min_dz(j->g))};
     p.k = malloc(scm * no * sizeof(uint16_t));
     p.t = malloc(scm * no * sizeof(float));
+    uint8_t *mark = ext && j->density ? malloc(scm * (nz + no)) : NULL;
     bool ok = zw && phb && buf && buf2 && (buf3 || !j->temperature) && (slab_out || !outs) &&
-              p.k && p.t;
+              p.k && p.t && (mark || !(ext && j->density));
     if (!ok)
         log_error("%s: out of memory reading time step %d", j->path, j->step);
     for (size_t sl = begin; sl < end && ok; sl++) {
@@ -1769,15 +1819,18 @@ static bool step_slabs(void *ctx, int share, size_t begin, size_t end)
             if (!ok)
                 break;
             check_values(&j->check[WRF_T], buf2, sc * nz, NAN, &r->sum[WRF_T]);
-            struct air a = {.p = buf, .theta = buf2, .temperature = buf3,
-                            .density = j->density};
-            air_range(&a, 0, 0, sc * nz);
-            if (j->temperature)
-                slab_apply(&p, buf3, NAN, j->fill_t, j->t_out + c0, j->cols);
-            if (rho_slab)
-                slab_apply(&p, buf, NAN, j->fill_rho, rho_slab, sc);
-            else if (j->density)
-                slab_apply(&p, buf, NAN, j->fill_rho, j->rho_out + c0, j->cols);
+            if (rho_slab) {
+                slab_density(&p, slab_out, j->nmass, scm * no, buf, buf2, j->fill_rho, mark,
+                             rho_slab);
+            } else {
+                struct air a = {.p = buf, .theta = buf2, .temperature = buf3,
+                                .density = j->density};
+                air_range(&a, 0, 0, sc * nz);
+                if (j->temperature)
+                    slab_apply(&p, buf3, NAN, j->fill_t, j->t_out + c0, j->cols);
+                if (j->density)
+                    slab_apply(&p, buf, NAN, j->fill_rho, j->rho_out + c0, j->cols);
+            }
         }
 
         if (ext) {
@@ -1795,6 +1848,7 @@ static bool step_slabs(void *ctx, int share, size_t begin, size_t end)
     free(buf);
     free(buf3);
     free(slab_out);
+    free(mark);
     free(p.k);
     free(p.t);
     return ok;
@@ -1820,6 +1874,8 @@ static double step_scratch(const struct wrf *w, const struct wrf_desc *d,
      * per output voxel), and for extinction the slab's outputs. */
     double slab = scm * (2.0 * w->nzs + (1.0 + d->temperature) * w->meta.nz) * sizeof(float) +
                   scm * s->nz * (sizeof(uint16_t) + sizeof(float) + outs * sizeof(float));
+    if (outs > 0 && !d->no_density) /* which voxels extinction needs the density of */
+        slab += scm * (w->meta.nz + s->nz);
     double scratch = threads * slab + slabs * sizeof(struct slab_result);
     bool wind = (d->wind || d->wind_components) && w->meta.has_wind;
     if (wind) {
@@ -1892,7 +1948,7 @@ static bool read_step(struct wrf *w, int step, const struct wrf_desc *d,
     j.temperature = !beta && d->temperature;
     j.air = j.density || j.temperature;
     float *fill = malloc(2 * (size_t)no * sizeof(float));
-    double *rho_std = malloc((size_t)no * sizeof(double));
+    double *rho_std = malloc(2 * (size_t)no * sizeof(double));
     j.res = malloc(j.slabs * sizeof(*j.res));
     bool ok = fill && rho_std && j.res;
     if (beta) {
@@ -1933,7 +1989,8 @@ static bool read_step(struct wrf *w, int step, const struct wrf_desc *d,
         fill[k] = (float)optics_std_atmosphere_density(z);
         wrf_std_atmosphere(z, &std, &p);
         fill[no + k] = (float)std;
-        rho_std[k] = optics_std_atmosphere_density(grid3_centre_z(g, k));
+        rho_std[no + k] = grid3_centre_z(g, k);
+        rho_std[k] = optics_std_atmosphere_density(rho_std[no + k]);
     }
     if (want_wind) {
         whole.k = malloc(nout * sizeof(uint16_t));
@@ -1948,6 +2005,7 @@ static bool read_step(struct wrf *w, int step, const struct wrf_desc *d,
     j.fill_rho = fill;
     j.fill_t = fill + no;
     j.rho_std = rho_std;
+    j.zc = rho_std + no;
     for (size_t sl = 0; sl < j.slabs; sl++) {
         for (int v = 0; v < WRF_VAR_COUNT; v++)
             check_sum_init(&j.res[sl].sum[v]);
