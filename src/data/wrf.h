@@ -60,7 +60,7 @@ struct wrf_desc {
                              vorticity; implies wind) */
     bool level_heights; /* also keep each column's mass-level heights (field_volume level_z) */
     bool no_density;  /* leave rho_air NULL (standard atmosphere) instead of reading P/PB/T */
-    int slab_rows;    /* rows of columns read, checked and resampled at a time; 0 = about 2048
+    int slab_rows;    /* rows of columns read, checked and resampled at a time; 0 = about 4096
                          columns.  The values read do not depend on it. */
 };
 
