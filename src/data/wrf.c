@@ -1655,6 +1655,7 @@ struct step_job {
     const double *zc;                   /* per output level: its height */
     float *beta_out;
     struct plan *whole; /* NULL, or the step's plan, kept for the wind (read_wind) */
+    bool scan;          /* only read and check (wrf_scan_step): no plan, no outputs */
     struct slab_result *res; /* one per slab */
 };
 
@@ -1773,6 +1774,19 @@ static bool step_slabs(void *ctx, int share, size_t begin, size_t end)
         }
         if (h.order[0] != SIZE_MAX)
             r->order = c0 + h.order[0];
+        if (j->scan) {
+            for (int m = 0; m < j->nmass && ok; m++) {
+                ok = slab_read(j, j->mass[m], &ss, j->nz, buf);
+                if (ok)
+                    check_values(&j->check[j->mass[m]], buf, sc * nz, 0.0f, &r->sum[j->mass[m]]);
+            }
+            for (int v = WRF_P; v <= WRF_T && ok && j->air; v++) {
+                ok = slab_read(j, (enum wrf_var)v, &ss, j->nz, buf);
+                if (ok)
+                    check_values(&j->check[v], buf, sc * nz, NAN, &r->sum[v]);
+            }
+            continue;
+        }
         if (j->level_z) { /* the mass levels' heights, half way between their staggered ones */
             for (size_t k = 0; k < nz; k++)
                 for (size_t c = 0; c < sc; c++)
@@ -1897,7 +1911,7 @@ static double step_scratch(const struct wrf *w, const struct wrf_desc *d,
 
 /* wrf_read_step (BETA NULL: fields into OUT), or wrf_read_step_ext (extinction with BETA's
  * species into EXT; OUT only holds the grid). */
-static bool read_step(struct wrf *w, int step, const struct wrf_desc *d,
+static bool read_step(struct wrf *w, int step, const struct wrf_desc *d, bool scan,
                       const struct ext_beta *beta, struct field_volume *out,
                       struct ext_volume *ext, struct wrf_stats *stats)
 {
@@ -1939,17 +1953,18 @@ static bool read_step(struct wrf *w, int step, const struct wrf_desc *d,
     size_t cols = (size_t)s.nx * s.ny, nout = grid3_count(g);
     int no = g->n[2];
     bool ask_wind = d->wind || d->wind_components;
-    bool want_wind = !beta && ask_wind && sf->varid[WRF_U] >= 0 && sf->varid[WRF_V] >= 0;
-    if (!beta && ask_wind && !want_wind)
+    bool want_wind = !beta && !scan && ask_wind && sf->varid[WRF_U] >= 0 &&
+                     sf->varid[WRF_V] >= 0;
+    if (!beta && !scan && ask_wind && !want_wind)
         log_warn("%s: no usable U and V (the staggered wind): wind speed unavailable", path);
 
     struct step_job j = {.w = w, .step = step, .path = path, .s = &s, .g = g, .nz = w->meta.nz,
                          .nzs = w->nzs, .no = no, .rows = slab_rows(d, &s), .cols = cols,
-                         .beta = beta};
+                         .beta = beta, .scan = scan};
     j.slabs = ((size_t)s.ny + (size_t)j.rows - 1) / (size_t)j.rows;
     struct plan whole = {.cols = cols, .nz = j.nz, .no = no}; /* the wind's */
     j.density = !d->no_density;
-    j.temperature = !beta && d->temperature;
+    j.temperature = !beta && !scan && d->temperature;
     j.air = j.density || j.temperature;
     float *fill = malloc(2 * (size_t)no * sizeof(float));
     double *rho_std = malloc(2 * (size_t)no * sizeof(double));
@@ -1964,20 +1979,24 @@ static bool read_step(struct wrf *w, int step, const struct wrf_desc *d,
         for (int v = 0; v <= WRF_QVAPOR; v++) {
             if (v < SPECIES_COUNT ? !w->meta.has_species[v] : !(d->qvapor && w->meta.has_qvapor))
                 continue;
+            j.mass[j.nmass] = (enum wrf_var)v;
+            if (scan) {
+                j.nmass++;
+                continue;
+            }
             float *dst = malloc(nout * sizeof(float));
             if (v < SPECIES_COUNT)
                 out->q[v] = dst;
             else
                 out->qvapor = dst;
-            j.mass[j.nmass] = (enum wrf_var)v;
             j.mass_out[j.nmass++] = dst;
             ok = ok && dst;
         }
-        if (j.density)
+        if (j.density && !scan)
             ok = ok && (j.rho_out = out->rho_air = malloc(nout * sizeof(float)));
         if (j.temperature)
             ok = ok && (j.t_out = out->temperature = malloc(nout * sizeof(float)));
-        if (d->level_heights) {
+        if (d->level_heights && !scan) {
             ok = ok && (j.level_z = out->level_z = malloc(cols * (size_t)j.nz * sizeof(float)));
             out->level_count = j.nz;
         }
@@ -2105,7 +2124,15 @@ done:
 bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct field_volume *out,
                    struct wrf_stats *stats)
 {
-    return read_step(w, step, d, NULL, out, NULL, stats);
+    return read_step(w, step, d, false, NULL, out, NULL, stats);
+}
+
+bool wrf_scan_step(struct wrf *w, int step, const struct wrf_desc *d, struct wrf_stats *stats)
+{
+    struct field_volume grid;
+    bool ok = read_step(w, step, d, true, NULL, &grid, NULL, stats);
+    field_volume_finish(&grid);
+    return ok;
 }
 
 bool wrf_read_step_ext(struct wrf *w, int step, const struct wrf_desc *d,
@@ -2115,7 +2142,7 @@ bool wrf_read_step_ext(struct wrf *w, int step, const struct wrf_desc *d,
     struct ext_beta b;
     ext_beta_init(&b, optics, sel, w->meta.has_species);
     struct field_volume grid;
-    bool ok = read_step(w, step, d, &b, &grid, out, stats);
+    bool ok = read_step(w, step, d, false, &b, &grid, out, stats);
     field_volume_finish(&grid);
     return ok;
 }

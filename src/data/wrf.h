@@ -178,6 +178,13 @@ bool wrf_read_step_ext(struct wrf *w, int step, const struct wrf_desc *d,
                        const struct optics_params *optics, const struct species_select *sel,
                        struct ext_volume *out, struct wrf_stats *stats);
 
+/* What wrf_read_step(D) would check of STEP, without resampling or keeping anything (anvil
+ * info): every value of the variables it reads is checked, the heights too, and STATS gets
+ * the same counts and ranges (but below_terrain and above_top stay 0), with the same warnings
+ * and errors.  The budget D->memory_mb is wrf_read_step's, so a step the scan passes is one
+ * that can be read.  False (logged) on failure. */
+bool wrf_scan_step(struct wrf *w, int step, const struct wrf_desc *d, struct wrf_stats *stats);
+
 /* The yardstick of the load path (anvil bench --load-only): reads the variables
  * wrf_read_step(D) would read for STEP (the species the file has, QVAPOR when D asks, PH, PHB,
  * P, PB, T, and U, V, W for the wind) over D's selection with one nc_get_vara / nc_get_vars

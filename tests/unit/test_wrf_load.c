@@ -4,7 +4,7 @@
  * resampled the same way; extinction equal to Nes eq. 5.3 summed per phase.  On the Katrina
  * and Lambert samples and on a synthetic file read onto other levels, with a crop and a
  * stride.  And QVAPOR is read only when asked; a step read in slabs of any size, and straight to
- * extinction, gives the same numbers. */
+ * extinction, gives the same numbers, and scanned (anvil info) the same counts. */
 #include "testutil.h"
 
 #include <math.h>
@@ -332,6 +332,15 @@ static void check_slabs(const char *path, int step, const struct wrf_desc *base,
         ext_volume_finish(&whole);
         ext_volume_finish(&slabs);
     }
+    /* The scan (anvil info) checks what the read checks. */
+    struct wrf_stats scan;
+    assert_true(wrf_scan_step(w, step, &d, &scan));
+    scan.below_terrain = st_one.below_terrain;
+    scan.above_top = st_one.above_top;
+    for (int v = WRF_U; v <= WRF_W; v++) /* the wind is not scanned */
+        assert_false(scan.var[v].read);
+    memcpy(&scan.var[WRF_U], &st_one.var[WRF_U], 3 * sizeof(scan.var[0]));
+    assert_same_stats(&st_one, &scan);
     field_volume_finish(&one);
     field_volume_finish(&many);
     wrf_close(w);
