@@ -163,7 +163,8 @@ bool wrf_probe(const char *path);
 /* Reads STEP into OUT (initialised here; the caller frees it with field_volume_finish).  STATS
  * (may be NULL) receives the bad-value counts; each bad count is also reported with one
  * log_warn per variable.  On failure OUT is zeroed, one log_error names the file and variable,
- * and false is returned. */
+ * and false is returned.  The step is read a slab at a time by a thread per CPU, each taking
+ * data_nc_lock for its reads: the caller must not hold that lock. */
 bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct field_volume *out,
                    struct wrf_stats *stats);
 
