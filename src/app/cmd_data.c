@@ -123,18 +123,18 @@ static int info_wrf_series(struct wrf *w, const char *const *paths, int count, d
     d.memory_mb = memory_mb;
     int rc = EXIT_OK;
     for (int s = 0; s < wrf_step_count(w); s++) {
-        struct field_volume v;
+        /* Every value checked, none resampled: the ranges and bad counts are the file's. */
+        struct grid3 g;
         struct wrf_stats st;
-        if (!wrf_read_step(w, s, &d, &v, &st)) {
+        if (!wrf_scan_step(w, s, &d, &st) || !wrf_grid(w, &d, &g)) {
             rc = EXIT_BAD_INPUT;
             break;
         }
         if (s == 0)
             printf("  extent      %.4g x %.4g x %.4g km (uniform grid: %d levels of %.4g m, "
                    "top at the highest model top)\n",
-                   v.grid.n[0] * v.grid.spacing[0] / 1e3, v.grid.n[1] * v.grid.spacing[1] / 1e3,
-                   (v.grid.origin[2] + v.grid.n[2] * v.grid.spacing[2]) / 1e3, v.grid.n[2],
-                   v.grid.spacing[2]);
+                   g.n[0] * g.spacing[0] / 1e3, g.n[1] * g.spacing[1] / 1e3,
+                   (g.origin[2] + g.n[2] * g.spacing[2]) / 1e3, g.n[2], g.spacing[2]);
         struct wrf_desc nd = d;
         nd.native_levels = true;
         struct grid3 ng;
@@ -146,7 +146,6 @@ static int info_wrf_series(struct wrf *w, const char *const *paths, int count, d
         printf("  %3d %s  (%s)\n", s, wrf_step_date(w, s), wrf_step_path(w, s));
         for (int k = 0; k < WRF_VAR_COUNT; k++)
             print_range(wrf_var_name((enum wrf_var)k), &st.var[k]);
-        field_volume_finish(&v);
     }
     return rc;
 }

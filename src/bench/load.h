@@ -28,8 +28,9 @@ struct bench_load_result {
     double plain_ms;   /* the plain read of a step (median over steps and rounds) */
     double load_ms;    /* the load of a step to extinction: read, checks, resampling,
                           optics (median) */
-    double read_ms, convert_ms; /* ... its reading (with checks and resampling) and its
-                                   conversion to extinction (medians) */
+    double read_ms, convert_ms; /* ... its reading (with checks, resampling and, a WRF step
+                                   being read slab by slab, extinction) and what follows it
+                                   (medians: data_source_load's LOAD_MS, CONVERT_MS) */
     double ratio;               /* median over the pairs of load / plain, side by side */
     double plain_peak_mb, load_peak_mb; /* the largest peak memory of either, MiB above what
                                            the process held before it */

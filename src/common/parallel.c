@@ -19,8 +19,7 @@ static void *run_share(void *arg)
     return NULL;
 }
 
-bool parallel_for(size_t n, size_t min, void *ctx,
-                  bool (*fn)(void *ctx, int share, size_t begin, size_t end))
+int parallel_share_count(size_t n, size_t min)
 {
     long cpus = sysconf(_SC_NPROCESSORS_ONLN);
     int tn = cpus < 1 ? 1 : cpus > PARALLEL_MAX ? PARALLEL_MAX : (int)cpus;
@@ -28,6 +27,13 @@ bool parallel_for(size_t n, size_t min, void *ctx,
         min = 1;
     if ((size_t)tn > n / min + 1)
         tn = (int)(n / min + 1);
+    return tn;
+}
+
+bool parallel_for(size_t n, size_t min, void *ctx,
+                  bool (*fn)(void *ctx, int share, size_t begin, size_t end))
+{
+    int tn = parallel_share_count(n, min);
     size_t per = (n + (size_t)tn - 1) / (size_t)tn;
     struct share jobs[PARALLEL_MAX];
     bool started[PARALLEL_MAX] = {false};

@@ -18,4 +18,7 @@
 bool parallel_for(size_t n, size_t min, void *ctx,
                   bool (*fn)(void *ctx, int share, size_t begin, size_t end));
 
+/* The shares parallel_for(N, MIN) makes: how many threads it runs. */
+int parallel_share_count(size_t n, size_t min);
+
 #endif

@@ -1,7 +1,8 @@
 /*
  * data/nclock: NetCDF-C is not thread safe, so every part of data/ that calls nc_* holds this
- * one process-wide lock for the whole of an operation (open, read a step, write a step).  The
- * lock is recursive: an operation may call another.
+ * one process-wide lock for the whole of an operation (open, read a variable, write a step;
+ * a WRF step is read a slab at a time, the lock taken for each read, so that other threads
+ * compute meanwhile).  The lock is recursive: an operation may call another.
  */
 #ifndef ANVIL_DATA_NCLOCK_H
 #define ANVIL_DATA_NCLOCK_H

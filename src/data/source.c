@@ -1,5 +1,6 @@
 #include "data/source.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -270,6 +271,24 @@ bool data_source_load_fields_want(struct data_source *s, int step,
                        want->wind_components, want->level_heights, out);
 }
 
+bool data_source_can_load_ext(const struct data_source *s)
+{
+    return s->wrf && !s->nest;
+}
+
+bool data_source_load_ext(struct data_source *s, int step, const struct optics_params *optics,
+                          const struct species_select *sel, struct ext_volume *out)
+{
+    assert(data_source_can_load_ext(s));
+    /* Straight to extinction, slab by slab: the step's fields are never held whole, and what
+     * extinction does not use is not read. */
+    struct wrf_stats st;
+    bool ok = wrf_read_step_ext(s->wrf, step, &s->desc.wrf, optics, sel, out, &st);
+    if (ok)
+        warn_empty_step(s, step, &st);
+    return ok;
+}
+
 bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,
                       double *convert_ms)
 {
@@ -288,6 +307,17 @@ bool data_source_load(struct data_source *s, int step, struct ext_volume *out, d
             if (convert_ms)
                 *convert_ms = time_now_ms() - t1;
         }
+        return ok;
+    }
+    if (data_source_can_load_ext(s) && !s->desc.detail.on) {
+        bool ok = data_source_load_ext(s, step, &s->desc.optics, &s->desc.select, out);
+        double t1 = time_now_ms();
+        if (ok)
+            ext_volume_stretch_height(out, k);
+        if (load_ms)
+            *load_ms = t1 - t0;
+        if (convert_ms)
+            *convert_ms = time_now_ms() - t1;
         return ok;
     }
     struct field_volume fv;

@@ -55,9 +55,21 @@ const char *data_source_step_date(const struct data_source *s, int step); /* "" 
  * step.  False (logged) when the description selects nothing. */
 bool data_source_grid(const struct data_source *s, struct grid3 *out);
 
-/* Loads STEP as extinction into OUT, with the description's detail and height scale applied (initialised here; the caller finishes it).  LOAD_MS and
- * CONVERT_MS (may be NULL) receive the milliseconds spent reading and converting.  Not to be
- * called from two threads at once on one source. */
+/* Whether STEP can be read straight to extinction (data_source_load_ext): WRF without nests. */
+bool data_source_can_load_ext(const struct data_source *s);
+
+/* Reads STEP straight to extinction with OPTICS and SEL (wrf_read_step_ext: the numbers
+ * ext_volume_from_fields makes of data_source_load_fields, without the fields), no detail, no
+ * height scale; OUT is initialised here (the caller finishes it).  Only where
+ * data_source_can_load_ext. */
+bool data_source_load_ext(struct data_source *s, int step, const struct optics_params *optics,
+                          const struct species_select *sel, struct ext_volume *out);
+
+/* Loads STEP as extinction into OUT, with the description's detail and height scale applied
+ * (initialised here; the caller finishes it).  LOAD_MS and CONVERT_MS (may be NULL) receive
+ * the milliseconds spent reading and converting; WRF files without nests or detail are read
+ * straight to extinction (wrf_read_step_ext), and LOAD_MS then covers both.  Not to be called
+ * from two threads at once on one source. */
 bool data_source_load(struct data_source *s, int step, struct ext_volume *out, double *load_ms,
                       double *convert_ms);
 

@@ -1,6 +1,7 @@
 #include "data/volume.h"
 
 #include <assert.h>
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -207,14 +208,78 @@ void species_select_defaults(struct species_select *s)
     }
 }
 
-/* ext_volume_from_fields over planes [begin, end): optics_beta with its constant part taken
- * out of the loop, the same operations in the same order, so the same numbers. */
+void ext_beta_init(struct ext_beta *b, const struct optics_params *optics,
+                   const struct species_select *sel, const bool present[SPECIES_COUNT])
+{
+    memset(b, 0, sizeof(*b));
+    b->scaled = sel != NULL;
+    for (int f = 0; f < SPECIES_COUNT; f++) {
+        double dn = 2.0 * optics->density[f] * optics->radius_m[f];
+        if (!present[f] || (sel && !sel->enabled[f]) || !(dn > 0.0))
+            continue;
+        b->species[b->used] = f;
+        b->denom[b->used] = dn;
+        b->scale[b->used] = sel ? sel->scale[f] : 1.0;
+        b->ice[b->used] = species_is_ice((enum species)f);
+        b->used++;
+    }
+}
+
+/* Voxels [I0, I1) one at a time. */
+static void ext_beta_voxels(const struct ext_beta *b, const float *const *q,
+                            const float *rho_air, double rho_std, size_t i0, size_t i1,
+                            float *beta)
+{
+    for (size_t i = i0; i < i1; i++) {
+        double rho = rho_air ? rho_air[i] : rho_std;
+        if (!isfinite(rho) || rho < 0.0)
+            rho = rho_std;
+        double sum[2] = {0.0, 0.0}; /* ice, water */
+        for (int u = 0; u < b->used && rho > 0.0; u++) {
+            double x = q[u][i];
+            if (!(x > 0.0) || !isfinite(x))
+                continue;
+            double v = 3.0 * rho * x / b->denom[u]; /* Nes eq. 5.3 */
+            if (b->scaled)
+                v *= b->scale[u];
+            sum[b->ice[u] ? 0 : 1] += v;
+        }
+        beta[2 * i] = (float)sum[0];
+        beta[2 * i + 1] = (float)sum[1];
+    }
+}
+
+/* Whether the mass ratio X adds extinction (ext_beta_run's test, for floats). */
+static inline bool adds(float x)
+{
+    return x > 0.0f && x <= FLT_MAX;
+}
+
+/* optics_beta with its constant part taken out of the loop.  Most of a storm's volume is clear
+ * air: a block of voxels where no species adds anything is written as zeros (what the sums
+ * give there) after one branch-free test that vectorises. */
+void ext_beta_run(const struct ext_beta *b, const float *const *q, const float *rho_air,
+                  double rho_std, size_t n, float *beta)
+{
+    enum { BLOCK = 64 };
+    for (size_t i0 = 0; i0 < n; i0 += BLOCK) {
+        size_t i1 = n - i0 < BLOCK ? n : i0 + BLOCK;
+        int any = 0;
+        for (int u = 0; u < b->used; u++)
+            for (size_t i = i0; i < i1; i++)
+                any |= adds(q[u][i]);
+        if (!any) {
+            memset(beta + 2 * i0, 0, 2 * (i1 - i0) * sizeof(float));
+            continue;
+        }
+        ext_beta_voxels(b, q, rho_air, rho_std, i0, i1, beta);
+    }
+}
+
+/* ext_volume_from_fields over planes [begin, end). */
 struct beta_job {
     const struct field_volume *in;
-    const float *q[SPECIES_COUNT];
-    double denom[SPECIES_COUNT], scale[SPECIES_COUNT];
-    bool ice[SPECIES_COUNT], scaled;
-    int used;
+    struct ext_beta b;
     float *beta;
 };
 
@@ -222,28 +287,14 @@ static bool beta_planes(void *ctx, int share, size_t begin, size_t end)
 {
     const struct beta_job *j = ctx;
     const struct grid3 *g = &j->in->grid;
-    const float *rho_air = j->in->rho_air;
     size_t plane = (size_t)g->n[0] * (size_t)g->n[1];
     for (size_t k = begin; k < end; k++) {
-        double z = grid3_centre_z(g, (int)k);
-        double rho_std = optics_std_atmosphere_density(z);
-        for (size_t idx = plane * k; idx < plane * (k + 1); idx++) {
-            double rho = rho_air ? rho_air[idx] : rho_std;
-            if (!isfinite(rho) || rho < 0.0)
-                rho = rho_std;
-            double sum[2] = {0.0, 0.0}; /* ice, water */
-            for (int u = 0; u < j->used && rho > 0.0; u++) {
-                double x = j->q[u][idx];
-                if (!(x > 0.0) || !isfinite(x))
-                    continue;
-                double b = 3.0 * rho * x / j->denom[u]; /* Nes eq. 5.3 */
-                if (j->scaled)
-                    b *= j->scale[u];
-                sum[j->ice[u] ? 0 : 1] += b;
-            }
-            j->beta[2 * idx] = (float)sum[0];
-            j->beta[2 * idx + 1] = (float)sum[1];
-        }
+        const float *q[SPECIES_COUNT];
+        for (int u = 0; u < j->b.used; u++)
+            q[u] = j->in->q[j->b.species[u]] + plane * k;
+        double rho_std = optics_std_atmosphere_density(grid3_centre_z(g, (int)k));
+        ext_beta_run(&j->b, q, j->in->rho_air ? j->in->rho_air + plane * k : NULL, rho_std,
+                     plane, j->beta + 2 * plane * k);
     }
     return true;
 }
@@ -253,17 +304,11 @@ bool ext_volume_from_fields(const struct field_volume *in, const struct optics_p
 {
     if (!ext_volume_init(out, &in->grid))
         return false;
-    struct beta_job j = {.in = in, .scaled = sel != NULL, .beta = out->beta};
-    for (int f = 0; f < SPECIES_COUNT; f++) {
-        double dn = 2.0 * optics->density[f] * optics->radius_m[f];
-        if (!in->q[f] || (sel && !sel->enabled[f]) || !(dn > 0.0))
-            continue;
-        j.q[j.used] = in->q[f];
-        j.denom[j.used] = dn;
-        j.scale[j.used] = sel ? sel->scale[f] : 1.0;
-        j.ice[j.used] = species_is_ice((enum species)f);
-        j.used++;
-    }
+    struct beta_job j = {.in = in, .beta = out->beta};
+    bool present[SPECIES_COUNT];
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        present[f] = in->q[f] != NULL;
+    ext_beta_init(&j.b, optics, sel, present);
     parallel_for((size_t)in->grid.n[2], 1, &j, beta_planes);
     return true;
 }

@@ -157,6 +157,28 @@ void species_select_defaults(struct species_select *s); /* all on, scale 1 */
 bool ext_volume_from_fields(const struct field_volume *in, const struct optics_params *optics,
                             const struct species_select *sel, struct ext_volume *out);
 
+/* ext_volume_from_fields' sum, set up once (ext_beta_init) and run on any run of voxels
+ * (ext_beta_run), for a reader that makes a step's fields a slab at a time and never holds
+ * them whole (wrf_read_step_ext): the same operations in the same order, so the same
+ * numbers. */
+struct ext_beta {
+    int used;                    /* species that add extinction */
+    int species[SPECIES_COUNT];  /* which, in species order */
+    double denom[SPECIES_COUNT]; /* 2 rho_f r_f of each (Nes eq. 5.3) */
+    double scale[SPECIES_COUNT];
+    bool ice[SPECIES_COUNT], scaled;
+};
+
+/* The species PRESENT marks (held by the fields), SEL enables (NULL: all, unscaled) and OPTICS
+ * gives a positive density and radius. */
+void ext_beta_init(struct ext_beta *b, const struct optics_params *optics,
+                   const struct species_select *sel, const bool present[SPECIES_COUNT]);
+
+/* BETA (ice, water pairs) of N voxels from Q[u], the mass ratios of B's u-th species, and the
+ * air density RHO_AIR (NULL, or where not finite or negative: RHO_STD). */
+void ext_beta_run(const struct ext_beta *b, const float *const *q, const float *rho_air,
+                  double rho_std, size_t n, float *beta);
+
 /* Per-species tints (linear RGB in [0, 1]); white everywhere means no tint. */
 struct species_tint {
     float rgb[SPECIES_COUNT][3];

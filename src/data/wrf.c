@@ -937,27 +937,19 @@ static size_t arrays_out(const struct wrf *w, const struct wrf_desc *d)
     return n;
 }
 
+static double step_scratch(const struct wrf *w, const struct wrf_desc *d,
+                           const struct selection *s, int outs);
+
 size_t wrf_step_bytes(const struct wrf *w, const struct wrf_desc *d)
 {
     struct selection s;
     if (!make_selection(w, d, &s))
         return 0;
     /* In double: the dimensions come from the file, and their product may not fit. */
-    double cols = (double)s.nx * s.ny;
-    double out = (double)arrays_out(w, d) * cols * s.nz * sizeof(float);
-    /* Scratch: the summed geopotential and PHB on staggered levels, a mass-level buffer, and
-     * the step's resampling plan (a level index and a weight per output voxel). */
-    double scratch = cols * (2.0 * w->nzs + w->meta.nz) * sizeof(float) +
-                     cols * s.nz * (sizeof(uint16_t) + sizeof(float));
-    /* Temperature and wind speed: a third mass-level buffer; W on its staggered levels. */
-    bool wind = (d->wind || d->wind_components) && w->meta.has_wind;
-    if (d->temperature || wind)
-        scratch += cols * w->meta.nz * sizeof(float);
-    if (wind && w->meta.has_w)
-        scratch += cols * w->nzs * sizeof(float);
-    if (wind && d->wind_components) /* the components and vorticity on the model levels */
-        scratch += 4.0 * cols * w->meta.nz * sizeof(float);
-    double total = out + scratch;
+    double out = (double)arrays_out(w, d) * s.nx * s.ny * s.nz * sizeof(float);
+    if (d->level_heights)
+        out += (double)s.nx * s.ny * w->meta.nz * sizeof(float);
+    double total = out + step_scratch(w, d, &s, 0);
     return total >= (double)SIZE_MAX ? SIZE_MAX : (size_t)total;
 }
 
@@ -1004,23 +996,80 @@ static bool fill_attr(int ncid, int varid, const char *name, float *out)
     return nc_get_att_float(ncid, varid, name, vals) == NC_NOERR && (*out = vals[0], true);
 }
 
-/* sanitize's first pass over one share: any value that is not good (outside [BOTTOM, TOP],
- * NaN, NetCDF's default fill, the variable's fill or missing value: a NaN there compares
- * unequal to everything, so an absent attribute costs nothing), and the range, kept as
- * integers that order as the floats do. */
-struct check {
-    const float *buf;
+/* How one variable's values are checked: a value is bad when outside [BOTTOM, TOP], NaN,
+ * NetCDF's default fill, or the variable's fill or missing value (NaN when it has none: a NaN
+ * compares unequal to everything, so an absent attribute costs nothing). */
+struct var_check {
     float fill, missing, top, bottom;
-    int32_t lo[PARALLEL_MAX], hi[PARALLEL_MAX], bad[PARALLEL_MAX];
+    bool mass; /* a mass ratio: negatives and values above 1 kg/kg are bad too */
+    bool fast; /* a mass ratio whose fill and missing values lie outside [0, 1] */
 };
 
-static bool check_range(void *ctx, int share, size_t begin, size_t end)
+static void var_check_init(const struct wrf *w, int step, enum wrf_var v, struct var_check *c)
 {
-    struct check *c = ctx;
+    const struct wrf_file *f = &w->files[w->steps[step].file];
+    float fv = 0.0f, mv = 0.0f;
+    bool has_fv = fill_attr(f->ncid, f->varid[v], "_FillValue", &fv);
+    bool has_mv = fill_attr(f->ncid, f->varid[v], "missing_value", &mv);
+    c->mass = is_mass_ratio(v);
+    c->fill = has_fv ? fv : NAN;
+    c->missing = has_mv ? mv : NAN;
+    c->top = c->mass ? 1.0f : FLT_MAX;
+    c->bottom = c->mass ? 0.0f : -FLT_MAX;
+    /* NaN fails both comparisons. */
+    c->fast = c->mass && !(c->fill >= 0.0f && c->fill <= 1.0f) &&
+              !(c->missing >= 0.0f && c->missing <= 1.0f);
+}
+
+/* What checking found in some of a variable's values: the counts of struct wrf_var_stats and
+ * the range [LO, HI] of the good values (LO > HI: none yet).  Adding up the parts in any order
+ * gives the whole's. */
+struct check_sum {
+    size_t count, nan, inf, fill, negative, absurd;
+    double lo, hi;
+};
+
+static void check_sum_init(struct check_sum *a)
+{
+    *a = (struct check_sum){.lo = INFINITY, .hi = -INFINITY};
+}
+
+static void check_sum_add(struct check_sum *a, const struct check_sum *b)
+{
+    a->count += b->count;
+    a->nan += b->nan;
+    a->inf += b->inf;
+    a->fill += b->fill;
+    a->negative += b->negative;
+    a->absurd += b->absurd;
+    a->lo = fmin(a->lo, b->lo);
+    a->hi = fmax(a->hi, b->hi);
+}
+
+static void check_sum_stats(const struct check_sum *a, struct wrf_var_stats *st)
+{
+    *st = (struct wrf_var_stats){.read = true, .count = a->count, .nan = a->nan, .inf = a->inf,
+                                 .fill = a->fill, .negative = a->negative,
+                                 .absurd = a->absurd};
+    /* + 0: -0 reads as 0 */
+    st->min = a->lo <= a->hi ? a->lo + 0.0 : 0.0;
+    st->max = a->lo <= a->hi ? a->hi + 0.0 : 0.0;
+}
+
+/* Checks the N values of BUF as C says, replaces bad ones by REPLACEMENT, and adds what it
+ * found to SUM. */
+static void check_values(const struct var_check *c, float *buf, size_t n, float replacement,
+                         struct check_sum *sum)
+{
+    sum->count += n;
+    if (n == 0)
+        return;
+    /* One branch-free pass first (it vectorises), keeping the range as integers that order as
+     * the floats do: when every value is good, that is all. */
     const float fvv = c->fill, mvv = c->missing, top = c->top, bottom = c->bottom;
     int32_t klo = INT32_MAX, khi = INT32_MIN, bad = 0;
-    for (size_t i = begin; i < end; i++) {
-        float x = c->buf[i];
+    for (size_t i = 0; i < n; i++) {
+        float x = buf[i];
         int32_t b;
         memcpy(&b, &x, sizeof(b));
         int32_t key = b ^ ((b >> 31) & 0x7fffffff);
@@ -1029,78 +1078,36 @@ static bool check_range(void *ctx, int share, size_t begin, size_t end)
         bad |= (int32_t)!(x >= bottom) | (int32_t)!(x <= top) | (int32_t)(x == NC_FILL_FLOAT) |
                (int32_t)(x == fvv) | (int32_t)(x == mvv);
     }
-    c->lo[share] = klo;
-    c->hi[share] = khi;
-    c->bad[share] = bad;
-    return true;
-}
-
-/* Replaces bad values by REPLACEMENT and counts them.  Mass ratios also lose negatives and
- * values above 1 kg/kg. */
-static void sanitize(const struct wrf *w, int step, enum wrf_var v, float *buf, size_t n,
-                     float replacement, struct wrf_var_stats *st)
-{
-    const struct wrf_file *f = &w->files[w->steps[step].file];
-    float fv = 0.0f, mv = 0.0f;
-    bool has_fv = fill_attr(f->ncid, f->varid[v], "_FillValue", &fv);
-    bool has_mv = fill_attr(f->ncid, f->varid[v], "missing_value", &mv);
-    bool mass = is_mass_ratio(v);
-    memset(st, 0, sizeof(*st));
-    st->read = true;
-    st->count = n;
-    double lo = INFINITY, hi = -INFINITY;
-    /* Fast path for the usual good mass ratio (NaN fails both comparisons). */
-    bool fast =
-        mass && !(has_fv && fv >= 0.0f && fv <= 1.0f) && !(has_mv && mv >= 0.0f && mv <= 1.0f);
-    float flo = INFINITY, fhi = -INFINITY;
-    {
-        /* One branch-free pass first (it vectorises, a share per thread): when every value is
-         * good, that is all. */
-        struct check c = {.buf = buf,
-                          .fill = has_fv ? fv : NAN,
-                          .missing = has_mv ? mv : NAN,
-                          .top = mass ? 1.0f : FLT_MAX,
-                          .bottom = mass ? 0.0f : -FLT_MAX};
-        for (int t = 0; t < PARALLEL_MAX; t++) {
-            c.lo[t] = INT32_MAX;
-            c.hi[t] = INT32_MIN;
-        }
-        parallel_for(n, 1 << 20, &c, check_range);
-        int32_t klo = INT32_MAX, khi = INT32_MIN, bad = 0;
-        for (int t = 0; t < PARALLEL_MAX; t++) {
-            klo = c.lo[t] < klo ? c.lo[t] : klo;
-            khi = c.hi[t] > khi ? c.hi[t] : khi;
-            bad |= c.bad[t];
-        }
-        if (!bad) {
-            if (n > 0) {
-                int32_t blo = klo ^ ((klo >> 31) & 0x7fffffff);
-                int32_t bhi = khi ^ ((khi >> 31) & 0x7fffffff);
-                memcpy(&flo, &blo, sizeof(flo));
-                memcpy(&fhi, &bhi, sizeof(fhi));
-            }
-            st->min = n > 0 ? flo + 0.0f : 0.0; /* + 0: -0 reads as 0 */
-            st->max = n > 0 ? fhi + 0.0f : 0.0;
-            return;
-        }
+    if (!bad) {
+        int32_t blo = klo ^ ((klo >> 31) & 0x7fffffff);
+        int32_t bhi = khi ^ ((khi >> 31) & 0x7fffffff);
+        float flo, fhi;
+        memcpy(&flo, &blo, sizeof(flo));
+        memcpy(&fhi, &bhi, sizeof(fhi));
+        sum->lo = fmin(sum->lo, flo);
+        sum->hi = fmax(sum->hi, fhi);
+        return;
     }
+    /* Some value is bad: count each kind. */
+    double lo = INFINITY, hi = -INFINITY;
+    float flo = INFINITY, fhi = -INFINITY; /* the usual good mass ratio */
     for (size_t i = 0; i < n; i++) {
         float x = buf[i];
-        if (fast && x >= 0.0f && x <= 1.0f) {
+        if (c->fast && x >= 0.0f && x <= 1.0f) {
             flo = x < flo ? x : flo;
             fhi = x > fhi ? x : fhi;
             continue;
         }
         if (isnan(x)) {
-            st->nan++;
+            sum->nan++;
         } else if (isinf(x)) {
-            st->inf++;
-        } else if (x == NC_FILL_FLOAT || (has_fv && x == fv) || (has_mv && x == mv)) {
-            st->fill++;
-        } else if (mass && x < 0.0f) {
-            st->negative++;
-        } else if (mass && x > 1.0f) {
-            st->absurd++;
+            sum->inf++;
+        } else if (x == NC_FILL_FLOAT || x == fvv || x == mvv) {
+            sum->fill++;
+        } else if (c->mass && x < 0.0f) {
+            sum->negative++;
+        } else if (c->mass && x > 1.0f) {
+            sum->absurd++;
         } else {
             if (x < lo)
                 lo = x;
@@ -1114,8 +1121,41 @@ static void sanitize(const struct wrf *w, int step, enum wrf_var v, float *buf, 
         lo = fmin(lo, flo);
         hi = fmax(hi, fhi);
     }
-    st->min = lo <= hi ? lo : 0.0;
-    st->max = lo <= hi ? hi : 0.0;
+    sum->lo = fmin(sum->lo, lo);
+    sum->hi = fmax(sum->hi, hi);
+}
+
+/* sanitize over one share. */
+struct check_job {
+    const struct var_check *c;
+    float *buf;
+    float replacement;
+    struct check_sum sum[PARALLEL_MAX];
+};
+
+static bool check_share(void *ctx, int share, size_t begin, size_t end)
+{
+    struct check_job *j = ctx;
+    check_values(j->c, j->buf + begin, end - begin, j->replacement, &j->sum[share]);
+    return true;
+}
+
+/* Replaces bad values of a whole variable by REPLACEMENT and counts them (check_values), a
+ * share per thread.  Mass ratios also lose negatives and values above 1 kg/kg. */
+static void sanitize(const struct wrf *w, int step, enum wrf_var v, float *buf, size_t n,
+                     float replacement, struct wrf_var_stats *st)
+{
+    struct var_check c;
+    var_check_init(w, step, v, &c);
+    struct check_job j = {.c = &c, .buf = buf, .replacement = replacement};
+    for (int t = 0; t < PARALLEL_MAX; t++)
+        check_sum_init(&j.sum[t]);
+    parallel_for(n, 1 << 20, &j, check_share);
+    struct check_sum all;
+    check_sum_init(&all);
+    for (int t = 0; t < PARALLEL_MAX; t++)
+        check_sum_add(&all, &j.sum[t]);
+    check_sum_stats(&all, st);
 }
 
 /* Logs what sanitize found; false (error) when no value at all was usable. */
@@ -1265,7 +1305,7 @@ struct plan {
     size_t cols;
     int nz, no;
     const float *zw;     /* staggered heights, m: zw[k * cols + c] (while the plan is made) */
-    const struct grid3 *g; /* the output grid (while the plan is made) */
+    const double *zc;    /* the output levels' heights, m (while the plan is made) */
     double tol;          /* a target this close to a level takes its value */
     uint16_t *k;         /* [o * cols + c]: the lower mass level, or PLAN_OUTSIDE */
     float *t;            /* the weight of level k + 1; 0: level k's value as it is */
@@ -1297,7 +1337,7 @@ static bool plan_blocks(void *ctx, int share, size_t begin, size_t end)
             int k = 0;
             for (int o = 0; o < no; o++) {
                 /* wrf_resample_column's cases, in its order. */
-                double zt = grid3_centre_z(p->g, o);
+                double zt = p->zc[o];
                 uint16_t kk;
                 float t = 0.0f;
                 if (zt < zg - tol || zt > ztop + tol) {
@@ -1348,36 +1388,6 @@ static void plan_finish(struct plan *p)
     memset(p, 0, sizeof(*p));
 }
 
-/* The plan of the levels of grid G over COLS columns whose NZ + 1 staggered heights ZW hold.
- * False (logged) when out of memory. */
-static bool plan_make(struct plan *p, const float *zw, size_t cols, int nz, const struct grid3 *g)
-{
-    int no = g->n[2];
-    *p = (struct plan){.cols = cols, .nz = nz, .no = no, .zw = zw, .g = g,
-                       .tol = 1e-4 * fabs(grid3_min_dz(g))};
-    if (nz >= PLAN_OUTSIDE) {
-        log_error("%d mass levels: at most %d can be resampled", nz, PLAN_OUTSIDE - 1);
-        return false;
-    }
-    p->k = malloc(cols * (size_t)no * sizeof(uint16_t));
-    p->t = malloc(cols * (size_t)no * sizeof(float));
-    bool ok = p->k && p->t;
-    if (ok) {
-        ok = parallel_for((cols + BLOCK - 1) / BLOCK, 16, p, plan_blocks);
-        for (int t = 0; t < PARALLEL_MAX; t++) {
-            p->below += p->share_below[t];
-            p->above += p->share_above[t];
-        }
-    }
-    p->zw = NULL;
-    p->g = NULL;
-    if (!ok) {
-        log_error("out of memory resampling %d-level columns", nz);
-        plan_finish(p);
-    }
-    return ok;
-}
-
 /* One variable through the plan: the mass levels BUF (nz * cols) into the output OUT. */
 struct apply {
     const struct plan *p;
@@ -1386,7 +1396,20 @@ struct apply {
     const float *fill; /* NULL, or per output level: the value of a voxel that came out NaN
                           (outside, or from a bad input) */
     float *out;
+    size_t out_stride; /* between the output's planes */
 };
+
+/* Output voxel I = o * cols + c of the mass levels BUF through the plan. */
+static inline float apply_one(const struct plan *p, const float *buf, float outside, size_t i,
+                              size_t c)
+{
+    uint16_t k = p->k[i];
+    if (k == PLAN_OUTSIDE)
+        return outside;
+    float v0 = buf[(size_t)k * p->cols + c];
+    double t = p->t[i];
+    return t == 0.0 ? v0 : (float)((1.0 - t) * v0 + t * buf[(size_t)(k + 1) * p->cols + c]);
+}
 
 static bool apply_planes(void *ctx, int share, size_t begin, size_t end)
 {
@@ -1394,22 +1417,9 @@ static bool apply_planes(void *ctx, int share, size_t begin, size_t end)
     const struct plan *p = a->p;
     size_t cols = p->cols;
     for (size_t o = begin; o < end; o++) {
-        const uint16_t *kp = p->k + cols * o;
-        const float *tp = p->t + cols * o;
-        float *dst = a->out + cols * o;
-        for (size_t c = 0; c < cols; c++) {
-            uint16_t k = kp[c];
-            float r;
-            if (k == PLAN_OUTSIDE) {
-                r = a->outside;
-            } else {
-                float v0 = a->buf[(size_t)k * cols + c];
-                double t = tp[c];
-                r = t == 0.0 ? v0
-                             : (float)((1.0 - t) * v0 + t * a->buf[(size_t)(k + 1) * cols + c]);
-            }
-            dst[c] = r;
-        }
+        float *dst = a->out + a->out_stride * o;
+        for (size_t c = 0; c < cols; c++)
+            dst[c] = apply_one(p, a->buf, a->outside, cols * o + c, c);
         if (a->fill) {
             for (size_t c = 0; c < cols; c++)
                 if (!isfinite(dst[c]))
@@ -1424,7 +1434,8 @@ static bool apply_planes(void *ctx, int share, size_t begin, size_t end)
 static void resample_var(const struct plan *p, const float *buf, float outside,
                          const float *fill, float *out)
 {
-    struct apply a = {.p = p, .buf = buf, .outside = outside, .fill = fill, .out = out};
+    struct apply a = {
+        .p = p, .buf = buf, .outside = outside, .fill = fill, .out = out, .out_stride = p->cols};
     parallel_for((size_t)p->no, 1, &a, apply_planes);
 }
 
@@ -1438,19 +1449,24 @@ struct air {
     bool density;
 };
 
+/* The density of air at pressure P (P + PB) and perturbation potential temperature T; NaN
+ * where they were bad. */
+static inline float air_density(float p, float t)
+{
+    double rho = optics_wrf_air_density_fast(p, (double)t + WRF_T0);
+    return (isfinite(rho) && rho > 0.0) ? (float)rho : NAN;
+}
+
 static bool air_range(void *ctx, int share, size_t begin, size_t end)
 {
     const struct air *a = ctx;
     for (size_t i = begin; i < end; i++) {
-        double p = a->p[i], theta = (double)a->theta[i] + WRF_T0;
         if (a->temperature) {
-            double t = optics_wrf_temperature_fast(p, theta);
+            double t = optics_wrf_temperature_fast(a->p[i], (double)a->theta[i] + WRF_T0);
             a->temperature[i] = t > 0.0 ? (float)t : NAN;
         }
-        if (a->density) {
-            double rho = optics_wrf_air_density_fast(p, theta);
-            a->p[i] = (isfinite(rho) && rho > 0.0) ? (float)rho : NAN;
-        }
+        if (a->density)
+            a->p[i] = air_density(a->p[i], a->theta[i]);
     }
     return true;
 }
@@ -1537,10 +1553,371 @@ static bool wind_speed(const struct wrf *w, int step, const struct selection *s,
     return true;
 }
 
-bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct field_volume *out,
-                   struct wrf_stats *stats)
+/* The wind of a step (fields OUT->wind and, with D's components, u, v, w and vorticity)
+ * through the step's plan P: its staggered variables and the vorticity's neighbours need
+ * whole planes, so it is read whole, after the slabs. */
+static bool read_wind(const struct wrf *w, int step, const struct wrf_desc *d,
+                      const struct selection *s, const struct plan *p, struct field_volume *out,
+                      struct wrf_stats *stats)
+{
+    const char *path = w->files[w->steps[step].file].path;
+    const struct wrf_file *sf = &w->files[w->steps[step].file];
+    struct columns c = {.nz = w->meta.nz, .nzs = w->nzs, .cols = (size_t)s->nx * s->ny};
+    size_t nout = p->cols * (size_t)p->no, nm = c.cols * (size_t)c.nz;
+    float *comp[3] = {NULL, NULL, NULL}, *vort = NULL;
+    bool ok = false, has_w = sf->varid[WRF_W] >= 0;
+    float *buf = malloc(nm * sizeof(float)), *buf2 = malloc(nm * sizeof(float));
+    float *buf3 = malloc(nm * sizeof(float));
+    out->wind = malloc(nout * sizeof(float));
+    if (!buf || !buf2 || !buf3 || !out->wind) {
+        log_error("%s: out of memory for wind speed", path);
+        goto done;
+    }
+    if (d->wind_components) {
+        bool cok = true;
+        for (int i = 0; i < 4; i++) {
+            float **dst = i < 3 ? &comp[i] : &vort;
+            *dst = malloc(nm * sizeof(float));
+            cok = cok && *dst;
+        }
+        out->u = malloc(nout * sizeof(float));
+        out->v = malloc(nout * sizeof(float));
+        out->w = has_w ? malloc(nout * sizeof(float)) : NULL;
+        out->vorticity = malloc(nout * sizeof(float));
+        if (!cok || !out->u || !out->v || (!out->w && has_w) || !out->vorticity) {
+            log_error("%s: out of memory for the wind's components", path);
+            goto done;
+        }
+    }
+    /* S's columns are S.sx and S.sy mass columns apart. */
+    data_nc_lock_file(path, "reading", false);
+    ok = wind_speed(w, step, s, &c, buf, buf2, buf3, d->wind_components ? comp : NULL, vort,
+                    w->meta.dx * s->sx, w->meta.dy * s->sy, stats);
+    data_nc_unlock();
+    if (ok) {
+        resample_var(p, buf3, 0.0f, NULL, out->wind);
+        if (d->wind_components) {
+            resample_var(p, comp[0], 0.0f, NULL, out->u);
+            resample_var(p, comp[1], 0.0f, NULL, out->v);
+            if (has_w)
+                resample_var(p, comp[2], 0.0f, NULL, out->w);
+            resample_var(p, vort, 0.0f, NULL, out->vorticity);
+        }
+    }
+done:
+    for (int i = 0; i < 3; i++)
+        free(comp[i]);
+    free(vort);
+    free(buf);
+    free(buf2);
+    free(buf3);
+    return ok;
+}
+
+/* ---- a step, slab by slab ---------------------------------------------------------------- */
+
+/* A step is read in slabs of whole rows of the selection (about SLAB_COLUMNS columns): every
+ * variable of a slab is read (one hyperslab each), checked and resampled before the next slab,
+ * so a thread's scratch is a few MiB, allocated once per step and reused while it is in the
+ * caches, and the step's heights and plan are never held whole.  Each thread takes a run of
+ * slabs; NetCDF reads are serialised by the lock, so one thread reads while another computes.
+ * Every value is computed as the passes over whole variables computed it: the same numbers,
+ * whatever the slabs. */
+#define SLAB_COLUMNS 4096
+
+/* What checking, the heights and the plan found in one slab. */
+struct slab_result {
+    struct check_sum sum[WRF_VAR_COUNT];
+    size_t range; /* the first height out of range, as k * cols + column; SIZE_MAX: none */
+    float range_z;
+    size_t order; /* the first column whose mass levels do not increase; SIZE_MAX: none */
+    size_t below, above;
+};
+
+struct step_job {
+    const struct wrf *w;
+    int step;
+    const char *path;
+    const struct selection *s;
+    const struct grid3 *g;
+    int nz, nzs, no, rows;
+    size_t cols, slabs;
+    struct var_check check[WRF_VAR_COUNT];
+    int nmass; /* mass ratios read: MASS, in variable order */
+    enum wrf_var mass[SPECIES_COUNT + 1];
+    float *mass_out[SPECIES_COUNT + 1]; /* the step's output of each (fields) */
+    bool air, density, temperature;     /* P, PB and T read; what is made of them */
+    const float *fill_rho, *fill_t;     /* per output level: the standard atmosphere */
+    float *rho_out, *t_out, *level_z;   /* the step's outputs (fields; NULL: not made) */
+    const struct ext_beta *beta;        /* NULL: fields; else extinction into BETA_OUT, MASS
+                                           being BETA's species */
+    const double *rho_std;              /* per output level (extinction) */
+    const double *zc;                   /* per output level: its height */
+    float *beta_out;
+    struct plan *whole; /* NULL, or the step's plan, kept for the wind (read_wind) */
+    bool scan;          /* only read and check (wrf_scan_step): no plan, no outputs */
+    struct slab_result *res; /* one per slab */
+};
+
+static bool slab_read(const struct step_job *j, enum wrf_var v, const struct selection *ss,
+                      int levels, float *buf)
+{
+    data_nc_lock_file(j->path, "reading", false);
+    bool ok = read_var(j->w, j->step, v, ss, levels, buf);
+    data_nc_unlock();
+    return ok;
+}
+
+/* One variable of a slab through its plan P (P->cols columns) into OUT, OUT_STRIDE apart
+ * between output planes. */
+static void slab_apply(const struct plan *p, const float *buf, float outside, const float *fill,
+                       float *out, size_t out_stride)
+{
+    struct apply a = {.p = p, .buf = buf, .outside = outside, .fill = fill, .out = out,
+                      .out_stride = out_stride};
+    apply_planes(&a, 0, 0, (size_t)p->no);
+}
+
+/* The air density of a slab for extinction into RHO, through plan P, from P + PB in PRES and T
+ * in THETA (mass levels): extinction needs it only where one of the NMASS resampled mass
+ * ratios Q (plane by plane, STRIDE floats apart) adds some, so only the mass levels those
+ * voxels are resampled from are worked out, and RHO is 0 elsewhere (where extinction is 0
+ * whatever the density).  MARK: scratch of a byte per mass-level and output value. */
+static void slab_density(const struct plan *p, const float *q, int nmass, size_t stride,
+                         float *pres, const float *theta, const float *fill, uint8_t *mark,
+                         float *rho)
+{
+    size_t sc = p->cols, no = (size_t)p->no, nm = sc * (size_t)p->nz;
+    uint8_t *need = mark + nm;
+    memset(mark, 0, nm);
+    memset(need, 0, sc * no);
+    for (int m = 0; m < nmass; m++) { /* species by species: it vectorises */
+        const float *qm = q + (size_t)m * stride;
+        for (size_t i = 0; i < sc * no; i++) {
+            /* ext_beta_run's test, 0 < x <= FLT_MAX, on the bits: one unsigned comparison */
+            uint32_t b;
+            memcpy(&b, &qm[i], sizeof(b));
+            need[i] |= (uint8_t)(b - 1u < 0x7f7fffffu);
+        }
+    }
+    for (size_t i = 0; i < sc * no; i++) {
+        uint16_t k = p->k[i];
+        if (need[i] && k != PLAN_OUTSIDE) {
+            size_t c = i % sc;
+            mark[(size_t)k * sc + c] = 1;
+            if (p->t[i] != 0.0f)
+                mark[(size_t)(k + 1) * sc + c] = 1;
+        }
+    }
+    for (size_t i = 0; i < nm; i++)
+        if (mark[i])
+            pres[i] = air_density(pres[i], theta[i]);
+    for (size_t o = 0; o < no; o++) {
+        for (size_t c = 0; c < sc; c++) {
+            size_t i = o * sc + c;
+            float r = 0.0f;
+            if (need[i]) {
+                r = apply_one(p, pres, NAN, i, c);
+                if (!isfinite(r))
+                    r = fill[o];
+            }
+            rho[i] = r;
+        }
+    }
+}
+
+/* Slabs [begin, end). */
+static bool step_slabs(void *ctx, int share, size_t begin, size_t end)
+{
+    const struct step_job *j = ctx;
+    const struct selection *s = j->s;
+    size_t scm = (size_t)j->rows * (size_t)s->nx, nz = (size_t)j->nz, nzs = (size_t)j->nzs,
+           no = (size_t)j->no;
+    bool ext = j->beta != NULL;
+    /* Extinction: the slab's resampled mass ratios, then its air density. */
+    size_t outs = ext ? (size_t)j->nmass + j->density : 0;
+    float *zw = malloc(scm * nzs * sizeof(float)), *phb = malloc(scm * nzs * sizeof(float));
+    /* BUF2 holds PHB on the staggered levels first, then mass-level variables. */
+    float *buf = malloc(scm * nz * sizeof(float)), *buf2 = phb;
+    float *buf3 = j->temperature ? malloc(scm * nz * sizeof(float)) : NULL;
+    float *slab_out = outs ? malloc(outs * scm * no * sizeof(float)) : NULL;
+    struct plan p = {.nz = j->nz, .no = j->no, .zc = j->zc,
+                     .tol = 1e-4 * fabs(grid3_min_dz(j->g))};
+    p.k = malloc(scm * no * sizeof(uint16_t));
+    p.t = malloc(scm * no * sizeof(float));
+    uint8_t *mark = ext && j->density ? malloc(scm * (nz + no)) : NULL;
+    bool ok = zw && phb && buf && buf2 && (buf3 || !j->temperature) && (slab_out || !outs) &&
+              p.k && p.t && (mark || !(ext && j->density));
+    if (!ok)
+        log_error("%s: out of memory reading time step %d", j->path, j->step);
+    for (size_t sl = begin; sl < end && ok; sl++) {
+        int row0 = (int)sl * j->rows;
+        int rows = s->ny - row0 < j->rows ? s->ny - row0 : j->rows;
+        size_t sc = (size_t)rows * (size_t)s->nx, c0 = (size_t)row0 * (size_t)s->nx;
+        struct selection ss = *s;
+        ss.y0 = s->y0 + row0 * s->sy;
+        ss.ny = rows;
+        struct slab_result *r = &j->res[sl];
+
+        /* Heights: (PH + PHB) / g on staggered levels, checked; then the slab's plan. */
+        ok = slab_read(j, WRF_PH, &ss, j->nzs, zw) && slab_read(j, WRF_PHB, &ss, j->nzs, phb);
+        if (!ok)
+            break;
+        check_values(&j->check[WRF_PH], zw, sc * nzs, NAN, &r->sum[WRF_PH]);
+        check_values(&j->check[WRF_PHB], phb, sc * nzs, NAN, &r->sum[WRF_PHB]);
+        struct heights h = {.zw = zw, .phb = phb, .cols = sc, .nz = j->nz};
+        h.range[0] = h.order[0] = SIZE_MAX;
+        heights_columns(&h, 0, 0, sc);
+        if (h.range[0] != SIZE_MAX) {
+            r->range = h.range[0] / sc * j->cols + c0 + h.range[0] % sc;
+            r->range_z = zw[h.range[0]];
+        }
+        if (h.order[0] != SIZE_MAX)
+            r->order = c0 + h.order[0];
+        if (j->scan) {
+            for (int m = 0; m < j->nmass && ok; m++) {
+                ok = slab_read(j, j->mass[m], &ss, j->nz, buf);
+                if (ok)
+                    check_values(&j->check[j->mass[m]], buf, sc * nz, 0.0f, &r->sum[j->mass[m]]);
+            }
+            for (int v = WRF_P; v <= WRF_T && ok && j->air; v++) {
+                ok = slab_read(j, (enum wrf_var)v, &ss, j->nz, buf);
+                if (ok)
+                    check_values(&j->check[v], buf, sc * nz, NAN, &r->sum[v]);
+            }
+            continue;
+        }
+        if (j->level_z) { /* the mass levels' heights, half way between their staggered ones */
+            for (size_t k = 0; k < nz; k++)
+                for (size_t c = 0; c < sc; c++)
+                    j->level_z[k * j->cols + c0 + c] =
+                        0.5f * (zw[k * sc + c] + zw[(k + 1) * sc + c]);
+        }
+        p.cols = sc;
+        p.zw = zw;
+        p.share_below[0] = p.share_above[0] = 0;
+        ok = plan_blocks(&p, 0, 0, (sc + BLOCK - 1) / BLOCK);
+        if (!ok) {
+            log_error("%s: out of memory resampling time step %d", j->path, j->step);
+            break;
+        }
+        r->below = p.share_below[0];
+        r->above = p.share_above[0];
+        for (size_t o = 0; j->whole && o < no; o++) {
+            memcpy(j->whole->k + o * j->cols + c0, p.k + o * sc, sc * sizeof(uint16_t));
+            memcpy(j->whole->t + o * j->cols + c0, p.t + o * sc, sc * sizeof(float));
+        }
+
+        for (int m = 0; m < j->nmass && ok; m++) {
+            enum wrf_var v = j->mass[m];
+            ok = slab_read(j, v, &ss, j->nz, buf);
+            if (!ok)
+                break;
+            check_values(&j->check[v], buf, sc * nz, 0.0f, &r->sum[v]);
+            if (ext)
+                slab_apply(&p, buf, 0.0f, NULL, slab_out + (size_t)m * scm * no, sc);
+            else
+                slab_apply(&p, buf, 0.0f, NULL, j->mass_out[m] + c0, j->cols);
+        }
+        if (!ok)
+            break;
+
+        /* Air: P + PB and T, temperature and density in one pass, resampled with the standard
+         * atmosphere where they came out NaN. */
+        float *rho_slab = ext && j->density ? slab_out + (size_t)j->nmass * scm * no : NULL;
+        if (j->air) {
+            ok = slab_read(j, WRF_P, &ss, j->nz, buf) && slab_read(j, WRF_PB, &ss, j->nz, buf2);
+            if (!ok)
+                break;
+            check_values(&j->check[WRF_P], buf, sc * nz, NAN, &r->sum[WRF_P]);
+            check_values(&j->check[WRF_PB], buf2, sc * nz, NAN, &r->sum[WRF_PB]);
+            for (size_t i = 0; i < sc * nz; i++)
+                buf[i] += buf2[i];
+            ok = slab_read(j, WRF_T, &ss, j->nz, buf2);
+            if (!ok)
+                break;
+            check_values(&j->check[WRF_T], buf2, sc * nz, NAN, &r->sum[WRF_T]);
+            if (rho_slab) {
+                slab_density(&p, slab_out, j->nmass, scm * no, buf, buf2, j->fill_rho, mark,
+                             rho_slab);
+            } else {
+                struct air a = {.p = buf, .theta = buf2, .temperature = buf3,
+                                .density = j->density};
+                air_range(&a, 0, 0, sc * nz);
+                if (j->temperature)
+                    slab_apply(&p, buf3, NAN, j->fill_t, j->t_out + c0, j->cols);
+                if (j->density)
+                    slab_apply(&p, buf, NAN, j->fill_rho, j->rho_out + c0, j->cols);
+            }
+        }
+
+        if (ext) {
+            for (size_t o = 0; o < no; o++) {
+                const float *q[SPECIES_COUNT];
+                for (int m = 0; m < j->nmass; m++)
+                    q[m] = slab_out + (size_t)m * scm * no + o * sc;
+                ext_beta_run(j->beta, q, rho_slab ? rho_slab + o * sc : NULL, j->rho_std[o], sc,
+                             j->beta_out + 2 * (o * j->cols + c0));
+            }
+        }
+    }
+    free(zw);
+    free(phb);
+    free(buf);
+    free(buf3);
+    free(slab_out);
+    free(mark);
+    free(p.k);
+    free(p.t);
+    return ok;
+}
+
+/* Rows of columns a slab of S holds. */
+static int slab_rows(const struct wrf_desc *d, const struct selection *s)
+{
+    int rows = d->slab_rows > 0 ? d->slab_rows : SLAB_COLUMNS / s->nx;
+    return rows < 1 ? 1 : rows > s->ny ? s->ny : rows;
+}
+
+/* The scratch of reading a step of S slab by slab (a thread per CPU, OUTS: extinction's
+ * resampled slabs) and, with the wind, of reading it whole. */
+static double step_scratch(const struct wrf *w, const struct wrf_desc *d,
+                           const struct selection *s, int outs)
+{
+    double cols = (double)s->nx * s->ny;
+    double scm = (double)slab_rows(d, s) * s->nx, slabs = ceil(s->ny / (double)slab_rows(d, s));
+    double threads = fmin(parallel_share_count((size_t)slabs, 1), slabs);
+    /* Per thread: PH and PHB on staggered levels (PHB's then holds a mass-level variable),
+     * a mass-level buffer (two with temperature), the slab's plan (a level index and a weight
+     * per output voxel), and for extinction the slab's outputs. */
+    double slab = scm * (2.0 * w->nzs + (1.0 + d->temperature) * w->meta.nz) * sizeof(float) +
+                  scm * s->nz * (sizeof(uint16_t) + sizeof(float) + outs * sizeof(float));
+    if (outs > 0 && !d->no_density) /* which voxels extinction needs the density of */
+        slab += scm * (w->meta.nz + s->nz);
+    double scratch = threads * slab + slabs * sizeof(struct slab_result);
+    bool wind = (d->wind || d->wind_components) && w->meta.has_wind;
+    if (wind) {
+        /* The step's plan, three mass-level buffers; W on its staggered levels; the
+         * components and vorticity on the model levels. */
+        scratch += cols * 3.0 * w->meta.nz * sizeof(float) +
+                   cols * s->nz * (sizeof(uint16_t) + sizeof(float));
+        if (w->meta.has_w)
+            scratch += cols * w->nzs * sizeof(float);
+        if (d->wind_components)
+            scratch += 4.0 * cols * w->meta.nz * sizeof(float);
+    }
+    return scratch;
+}
+
+/* wrf_read_step (BETA NULL: fields into OUT), or wrf_read_step_ext (extinction with BETA's
+ * species into EXT; OUT only holds the grid). */
+static bool read_step(struct wrf *w, int step, const struct wrf_desc *d, bool scan,
+                      const struct ext_beta *beta, struct field_volume *out,
+                      struct ext_volume *ext, struct wrf_stats *stats)
 {
     memset(out, 0, sizeof(*out));
+    if (ext)
+        memset(ext, 0, sizeof(*ext));
     struct wrf_stats local;
     if (!stats)
         stats = &local;
@@ -1551,11 +1928,18 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
         return false;
     }
     const char *path = w->files[w->steps[step].file].path;
+    const struct wrf_file *sf = &w->files[w->steps[step].file];
     struct selection s;
-    if (!make_selection(w, d, &s) ||
-        !data_nc_still_whole(path, &w->files[w->steps[step].file].layout))
+    if (!make_selection(w, d, &s) || !data_nc_still_whole(path, &sf->layout))
         return false;
-    size_t need = wrf_step_bytes(w, d);
+    size_t need;
+    if (beta) {
+        double n = (double)s.nx * s.ny * s.nz * 2.0 * sizeof(float) +
+                   step_scratch(w, d, &s, beta->used + !d->no_density);
+        need = n >= (double)SIZE_MAX ? SIZE_MAX : (size_t)n;
+    } else {
+        need = wrf_step_bytes(w, d);
+    }
     if ((d->memory_mb > 0 && (double)need > d->memory_mb * 1048576.0) || need == SIZE_MAX) {
         log_error("%s: one time step on a %d x %d x %d grid needs %.0f MiB, above the budget "
                   "data.memory = %.0f MiB: subsample with data.stride or data.crop (or fewer "
@@ -1563,68 +1947,143 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
                   path, s.nx, s.ny, s.nz, (double)need / 1048576.0, d->memory_mb);
         return false;
     }
-
-    struct columns c = {.nz = w->meta.nz, .nzs = w->nzs, .cols = (size_t)s.nx * s.ny};
-    struct plan plan = {0};
-    float *buf = NULL, *buf2 = NULL, *buf3 = NULL, *fill = NULL;
-    bool ok = false;
-    const struct wrf_file *sf = &w->files[w->steps[step].file];
+    struct grid3 *g = &out->grid;
+    if (!output_grid(w, d, &s, g))
+        return false;
+    size_t cols = (size_t)s.nx * s.ny, nout = grid3_count(g);
+    int no = g->n[2];
     bool ask_wind = d->wind || d->wind_components;
-    bool want_wind = ask_wind && sf->varid[WRF_U] >= 0 && sf->varid[WRF_V] >= 0;
-    if (ask_wind && !want_wind)
+    bool want_wind = !beta && !scan && ask_wind && sf->varid[WRF_U] >= 0 &&
+                     sf->varid[WRF_V] >= 0;
+    if (!beta && !scan && ask_wind && !want_wind)
         log_warn("%s: no usable U and V (the staggered wind): wind speed unavailable", path);
-    c.zw = malloc(c.cols * (size_t)c.nzs * sizeof(float));
-    /* BUF holds PHB on the staggered levels first, then mass-level variables. */
-    buf = malloc(c.cols * (size_t)c.nzs * sizeof(float));
-    buf2 = malloc(c.cols * (size_t)c.nz * sizeof(float));
-    if (d->temperature || want_wind)
-        buf3 = malloc(c.cols * (size_t)c.nz * sizeof(float));
-    if (!c.zw || !buf || !buf2 || ((d->temperature || want_wind) && !buf3)) {
+
+    struct step_job j = {.w = w, .step = step, .path = path, .s = &s, .g = g, .nz = w->meta.nz,
+                         .nzs = w->nzs, .no = no, .rows = slab_rows(d, &s), .cols = cols,
+                         .beta = beta, .scan = scan};
+    j.slabs = ((size_t)s.ny + (size_t)j.rows - 1) / (size_t)j.rows;
+    struct plan whole = {.cols = cols, .nz = j.nz, .no = no}; /* the wind's */
+    j.density = !d->no_density;
+    j.temperature = !beta && !scan && d->temperature;
+    j.air = j.density || j.temperature;
+    float *fill = malloc(2 * (size_t)no * sizeof(float));
+    double *rho_std = malloc(2 * (size_t)no * sizeof(double));
+    j.res = malloc(j.slabs * sizeof(*j.res));
+    bool ok = fill && rho_std && j.res;
+    if (beta) {
+        for (int u = 0; u < beta->used; u++)
+            j.mass[j.nmass++] = (enum wrf_var)beta->species[u];
+        ok = ok && ext_volume_init(ext, g);
+        j.beta_out = ext->beta;
+    } else {
+        for (int v = 0; v <= WRF_QVAPOR; v++) {
+            if (v < SPECIES_COUNT ? !w->meta.has_species[v] : !(d->qvapor && w->meta.has_qvapor))
+                continue;
+            j.mass[j.nmass] = (enum wrf_var)v;
+            if (scan) {
+                j.nmass++;
+                continue;
+            }
+            float *dst = malloc(nout * sizeof(float));
+            if (v < SPECIES_COUNT)
+                out->q[v] = dst;
+            else
+                out->qvapor = dst;
+            j.mass_out[j.nmass++] = dst;
+            ok = ok && dst;
+        }
+        if (j.density && !scan)
+            ok = ok && (j.rho_out = out->rho_air = malloc(nout * sizeof(float)));
+        if (j.temperature)
+            ok = ok && (j.t_out = out->temperature = malloc(nout * sizeof(float)));
+        if (d->level_heights && !scan) {
+            ok = ok && (j.level_z = out->level_z = malloc(cols * (size_t)j.nz * sizeof(float)));
+            out->level_count = j.nz;
+        }
+    }
+    if (!ok) {
         log_error("%s: out of memory reading time step %d", path, step);
         goto done;
     }
-
+    /* Below the ground, above the top, or where P/PB/T were bad: the standard atmosphere,
+     * one value per output level. */
+    for (int k = 0; k < no; k++) {
+        double z = g->origin[2] + (k + 0.5) * g->spacing[2], std, p;
+        fill[k] = (float)optics_std_atmosphere_density(z);
+        wrf_std_atmosphere(z, &std, &p);
+        fill[no + k] = (float)std;
+        rho_std[no + k] = grid3_centre_z(g, k);
+        rho_std[k] = optics_std_atmosphere_density(rho_std[no + k]);
+    }
+    if (want_wind) {
+        whole.k = malloc(nout * sizeof(uint16_t));
+        whole.t = malloc(nout * sizeof(float));
+        if (!whole.k || !whole.t) {
+            log_error("%s: out of memory for wind speed", path);
+            ok = false;
+            goto done;
+        }
+        j.whole = &whole;
+    }
+    j.fill_rho = fill;
+    j.fill_t = fill + no;
+    j.rho_std = rho_std;
+    j.zc = rho_std + no;
+    for (size_t sl = 0; sl < j.slabs; sl++) {
+        for (int v = 0; v < WRF_VAR_COUNT; v++)
+            check_sum_init(&j.res[sl].sum[v]);
+        j.res[sl].range = j.res[sl].order = SIZE_MAX;
+        j.res[sl].below = j.res[sl].above = 0;
+    }
     data_nc_lock_file(path, "reading", false);
-    /* Heights: (PH + PHB) / g on staggered levels. */
-    float *phb = buf;
-    bool hok =
-        read_var(w, step, WRF_PH, &s, c.nzs, c.zw) && read_var(w, step, WRF_PHB, &s, c.nzs, phb);
-    if (hok) {
-        size_t n = c.cols * (size_t)c.nzs;
-        sanitize(w, step, WRF_PH, c.zw, n, NAN, &stats->var[WRF_PH]);
-        sanitize(w, step, WRF_PHB, phb, n, NAN, &stats->var[WRF_PHB]);
-        for (int v = WRF_PH; v <= WRF_PHB && hok; v++) {
-            const struct wrf_var_stats *st = &stats->var[v];
-            if (st->nan + st->inf + st->fill > 0) {
-                log_error("%s: variable %s, time %d: %zu NaN, Inf or fill values: heights "
-                          "cannot be placed",
-                          path, var_names[v], w->steps[step].index, st->nan + st->inf + st->fill);
-                hok = false;
-            }
+    for (int v = 0; v < WRF_VAR_COUNT; v++)
+        if (sf->varid[v] >= 0)
+            var_check_init(w, step, (enum wrf_var)v, &j.check[v]);
+    data_nc_unlock();
+
+    ok = parallel_for(j.slabs, 1, &j, step_slabs);
+    if (!ok)
+        goto done;
+
+    /* What the slabs found, added up in their order and reported as the whole step. */
+    ok = false;
+    struct check_sum sum[WRF_VAR_COUNT];
+    for (int v = 0; v < WRF_VAR_COUNT; v++)
+        check_sum_init(&sum[v]);
+    size_t bad_range = SIZE_MAX, bad_order = SIZE_MAX;
+    float bad_z = 0.0f;
+    for (size_t sl = 0; sl < j.slabs; sl++) {
+        const struct slab_result *r = &j.res[sl];
+        for (int v = 0; v < WRF_VAR_COUNT; v++)
+            check_sum_add(&sum[v], &r->sum[v]);
+        if (r->range < bad_range) {
+            bad_range = r->range;
+            bad_z = r->range_z;
+        }
+        bad_order = r->order < bad_order ? r->order : bad_order;
+        stats->below_terrain += r->below;
+        stats->above_top += r->above;
+    }
+    for (int v = WRF_PH; v <= WRF_PHB; v++) {
+        check_sum_stats(&sum[v], &stats->var[v]);
+        const struct wrf_var_stats *st = &stats->var[v];
+        if (st->nan + st->inf + st->fill > 0) {
+            log_error("%s: variable %s, time %d: %zu NaN, Inf or fill values: heights "
+                      "cannot be placed",
+                      path, var_names[v], w->steps[step].index, st->nan + st->inf + st->fill);
+            goto done;
         }
     }
-    if (!hok)
-        goto unlock;
-    /* The heights, each checked for its range and each column for increasing upward, in
-     * one pass a share of columns per CPU; the first bad value in the file's order is named,
-     * a height out of range before a column out of order. */
-    struct heights hs = {.zw = c.zw, .phb = phb, .cols = c.cols, .nz = c.nz};
-    for (int t = 0; t < PARALLEL_MAX; t++)
-        hs.range[t] = hs.order[t] = SIZE_MAX;
-    parallel_for(c.cols, 4096, &hs, heights_columns);
-    size_t bad_range = SIZE_MAX, bad_order = SIZE_MAX;
-    for (int t = 0; t < PARALLEL_MAX; t++) {
-        bad_range = hs.range[t] < bad_range ? hs.range[t] : bad_range;
-        bad_order = hs.order[t] < bad_order ? hs.order[t] : bad_order;
-    }
+    /* A height out of range before a column out of order, each the first in the file's
+     * order. */
     if (bad_range != SIZE_MAX) {
-        size_t i = bad_range, col = i % c.cols;
+        size_t i = bad_range, col = i % cols;
         log_error("%s: variables PH, PHB, time %d: a height of %g m in column (%zu, %zu), "
                   "level %zu: expected %g m to %g km above sea level",
-                  path, w->steps[step].index, c.zw[i], s.x0 + (col % s.nx) * s.sx,
-                  s.y0 + (col / s.nx) * s.sy, i / c.cols, DATA_HEIGHT_MIN_M,
+                  path, w->steps[step].index, bad_z, s.x0 + (col % s.nx) * s.sx,
+                  s.y0 + (col / s.nx) * s.sy, i / cols, DATA_HEIGHT_MIN_M,
                   DATA_HEIGHT_MAX_M / 1000.0);
-        goto unlock;
+        goto done;
     }
     if (bad_order != SIZE_MAX) {
         size_t col = bad_order;
@@ -1632,165 +2091,59 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
                   "(%zu, %zu)",
                   path, w->steps[step].index, s.x0 + (col % s.nx) * s.sx,
                   s.y0 + (col / s.nx) * s.sy);
-        goto unlock;
+        goto done;
     }
-
-    if (d->level_heights) {
-        /* The mass levels' heights, half way between their staggered levels. */
-        out->level_z = malloc(c.cols * (size_t)c.nz * sizeof(float));
-        if (!out->level_z) {
-            log_error("%s: out of memory for the model levels' heights", path);
-            goto unlock;
-        }
-        for (size_t i = 0; i < c.cols * (size_t)c.nz; i++)
-            out->level_z[i] = 0.5f * (c.zw[i] + c.zw[i + c.cols]);
-        out->level_count = c.nz;
+    for (int m = 0; m < j.nmass; m++) {
+        enum wrf_var v = j.mass[m];
+        check_sum_stats(&sum[v], &stats->var[v]);
+        if (!report(w, step, v, &stats->var[v]))
+            goto done;
     }
-
-    /* The output grid. */
-    struct grid3 *g = &out->grid;
-    if (!output_grid(w, d, &s, g))
-        goto unlock;
-    size_t nout = grid3_count(g);
-
-    /* Where every output voxel comes from, once for all the variables of the step; the
-     * staggered heights are not needed after it. */
-    if (!plan_make(&plan, c.zw, c.cols, c.nz, g))
-        goto unlock;
-    stats->below_terrain = plan.below;
-    stats->above_top = plan.above;
-    free(c.zw);
-    c.zw = NULL;
-
-    for (int v = 0; v <= WRF_QVAPOR; v++) {
-        if (v < SPECIES_COUNT ? !w->meta.has_species[v] : !(d->qvapor && w->meta.has_qvapor))
-            continue;
-        float *dst = malloc(nout * sizeof(float));
-        if (!dst) {
-            log_error("%s: out of memory for %s", path, var_names[v]);
-            goto unlock;
-        }
-        if (v < SPECIES_COUNT)
-            out->q[v] = dst;
-        else
-            out->qvapor = dst;
-        if (!read_var(w, step, (enum wrf_var)v, &s, c.nz, buf))
-            goto unlock;
-        sanitize(w, step, (enum wrf_var)v, buf, c.cols * (size_t)c.nz, 0.0f, &stats->var[v]);
+    if (want_wind && !read_wind(w, step, d, &s, &whole, out, stats))
+        goto done;
+    for (int v = WRF_P; j.air && v <= WRF_T; v++) {
+        check_sum_stats(&sum[v], &stats->var[v]);
         if (!report(w, step, (enum wrf_var)v, &stats->var[v]))
-            goto unlock;
-        resample_var(&plan, buf, 0.0f, NULL, dst);
-    }
-
-    if (want_wind) {
-        out->wind = malloc(nout * sizeof(float));
-        if (!out->wind) {
-            log_error("%s: out of memory for wind speed", path);
-            goto unlock;
-        }
-        float *comp[3] = {NULL, NULL, NULL}, *vort = NULL;
-        bool has_w = sf->varid[WRF_W] >= 0, cok = true;
-        size_t nm = c.cols * (size_t)c.nz;
-        if (d->wind_components) {
-            for (int i = 0; i < 4; i++) {
-                float **dst = i < 3 ? &comp[i] : &vort;
-                *dst = malloc(nm * sizeof(float));
-                cok = cok && *dst;
-            }
-            out->u = malloc(nout * sizeof(float));
-            out->v = malloc(nout * sizeof(float));
-            out->w = has_w ? malloc(nout * sizeof(float)) : NULL;
-            out->vorticity = malloc(nout * sizeof(float));
-            cok = cok && out->u && out->v && (out->w || !has_w) && out->vorticity;
-        }
-        if (!cok)
-            log_error("%s: out of memory for the wind's components", path);
-        /* S's columns are S.sx and S.sy mass columns apart. */
-        cok = cok && wind_speed(w, step, &s, &c, buf, buf2, buf3,
-                                d->wind_components ? comp : NULL, vort, w->meta.dx * s.sx,
-                                w->meta.dy * s.sy, stats);
-        if (cok) {
-            resample_var(&plan, buf3, 0.0f, NULL, out->wind);
-            if (d->wind_components) {
-                resample_var(&plan, comp[0], 0.0f, NULL, out->u);
-                resample_var(&plan, comp[1], 0.0f, NULL, out->v);
-                if (has_w)
-                    resample_var(&plan, comp[2], 0.0f, NULL, out->w);
-                resample_var(&plan, vort, 0.0f, NULL, out->vorticity);
-            }
-        }
-        for (int i = 0; i < 3; i++)
-            free(comp[i]);
-        free(vort);
-        if (!cok)
-            goto unlock;
-    }
-
-    /* Below the ground, above the top, or where P/PB/T were bad: the standard atmosphere,
-     * one value per output level. */
-    if (!d->no_density || d->temperature) {
-        fill = malloc((size_t)g->n[2] * sizeof(float));
-        if (!fill) {
-            log_error("%s: out of memory reading time step %d", path, step);
-            goto unlock;
-        }
-        size_t n = c.cols * (size_t)c.nz;
-        if (!read_var(w, step, WRF_P, &s, c.nz, buf) || !read_var(w, step, WRF_PB, &s, c.nz, buf2))
-            goto unlock;
-        sanitize(w, step, WRF_P, buf, n, NAN, &stats->var[WRF_P]);
-        sanitize(w, step, WRF_PB, buf2, n, NAN, &stats->var[WRF_PB]);
-        if (!report(w, step, WRF_P, &stats->var[WRF_P]) ||
-            !report(w, step, WRF_PB, &stats->var[WRF_PB]))
-            goto unlock;
-        for (size_t i = 0; i < n; i++)
-            buf[i] += buf2[i];
-        if (!read_var(w, step, WRF_T, &s, c.nz, buf2))
-            goto unlock;
-        sanitize(w, step, WRF_T, buf2, n, NAN, &stats->var[WRF_T]);
-        if (!report(w, step, WRF_T, &stats->var[WRF_T]))
-            goto unlock;
-        /* Temperature (when asked) and air density in one pass, a share per thread. */
-        struct air a = {.p = buf, .theta = buf2, .temperature = d->temperature ? buf3 : NULL,
-                        .density = !d->no_density};
-        parallel_for(n, 1 << 18, &a, air_range);
-        if (d->temperature) {
-            out->temperature = malloc(nout * sizeof(float));
-            if (!out->temperature) {
-                log_error("%s: out of memory for temperature", path);
-                goto unlock;
-            }
-            for (int k = 0; k < g->n[2]; k++) {
-                double z = g->origin[2] + (k + 0.5) * g->spacing[2], std, p;
-                wrf_std_atmosphere(z, &std, &p);
-                fill[k] = (float)std;
-            }
-            resample_var(&plan, buf3, NAN, fill, out->temperature);
-        }
-    }
-    if (!d->no_density) {
-        out->rho_air = malloc(nout * sizeof(float));
-        if (!out->rho_air) {
-            log_error("%s: out of memory for air density", path);
-            goto unlock;
-        }
-        for (int k = 0; k < g->n[2]; k++)
-            fill[k] = (float)optics_std_atmosphere_density(g->origin[2] +
-                                                           (k + 0.5) * g->spacing[2]);
-        resample_var(&plan, buf, NAN, fill, out->rho_air);
+            goto done;
     }
     ok = true;
 
-unlock:
-    data_nc_unlock();
 done:
-    plan_finish(&plan);
+    plan_finish(&whole);
     free(fill);
-    free(c.zw);
-    free(buf);
-    free(buf2);
-    free(buf3);
-    if (!ok)
+    free(rho_std);
+    free(j.res);
+    if (!ok) {
         field_volume_finish(out);
+        if (ext)
+            ext_volume_finish(ext);
+    }
+    return ok;
+}
+
+bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct field_volume *out,
+                   struct wrf_stats *stats)
+{
+    return read_step(w, step, d, false, NULL, out, NULL, stats);
+}
+
+bool wrf_scan_step(struct wrf *w, int step, const struct wrf_desc *d, struct wrf_stats *stats)
+{
+    struct field_volume grid;
+    bool ok = read_step(w, step, d, true, NULL, &grid, NULL, stats);
+    field_volume_finish(&grid);
+    return ok;
+}
+
+bool wrf_read_step_ext(struct wrf *w, int step, const struct wrf_desc *d,
+                       const struct optics_params *optics, const struct species_select *sel,
+                       struct ext_volume *out, struct wrf_stats *stats)
+{
+    struct ext_beta b;
+    ext_beta_init(&b, optics, sel, w->meta.has_species);
+    struct field_volume grid;
+    bool ok = read_step(w, step, d, false, &b, &grid, out, stats);
+    field_volume_finish(&grid);
     return ok;
 }
 

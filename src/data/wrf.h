@@ -60,6 +60,8 @@ struct wrf_desc {
                              vorticity; implies wind) */
     bool level_heights; /* also keep each column's mass-level heights (field_volume level_z) */
     bool no_density;  /* leave rho_air NULL (standard atmosphere) instead of reading P/PB/T */
+    int slab_rows;    /* rows of columns read, checked and resampled at a time; 0 = about 4096
+                         columns.  The values read do not depend on it. */
 };
 
 void wrf_desc_defaults(struct wrf_desc *d);
@@ -161,9 +163,28 @@ bool wrf_probe(const char *path);
 /* Reads STEP into OUT (initialised here; the caller frees it with field_volume_finish).  STATS
  * (may be NULL) receives the bad-value counts; each bad count is also reported with one
  * log_warn per variable.  On failure OUT is zeroed, one log_error names the file and variable,
- * and false is returned. */
+ * and false is returned.  The step is read a slab at a time by a thread per CPU, each taking
+ * data_nc_lock for its reads: the caller must not hold that lock. */
 bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct field_volume *out,
                    struct wrf_stats *stats);
+
+/* Reads STEP straight to extinction: what wrf_read_step(D) followed by
+ * ext_volume_from_fields(OPTICS, SEL) makes, the same numbers, without holding the step's
+ * fields (each slab of columns is read, checked, resampled and turned into extinction before
+ * the next).  Reads only the species that add extinction, and P, PB and T unless
+ * D->no_density: D's qvapor, temperature, wind and level heights are not read.  OUT is
+ * initialised here (the caller frees it with ext_volume_finish); STATS and failures as
+ * wrf_read_step. */
+bool wrf_read_step_ext(struct wrf *w, int step, const struct wrf_desc *d,
+                       const struct optics_params *optics, const struct species_select *sel,
+                       struct ext_volume *out, struct wrf_stats *stats);
+
+/* What wrf_read_step(D) would check of STEP, without resampling or keeping anything (anvil
+ * info): every value of the variables it reads is checked, the heights too, and STATS gets
+ * the same counts and ranges (but below_terrain and above_top stay 0), with the same warnings
+ * and errors.  The budget D->memory_mb is wrf_read_step's, so a step the scan passes is one
+ * that can be read.  False (logged) on failure. */
+bool wrf_scan_step(struct wrf *w, int step, const struct wrf_desc *d, struct wrf_stats *stats);
 
 /* The yardstick of the load path (anvil bench --load-only): reads the variables
  * wrf_read_step(D) would read for STEP (the species the file has, QVAPOR when D asks, PH, PHB,

@@ -3,7 +3,8 @@
  * and heights, bit for bit; air density within float rounding of the double-precision formula
  * resampled the same way; extinction equal to Nes eq. 5.3 summed per phase.  On the Katrina
  * and Lambert samples and on a synthetic file read onto other levels, with a crop and a
- * stride.  And QVAPOR is read only when asked. */
+ * stride.  And QVAPOR is read only when asked; a step read in slabs of any size, and straight to
+ * extinction, gives the same numbers, and scanned (anvil info) the same counts. */
 #include "testutil.h"
 
 #include <math.h>
@@ -250,6 +251,158 @@ static void test_qvapor_when_asked(void **state)
     data_source_close(s);
 }
 
+/* A field volume's arrays equal, bit for bit. */
+static void assert_same_array(const float *a, const float *b, size_t n, const char *what)
+{
+    assert_true((a == NULL) == (b == NULL));
+    if (a && memcmp(a, b, n * sizeof(float)) != 0)
+        fail_msg("%s differs", what);
+}
+
+static void assert_same_fields(const struct field_volume *a, const struct field_volume *b)
+{
+    assert_memory_equal(a->grid.n, b->grid.n, sizeof(a->grid.n));
+    size_t n = grid3_count(&a->grid);
+    for (int f = 0; f < SPECIES_COUNT; f++)
+        assert_same_array(a->q[f], b->q[f], n, species_wrf_name((enum species)f));
+    assert_same_array(a->qvapor, b->qvapor, n, "QVAPOR");
+    assert_same_array(a->rho_air, b->rho_air, n, "air density");
+    assert_same_array(a->temperature, b->temperature, n, "temperature");
+    assert_same_array(a->wind, b->wind, n, "wind");
+    assert_same_array(a->vorticity, b->vorticity, n, "vorticity");
+    assert_int_equal(a->level_count, b->level_count);
+    assert_same_array(a->level_z, b->level_z,
+                      (size_t)a->grid.n[0] * a->grid.n[1] * (size_t)a->level_count, "levels");
+}
+
+static void assert_same_stats(const struct wrf_stats *a, const struct wrf_stats *b)
+{
+    assert_int_equal(a->below_terrain, b->below_terrain);
+    assert_int_equal(a->above_top, b->above_top);
+    for (int v = 0; v < WRF_VAR_COUNT; v++) {
+        const struct wrf_var_stats *x = &a->var[v], *y = &b->var[v];
+        assert_int_equal(x->read, y->read);
+        assert_int_equal(x->count, y->count);
+        assert_int_equal(x->nan, y->nan);
+        assert_int_equal(x->inf, y->inf);
+        assert_int_equal(x->fill, y->fill);
+        assert_int_equal(x->negative, y->negative);
+        assert_int_equal(x->absurd, y->absurd);
+        assert_true(x->min == y->min && x->max == y->max);
+    }
+}
+
+/* A step read a slab of ROWS rows at a time gives the numbers and counts of the step read in
+ * one slab; straight to extinction (data_source_load) it gives what the fields make through
+ * ext_volume_from_fields. */
+static void check_slabs(const char *path, int step, const struct wrf_desc *base, int rows)
+{
+    struct wrf *w = wrf_open(&path, 1, 0.0);
+    assert_non_null(w);
+    struct wrf_desc d = *base;
+    d.slab_rows = 100000; /* the whole step in one slab */
+    struct field_volume one, many;
+    struct wrf_stats st_one, st_many;
+    assert_true(wrf_read_step(w, step, &d, &one, &st_one));
+    d.slab_rows = rows;
+    assert_true(wrf_read_step(w, step, &d, &many, &st_many));
+    assert_same_fields(&one, &many);
+    assert_same_stats(&st_one, &st_many);
+
+    struct optics_params op;
+    optics_params_defaults(&op);
+    struct species_select sel;
+    species_select_defaults(&sel);
+    for (int look = 0; look < 2; look++) {
+        if (look == 1) { /* rain off, snow doubled */
+            sel.enabled[SPECIES_RAIN] = false;
+            sel.scale[SPECIES_SNOW] = 2.0;
+        }
+        struct ext_volume whole, slabs;
+        assert_true(ext_volume_from_fields(&one, &op, &sel, &whole));
+        struct wrf_stats st;
+        assert_true(wrf_read_step_ext(w, step, &d, &op, &sel, &slabs, &st));
+        assert_memory_equal(whole.grid.n, slabs.grid.n, sizeof(whole.grid.n));
+        assert_true(memcmp(whole.beta, slabs.beta, grid3_count(&whole.grid) * 2 * sizeof(float)) ==
+                    0);
+        assert_int_equal(st.below_terrain, st_one.below_terrain);
+        for (int f = 0; f < SPECIES_COUNT; f++) /* only what extinction uses is read */
+            assert_int_equal(st.var[f].read, st_one.var[f].read && sel.enabled[f]);
+        assert_false(st.var[WRF_QVAPOR].read);
+        ext_volume_finish(&whole);
+        ext_volume_finish(&slabs);
+    }
+    /* The scan (anvil info) checks what the read checks. */
+    struct wrf_stats scan;
+    assert_true(wrf_scan_step(w, step, &d, &scan));
+    scan.below_terrain = st_one.below_terrain;
+    scan.above_top = st_one.above_top;
+    for (int v = WRF_U; v <= WRF_W; v++) /* the wind is not scanned */
+        assert_false(scan.var[v].read);
+    memcpy(&scan.var[WRF_U], &st_one.var[WRF_U], 3 * sizeof(scan.var[0]));
+    assert_same_stats(&st_one, &scan);
+    field_volume_finish(&one);
+    field_volume_finish(&many);
+    wrf_close(w);
+}
+
+static void test_slabs(void **state)
+{
+    char katrina[512], lambert[512]; /* test_shared_data's buffer is reused */
+    snprintf(katrina, sizeof(katrina), "%s", test_shared_data("wrf/katrina_2005_mercator_wsm3.nc"));
+    snprintf(lambert, sizeof(lambert), "%s", test_shared_data("wrf/lambert_thompson_cropped.nc"));
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    check_slabs(katrina, 2, &d, 1);
+    check_slabs(lambert, 1, &d, 3);
+    /* Everything a field load can make, on other levels, cropped and subsampled. */
+    d.qvapor = d.temperature = d.wind_components = d.level_heights = true;
+    d.levels = 33;
+    d.stride[0] = 2;
+    d.stride[1] = 3;
+    d.crop[2] = 5;
+    check_slabs(katrina, 1, &d, 2);
+    wrf_desc_defaults(&d);
+    d.native_levels = true;
+    check_slabs(lambert, 0, &d, 5);
+    d.no_density = true;
+    check_slabs(katrina, 0, &d, 4);
+}
+
+/* Bad values spread over many slabs are counted and replaced as in one. */
+static void test_slabs_bad_values(void **state)
+{
+    char path[512];
+    snprintf(path, sizeof(path), "%s", test_tmp_path("bad.nc"));
+    struct synth_desc sd = {
+        .kind = SYNTH_STORM, .n = {20, 30, 12}, .extent_m = {40000.0, 60000.0, 12000.0}, .seed = 3};
+    struct field_volume in;
+    assert_true(synth_storm_fields(&sd, &in));
+    struct wrf_writer *ww = wrf_writer_create(path, &in.grid, NULL);
+    assert_non_null(ww);
+    assert_true(wrf_writer_add(ww, &in, "2000-01-01_00:00:00"));
+    assert_true(wrf_writer_finish(ww));
+    field_volume_finish(&in);
+    int nc, qc, qr, p;
+    CHECK(nc_open(path, NC_WRITE, &nc));
+    CHECK(nc_inq_varid(nc, "QCLOUD", &qc));
+    CHECK(nc_inq_varid(nc, "QRAIN", &qr));
+    CHECK(nc_inq_varid(nc, "P", &p));
+    for (int i = 0; i < 40; i++) {
+        size_t at[4] = {0, (size_t)(i % 12), (size_t)((i * 7) % 30), (size_t)((i * 3) % 20)};
+        float bad[4] = {NAN, -1e-3f, 5.0f, INFINITY};
+        CHECK(nc_put_var1_float(nc, i % 2 ? qc : qr, at, &bad[i % 4]));
+        float fill = NC_FILL_FLOAT;
+        if (i % 5 == 0)
+            CHECK(nc_put_var1_float(nc, p, at, &fill));
+    }
+    CHECK(nc_close(nc));
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    check_slabs(path, 0, &d, 1);
+    check_slabs(path, 0, &d, 7);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -257,6 +410,8 @@ int main(void)
         cmocka_unit_test(test_lambert),
         cmocka_unit_test(test_synth),
         cmocka_unit_test(test_qvapor_when_asked),
+        cmocka_unit_test(test_slabs),
+        cmocka_unit_test(test_slabs_bad_values),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
