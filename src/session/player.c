@@ -162,10 +162,15 @@ void look_from_config(const struct config *cfg, struct look *look)
     }
 }
 
+int look_edited_layer(const struct look *look)
+{
+    return look->edited >= 0 && look->edited < look->layer_count ? look->edited : 0;
+}
+
 void look_edited_transfer(const struct look *look, struct transfer_function *out)
 {
     if (look->layer_count > 0)
-        *out = look->layers[0].tf;
+        *out = look->layers[look_edited_layer(look)].tf;
     else
         transfer_defaults(out, TRANSFER_FIELD_QVAPOR);
 }

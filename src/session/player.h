@@ -43,11 +43,15 @@ struct look {
     struct transfer_layer layers[TRANSFER_LAYER_MAX];
     int slice_count; /* 0 .. TRANSFER_SLICE_MAX */
     struct transfer_slice slices[TRANSFER_SLICE_MAX];
+    int edited; /* the layer the transfer editor edits, whose field its histogram counts */
 };
 
-/* The function the transfer editor shows: layer 0's, or the default function of QVAPOR
- * without layers. */
+/* The function the transfer editor shows: the edited layer's, or the default function of
+ * QVAPOR without layers. */
 void look_edited_transfer(const struct look *look, struct transfer_function *out);
+
+/* The layer the transfer editor edits: EDITED where it names one of the layers, else 0. */
+int look_edited_layer(const struct look *look);
 
 void look_from_config(const struct config *cfg, struct look *look);
 

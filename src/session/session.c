@@ -158,11 +158,11 @@ static void model_from_session(struct session *s, struct menu_model *m)
         m->species_scale[f] = look->select.scale[f];
         memcpy(m->species_tint[f], look->tint.rgb[f], sizeof(m->species_tint[f]));
     }
-    m->transfer_on = look->layer_count > 0 && look->layers[0].enabled;
+    m->transfer_on = look->layer_count > 0 && look->layers[look_edited_layer(look)].enabled;
     look_edited_transfer(look, &m->transfer);
     m->layer_count = look->layer_count;
     memcpy(m->layers, look->layers, sizeof(m->layers));
-    m->layer_edited = 0;
+    m->layer_edited = look_edited_layer(look);
     m->slice_count = look->slice_count;
     for (int i = 0; i < look->slice_count; i++) {
         m->slices[i].slice = look->slices[i];
@@ -812,6 +812,7 @@ static void edit_layers(struct look *look, struct menu_model *m)
     m->layer_count = look->layer_count;
     memcpy(m->layers, look->layers, sizeof(m->layers));
     m->layer_edited = look->layer_count > 0 ? i : 0;
+    look->edited = m->layer_edited; /* the editor's histogram counts its field */
 }
 
 static void edit_layer(struct look *look, int i, bool on, const struct transfer_function *tf)

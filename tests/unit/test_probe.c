@@ -495,6 +495,56 @@ static void test_histogram_counts(void **state)
     }
 }
 
+/* The editor's bars count the field of the layer it edits: layer 2's temperature once the
+ * look says layer 2 is the edited one, layer 1's water vapour before and when the edited index
+ * names no layer. */
+static void test_histogram_of_edited_layer(void **state)
+{
+    static struct config cfg;
+    char path[1024];
+    snprintf(path, sizeof(path), "%s/configs/katrina.cfg", ANVIL_SOURCE_DIR);
+    const char *sets[] = {"data.step=2"};
+    test_config_file(&cfg, path, sets, 1);
+    log_set_level(LOG_ERROR);
+    struct player *p = player_create(&cfg, &(struct player_desc){.still = true, .histogram = true});
+    log_set_level(LOG_INFO);
+    assert_non_null(p);
+    struct ext_volume first;
+    assert_true(player_take_first(p, &first));
+    struct look look;
+    look_from_config(&cfg, &look);
+    look.layer_count = 2;
+    look.layers[0] =
+        (struct transfer_layer){.enabled = true, .mode = TRANSFER_LAYER_EMIT, .opacity = 0.02};
+    transfer_defaults(&look.layers[0].tf, TRANSFER_FIELD_QVAPOR);
+    look.layers[1] = look.layers[0];
+    transfer_defaults(&look.layers[1].tf, TRANSFER_FIELD_TEMPERATURE);
+    const int edited[] = {1, 0, 7};
+    const enum transfer_field want[] = {TRANSFER_FIELD_TEMPERATURE, TRANSFER_FIELD_QVAPOR,
+                                        TRANSFER_FIELD_QVAPOR};
+    for (int i = 0; i < 3; i++) {
+        look.edited = edited[i];
+        player_set_look(p, &look);
+        int shown = -1;
+        log_set_level(LOG_ERROR);
+        const struct ext_volume *v = player_poll(p, 2, &shown);
+        log_set_level(LOG_INFO);
+        assert_non_null(v);
+        assert_int_equal(shown, 2);
+        assert_non_null(v->histogram);
+        const struct transfer_histogram *h = v->histogram;
+        assert_int_equal(h->field, want[i]);
+        struct transfer_function tf;
+        transfer_defaults(&tf, want[i]);
+        assert_true(h->lo == tf.lo && h->hi == tf.hi);
+        /* Water vapour's bars are the first step's (no layers: the editor's default function). */
+        bool same = memcmp(h->count, first.histogram->count, sizeof(h->count)) == 0;
+        assert_true(same == (want[i] == TRANSFER_FIELD_QVAPOR));
+    }
+    ext_volume_finish(&first);
+    player_destroy(p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -505,6 +555,7 @@ int main(void)
         cmocka_unit_test(test_first_visible),
         cmocka_unit_test(test_sample_fields),
         cmocka_unit_test(test_histogram_counts),
+        cmocka_unit_test(test_histogram_of_edited_layer),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
