@@ -35,20 +35,23 @@ double derived_rh(double t, double p, double q)
     return 100.0 * e / es;
 }
 
-void derived_vorticity_plane(const float *u, const float *v, int nx, int ny, double dx,
-                             double dy, float *out)
+void derived_vorticity_plane(const float *u, const float *v, const float *map, int nx, int ny,
+                             double dx, double dy, float *out)
 {
     for (int j = 0; j < ny; j++) {
         int j0 = j > 0 ? j - 1 : 0, j1 = j < ny - 1 ? j + 1 : ny - 1;
         for (int i = 0; i < nx; i++) {
             int i0 = i > 0 ? i - 1 : 0, i1 = i < nx - 1 ? i + 1 : nx - 1;
-            double dvdx = i1 > i0 ? ((double)v[(size_t)j * nx + i1] - v[(size_t)j * nx + i0]) /
-                                        ((i1 - i0) * dx)
-                                  : 0.0;
-            double dudy = j1 > j0 ? ((double)u[(size_t)j1 * nx + i] - u[(size_t)j0 * nx + i]) /
-                                        ((j1 - j0) * dy)
-                                  : 0.0;
-            out[(size_t)j * nx + i] = (float)(dvdx - dudy);
+            size_t c = (size_t)j * nx + i, e = (size_t)j * nx + i1, w = (size_t)j * nx + i0;
+            size_t n = (size_t)j1 * nx + i, s = (size_t)j0 * nx + i;
+            double m = map ? map[c] : 1.0;
+            double me = map ? map[e] : 1.0, mw = map ? map[w] : 1.0;
+            double mn = map ? map[n] : 1.0, ms = map ? map[s] : 1.0;
+            double dvdx =
+                i1 > i0 ? ((double)v[e] / me - (double)v[w] / mw) / ((i1 - i0) * dx) : 0.0;
+            double dudy =
+                j1 > j0 ? ((double)u[n] / mn - (double)u[s] / ms) / ((j1 - j0) * dy) : 0.0;
+            out[c] = (float)(m * m * (dvdx - dudy));
         }
     }
 }
@@ -85,8 +88,8 @@ void derived_field(const struct field_volume *fv, enum transfer_field field, flo
             memcpy(out, have, n * sizeof(float));
         } else if (field == TRANSFER_FIELD_VORTICITY && fv->u && fv->v) {
             for (int k = 0; k < g->n[2]; k++)
-                derived_vorticity_plane(fv->u + k * plane, fv->v + k * plane, g->n[0], g->n[1],
-                                        g->spacing[0], g->spacing[1], out + k * plane);
+                derived_vorticity_plane(fv->u + k * plane, fv->v + k * plane, NULL, g->n[0],
+                                        g->n[1], g->spacing[0], g->spacing[1], out + k * plane);
         } else {
             memset(out, 0, n * sizeof(float));
         }

@@ -29,9 +29,12 @@ double derived_rh(double t_k, double p_pa, double q_kg_kg);
  * differences (v[i+1] - v[i-1]) / 2dx - (u[j+1] - u[j-1]) / 2dy inside, one-sided at the edges,
  * zero along an axis of one point.  With U and V the means of an Arakawa C grid's face winds
  * (WRF's staggered U and V), the centred form equals the mean of the four vorticities at the
- * cell's corners, where the C grid defines them (Arakawa and Lamb 1977). */
-void derived_vorticity_plane(const float *u, const float *v, int nx, int ny, double dx,
-                             double dy, float *out);
+ * cell's corners, where the C grid defines them (Arakawa and Lamb 1977).  With MAP (the map
+ * scale factor m at the same points; NULL: m = 1), DX and DY are distances on the map, and
+ * zeta = m^2 (d(v/m)/dx - d(u/m)/dy), the same differences over v/m and u/m (Haltiner and
+ * Williams 1980: the vorticity on a conformal map projection). */
+void derived_vorticity_plane(const float *u, const float *v, const float *map, int nx, int ny,
+                             double dx, double dy, float *out);
 
 /* Whether FV holds what FIELD is computed from (else derived_field uses the stand-ins below). */
 bool derived_field_available(const struct field_volume *fv, enum transfer_field field);

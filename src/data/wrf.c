@@ -365,6 +365,18 @@ static bool read_meta(struct wrf *w)
         !read_meta_2d(f->path, ncid, "LANDMASK", m->nx, m->ny, &m->landmask) ||
         !read_meta_2d(f->path, ncid, "LU_INDEX", m->nx, m->ny, &m->lu_index))
         return false;
+    if (!read_meta_2d(f->path, ncid, "MAPFAC_M", m->nx, m->ny, &m->mapfac_m))
+        return false;
+    for (size_t i = 0; m->mapfac_m && i < (size_t)m->nx * m->ny; i++) {
+        float v = m->mapfac_m[i];
+        if (!(v >= 0.01f && v <= 100.0f)) { /* NaN too */
+            log_warn("%s: MAPFAC_M: %g at column %zu of %d x %d is not a map scale factor (0.01 "
+                     "to 100): the vertical vorticity is taken on the map's grid",
+                     f->path, v, i, m->nx, m->ny);
+            free(m->mapfac_m);
+            m->mapfac_m = NULL;
+        }
+    }
     size_t lu_len = 0;
     if (nc_inq_attlen(ncid, NC_GLOBAL, "MMINLU", &lu_len) == NC_NOERR &&
         lu_len < sizeof(m->land_use) &&
@@ -753,6 +765,7 @@ void wrf_close(struct wrf *w)
     free(w->meta.hgt);
     free(w->meta.landmask);
     free(w->meta.lu_index);
+    free(w->meta.mapfac_m);
     free(w);
 }
 
@@ -1503,7 +1516,8 @@ static bool read_faces(const struct wrf *w, int step, enum wrf_var v, const stru
  * west_east_stag faces, V over its south_north_stag faces, W (when the file has it) over its
  * bottom_top_stag levels, using BUF and BUF2 as scratch.  With COMP (three arrays of
  * c->cols * c->nz, the caller's), the components at the mass points go there too, and with
- * VORT the vertical vorticity on each model level (derived_vorticity_plane, spacing DX, DY);
+ * VORT the vertical vorticity on each model level (derived_vorticity_plane, spacing DX, DY,
+ * the file's map factors where it has them);
  * COMP[2] stays untouched when the file has no W. */
 static bool wind_speed(const struct wrf *w, int step, const struct selection *s,
                        const struct columns *c, float *buf, float *buf2, float *speed,
@@ -1523,9 +1537,15 @@ static bool wind_speed(const struct wrf *w, int step, const struct selection *s,
         speed[i] += buf[i] * buf[i];
     if (comp) {
         memcpy(comp[1], buf, n * sizeof(float));
+        /* The map factors of S's columns (BUF's first plane, free now). */
+        const float *mf = w->meta.mapfac_m;
+        for (int j = 0; vort && mf && j < s->ny; j++)
+            for (int i = 0; i < s->nx; i++)
+                buf[(size_t)j * s->nx + i] =
+                    mf[(size_t)(s->y0 + j * s->sy) * w->meta.nx + s->x0 + i * s->sx];
         for (int k = 0; vort && k < c->nz; k++)
-            derived_vorticity_plane(comp[0] + k * c->cols, comp[1] + k * c->cols, s->nx, s->ny,
-                                    dx, dy, vort + k * c->cols);
+            derived_vorticity_plane(comp[0] + k * c->cols, comp[1] + k * c->cols, mf ? buf : NULL,
+                                    s->nx, s->ny, dx, dy, vort + k * c->cols);
     }
     if (w->files[w->steps[step].file].varid[WRF_W] >= 0) {
         float *ws = malloc(c->cols * (size_t)c->nzs * sizeof(float));

@@ -123,6 +123,8 @@ struct wrf_meta {
     float *hgt;                                /* terrain height, m; NULL when absent */
     float *landmask;                           /* 1 land, 0 water; NULL when absent */
     float *lu_index;                           /* land use category; NULL when absent */
+    float *mapfac_m; /* MAPFAC_M, the map scale factor at the mass points; NULL when absent or
+                        unusable (the vorticity is then on the map's grid) */
     char land_use[32];                         /* MMINLU: the categories ("USGS", "MODIS...") */
     double lat_min, lat_max, lon_min, lon_max; /* NAN when XLAT/XLONG are absent */
 };

@@ -340,6 +340,108 @@ static void test_vorticity_solid_body(void **state)
     wrf_close(w);
 }
 
+/* On a map of scale factor m, distances on the ground are the map's divided by m: a solid body
+ * turning at Omega in ground coordinates (u = -Omega y, v = Omega x, x = i dx / m) has
+ * zeta = 2 Omega, and differences on the map's grid alone give 2 Omega / m. */
+static void test_vorticity_on_a_map(void **state)
+{
+    (void)state;
+    enum { W = 7, H = 5 };
+    const double omega = 1e-3, dx = 3000.0, dy = 2000.0, m = 1.25;
+    float u[W * H], v[W * H], map[W * H], out[W * H];
+    for (int j = 0; j < H; j++)
+        for (int i = 0; i < W; i++) {
+            u[j * W + i] = (float)(-omega * (j * dy / m));
+            v[j * W + i] = (float)(omega * (i * dx / m));
+            map[j * W + i] = (float)m;
+        }
+    derived_vorticity_plane(u, v, map, W, H, dx, dy, out);
+    for (int c = 0; c < W * H; c++)
+        assert_float_equal(out[c], 2.0 * omega, 1e-9);
+    derived_vorticity_plane(u, v, NULL, W, H, dx, dy, out);
+    for (int c = 0; c < W * H; c++)
+        assert_float_equal(out[c], 2.0 * omega / m, 1e-9);
+}
+
+/* MAPFAC_M added to anvil synth's file, m = 1 + 0.01 i + 0.02 j over the file's mass columns:
+ * the reader's vorticity is the map form over its kept columns' factors (with a stride, the
+ * file's columns i * stride), and a factor that is not one (NaN) leaves the map's grid, with
+ * one warning. */
+static void test_vorticity_map_factors_read(void **state)
+{
+    (void)state;
+    char path[512];
+    snprintf(path, sizeof(path), "%s", test_tmp_path("synthm.nc"));
+    struct synth_desc sd = {
+        .kind = SYNTH_STORM, .n = {24, 20, 6}, .extent_m = {48000.0, 40000.0, 12000.0}, .seed = 3};
+    struct field_volume in;
+    assert_true(synth_storm_fields(&sd, &in));
+    const int nx = sd.n[0], ny = sd.n[1];
+    for (int bad = 0; bad < 2; bad++) {
+        struct wrf_writer *ww = wrf_writer_create(path, &in.grid, NULL);
+        assert_non_null(ww);
+        assert_true(wrf_writer_add(ww, &in, "2000-01-01_00:00:00"));
+        assert_true(wrf_writer_finish(ww));
+        int nc, dims[3], var;
+        CHECK(nc_open(path, NC_WRITE, &nc));
+        CHECK(nc_redef(nc));
+        CHECK(nc_inq_dimid(nc, "Time", &dims[0]));
+        CHECK(nc_inq_dimid(nc, "south_north", &dims[1]));
+        CHECK(nc_inq_dimid(nc, "west_east", &dims[2]));
+        CHECK(nc_def_var(nc, "MAPFAC_M", NC_FLOAT, 3, dims, &var));
+        CHECK(nc_enddef(nc));
+        float *mf = malloc((size_t)nx * ny * sizeof(float));
+        assert_non_null(mf);
+        for (int j = 0; j < ny; j++)
+            for (int i = 0; i < nx; i++)
+                mf[j * nx + i] = bad && i == 3 && j == 2 ? NAN : 1.0f + 0.01f * i + 0.02f * j;
+        CHECK(nc_put_var_float(nc, var, mf));
+        CHECK(nc_close(nc));
+        const char *p = path;
+        log_set_level(LOG_ERROR);
+        struct wrf *w = wrf_open(&p, 1, 0.0);
+        log_set_level(LOG_INFO);
+        assert_non_null(w);
+        assert_true((wrf_get_meta(w)->mapfac_m == NULL) == (bad == 1));
+        for (int stride = 1; stride <= 2; stride++) {
+            struct wrf_desc d;
+            wrf_desc_defaults(&d);
+            d.stride[0] = d.stride[1] = stride;
+            d.wind_components = true;
+            struct field_volume out;
+            assert_true(wrf_read_step(w, 0, &d, &out, NULL));
+            const struct grid3 *g = &out.grid;
+            size_t plane = (size_t)g->n[0] * g->n[1];
+            float *kept = malloc(plane * sizeof(float)), *want = malloc(plane * sizeof(float));
+            assert_non_null(kept);
+            assert_non_null(want);
+            for (int j = 0; j < g->n[1]; j++)
+                for (int i = 0; i < g->n[0]; i++)
+                    kept[j * g->n[0] + i] = mf[(j * stride) * nx + i * stride];
+            /* The synthetic file's levels are flat at the voxel centres: its model levels are
+             * the height grid's, so the differences on a level are those on a grid plane. */
+            double most = 0.0;
+            for (int k = 0; k < g->n[2]; k++) {
+                derived_vorticity_plane(out.u + k * plane, out.v + k * plane, bad ? NULL : kept,
+                                        g->n[0], g->n[1], in.grid.spacing[0] * stride,
+                                        in.grid.spacing[1] * stride, want);
+                for (size_t c = 0; c < plane; c++) {
+                    assert_float_equal(out.vorticity[k * plane + c], want[c],
+                                       1e-4 * fabs(want[c]) + 1e-8);
+                    most = fmax(most, fabs(want[c]));
+                }
+            }
+            assert_true(most > 1e-4); /* a vortex, not a calm */
+            free(kept);
+            free(want);
+            field_volume_finish(&out);
+        }
+        free(mf);
+        wrf_close(w);
+    }
+    field_volume_finish(&in);
+}
+
 /* Katrina has U, V, W and T: every voxel finite and plausible; column (10, 10) near the
  * ground from its P, PB, T (ncdump): 302.289789 (99571.77 / 1e5)^(287 / 1004.5). */
 static void test_katrina(void **state)
@@ -444,6 +546,8 @@ int main(void)
         cmocka_unit_test(test_wind_unavailable),
         cmocka_unit_test(test_synth_wind_and_temperature),
         cmocka_unit_test(test_vorticity_solid_body),
+        cmocka_unit_test(test_vorticity_on_a_map),
+        cmocka_unit_test(test_vorticity_map_factors_read),
         cmocka_unit_test(test_katrina),
         cmocka_unit_test(test_field_names),
         cmocka_unit_test(test_derived_fields),
