@@ -3,6 +3,7 @@
 #include "session/lightmaps.h"
 #include "session/scene.h"
 #include "session/stats.h"
+#include "data/wrf_write.h"
 #include "gpu/gpu.h"
 #include "render/render.h"
 
@@ -98,4 +99,12 @@ void test_upload_scene(struct renderer *r, const struct config *cfg, struct ext_
     assert_true(scene_build_volume(cfg, vol));
     assert_true(renderer_set_volume(r, vol));
     assert_true(renderer_set_optics(r, &cfg->optics.params));
+}
+
+void test_write_wrf_step(const char *path, const struct field_volume *in)
+{
+    struct wrf_writer *ww = wrf_writer_create(path, &in->grid, NULL);
+    assert_non_null(ww);
+    assert_true(wrf_writer_add(ww, in, "2000-01-01_00:00:00"));
+    assert_true(wrf_writer_finish(ww));
 }

@@ -37,6 +37,10 @@ struct gpu_context;
 struct config;
 struct renderer;
 struct ext_volume;
+struct field_volume;
+
+/* Writes IN as a one-step WRF file (time 2000-01-01_00:00:00) at PATH (asserts). */
+void test_write_wrf_step(const char *path, const struct field_volume *in);
 
 /* CFG = the defaults with the N "path=value" overrides SETS applied, validated (asserts). */
 void test_config_from(struct config *cfg, const char **sets, int n);

@@ -200,10 +200,7 @@ static void test_synth_wind_and_temperature(void **state)
         .kind = SYNTH_STORM, .n = {20, 16, 10}, .extent_m = {40000.0, 32000.0, 15000.0}, .seed = 3};
     struct field_volume in;
     assert_true(synth_storm_fields(&sd, &in));
-    struct wrf_writer *ww = wrf_writer_create(path, &in.grid, NULL);
-    assert_non_null(ww);
-    assert_true(wrf_writer_add(ww, &in, "2000-01-01_00:00:00"));
-    assert_true(wrf_writer_finish(ww));
+    test_write_wrf_step(path, &in);
     const char *p = path;
     struct wrf *w = wrf_open(&p, 1, 0.0);
     assert_non_null(w);
@@ -255,10 +252,7 @@ static void test_vorticity_solid_body(void **state)
         .kind = SYNTH_STORM, .n = {40, 40, 8}, .extent_m = {80000.0, 80000.0, 16000.0}, .seed = 5};
     struct field_volume in;
     assert_true(synth_storm_fields(&sd, &in));
-    struct wrf_writer *ww = wrf_writer_create(path, &in.grid, NULL);
-    assert_non_null(ww);
-    assert_true(wrf_writer_add(ww, &in, "2000-01-01_00:00:00"));
-    assert_true(wrf_writer_finish(ww));
+    test_write_wrf_step(path, &in);
     const char *p = path;
     struct wrf *w = wrf_open(&p, 1, 0.0);
     assert_non_null(w);
@@ -378,10 +372,7 @@ static void test_vorticity_map_factors_read(void **state)
     assert_true(synth_storm_fields(&sd, &in));
     const int nx = sd.n[0], ny = sd.n[1];
     for (int bad = 0; bad < 2; bad++) {
-        struct wrf_writer *ww = wrf_writer_create(path, &in.grid, NULL);
-        assert_non_null(ww);
-        assert_true(wrf_writer_add(ww, &in, "2000-01-01_00:00:00"));
-        assert_true(wrf_writer_finish(ww));
+        test_write_wrf_step(path, &in);
         int nc, dims[3], var;
         CHECK(nc_open(path, NC_WRITE, &nc));
         CHECK(nc_redef(nc));

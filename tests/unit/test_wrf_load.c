@@ -18,7 +18,6 @@
 #include "data/synth.h"
 #include "data/volume.h"
 #include "data/wrf.h"
-#include "data/wrf_write.h"
 #include "optics/optics.h"
 
 #define CHECK(x) assert_int_equal((x), NC_NOERR)
@@ -194,10 +193,7 @@ static void test_synth(void **state)
         .kind = SYNTH_STORM, .n = {40, 30, 24}, .extent_m = {80000.0, 60000.0, 15000.0}, .seed = 5};
     struct field_volume in;
     assert_true(synth_storm_fields(&sd, &in));
-    struct wrf_writer *ww = wrf_writer_create(path, &in.grid, NULL);
-    assert_non_null(ww);
-    assert_true(wrf_writer_add(ww, &in, "2000-01-01_00:00:00"));
-    assert_true(wrf_writer_finish(ww));
+    test_write_wrf_step(path, &in);
     field_volume_finish(&in);
     struct wrf_desc d;
     wrf_desc_defaults(&d);
@@ -378,10 +374,7 @@ static void test_slabs_bad_values(void **state)
         .kind = SYNTH_STORM, .n = {20, 30, 12}, .extent_m = {40000.0, 60000.0, 12000.0}, .seed = 3};
     struct field_volume in;
     assert_true(synth_storm_fields(&sd, &in));
-    struct wrf_writer *ww = wrf_writer_create(path, &in.grid, NULL);
-    assert_non_null(ww);
-    assert_true(wrf_writer_add(ww, &in, "2000-01-01_00:00:00"));
-    assert_true(wrf_writer_finish(ww));
+    test_write_wrf_step(path, &in);
     field_volume_finish(&in);
     int nc, qc, qr, p;
     CHECK(nc_open(path, NC_WRITE, &nc));
