@@ -630,15 +630,15 @@ static void warn_gaps(const struct wrf *w)
 }
 
 /* What opening allocates, in bytes, judged from the dimensions before anything is read: up to
- * five 2-D metadata fields (XLAT, XLONG, HGT, LANDMASK, LU_INDEX) and two planes of the model
- * top's scratch, the dates and the steps of every file. */
+ * six 2-D metadata fields (XLAT, XLONG, HGT, LANDMASK, LU_INDEX, MAPFAC_M) and two planes of
+ * the model top's scratch, the dates and the steps of every file. */
 static bool open_fits(const struct wrf *w, double memory_mb)
 {
     const char *path = w->files[0].path;
     double plane = (double)w->meta.nx * w->meta.ny * sizeof(float), steps = 0.0;
     for (int i = 0; i < w->file_count; i++)
         steps += w->files[i].ntimes;
-    double need = 7.0 * plane + steps * (256.0 + sizeof(struct wrf_step));
+    double need = 8.0 * plane + steps * (256.0 + sizeof(struct wrf_step));
     if (memory_mb > 0 && need > memory_mb * 1048576.0) {
         log_error("%s: opening a grid of %d x %d columns and %.0f time steps needs %.0f MiB, "
                   "above the budget data.memory = %.0f MiB",
