@@ -47,7 +47,12 @@ layout(std430, binding = BIND_VOLUME_BUF_SCALARS) buffer volume_scalars {
     float scal[];
 };
 
-#define MARSHAK_R 2.0
+// light_volume.h's resistance of a surface facing clear air (the Milne-type condition), set by
+// volume_gpu.c from the header so that the two builds solve one system.
+#ifndef LIGHT_VOLUME_BOUNDARY_R
+#error "light_volume.comp needs LIGHT_VOLUME_BOUNDARY_R"
+#endif
+#define BOUNDARY_R float(LIGHT_VOLUME_BOUNDARY_R)
 // volume.c: the least half-cell resistance in cloud and in clear air.
 #define HALF_CELL_R_MIN 0.01
 #define HALF_CELL_R_AIR 0.25
@@ -287,7 +292,7 @@ void main()
             for (int side = 0; side < 2; side++) {
                 bool edge = side == 0 ? idx[a] == 0 : idx[a] == cells_n[a] - 1;
                 if (edge) {
-                    float g = 1.0 / (ra + MARSHAK_R) / dx;
+                    float g = 1.0 / (ra + BOUNDARY_R) / dx;
                     float push = face_push(c, a, side, ra, dx) * (side == 1 ? 1.0 : -1.0);
                     diag += g;
                     rhs -= g * push;
@@ -295,7 +300,7 @@ void main()
                 }
                 int o = side == 0 ? c - stride_of(a) : c + stride_of(a);
                 float rb = half_r(terms[2 * o + 1].x, dx), cb = clearness(terms[2 * o + 1].x, dx);
-                float g = 1.0 / (ra + rb + MARSHAK_R * abs(ca - cb)) / dx;
+                float g = 1.0 / (ra + rb + BOUNDARY_R * abs(ca - cb)) / dx;
                 diag += g;
                 // the flux along +a through this face, lower cell first
                 int lo = side == 0 ? o : c, hi = side == 0 ? c : o;
@@ -427,13 +432,13 @@ void main()
             bool edge = side == 0 ? idx[a] == 0 : idx[a] == cells_n[a] - 1;
             if (edge) {
                 float nout = side == 0 ? -1.0 : 1.0;
-                float fo = (phi + face_push(c, a, side, ra, dx) * nout) / (ra + MARSHAK_R);
+                float fo = (phi + face_push(c, a, side, ra, dx) * nout) / (ra + BOUNDARY_R);
                 face[side] = fo * nout;
                 continue;
             }
             int o = side == 0 ? c - stride_of(a) : c + stride_of(a);
             float rb = half_r(terms[2 * o + 1].x, dx), cb = clearness(terms[2 * o + 1].x, dx);
-            float r = ra + rb + MARSHAK_R * abs(ca - cb);
+            float r = ra + rb + BOUNDARY_R * abs(ca - cb);
             int lo = side == 0 ? o : c, hi = side == 0 ? c : o;
             float rl = side == 0 ? rb : ra, rh = side == 0 ? ra : rb;
             face[side] = (X(lo) - X(hi) + face_push(lo, a, 1, rl, dx) +

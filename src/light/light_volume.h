@@ -68,6 +68,17 @@ void light_volume_finish(struct light_volume *v);
  * inside the box; zero outside it.  OUT: phi, Fx, Fy, Fz. */
 void light_volume_sample(const struct light_volume *v, const double p[3], float out[4]);
 
+/* The resistance to the net flux at a surface that faces clear air (the box's faces, and the
+ * jump from optically thick to clear inside it), per unit area in units of 1 / flux per
+ * fluence: phi at the surface = R F.  A Milne-type condition.  The exact solution of Milne's
+ * problem (a conservative, isotropically scattering half space) has its asymptotic diffusion
+ * fluence extrapolate to zero at z0 = 0.7104 transport mean free paths beyond the surface
+ * (Case & Zweifel, "Linear Transport Theory", 1967; Davison, "Neutron Transport Theory",
+ * 1957).  With F = -D dphi/dn and D = 1 / (3 sigma_tr), phi_s = z0 |dphi/dn| = 3 x 0.7104 F:
+ * R = 2.1312.  Marshak's vacuum condition (the incoming half-range flux phi / 4 - F / 2 set to
+ * zero) gives R = 2, an extrapolation length of 2 / 3: it lets a little too much out. */
+#define LIGHT_VOLUME_BOUNDARY_R 2.1312
+
 /* The largest |F| / phi the eye reads: the flux beyond it is scaled down to it.  P1 keeps its
  * radiance non-negative up to 1/3; where the eye looks (the first optical depths of a cloud's
  * surface) the field is far from P1's two moments (light just scattered out of the beam runs

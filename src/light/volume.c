@@ -11,11 +11,6 @@
 
 #define PI 3.14159265358979323846
 
-/* Resistance to the net flux of the jump from optically thick to clear (per unit area, in
- * units of 1 / flux per fluence): Marshak's vacuum condition, the outgoing half-range flux of
- * an isotropic field being phi / 4 each way, so that a surface facing empty space lets out
- * J = phi / 2. */
-#define MARSHAK_R 2.0
 /* The least resistance of a half cell.  In cloud, 0.01: nearly free conduction without making
  * the system singular where thin cells meet.  In clear air (a cell whose transport extinction
  * is below CLEAR_SIGMA, 1e-6 per metre: about LIGHT_CLEAR_BETA), 0.25: diffusion cannot hold
@@ -194,7 +189,8 @@ static double face_push(const struct cell_terms *t, int a, int side, double r, d
 
 /* How clear a cell of transport extinction SIGMA is across DX, 1 / (1 + 1.5 sigma dx): 1 in
  * clear air, 0 in opaque cloud.  From the cell's own optical depth, not the floored
- * resistance, so that a thick cloud's face toward air gets the whole Marshak jump. */
+ * resistance, so that a thick cloud's face toward air gets the whole boundary jump
+ * (LIGHT_VOLUME_BOUNDARY_R). */
 static double clearness(double sigma, double dx)
 {
     return 1.0 / (1.0 + 1.5 * sigma * dx);
@@ -210,8 +206,8 @@ static size_t cell_index(const int n[3], int i, int j, int k)
  * and the right-hand side.  Face between cells a and b along an axis of cell length dx, per
  * unit area: F = (phi_a - phi_b + 1.5 dx (Q1_a + Q1_b).e) / (R_a + R_b + R_int), the half
  * cells' resistances R = dx / (2 D) = 1.5 sigma_tr dx in series with the jump between thick
- * and clear R_int = 2 |c_a - c_b| (clearness, below); a box face lets out
- * F = (phi_a + 1.5 dx Q1_a.n) / (R_a + 2). */
+ * and clear R_int = R_b |c_a - c_b| (clearness, below; R_b = LIGHT_VOLUME_BOUNDARY_R); a box
+ * face lets out F = (phi_a + 1.5 dx Q1_a.n) / (R_a + R_b). */
 struct system {
     int n[3];
     size_t count;
@@ -385,7 +381,7 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
                         bool edge = side == 0 ? idx[a] == 0 : idx[a] == n[a] - 1;
                         if (!edge)
                             continue;
-                        double g = 1.0 / (ra + MARSHAK_R) / dx[a];
+                        double g = 1.0 / (ra + LIGHT_VOLUME_BOUNDARY_R) / dx[a];
                         double push = face_push(t, a, side, ra, dx[a]) * (side ? 1.0 : -1.0);
                         sys.diag[c] += g;
                         sys.rhs[c] -= g * push;
@@ -395,7 +391,8 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
                     size_t o = c + stride[a];
                     const struct cell_terms *u = &terms[o];
                     double rb = half_r(u->sigma, dx[a]), cb = clearness(u->sigma, dx[a]);
-                    double g = 1.0 / (ra + rb + MARSHAK_R * fabs(ca - cb)) / dx[a];
+                    double rj = LIGHT_VOLUME_BOUNDARY_R * fabs(ca - cb);
+                    double g = 1.0 / (ra + rb + rj) / dx[a];
                     double b = face_push(t, a, 1, ra, dx[a]) + face_push(u, a, 0, rb, dx[a]);
                     sys.off[a][c] = -g;
                     sys.diag[c] += g;
@@ -432,7 +429,7 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
                         if (edge) {
                             double nout = side == 0 ? -1.0 : 1.0;
                             double fo = (phi[c] + face_push(t, a, side, ra, dx[a]) * nout) /
-                                        (ra + MARSHAK_R);
+                                        (ra + LIGHT_VOLUME_BOUNDARY_R);
                             out->leak += fo * area;
                             face[side] = fo * nout;
                             continue;
@@ -440,7 +437,7 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
                         size_t o = side == 0 ? c - stride[a] : c + stride[a];
                         const struct cell_terms *u = &terms[o];
                         double rb = half_r(u->sigma, dx[a]), cb = clearness(u->sigma, dx[a]);
-                        double r = ra + rb + MARSHAK_R * fabs(ca - cb);
+                        double r = ra + rb + LIGHT_VOLUME_BOUNDARY_R * fabs(ca - cb);
                         /* lower cell L, upper cell U of the face */
                         const struct cell_terms *tl = side == 0 ? u : t, *tu = side == 0 ? t : u;
                         double rl = side == 0 ? rb : ra, ru = side == 0 ? ra : rb;

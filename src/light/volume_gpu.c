@@ -20,9 +20,10 @@ static const struct gpu_program *pass(struct light_volume_gpu *v, int k, bool st
 {
     struct gpu_program *p = stretched ? &v->pass[7] : &v->pass[k - 1];
     if (!p->id) {
-        char defines[64];
-        snprintf(defines, sizeof(defines), "#define PASS %d\n#define STRETCHED %d\n", k,
-                 stretched ? 1 : 0);
+        char defines[128];
+        snprintf(defines, sizeof(defines),
+                 "#define PASS %d\n#define STRETCHED %d\n#define LIGHT_VOLUME_BOUNDARY_R %.17g\n",
+                 k, stretched ? 1 : 0, LIGHT_VOLUME_BOUNDARY_R);
         if (!gpu_program_init(p, "light_volume.comp", defines))
             return NULL;
     }

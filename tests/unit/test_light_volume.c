@@ -87,9 +87,11 @@ static void test_empty_volume_has_no_diffuse_light(void **state)
 
 /* The infinite slab, sun overhead, shadow-only beam and a phase of mean cosine 0: the beam
  * loses beta e^-(beta z) at depth z and none of it drifts, so the diffusion problem is
- * -D phi'' = beta e^-(beta z), D = 1 / (3 beta), with Marshak's phi -/+ 2 D phi' = 0 at the top
- * and the bottom: phi = A + B z - 3 e^-(beta z), B = (e^-tau - 5) / (H + 4 D),
- * A = 5 + 2 D B.  The box is 100 km wide, so its middle is the infinite slab. */
+ * -D phi'' = beta e^-(beta z), D = 1 / (3 beta), with the boundary condition phi -/+ R D phi' = 0
+ * at the top and the bottom (R = LIGHT_VOLUME_BOUNDARY_R, 2.1312: the Milne extrapolation
+ * length; Marshak's would be 2): phi = A + B z - 3 e^-(beta z),
+ * B = -(3 + R + (R - 3) e^-tau) / (H + 2 R D), A = 3 + R + R D B.  The box is 100 km wide, so
+ * its middle is the infinite slab. */
 static void test_slab_matches_closed_form(void **state)
 {
     (void)state;
@@ -105,7 +107,8 @@ static void test_slab_matches_closed_form(void **state)
      * interpolation of e^-(beta z) between its nodes. */
     double area = 1e5 * 1e5;
     assert_float_equal(v.source / area, 1.0 - exp(-tau), 2e-3);
-    double B = (exp(-tau) - 5.0) / (H + 4.0 * D), A = 5.0 + 2.0 * D * B;
+    const double R = LIGHT_VOLUME_BOUNDARY_R;
+    double B = -(3.0 + R + (R - 3.0) * exp(-tau)) / (H + 2.0 * R * D), A = 3.0 + R + R * D * B;
     double worst = 0.0;
     for (int k = 0; k < 40; k++) {
         double zc = (k + 0.5) * H / 40.0, depth = H - zc;
@@ -120,7 +123,7 @@ static void test_slab_matches_closed_form(void **state)
     }
     if (worst > 0.01)
         fail_msg("fluence off the closed form by %.3g (relative)", worst);
-    /* The top lets out phi / 2 (Marshak): the flux at the topmost cell points up. */
+    /* The top lets out phi / R: the flux at the topmost cell points up. */
     float top[4];
     light_volume_sample(&v, (double[3]){5e4, 5e4, H - 12.5}, top);
     assert_true(top[3] > 0.0f);
