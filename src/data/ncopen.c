@@ -167,7 +167,7 @@ static uint64_t pad4(uint64_t n)
 /* A name: its length, then its bytes padded to 4.  Kept in OUT (NAME_MAX_BYTES + 1). */
 static bool name(struct cursor *c, char *out, const char *what)
 {
-    uint64_t n;
+    uint64_t n = 0; /* set by count; -O3 cannot see that on every path */
     if (!count(c, &n, what))
         return false;
     if (n == 0 || n > NAME_MAX_BYTES)
