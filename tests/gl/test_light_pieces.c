@@ -1,8 +1,9 @@
 /* The light map built in pieces (light_gpu_build_begin / _step, as staged playback builds the
  * next step's between frames) against the one-piece build (light_gpu_update): the same bits,
- * for every pass that is cut (lateral rates, slices, sweep) and the ones that stay whole, with
- * another map's build between every two pieces (it rebinds the same units and images, as a
- * frame does). */
+ * for every pass that is cut (lateral rates, slices, sweep, the columns' diffuse pass, the
+ * diffuse light volume's solve, the compression) and the ones that stay whole, with another
+ * map's build between every two pieces (it rebinds the same units and images, as a frame
+ * does). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -161,12 +162,21 @@ static void test_pieces_match_whole(void **state)
 {
     (void)state;
     const char *names[] = {"beam", "peripheral", "diffuse", "volume", "half", "compressed"};
+    int calls[COMPRESSED + 1];
     for (int v = BEAM; v <= COMPRESSED; v++) {
-        int calls = compare(storm, 2, (enum variant)v);
-        print_message("%s: %d pieces\n", names[v], calls);
+        calls[v] = compare(storm, 2, (enum variant)v);
+        print_message("%s: %d pieces\n", names[v], calls[v]);
         /* Cut, not one piece: the slices alone are 20 pieces of 2 at 40 planes. */
-        assert_true(calls > 20);
+        assert_true(calls[v] > 20);
     }
+    /* The columns' diffuse pass cut too: more pieces than the lateral rates add to the
+     * peripheral build (2 axes x 24 levels, 8 a piece: 6) and one. */
+    assert_true(calls[DIFFUSE] - calls[PERIPHERAL] > 6 + 1);
+    /* The compression cut: its four sweeps (the light's and the diffuse light's counts, then
+     * their nodes) in more than a piece each. */
+    assert_true(calls[COMPRESSED] - calls[DIFFUSE] > 4);
+    /* The diffuse light volume's solve cut: more pieces than its source and system and one. */
+    assert_true(calls[VOLUME] - calls[PERIPHERAL] > 2);
 }
 
 /* On the model's own levels (the slices sample through the height table). */
