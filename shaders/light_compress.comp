@@ -36,6 +36,7 @@ layout(std430, binding = BIND_COMPRESS_BUF_NODES) writeonly buffer light_nodes {
 #endif
 
 uniform ivec3 grid_n;
+uniform int base_y;     // the first row of columns of this dispatch (a build in pieces)
 uniform double epsilon;
 uniform uint base;      // this part's first word in columns[]
 uniform uint node_base; // and in nodes[]
@@ -90,7 +91,7 @@ void emit(inout int m, double depth, DVEC value)
 
 void main()
 {
-    ivec2 ij = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 ij = ivec2(gl_GlobalInvocationID.xy) + ivec2(0, base_y);
     if (ij.x >= grid_n.x || ij.y >= grid_n.y)
         return;
     uint col = uint(ij.x + grid_n.x * ij.y);

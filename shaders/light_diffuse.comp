@@ -36,6 +36,7 @@ layout(rg32f, binding = BIND_DIFFUSE_IMG_DIFFUSE) uniform writeonly image3D diff
 #endif
 
 uniform ivec3 grid_n;
+uniform int base_y;     // the first row of columns of this dispatch (a build in pieces)
 uniform vec2 loss;  // the beam's loss share: water, ice
 uniform vec2 back;  // lost and heading up toward the sun's side: water, ice
 uniform vec2 gamma; // Eddington coupling 3 (1 - g) / 4: water, ice
@@ -152,7 +153,7 @@ vec2 sources(float d0, slice_terms t)
 
 void main()
 {
-    ivec2 ij = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 ij = ivec2(gl_GlobalInvocationID.xy) + ivec2(0, base_y);
     if (ij.x >= grid_n.x || ij.y >= grid_n.y)
         return;
     int n = grid_n.z;

@@ -19,7 +19,10 @@ enum job_phase { JOB_RATES, JOB_SLICES, JOB_SWEEP, JOB_DIFFUSE, JOB_VOLUME, JOB_
 struct light_gpu_job {
     bool active;
     enum job_phase phase;
-    int at;                       /* the first plane (level) of the phase not done yet */
+    int at;                       /* the first plane (level, row) of the phase not done yet */
+    int part;                     /* compression: 0, 1 the light's and the diffuse light's
+                                     counts, 2, 3 their nodes */
+    uint32_t total[2];            /* compression: the nodes each part counted */
     struct light_gpu_source src;
     double sun[3];
     struct light_settings settings, beam; /* beam: without the columns' diffuse pass */
@@ -31,10 +34,14 @@ struct light_gpu_job {
 };
 
 /* What one piece of a phase covers: levels of the volume (both passes of the lateral rates),
- * slices, planes of the sweep. */
+ * slices, planes of the sweep, rows of columns of the diffuse pass and of the compression,
+ * iterations of the diffuse light volume's solve. */
 #define JOB_RATE_LEVELS 8 /* a multiple of light_lateral.comp's local_size_z */
 #define JOB_SLICE_PLANES 2
 #define JOB_SWEEP_PLANES 4
+#define JOB_DIFFUSE_ROWS 8  /* a multiple of light_diffuse.comp's local_size_y */
+#define JOB_COMPRESS_ROWS 8 /* a multiple of light_compress.comp's local_size_y */
+#define JOB_VOLUME_ITERATIONS 4 /* of the diffuse light volume's solve */
 
 struct light_gpu {
     struct render_light hook; /* first: the renderer's bind callback gets it back */
@@ -297,9 +304,10 @@ static bool node_texture(struct gpu_texture *tex, const int n[3], enum gpu_forma
     return gpu_texture_init(tex, 3, n, format, NULL);
 }
 
-/* The two-stream pass down every column (light_diffuse.comp), after the beam. */
+/* The two-stream pass down the columns of rows FROM .. FROM + COUNT - 1 (light_diffuse.comp),
+ * after the beam. */
 static bool build_diffuse(struct light_gpu *lg, const double sun[3],
-                          const struct light_settings *s, bool half)
+                          const struct light_settings *s, bool half, int from, int count)
 {
     const struct light_grid *g = &lg->grid;
     if (!node_texture(&lg->diffuse, g->n, half ? GPU_RG16F : GPU_RG32F) ||
@@ -320,7 +328,8 @@ static bool build_diffuse(struct light_gpu *lg, const double sun[3],
     gpu_image_bind(&lg->slice, BIND_DIFFUSE_IMG_SLICE, false);
     gpu_image_bind_rw(&lg->adding, BIND_DIFFUSE_IMG_ADDING);
     gpu_image_bind(&lg->diffuse, BIND_DIFFUSE_IMG_DIFFUSE, true);
-    gpu_dispatch(p, g->n[0], g->n[1], 1);
+    gpu_uniform_int(p, "base_y", from);
+    gpu_dispatch(p, g->n[0], count, 1);
     return true;
 }
 
@@ -430,7 +439,7 @@ static void sweep_range(struct light_gpu *lg, const struct light_gpu_job *j, int
     }
 }
 
-static bool build_compressed(struct light_gpu *lg, double epsilon);
+static bool compress_piece(struct light_gpu *lg, struct light_gpu_job *j, bool whole);
 
 /* Advances job J by one piece of its phase (WHOLE: the phase's rest at once, as the one-piece
  * build does), moving to the next phase when its range is done. */
@@ -478,39 +487,58 @@ static bool job_piece(struct light_gpu *lg, struct light_gpu_job *j, bool whole)
             count = total - j->at;
         sweep_range(lg, j, j->at, count);
         j->at += count;
-        if (j->at >= total)
+        if (j->at >= total) {
             j->phase = JOB_DIFFUSE;
+            j->at = 0;
+        }
         return true;
     }
     case JOB_DIFFUSE: {
-        bool ok = !j->beam.multiple || build_diffuse(lg, j->sun, &j->beam, j->half);
+        int total = gn[1];
+        int count = whole || !j->beam.multiple ? total - j->at : JOB_DIFFUSE_ROWS;
+        if (count > total - j->at)
+            count = total - j->at;
+        bool ok = !j->beam.multiple ||
+                  build_diffuse(lg, j->sun, &j->beam, j->half, j->at, count);
+        j->at += count;
+        if (ok && j->at < total)
+            return true;
         /* The scratch served this build only: give its memory back. */
         gpu_texture_finish(&lg->slice);
         gpu_texture_finish(&lg->adding);
         j->phase = JOB_VOLUME;
+        j->at = 0;
         return ok;
     }
     case JOB_VOLUME: {
-        bool ok = true;
-        if (j->volume)
-            ok = light_volume_gpu_build(&lg->volume, j->src.beta, j->src.grid, &lg->light,
-                                        &lg->grid, &j->settings, NULL);
-        else
+        /* The source and the system (a piece), then the solve's iterations. */
+        bool ok = true, done = true;
+        if (j->volume && j->at == 0) {
+            ok = light_volume_gpu_build_begin(&lg->volume, j->src.beta, j->src.grid, &lg->light,
+                                              &lg->grid, &j->settings, NULL);
+            j->at = 1;
+            if (ok && !whole)
+                return true;
+        }
+        if (j->volume && ok)
+            ok = light_volume_gpu_build_step(&lg->volume, whole ? 0 : JOB_VOLUME_ITERATIONS,
+                                             &done);
+        else if (!j->volume)
             gpu_texture_finish(&lg->volume.field);
+        if (ok && !done)
+            return true;
         j->phase = JOB_COMPRESS;
+        j->at = 0;
         return ok;
     }
     case JOB_COMPRESS: {
-        bool ok = true;
-        if (j->mode == LIGHT_GPU_COMPRESSED) {
-            ok = build_compressed(lg, j->settings.epsilon);
-        } else {
-            gpu_buffer_finish(&lg->columns);
-            gpu_buffer_finish(&lg->nodes);
-            lg->compressed_bytes = 0;
-        }
+        if (j->mode == LIGHT_GPU_COMPRESSED)
+            return compress_piece(lg, j, whole);
+        gpu_buffer_finish(&lg->columns);
+        gpu_buffer_finish(&lg->nodes);
+        lg->compressed_bytes = 0;
         j->phase = JOB_DONE;
-        return ok;
+        return true;
     }
     case JOB_DONE:
         break;
@@ -611,9 +639,11 @@ bool light_gpu_read(const struct light_gpu *lg, struct light_map *map)
     return read_back(lg, map, true);
 }
 
-/* Compresses part CH (0 the light, 1 the diffuse light) of the dense map into the columns
- * buffer from word BASE on (light_compress.comp, PASS 1, then light_scan.comp). */
-static void count_part(struct light_gpu *lg, int ch, uint32_t base, double epsilon)
+/* Counts the nodes of part CH's (0 the light, 1 the diffuse light) columns on rows FROM ..
+ * FROM + COUNT - 1 of the dense map into the columns buffer from word BASE on
+ * (light_compress.comp, PASS 1). */
+static void count_rows(struct light_gpu *lg, int ch, uint32_t base, double epsilon, int from,
+                       int count)
 {
     const int *n = lg->grid.n;
     const struct gpu_program *p = &lg->compress[2 * ch];
@@ -622,16 +652,24 @@ static void count_part(struct light_gpu *lg, int ch, uint32_t base, double epsil
     gpu_uniform_ivec3(p, "grid_n", n);
     gpu_uniform_double(p, "epsilon", epsilon);
     gpu_uniform_uint(p, "base", base);
-    gpu_dispatch(p, n[0], n[1], 1);
+    gpu_uniform_int(p, "base_y", from);
+    gpu_dispatch(p, n[0], count, 1);
+}
+
+/* The part's counts from word BASE on turned into first indices (light_scan.comp). */
+static void scan_part(struct light_gpu *lg, uint32_t base)
+{
+    const int *n = lg->grid.n;
     gpu_buffer_bind(&lg->columns, BIND_SCAN_BUF_COLUMNS);
     gpu_uniform_uint(&lg->scan, "column_count", (unsigned)((size_t)n[0] * n[1]));
     gpu_uniform_uint(&lg->scan, "base", base);
     gpu_dispatch(&lg->scan, 1024, 1, 1);
 }
 
-/* Writes part CH's nodes from float NODE_BASE of the nodes buffer on (PASS 2). */
-static void write_part(struct light_gpu *lg, int ch, uint32_t base, uint32_t node_base,
-                       double epsilon)
+/* Writes part CH's nodes of the columns on rows FROM .. FROM + COUNT - 1, from float NODE_BASE
+ * of the nodes buffer on (PASS 2). */
+static void write_rows(struct light_gpu *lg, int ch, uint32_t base, uint32_t node_base,
+                       double epsilon, int from, int count)
 {
     const int *n = lg->grid.n;
     const struct gpu_program *p = &lg->compress[2 * ch + 1];
@@ -642,20 +680,15 @@ static void write_part(struct light_gpu *lg, int ch, uint32_t base, uint32_t nod
     gpu_uniform_double(p, "epsilon", epsilon);
     gpu_uniform_uint(p, "base", base);
     gpu_uniform_uint(p, "node_base", node_base);
-    gpu_dispatch(p, n[0], n[1], 1);
+    gpu_uniform_int(p, "base_y", from);
+    gpu_dispatch(p, n[0], count, 1);
 }
 
-/* The dense map's columns compressed on the GPU, as the reference compressor does: the light's
- * (depth, light) nodes, and with multiple scattering the diffuse light's (depth, M, N), each
- * part's columns and nodes after the light's in the same two buffers.  Every column's nodes
- * are counted, the counts turned into first indices, then the nodes written; the node buffer
- * is made for the totals the GPU found, the one thing read back (it waits for the build).
- * The dense volumes are freed after. */
-static bool build_compressed(struct light_gpu *lg, double epsilon)
+/* The compression's programs and columns buffer, before its first piece. */
+static bool compress_setup(struct light_gpu *lg, bool diffuse)
 {
     const int *n = lg->grid.n;
     size_t ncol = (size_t)n[0] * n[1];
-    bool diffuse = lg->diffuse.id != 0;
     if ((double)ncol * (n[2] + 1) * (diffuse ? 3 : 1) >= 4294967295.0) {
         log_error("light map: %dx%dx%d nodes are too many to compress (at most 2^32 nodes)",
                   n[0], n[1], n[2]);
@@ -675,30 +708,63 @@ static bool build_compressed(struct light_gpu *lg, double epsilon)
     gpu_buffer_finish(&lg->nodes);
     /* The light's columns and their total, then the diffuse light's. */
     uint32_t dbase = (uint32_t)(2 * ncol + 1);
-    if (!gpu_buffer_init(&lg->columns, (diffuse ? 2 : 1) * (size_t)dbase * sizeof(uint32_t), NULL))
+    return gpu_buffer_init(&lg->columns, (diffuse ? 2 : 1) * (size_t)dbase * sizeof(uint32_t),
+                           NULL);
+}
+
+/* One piece of the dense map's compression on the GPU (WHOLE: a whole sweep), as the reference
+ * compressor does: the light's (depth, light) nodes, and with multiple scattering the diffuse
+ * light's (depth, M, N), each part's columns and nodes after the light's in the same two
+ * buffers.  Every column's nodes are counted, a rows' piece at a time, the counts turned into
+ * first indices, then the nodes written; the node buffer is made for the totals the GPU found,
+ * the one thing read back (it waits for the build).  The dense volumes are freed after. */
+static bool compress_piece(struct light_gpu *lg, struct light_gpu_job *j, bool whole)
+{
+    const int *n = lg->grid.n;
+    size_t ncol = (size_t)n[0] * n[1];
+    bool diffuse = lg->diffuse.id != 0;
+    uint32_t dbase = (uint32_t)(2 * ncol + 1);
+    double epsilon = j->settings.epsilon;
+    if (j->part == 0 && j->at == 0 && !compress_setup(lg, diffuse))
         return false;
-    count_part(lg, 0, 0, epsilon);
-    if (diffuse)
-        count_part(lg, 1, dbase, epsilon);
-    uint32_t total[2] = {0, 0};
-    gpu_buffer_read(&lg->columns, 2 * ncol * sizeof(uint32_t), sizeof(uint32_t), &total[0]);
-    if (diffuse)
-        gpu_buffer_read(&lg->columns, (dbase + 2 * ncol) * sizeof(uint32_t), sizeof(uint32_t),
-                        &total[1]);
-    size_t floats = 2 * (size_t)total[0] + 3 * (size_t)total[1];
-    if (!gpu_buffer_init(&lg->nodes, (floats ? floats : 1) * sizeof(float), NULL))
-        return false;
-    write_part(lg, 0, 0, 0, epsilon);
-    if (diffuse)
-        write_part(lg, 1, dbase, 2 * total[0], epsilon);
-    lg->compressed_nodes = total[0];
-    lg->diffuse_nodes = total[1];
+    int ch = j->part % 2;
+    uint32_t base = ch ? dbase : 0;
+    int count = whole ? n[1] - j->at : JOB_COMPRESS_ROWS;
+    if (count > n[1] - j->at)
+        count = n[1] - j->at;
+    if (j->part < 2)
+        count_rows(lg, ch, base, epsilon, j->at, count);
+    else
+        write_rows(lg, ch, base, ch ? 2 * j->total[0] : 0, epsilon, j->at, count);
+    j->at += count;
+    if (j->at < n[1])
+        return true;
+    j->at = 0;
+    if (j->part < 2)
+        scan_part(lg, base);
+    j->part += diffuse ? 1 : 2;
+    if (j->part == 2) {
+        j->total[0] = j->total[1] = 0;
+        gpu_buffer_read(&lg->columns, 2 * ncol * sizeof(uint32_t), sizeof(uint32_t),
+                        &j->total[0]);
+        if (diffuse)
+            gpu_buffer_read(&lg->columns, (dbase + 2 * ncol) * sizeof(uint32_t),
+                            sizeof(uint32_t), &j->total[1]);
+        size_t floats = 2 * (size_t)j->total[0] + 3 * (size_t)j->total[1];
+        return gpu_buffer_init(&lg->nodes, (floats ? floats : 1) * sizeof(float), NULL);
+    }
+    if (j->part < 4)
+        return true;
+    size_t floats = 2 * (size_t)j->total[0] + 3 * (size_t)j->total[1];
+    lg->compressed_nodes = j->total[0];
+    lg->diffuse_nodes = j->total[1];
     lg->diffuse_columns_at = dbase;
-    lg->diffuse_nodes_at = 2 * total[0];
+    lg->diffuse_nodes_at = 2 * j->total[0];
     lg->compressed_bytes = (diffuse ? 2 : 1) * ncol * 2 * sizeof(uint32_t) + floats * sizeof(float);
     /* The dense volumes were only the build's scratch: give their memory back. */
     gpu_texture_finish(&lg->light);
     gpu_texture_finish(&lg->diffuse);
+    j->phase = JOB_DONE;
     return true;
 }
 

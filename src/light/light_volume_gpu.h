@@ -25,6 +25,11 @@ struct light_volume_gpu {
     struct grid3 grid;           /* the cells */
     int iterations;              /* of the last build */
     float residual;              /* relative residual it reached */
+    /* The build under way (light_volume_gpu_build_begin / _step). */
+    bool solving;                /* begun, the field not made yet */
+    bool converged;              /* the residual is down to the tolerance */
+    int max_iterations;
+    double tolerance;
 };
 
 /* Builds the field for the extinction texture BETA (RG32F on VOL_GRID), the dense light map
@@ -35,6 +40,18 @@ bool light_volume_gpu_build(struct light_volume_gpu *v, const struct gpu_texture
                             const struct grid3 *vol_grid, const struct gpu_texture *light,
                             const struct light_grid *lgrid, const struct light_settings *s,
                             const struct light_volume_desc *d);
+
+/* The same build in pieces: _begin makes the source and the system (the first piece), each
+ * _step runs ITERATIONS more iterations of the solve (0: to the end), and the one that ends it
+ * makes the field and sets *DONE.  The field is the one light_volume_gpu_build makes, bit for
+ * bit.  BETA and LIGHT are read by _begin only; anything may run on the GPU between pieces.
+ * False (logged) as light_volume_gpu_build. */
+bool light_volume_gpu_build_begin(struct light_volume_gpu *v, const struct gpu_texture *beta,
+                                  const struct grid3 *vol_grid, const struct gpu_texture *light,
+                                  const struct light_grid *lgrid,
+                                  const struct light_settings *s,
+                                  const struct light_volume_desc *d);
+bool light_volume_gpu_build_step(struct light_volume_gpu *v, int iterations, bool *done);
 
 /* Reads the field back into OUT (zeroed or finished; finish with light_volume_finish): the
  * layout of light_volume_build's. */

@@ -77,11 +77,14 @@ static void reduce(struct light_volume_gpu *v, const struct gpu_program *p, int 
     gpu_dispatch(p, GROUP, 1, 1);
 }
 
-bool light_volume_gpu_build(struct light_volume_gpu *v, const struct gpu_texture *beta,
-                            const struct grid3 *vol_grid, const struct gpu_texture *light,
-                            const struct light_grid *lgrid, const struct light_settings *s,
-                            const struct light_volume_desc *desc)
+bool light_volume_gpu_build_begin(struct light_volume_gpu *v, const struct gpu_texture *beta,
+                                  const struct grid3 *vol_grid, const struct gpu_texture *light,
+                                  const struct light_grid *lgrid,
+                                  const struct light_settings *s,
+                                  const struct light_volume_desc *desc)
 {
+    v->solving = false;
+    scratch_finish(v); /* a build in pieces dropped half way leaves its scratch */
     struct light_volume_desc d = desc ? *desc : (struct light_volume_desc){0};
     light_volume_desc_defaults(&d, vol_grid);
     double tol = fmax(d.tolerance, 1e-5);
@@ -153,12 +156,34 @@ bool light_volume_gpu_build(struct light_volume_gpu *v, const struct gpu_texture
     reduce(v, p[3], groups, 0);
     float head[SCALARS_HEAD];
     gpu_buffer_read(&v->scalars, 0, sizeof(head), head);
-    bool ok = true;
     v->iterations = 0;
     v->residual = 0.0f;
-    if (head[1] > 0.0f) {
-        ok = false;
-        for (int it = 1; it <= d.max_iterations; it++) {
+    v->max_iterations = d.max_iterations;
+    v->tolerance = tol;
+    v->converged = !(head[1] > 0.0f);
+    v->solving = true;
+    return true;
+}
+
+bool light_volume_gpu_build_step(struct light_volume_gpu *v, int iterations, bool *done)
+{
+    *done = !v->solving;
+    if (!v->solving)
+        return true;
+    const struct gpu_program *p[7];
+    for (int k = 2; k <= 7; k++)
+        p[k - 1] = &v->pass[k - 1]; /* made by light_volume_gpu_build_begin */
+    bind_buffers(v); /* a frame may have come between two pieces */
+    const int count = (int)grid3_count(&v->grid);
+    const int groups = (count + GROUP - 1) / GROUP;
+    float head[SCALARS_HEAD];
+    double tol = v->tolerance;
+    bool ok = v->converged, stop = v->converged;
+    if (!stop) {
+        for (int n = 0; !stop && v->iterations < v->max_iterations &&
+                        (iterations <= 0 || n < iterations);
+             n++) {
+            int it = v->iterations + 1;
             gpu_program_use(p[2]);
             common_uniforms(v, p[2]);
             gpu_dispatch(p[2], count, 1, 1);
@@ -171,18 +196,21 @@ bool light_volume_gpu_build(struct light_volume_gpu *v, const struct gpu_texture
             common_uniforms(v, p[5]);
             gpu_dispatch(p[5], count, 1, 1);
             v->iterations = it;
-            if (it % CHECK_EVERY == 0 || it == d.max_iterations) {
+            if (it % CHECK_EVERY == 0 || it == v->max_iterations) {
                 gpu_buffer_read(&v->scalars, 0, sizeof(head), head);
                 v->residual = head[6];
                 if (!isfinite(head[6]))
-                    break;
-                if (head[6] <= tol) {
-                    ok = true;
-                    break;
-                }
+                    stop = true;
+                else if (head[6] <= tol)
+                    ok = stop = true;
             }
         }
     }
+    if (!stop && v->iterations < v->max_iterations)
+        return true; /* more iterations in the next piece */
+    v->solving = false;
+    v->converged = ok;
+    *done = true;
     if (!ok) {
         log_error("light volume (GPU): the diffusion solve stopped at a relative residual of "
                   "%.3g after %d iterations (wanted %.3g)", (double)v->residual, v->iterations,
@@ -200,6 +228,16 @@ bool light_volume_gpu_build(struct light_volume_gpu *v, const struct gpu_texture
     gpu_dispatch(p[6], count, 1, 1);
     scratch_finish(v);
     return true;
+}
+
+bool light_volume_gpu_build(struct light_volume_gpu *v, const struct gpu_texture *beta,
+                            const struct grid3 *vol_grid, const struct gpu_texture *light,
+                            const struct light_grid *lgrid, const struct light_settings *s,
+                            const struct light_volume_desc *desc)
+{
+    bool done = false;
+    return light_volume_gpu_build_begin(v, beta, vol_grid, light, lgrid, s, desc) &&
+           light_volume_gpu_build_step(v, 0, &done);
 }
 
 bool light_volume_gpu_read(const struct light_volume_gpu *v, struct light_volume *out)

@@ -98,9 +98,7 @@ void render_zmap_uniforms(const struct grid3 *grid, const struct gpu_texture *te
     gpu_uniform_float(prog, "zmap_inv_height", (float)(1.0 / (grid->n[2] * grid->spacing[2])));
 }
 
-bool render_cells_build(struct render_cells *c, const struct render_cells_programs *p,
-                        const struct gpu_texture *beta, const struct gpu_texture *next,
-                        const struct grid3 *grid)
+bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *beta)
 {
     struct render_cells layout = {0};
     render_cells_layout(beta->size, RENDER_CELL_VOXELS, &layout);
@@ -115,12 +113,33 @@ bool render_cells_build(struct render_cells *c, const struct render_cells_progra
     struct gpu_buffer buf = c->buf;
     *c = layout;
     c->buf = buf;
+    c->built_layers = 0;
     int header[HEADER_INTS] = {0};
     memcpy(header, c->dims, sizeof(c->dims));
     header[4 * RENDER_CELL_LEVELS] = c->levels;
     header[4 * RENDER_CELL_LEVELS + 1] = c->cell_voxels;
     gpu_buffer_upload(&c->buf, 0, sizeof(header), header);
+    return true;
+}
 
+bool render_cells_build_step(struct render_cells *c, const struct render_cells_programs *p,
+                             const struct gpu_texture *beta, const struct gpu_texture *next,
+                             const struct grid3 *grid, int layers, bool *done)
+{
+    *done = false;
+    if (c->built_layers >= c->dims[0][2]) {
+        /* The coarser levels, each from the one below. */
+        gpu_buffer_bind(&c->buf, BIND_CELLS_BUF_CELLS);
+        for (int level = 1; level < c->levels; level++) {
+            gpu_uniform_int(&p->reduce, "level", level);
+            gpu_dispatch(&p->reduce, c->dims[level][0], c->dims[level][1], c->dims[level][2]);
+        }
+        *done = true;
+        return true;
+    }
+    int from = c->built_layers, count = c->dims[0][2] - from;
+    if (layers > 0 && layers < count)
+        count = layers;
     bool stretched = grid && grid3_stretched(grid);
     const struct gpu_program *b = &p->build[(next ? 1 : 0) | (stretched ? 2 : 0)];
     gpu_uniform_ivec3(b, "vol_n", beta->size);
@@ -134,16 +153,24 @@ bool render_cells_build(struct render_cells *c, const struct render_cells_progra
         snprintf(name, sizeof(name), "cell_levels[%d]", cz);
         gpu_uniform_ivec2(b, name, range);
     }
+    gpu_uniform_int(b, "base_z", from);
     gpu_texture_bind(beta, BIND_CELLS_TEX_BETA);
     if (next)
         gpu_texture_bind(next, BIND_CELLS_TEX_BETA_NEXT);
     gpu_buffer_bind(&c->buf, BIND_CELLS_BUF_CELLS);
-    gpu_dispatch(b, c->dims[0][0], c->dims[0][1], c->dims[0][2]);
-    for (int level = 1; level < c->levels; level++) {
-        gpu_uniform_int(&p->reduce, "level", level);
-        gpu_dispatch(&p->reduce, c->dims[level][0], c->dims[level][1], c->dims[level][2]);
-    }
+    gpu_dispatch(b, c->dims[0][0], c->dims[0][1], count);
+    c->built_layers = from + count;
     return true;
+}
+
+bool render_cells_build(struct render_cells *c, const struct render_cells_programs *p,
+                        const struct gpu_texture *beta, const struct gpu_texture *next,
+                        const struct grid3 *grid)
+{
+    bool done = false;
+    return render_cells_build_begin(c, beta) &&
+           render_cells_build_step(c, p, beta, next, grid, 0, &done) &&
+           render_cells_build_step(c, p, beta, next, grid, 0, &done);
 }
 
 void render_cells_finish(struct render_cells *c)

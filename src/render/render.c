@@ -68,7 +68,7 @@ struct renderer {
     struct held_fields next_held;
     bool next_whole;
     struct render_stage stage;
-    enum { STAGE_IDLE, STAGE_COPYING, STAGE_UPLOADING } stage_state;
+    enum { STAGE_IDLE, STAGE_COPYING, STAGE_UPLOADING, STAGE_CELLS } stage_state;
     struct grid3 stage_grid;
     struct held_fields stage_held;
     size_t stage_done; /* bytes of the staged volume uploaded so far */
@@ -643,8 +643,10 @@ void renderer_stage_cancel(struct renderer *r)
 {
     if (r->stage_state == STAGE_IDLE)
         return;
-    render_stage_wait(&r->stage);
-    render_stage_release(&r->stage);
+    if (r->stage_state != STAGE_CELLS) {
+        render_stage_wait(&r->stage);
+        render_stage_release(&r->stage);
+    }
     r->stage_state = STAGE_IDLE;
     r->have_next = false;
     r->next_whole = false;
@@ -676,6 +678,10 @@ static int stage_pieces(struct renderer *r, struct stage_piece out[5])
             out[count++] = all[i];
     return count;
 }
+
+/* Layers of level-0 macro cells one renderer_stage_step makes (cells_build.comp's
+ * local_size_z). */
+#define STAGE_CELL_LAYERS 4
 
 bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
 {
@@ -732,11 +738,29 @@ bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
     }
     if (r->stage_done < total)
         return true;
-    render_stage_release(&r->stage);
+    if (r->stage_state == STAGE_UPLOADING) {
+        /* Uploaded: the cells next, a few layers a call. */
+        render_stage_release(&r->stage);
+        r->stage_state = STAGE_CELLS;
+        if (!render_cells_build_begin(&r->next_cells, &r->beta_next)) {
+            r->stage_state = STAGE_IDLE;
+            return false;
+        }
+        if (budget != 0)
+            return true;
+    }
+    bool built = false;
+    do {
+        if (!render_cells_build_step(&r->next_cells, &r->cell_programs, &r->beta_next, NULL,
+                                     &r->stage_grid, budget == 0 ? 0 : STAGE_CELL_LAYERS,
+                                     &built)) {
+            r->stage_state = STAGE_IDLE;
+            return false;
+        }
+    } while (budget == 0 && !built);
+    if (!built)
+        return true;
     r->stage_state = STAGE_IDLE;
-    if (!render_cells_build(&r->next_cells, &r->cell_programs, &r->beta_next, NULL,
-                            &r->stage_grid))
-        return false;
     r->grid_next = r->stage_grid;
     r->next_held = r->stage_held;
     r->have_next = true;

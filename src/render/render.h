@@ -121,8 +121,8 @@ bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, float
                          bool *started);
 /* Moves the staged volume on: once the copy is complete, uploads at most BUDGET bytes of it
  * (whole z layers, at least one; 0: all) from the buffer into the next volume's textures, and
- * after the last builds its cells.  *READY: the next volume is whole on the GPU (now or
- * before).  Never waits for the copy.  False (logged) on a GL failure. */
+ * after the last builds its cells, a few layers of them a call (BUDGET 0: all in the last
+ * upload's).  *READY: the next volume is whole on the GPU (now or before).  Never waits for the copy.  False (logged) on a GL failure. */
 bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready);
 /* Whether a staged volume is being copied or uploaded; whether it is still being copied (the
  * stage's thread is on it: renderer_stage_step cannot move it on yet). */
@@ -269,6 +269,7 @@ struct render_cells {
     int dims[RENDER_CELL_LEVELS][4];      /* cells along x, y, z; the level's first index */
     size_t count;                         /* cells of all levels */
     int cell_voxels;                      /* voxels along a level-0 cell's edge */
+    int built_layers;                     /* a build in pieces: level 0's layers made */
 };
 
 struct render_cells_programs {
@@ -288,6 +289,14 @@ void render_cells_layout(const int n[3], int cell_voxels, struct render_cells *c
 bool render_cells_build(struct render_cells *c, const struct render_cells_programs *p,
                         const struct gpu_texture *beta, const struct gpu_texture *next,
                         const struct grid3 *grid);
+/* The same build in pieces: _begin lays C out (and sets its header), each _step makes LAYERS
+ * more of level 0's layers of cells (0: all the rest; a multiple of cells_build.comp's
+ * local_size_z), and the one after the last the coarser levels, setting *DONE.  The cells are
+ * the one-piece build's, bit for bit; anything may run on the GPU between pieces. */
+bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *beta);
+bool render_cells_build_step(struct render_cells *c, const struct render_cells_programs *p,
+                             const struct gpu_texture *beta, const struct gpu_texture *next,
+                             const struct grid3 *grid, int layers, bool *done);
 void render_cells_finish(struct render_cells *c);
 /* A stretched GRID's height table (shaders/zmap.glsl) into TEX (made or remade, RG32F 1-D),
  * and PROG's (NULL: none) uniforms zmap_n and zmap_inv_height as render_zmap_uniforms sets

@@ -1,8 +1,9 @@
 /* The light map built in pieces (light_gpu_build_begin / _step, as staged playback builds the
  * next step's between frames) against the one-piece build (light_gpu_update): the same bits,
- * for every pass that is cut (lateral rates, slices, sweep) and the ones that stay whole, with
- * another map's build between every two pieces (it rebinds the same units and images, as a
- * frame does). */
+ * for every pass that is cut (lateral rates, slices, sweep, the columns' diffuse pass, the
+ * diffuse light volume's solve, the compression) and the ones that stay whole, with another
+ * map's build between every two pieces (it rebinds the same units and images, as a frame
+ * does); and the macro cells built in pieces against the cells built whole. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -155,18 +156,83 @@ static int compare(const char **sets, int n, enum variant v)
     return calls;
 }
 
+/* The macro cells of the scene uploaded last built whole and a layer of cells a piece (another
+ * volume's cells built between every two pieces, with the same programs); returns the pieces. */
+static int compare_cells(void)
+{
+    const struct gpu_texture *beta = renderer_volume_texture(renderer);
+    const struct grid3 *grid = renderer_grid(renderer);
+    struct render_cells_programs p;
+    assert_true(render_cells_programs_init(&p));
+    struct render_cells whole = {0}, pieces = {0}, other = {0};
+    assert_true(render_cells_build(&whole, &p, beta, NULL, grid));
+    assert_true(render_cells_build_begin(&pieces, beta));
+    int calls = 0;
+    for (bool done = false; !done; calls++) {
+        /* 4 layers a piece (a multiple of cells_build.comp's local size); between two, the
+         * same program run whole over the same volume, and the one over two volumes. */
+        assert_true(render_cells_build_step(&pieces, &p, beta, NULL, grid, 4, &done));
+        assert_true(render_cells_build(&other, &p, beta, NULL, grid));
+        assert_true(render_cells_build(&other, &p, beta, beta, grid));
+        assert_true(calls < 1000);
+    }
+    assert_int_equal(whole.count, pieces.count);
+    assert_int_equal(whole.levels, pieces.levels);
+    float *a = render_cells_read(&whole), *b = render_cells_read(&pieces);
+    assert_non_null(a);
+    assert_non_null(b);
+    assert_memory_equal(a, b, whole.count * sizeof(float));
+    /* Not all zero: the comparison saw the scene. */
+    float top = 0.0f;
+    for (size_t i = 0; i < whole.count; i++)
+        top = a[i] > top ? a[i] : top;
+    assert_true(top > 0.0f);
+    free(a);
+    free(b);
+    render_cells_finish(&whole);
+    render_cells_finish(&pieces);
+    render_cells_finish(&other);
+    render_cells_programs_finish(&p);
+    return calls;
+}
+
 static const char *storm[] = {"scene.size=[48,48,24]", "lightmap.resolution=[32,32,40]"};
 
 static void test_pieces_match_whole(void **state)
 {
     (void)state;
     const char *names[] = {"beam", "peripheral", "diffuse", "volume", "half", "compressed"};
+    int calls[COMPRESSED + 1];
     for (int v = BEAM; v <= COMPRESSED; v++) {
-        int calls = compare(storm, 2, (enum variant)v);
-        print_message("%s: %d pieces\n", names[v], calls);
+        calls[v] = compare(storm, 2, (enum variant)v);
+        print_message("%s: %d pieces\n", names[v], calls[v]);
         /* Cut, not one piece: the slices alone are 20 pieces of 2 at 40 planes. */
-        assert_true(calls > 20);
+        assert_true(calls[v] > 20);
     }
+    /* The columns' diffuse pass cut too: more pieces than the lateral rates add to the
+     * peripheral build (2 axes x 24 levels, 8 a piece: 6) and one. */
+    assert_true(calls[DIFFUSE] - calls[PERIPHERAL] > 6 + 1);
+    /* The compression cut: its four sweeps (the light's and the diffuse light's counts, then
+     * their nodes) in more than a piece each. */
+    assert_true(calls[COMPRESSED] - calls[DIFFUSE] > 4);
+    /* The diffuse light volume's solve cut: more pieces than its source and system and one. */
+    assert_true(calls[VOLUME] - calls[PERIPHERAL] > 2);
+}
+
+/* The macro cells in pieces of 4 layers (the storm 72 voxels high: 9 layers of cells): the same
+ * cells as built whole, on even levels and on the model's own. */
+static void test_cells_pieces_match_whole(void **state)
+{
+    (void)state;
+    struct config cfg;
+    struct ext_volume vol = {0};
+    const char *tall[] = {"scene.size=[48,48,72]"};
+    test_config_from(&cfg, tall, 1);
+    test_upload_scene(renderer, &cfg, &vol);
+    int calls = compare_cells();
+    print_message("cells: %d pieces\n", calls);
+    assert_true(calls > 2); /* 9 layers: 3 pieces of level 0, then the coarser levels */
+    ext_volume_finish(&vol);
 }
 
 /* On the model's own levels (the slices sample through the height table). */
@@ -180,6 +246,7 @@ static void test_pieces_match_whole_native_levels(void **state)
     const char *levels[] = {"scene.kind=data", files, "data.vertical=native",
                             "lightmap.resolution=[16,16,64]", "light.elevation=30"};
     assert_true(compare(levels, 5, DIFFUSE) > 20);
+    assert_true(compare_cells() >= 2);
     remove(path);
 }
 
@@ -233,6 +300,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pieces_match_whole),
         cmocka_unit_test(test_pieces_match_whole_native_levels),
+        cmocka_unit_test(test_cells_pieces_match_whole),
         cmocka_unit_test(test_budget_and_drop),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
