@@ -58,9 +58,36 @@ void render_cells_layout(const int n[3], int cell_voxels, struct render_cells *c
     c->count = count;
 }
 
-/* A cell row's levels go to cells_build.comp in a uniform array of 32. */
-_Static_assert((GRID3_LEVELS_MAX + RENDER_CELL_VOXELS - 1) / RENDER_CELL_VOXELS <= 32,
+/* A cell row's levels go to cells_build.comp in a uniform array of 32 (stretched grids only). */
+_Static_assert((GRID3_LEVELS_MAX + RENDER_CELL_VOXELS_STRETCHED - 1) /
+                       RENDER_CELL_VOXELS_STRETCHED <= 32,
                "cell_levels[] holds every cell row");
+
+/* The levels a trilinear sample within half a (mean) voxel of cell row CZ reads, on a
+ * stretched GRID with cells CELL_VOXELS mean levels tall. */
+static void row_levels(const struct grid3 *grid, int cell_voxels, int cz, int range[2])
+{
+    double h = cell_voxels * grid->spacing[2], z0 = grid->origin[2] + cz * h;
+    grid3_z_voxel_range(grid, z0 - 0.5 * grid->spacing[2], z0 + h + 0.5 * grid->spacing[2],
+                        &range[0], &range[1]);
+}
+
+void render_cells_level_rows(const struct render_cells *c, const struct grid3 *grid, int *row)
+{
+    for (int k = 0; k < grid->n[2]; k++)
+        row[k] = k / c->cell_voxels;
+    if (!grid3_stretched(grid))
+        return;
+    /* Cells are even in height: the rows reading level k are not k / cell_voxels. */
+    for (int k = 0; k < grid->n[2]; k++)
+        row[k] = -1;
+    for (int cz = c->dims[0][2] - 1; cz >= 0; cz--) {
+        int range[2];
+        row_levels(grid, c->cell_voxels, cz, range);
+        for (int k = range[0]; k <= range[1]; k++)
+            row[k] = cz;
+    }
+}
 
 bool render_zmap_upload(const struct grid3 *grid, struct gpu_texture *tex,
                         const struct gpu_program *prog)
@@ -102,8 +129,10 @@ bool render_cells_build(struct render_cells *c, const struct render_cells_progra
                         const struct gpu_texture *beta, const struct gpu_texture *next,
                         const struct grid3 *grid)
 {
+    bool stretched = grid && grid3_stretched(grid);
     struct render_cells layout = {0};
-    render_cells_layout(beta->size, RENDER_CELL_VOXELS, &layout);
+    render_cells_layout(beta->size, stretched ? RENDER_CELL_VOXELS_STRETCHED : RENDER_CELL_VOXELS,
+                        &layout);
     size_t bytes = HEADER_INTS * sizeof(int) + layout.count * sizeof(float);
     if (!c->buf.id || c->buf.bytes != bytes) {
         gpu_buffer_finish(&c->buf);
@@ -121,15 +150,11 @@ bool render_cells_build(struct render_cells *c, const struct render_cells_progra
     header[4 * RENDER_CELL_LEVELS + 1] = c->cell_voxels;
     gpu_buffer_upload(&c->buf, 0, sizeof(header), header);
 
-    bool stretched = grid && grid3_stretched(grid);
     const struct gpu_program *b = &p->build[(next ? 1 : 0) | (stretched ? 2 : 0)];
     gpu_uniform_ivec3(b, "vol_n", beta->size);
     for (int cz = 0; stretched && cz < c->dims[0][2]; cz++) {
-        /* The levels a trilinear sample within half a (mean) voxel of the cell reads. */
-        double h = c->cell_voxels * grid->spacing[2], z0 = grid->origin[2] + cz * h;
         int range[2];
-        grid3_z_voxel_range(grid, z0 - 0.5 * grid->spacing[2], z0 + h + 0.5 * grid->spacing[2],
-                            &range[0], &range[1]);
+        row_levels(grid, c->cell_voxels, cz, range);
         char name[32];
         snprintf(name, sizeof(name), "cell_levels[%d]", cz);
         gpu_uniform_ivec2(b, name, range);
