@@ -12,7 +12,8 @@
 #include "shaders/bindings.h"
 
 /* The buffer's header: RENDER_CELL_LEVELS ivec4 (cells along x, y, z, the level's first
- * index) and one ivec4 (levels, voxels per cell edge, 0, 0), as the shaders declare it. */
+ * index) and one ivec4 (levels, voxels per cell edge, the walk's top level, 0), as the shaders
+ * declare it. */
 #define HEADER_INTS (4 * RENDER_CELL_LEVELS + 4)
 
 bool render_cells_programs_init(struct render_cells_programs *p)
@@ -56,6 +57,11 @@ void render_cells_layout(const int n[3], int cell_voxels, struct render_cells *c
     }
     c->levels = level;
     c->count = count;
+    c->walk_top = level - 1;
+    while (c->walk_top > 0 && (size_t)c->dims[c->walk_top - 1][0] * c->dims[c->walk_top - 1][1] *
+                                      c->dims[c->walk_top - 1][2] <=
+                                  RENDER_CELL_WALK_CELLS)
+        c->walk_top--;
 }
 
 /* A cell row's levels go to cells_build.comp in a uniform array of 32 (stretched grids only). */
@@ -148,6 +154,7 @@ bool render_cells_build(struct render_cells *c, const struct render_cells_progra
     memcpy(header, c->dims, sizeof(c->dims));
     header[4 * RENDER_CELL_LEVELS] = c->levels;
     header[4 * RENDER_CELL_LEVELS + 1] = c->cell_voxels;
+    header[4 * RENDER_CELL_LEVELS + 2] = c->walk_top;
     gpu_buffer_upload(&c->buf, 0, sizeof(header), header);
 
     const struct gpu_program *b = &p->build[(next ? 1 : 0) | (stretched ? 2 : 0)];

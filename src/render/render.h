@@ -265,6 +265,9 @@ int renderer_collect_timings(struct renderer *r, bool wait);
 #define RENDER_CELL_VOXELS 4           /* on a uniform grid */
 #define RENDER_CELL_VOXELS_STRETCHED 8 /* on the model's levels (grid3_stretched) */
 #define RENDER_CELL_LEVELS 16
+/* The eye pass's walk starts at the finest level of at most this many cells (walk_top), not at
+ * the pyramid's one top cell: a ray through an empty cell of it leaps it at the first read. */
+#define RENDER_CELL_WALK_CELLS 64
 
 struct render_cells {
     struct gpu_buffer buf;                /* the header, then a float per cell, level 0 first */
@@ -272,6 +275,7 @@ struct render_cells {
     int dims[RENDER_CELL_LEVELS][4];      /* cells along x, y, z; the level's first index */
     size_t count;                         /* cells of all levels */
     int cell_voxels;                      /* voxels along a level-0 cell's edge */
+    int walk_top;                         /* the level the eye pass's walk starts at */
 };
 
 struct render_cells_programs {

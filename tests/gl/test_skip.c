@@ -174,6 +174,29 @@ static void test_cells_match_cpu(void **state)
     ext_volume_finish(&vol);
 }
 
+/* The eye pass's walk starts at the finest level of at most RENDER_CELL_WALK_CELLS cells: a
+ * level of the pyramid, below its one top cell on a volume of more cells than that. */
+static void test_walk_top(void **state)
+{
+    const int sizes[][3] = {{128, 128, 64}, {500, 500, 100}, {44, 37, 21}, {3, 3, 3}};
+    for (size_t i = 0; i < sizeof(sizes) / sizeof(sizes[0]); i++) {
+        struct render_cells c;
+        render_cells_layout(sizes[i], RENDER_CELL_VOXELS, &c);
+        const int *d = c.dims[c.walk_top];
+        assert_true(c.walk_top >= 0 && c.walk_top < c.levels);
+        assert_true(d[0] * d[1] * d[2] <= RENDER_CELL_WALK_CELLS);
+        if (c.walk_top > 0) {
+            const int *e = c.dims[c.walk_top - 1];
+            assert_true(e[0] * e[1] * e[2] > RENDER_CELL_WALK_CELLS);
+        }
+        /* Volumes of more than RENDER_CELL_WALK_CELLS level-0 cells skip the top levels. */
+        if (c.dims[0][0] * c.dims[0][1] * c.dims[0][2] > RENDER_CELL_WALK_CELLS * 8)
+            assert_true(c.walk_top < c.levels - 2);
+        print_message("%d x %d x %d voxels: %d levels, the walk starts at level %d\n",
+                      sizes[i][0], sizes[i][1], sizes[i][2], c.levels, c.walk_top);
+    }
+}
+
 /* The config's scene drawn with its own light map, with empty-space skipping and without;
  * *WITH and *WITHOUT what the rays did.  Returns the largest relative difference of any
  * channel. */
@@ -388,6 +411,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cells_match_cpu),
+        cmocka_unit_test(test_walk_top),
         cmocka_unit_test(test_skipping_keeps_pictures),
         cmocka_unit_test(test_empty_box_reads_nothing),
         cmocka_unit_test(test_temporal_pair),
