@@ -25,12 +25,14 @@ bool cell_clear_at_voxel(vec3 x)
 // T_END); OCCUPIED_END is where the occupied level-0 cell it stopped at ends (the return value
 // when it stopped at T_END).  BOX_MIN is the volume's corner, CELL_SIZE a level-0 cell in
 // metres, NUDGE a distance far below half a voxel that steps a point off a cell's face.
-// The walk starts at the top of the pyramid, goes down into occupied cells and up again when
-// a leap leaves the parent cell; CELLS counts the cells it read.
+// The walk starts at level cell_header.z (the finest of at most RENDER_CELL_WALK_CELLS cells,
+// render.h): a ray through an empty cell of it leaps the cell at its first read, without
+// descending from the one top cell.  It goes down into occupied cells and up again, to that
+// level at most, when a leap leaves the parent cell; CELLS counts the cells it read.
 float cells_skip(vec3 origin, vec3 dir, vec3 inv_dir, float t, float t_end, vec3 box_min,
                  vec3 cell_size, float nudge, out float occupied_end, inout uint cells)
 {
-    int top = cell_header.x - 1;
+    int top = cell_header.z;
     int level = top;
     for (int it = 0; it < 1024 && t < t_end; it++) {
         float nt = max(nudge, 4e-7 * abs(t));

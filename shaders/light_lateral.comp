@@ -8,6 +8,8 @@
 // light_lateral_rates() in src/light/transport.c operation for operation in float32: the pass
 // along x writes .r, the pass along y then writes .g beside it.
 // SKIP 1: an empty macro cell (render/cells.c) holds no cloudy voxel: it is passed in one step.
+// Cells are even in height, so on the model's levels a level's cell row is not its index over
+// the cell's voxels: level_rows gives it (render_cells_level_rows; -1: none, read every voxel).
 
 #include "bindings.h"
 
@@ -29,6 +31,7 @@ layout(std430, binding = BIND_LATERAL_BUF_CELLS) readonly buffer macro_cells {
     float cell_max[];
 };
 #include "cells.glsl"
+uniform ivec4 level_rows[64]; // level k's cell row: level_rows[k / 4][k % 4]
 #endif
 
 uniform ivec3 vol_n;
@@ -59,10 +62,13 @@ void main()
     if (i > 0 && beta_at(row + (i - 1) * step) >= clear_beta)
         while (i < len && beta_at(row + i * step) >= clear_beta)
             i++;
+#if SKIP
+    int b = cell_header.y, cell_row = level_rows[id.z >> 2][id.z & 3];
+#endif
     while (i < stop) {
 #if SKIP
-        int b = cell_header.y;
-        if (cell_max[cell_index((row + i * step) / b, 0)] <= 0.0) {
+        ivec3 cell = ivec3((row + i * step).xy / b, cell_row);
+        if (cell_row >= 0 && cell_max[cell_index(cell, 0)] <= 0.0) {
             i = (i / b + 1) * b; // the rest of an empty cell: clear
             continue;
         }

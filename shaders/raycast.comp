@@ -120,7 +120,7 @@ vec3 vol_tex(vec3 p)
 #if SKIP
 layout(std430, binding = BIND_EYE_BUF_CELLS) readonly buffer macro_cells {
     ivec4 cell_dims[16]; // cells along x, y, z and the level's first index
-    ivec4 cell_header;   // levels, voxels per cell edge
+    ivec4 cell_header;   // levels, voxels per cell edge, the walk's top level
     float cell_max[];
 };
 uniform vec3 cell_size;  // metres, a level-0 cell
@@ -661,13 +661,16 @@ void main()
                 d = min(d, level_step(za + dir.z * d, per_dz));
                 d = min(d, left);
 #if SKIP
-                // A step wholly in clear cells adds nothing: on to where they end.
+                // A step wholly in clear cells adds nothing: t goes over it as the plain march
+                // would, without reading the volume.  (Not on to t_clear at once: the steps
+                // follow the levels from where they start, and a leap would move every later
+                // step's samples.)
                 if (t + d > t_clear && t >= t_occupied)
                     t_clear = cells_skip(origin, dir, inv_dir, t, t1, box_min, cell_size, nudge,
                                          t_occupied, n_cells);
                 if (t + d <= t_clear) {
                     n_leapt++;
-                    t = t_clear;
+                    t += d;
                     continue;
                 }
 #endif

@@ -562,6 +562,12 @@ void gpu_uniform_ivec3(const struct gpu_program *p, const char *name, const int 
     glProgramUniform3iv(p->id, glGetUniformLocation(p->id, name), 1, v);
 }
 
+void gpu_uniform_ivec4_array(const struct gpu_program *p, const char *name, int count,
+                             const int *v)
+{
+    glProgramUniform4iv(p->id, glGetUniformLocation(p->id, name), count, v);
+}
+
 void gpu_uniform_vec4(const struct gpu_program *p, const char *name, const float v[4])
 {
     glProgramUniform4fv(p->id, glGetUniformLocation(p->id, name), 1, v);

@@ -203,6 +203,9 @@ void gpu_uniform_vec2(const struct gpu_program *p, const char *name, const float
 void gpu_uniform_vec3(const struct gpu_program *p, const char *name, const float v[3]);
 void gpu_uniform_ivec2(const struct gpu_program *p, const char *name, const int v[2]);
 void gpu_uniform_ivec3(const struct gpu_program *p, const char *name, const int v[3]);
+/* COUNT ivec4 of V (4 * COUNT ints) into the uniform array NAME from its element 0. */
+void gpu_uniform_ivec4_array(const struct gpu_program *p, const char *name, int count,
+                             const int *v);
 void gpu_uniform_vec4(const struct gpu_program *p, const char *name, const float v[4]);
 void gpu_uniform_mat4(const struct gpu_program *p, const char *name, const float m[16]);
 

@@ -210,6 +210,8 @@ static bool rates_setup(struct light_gpu *lg, const struct light_gpu_source *src
     return true;
 }
 
+_Static_assert(GRID3_LEVELS_MAX == 4 * 64, "light_lateral.comp's level_rows[64] holds every level");
+
 /* The lateral escape rates of the volume (light_lateral.comp) along AXIS (0: x, 1: y) on
  * levels FROM .. FROM + COUNT - 1: one invocation per stretch of a row (each walks the runs that
  * start in it).  Every binding is made again: a frame may have come between two pieces. */
@@ -223,8 +225,12 @@ static void rates_levels(struct light_gpu *lg, const struct light_gpu_source *sr
     gpu_uniform_float(p, "clear_beta", LIGHT_CLEAR_BETA);
     gpu_texture_bind(src->beta, BIND_LATERAL_TEX_BETA);
     gpu_image_bind_rw(&lg->rates, BIND_LATERAL_IMG_RATES);
-    if (skip)
+    if (skip) {
         gpu_buffer_bind(&src->cells->buf, BIND_LATERAL_BUF_CELLS);
+        int rows[GRID3_LEVELS_MAX] = {0};
+        render_cells_level_rows(src->cells, src->grid, rows);
+        gpu_uniform_ivec4_array(p, "level_rows", GRID3_LEVELS_MAX / 4, rows);
+    }
     gpu_uniform_int(p, "axis", axis);
     gpu_uniform_int(p, "base_z", from);
     gpu_uniform_float(p, "spacing", (float)src->grid->spacing[axis]);

@@ -12,7 +12,8 @@
 #include "shaders/bindings.h"
 
 /* The buffer's header: RENDER_CELL_LEVELS ivec4 (cells along x, y, z, the level's first
- * index) and one ivec4 (levels, voxels per cell edge, 0, 0), as the shaders declare it. */
+ * index) and one ivec4 (levels, voxels per cell edge, the walk's top level, 0), as the shaders
+ * declare it. */
 #define HEADER_INTS (4 * RENDER_CELL_LEVELS + 4)
 
 bool render_cells_programs_init(struct render_cells_programs *p)
@@ -56,11 +57,43 @@ void render_cells_layout(const int n[3], int cell_voxels, struct render_cells *c
     }
     c->levels = level;
     c->count = count;
+    c->walk_top = level - 1;
+    while (c->walk_top > 0 && (size_t)c->dims[c->walk_top - 1][0] * c->dims[c->walk_top - 1][1] *
+                                      c->dims[c->walk_top - 1][2] <=
+                                  RENDER_CELL_WALK_CELLS)
+        c->walk_top--;
 }
 
-/* A cell row's levels go to cells_build.comp in a uniform array of 32. */
-_Static_assert((GRID3_LEVELS_MAX + RENDER_CELL_VOXELS - 1) / RENDER_CELL_VOXELS <= 32,
+/* A cell row's levels go to cells_build.comp in a uniform array of 32 (stretched grids only). */
+_Static_assert((GRID3_LEVELS_MAX + RENDER_CELL_VOXELS_STRETCHED - 1) /
+                       RENDER_CELL_VOXELS_STRETCHED <= 32,
                "cell_levels[] holds every cell row");
+
+/* The levels a trilinear sample within half a (mean) voxel of cell row CZ reads, on a
+ * stretched GRID with cells CELL_VOXELS mean levels tall. */
+static void row_levels(const struct grid3 *grid, int cell_voxels, int cz, int range[2])
+{
+    double h = cell_voxels * grid->spacing[2], z0 = grid->origin[2] + cz * h;
+    grid3_z_voxel_range(grid, z0 - 0.5 * grid->spacing[2], z0 + h + 0.5 * grid->spacing[2],
+                        &range[0], &range[1]);
+}
+
+void render_cells_level_rows(const struct render_cells *c, const struct grid3 *grid, int *row)
+{
+    for (int k = 0; k < grid->n[2]; k++)
+        row[k] = k / c->cell_voxels;
+    if (!grid3_stretched(grid))
+        return;
+    /* Cells are even in height: the rows reading level k are not k / cell_voxels. */
+    for (int k = 0; k < grid->n[2]; k++)
+        row[k] = -1;
+    for (int cz = c->dims[0][2] - 1; cz >= 0; cz--) {
+        int range[2];
+        row_levels(grid, c->cell_voxels, cz, range);
+        for (int k = range[0]; k <= range[1]; k++)
+            row[k] = cz;
+    }
+}
 
 bool render_zmap_upload(const struct grid3 *grid, struct gpu_texture *tex,
                         const struct gpu_program *prog)
@@ -98,10 +131,13 @@ void render_zmap_uniforms(const struct grid3 *grid, const struct gpu_texture *te
     gpu_uniform_float(prog, "zmap_inv_height", (float)(1.0 / (grid->n[2] * grid->spacing[2])));
 }
 
-bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *beta)
+bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *beta,
+                              const struct grid3 *grid)
 {
+    bool stretched = grid && grid3_stretched(grid);
     struct render_cells layout = {0};
-    render_cells_layout(beta->size, RENDER_CELL_VOXELS, &layout);
+    render_cells_layout(beta->size, stretched ? RENDER_CELL_VOXELS_STRETCHED : RENDER_CELL_VOXELS,
+                        &layout);
     size_t bytes = HEADER_INTS * sizeof(int) + layout.count * sizeof(float);
     if (!c->buf.id || c->buf.bytes != bytes) {
         gpu_buffer_finish(&c->buf);
@@ -118,6 +154,7 @@ bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *
     memcpy(header, c->dims, sizeof(c->dims));
     header[4 * RENDER_CELL_LEVELS] = c->levels;
     header[4 * RENDER_CELL_LEVELS + 1] = c->cell_voxels;
+    header[4 * RENDER_CELL_LEVELS + 2] = c->walk_top;
     gpu_buffer_upload(&c->buf, 0, sizeof(header), header);
     return true;
 }
@@ -144,11 +181,8 @@ bool render_cells_build_step(struct render_cells *c, const struct render_cells_p
     const struct gpu_program *b = &p->build[(next ? 1 : 0) | (stretched ? 2 : 0)];
     gpu_uniform_ivec3(b, "vol_n", beta->size);
     for (int cz = 0; stretched && cz < c->dims[0][2]; cz++) {
-        /* The levels a trilinear sample within half a (mean) voxel of the cell reads. */
-        double h = c->cell_voxels * grid->spacing[2], z0 = grid->origin[2] + cz * h;
         int range[2];
-        grid3_z_voxel_range(grid, z0 - 0.5 * grid->spacing[2], z0 + h + 0.5 * grid->spacing[2],
-                            &range[0], &range[1]);
+        row_levels(grid, c->cell_voxels, cz, range);
         char name[32];
         snprintf(name, sizeof(name), "cell_levels[%d]", cz);
         gpu_uniform_ivec2(b, name, range);
@@ -168,7 +202,7 @@ bool render_cells_build(struct render_cells *c, const struct render_cells_progra
                         const struct grid3 *grid)
 {
     bool done = false;
-    return render_cells_build_begin(c, beta) &&
+    return render_cells_build_begin(c, beta, grid) &&
            render_cells_build_step(c, p, beta, next, grid, 0, &done) &&
            render_cells_build_step(c, p, beta, next, grid, 0, &done);
 }

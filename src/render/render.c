@@ -742,7 +742,7 @@ bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
         /* Uploaded: the cells next, a few layers a call. */
         render_stage_release(&r->stage);
         r->stage_state = STAGE_CELLS;
-        if (!render_cells_build_begin(&r->next_cells, &r->beta_next)) {
+        if (!render_cells_build_begin(&r->next_cells, &r->beta_next, &r->stage_grid)) {
             r->stage_state = STAGE_IDLE;
             return false;
         }

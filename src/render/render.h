@@ -253,15 +253,21 @@ int renderer_collect_timings(struct renderer *r, bool wait);
 
 /* ---- empty-space skipping -------------------------------------------------------------
  * Beside each extinction texture the renderer keeps a pyramid of macro cells.  Level 0 holds,
- * for each block of RENDER_CELL_VOXELS^3 voxels, the largest extinction (ice plus water; NaN
+ * for each block of RENDER_CELL_VOXELS^3 voxels (RENDER_CELL_VOXELS_STRETCHED^3 on the model's
+ * levels, where each cell row reads a run of uneven levels and small cells cost more reads
+ * than they leap), the largest extinction (ice plus water; NaN
  * and negative as 0) that a trilinear sample anywhere within half a voxel of the block can
  * read: the block's voxels and one voxel around it.  Each further level holds the largest of
  * 2 x 2 x 2 cells of the one below, up to one cell.  A cell holding 0 is empty: the eye pass
  * leaps it (shaders/cells.glsl) and the light build reads no voxel in it, and both come out
  * the same as without the leap. */
 
-#define RENDER_CELL_VOXELS 8
+#define RENDER_CELL_VOXELS 4           /* on a uniform grid */
+#define RENDER_CELL_VOXELS_STRETCHED 8 /* on the model's levels (grid3_stretched) */
 #define RENDER_CELL_LEVELS 16
+/* The eye pass's walk starts at the finest level of at most this many cells (walk_top), not at
+ * the pyramid's one top cell: a ray through an empty cell of it leaps it at the first read. */
+#define RENDER_CELL_WALK_CELLS 64
 
 struct render_cells {
     struct gpu_buffer buf;                /* the header, then a float per cell, level 0 first */
@@ -270,6 +276,7 @@ struct render_cells {
     size_t count;                         /* cells of all levels */
     int cell_voxels;                      /* voxels along a level-0 cell's edge */
     int built_layers;                     /* a build in pieces: level 0's layers made */
+    int walk_top;                         /* the level the eye pass's walk starts at */
 };
 
 struct render_cells_programs {
@@ -293,7 +300,8 @@ bool render_cells_build(struct render_cells *c, const struct render_cells_progra
  * more of level 0's layers of cells (0: all the rest; a multiple of cells_build.comp's
  * local_size_z), and the one after the last the coarser levels, setting *DONE.  The cells are
  * the one-piece build's, bit for bit; anything may run on the GPU between pieces. */
-bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *beta);
+bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *beta,
+                              const struct grid3 *grid);
 bool render_cells_build_step(struct render_cells *c, const struct render_cells_programs *p,
                              const struct gpu_texture *beta, const struct gpu_texture *next,
                              const struct grid3 *grid, int layers, bool *done);
@@ -305,6 +313,9 @@ bool render_zmap_upload(const struct grid3 *grid, struct gpu_texture *tex,
                         const struct gpu_program *prog);
 void render_zmap_uniforms(const struct grid3 *grid, const struct gpu_texture *tex,
                           const struct gpu_program *prog);
+/* For each level k of GRID (n[2] of them) into ROW[k], a level-0 cell row of C that holds it:
+ * where a level-0 cell of that row is empty, so is every voxel of level k beneath it. */
+void render_cells_level_rows(const struct render_cells *c, const struct grid3 *grid, int *row);
 /* Binds C's buffer at storage binding BINDING and sets PROG's uniform cell_size (a level-0
  * cell in metres on GRID). */
 void render_cells_bind(const struct render_cells *c, const struct gpu_program *prog,

@@ -166,7 +166,7 @@ static int compare_cells(void)
     assert_true(render_cells_programs_init(&p));
     struct render_cells whole = {0}, pieces = {0}, other = {0};
     assert_true(render_cells_build(&whole, &p, beta, NULL, grid));
-    assert_true(render_cells_build_begin(&pieces, beta));
+    assert_true(render_cells_build_begin(&pieces, beta, grid));
     int calls = 0;
     for (bool done = false; !done; calls++) {
         /* 4 layers a piece (a multiple of cells_build.comp's local size); between two, the

@@ -167,6 +167,15 @@ static void test_gpu_matches_cpu_stretched(void **state)
                   err, diffuse);
     assert_true(err <= GPU_CPU_TOLERANCE);
     assert_true(diffuse <= GPU_CPU_DIFFUSE_TOLERANCE);
+    /* The storm's low cells stand under clear air aloft: the lateral pass must find the macro
+     * cell of each level by its height, not its index, or those levels lose their rates. */
+    diffuse = INFINITY;
+    err = gpu_vs_cpu_on(storm, 2, true, &diffuse, true);
+    print_message("storm, stretched, multiple scattering: max |GPU - CPU| light %.3g, "
+                  "diffuse %.3g\n",
+                  err, diffuse);
+    assert_true(err <= GPU_CPU_TOLERANCE);
+    assert_true(diffuse <= GPU_CPU_DIFFUSE_TOLERANCE);
 }
 
 /* Multiple scattering on the same three scenes: the column pass on the GPU

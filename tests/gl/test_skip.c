@@ -18,18 +18,38 @@
 static struct gpu_context *ctx;
 static struct renderer *renderer;
 
+/* VOL's levels moved onto uneven ones in the same box (the model's own levels of a WRF file,
+ * data/volume.h): faces at (k / n)^2 of the height, thin at the bottom, thick aloft. */
+static void stretch_levels(struct ext_volume *vol)
+{
+    struct grid3 *g = &vol->grid;
+    int nz = g->n[2];
+    double h = nz * g->spacing[2], zc[GRID3_LEVELS_MAX];
+    for (int k = 0; k < nz; k++) {
+        double a = (double)k / nz, b = (double)(k + 1) / nz;
+        zc[k] = g->origin[2] + 0.5 * (a * a + b * b) * h;
+    }
+    assert_true(grid3_set_levels(g, zc, nz, g->origin[2], g->origin[2] + h));
+    assert_true(grid3_stretched(g));
+}
+
 /* What the GPU's cells must hold: per level-0 cell the largest ice + water extinction (NaN and
  * negative as 0, infinity as 1e30) over the cell's voxels and one voxel around it, clamped to
- * the volume; each further level the largest of its 2 x 2 x 2 children.  NEXT (may be NULL)
- * is a second volume of the same grid whose values count too. */
+ * the volume; each further level the largest of its 2 x 2 x 2 children.  Cells are
+ * RENDER_CELL_VOXELS on a side, RENDER_CELL_VOXELS_STRETCHED on the model's levels, where a
+ * cell row is that many mean levels tall and holds every level a sample within half a mean
+ * level of it reads.  NEXT (may be NULL) is a second volume of the same grid whose values
+ * count too. */
 static float *cpu_cells(const struct ext_volume *vol, const struct ext_volume *next,
                         struct render_cells *layout)
 {
     const int *n = vol->grid.n;
-    render_cells_layout(n, RENDER_CELL_VOXELS, layout);
+    const struct grid3 *g = &vol->grid;
+    const bool stretched = grid3_stretched(g);
+    const int b = stretched ? RENDER_CELL_VOXELS_STRETCHED : RENDER_CELL_VOXELS;
+    render_cells_layout(n, b, layout);
     float *out = calloc(layout->count, sizeof(float));
     assert_non_null(out);
-    const int b = RENDER_CELL_VOXELS;
     const int *d0 = layout->dims[0];
     for (int cz = 0; cz < d0[2]; cz++)
         for (int cy = 0; cy < d0[1]; cy++)
@@ -38,6 +58,11 @@ static float *cpu_cells(const struct ext_volume *vol, const struct ext_volume *n
                 for (int a = 0; a < 3; a++) {
                     lo[a] = c[a] * b - 1 < 0 ? 0 : c[a] * b - 1;
                     hi[a] = c[a] * b + b > n[a] - 1 ? n[a] - 1 : c[a] * b + b;
+                }
+                if (stretched) {
+                    double h = b * g->spacing[2], z0 = g->origin[2] + cz * h;
+                    grid3_z_voxel_range(g, z0 - 0.5 * g->spacing[2], z0 + h + 0.5 * g->spacing[2],
+                                        &lo[2], &hi[2]);
                 }
                 float m = 0.0f;
                 for (int z = lo[2]; z <= hi[2]; z++)
@@ -79,6 +104,7 @@ static double check_cells(const struct render_cells *cells, const struct ext_vol
 {
     struct render_cells layout;
     float *want = cpu_cells(vol, next, &layout);
+    assert_int_equal(cells->cell_voxels, layout.cell_voxels);
     assert_int_equal(cells->levels, layout.levels);
     assert_int_equal(cells->count, layout.count);
     assert_memory_equal(cells->dims, layout.dims, sizeof(layout.dims));
@@ -115,35 +141,76 @@ static void test_cells_match_cpu(void **state)
     double clear = check_cells(renderer_cells(renderer), &vol, NULL);
     print_message("storm 44x37x21: %.0f %% of the cells empty\n", 100.0 * clear);
     assert_true(clear > 0.3 && clear < 0.95); /* a test of both kinds of cell */
+    assert_int_equal(renderer_cells(renderer)->cell_voxels, RENDER_CELL_VOXELS);
+    ext_volume_finish(&vol);
+
+    /* On the model's levels: larger cells, each row the run of levels its height holds. */
+    const char *tall[] = {"scene.size=[44,37,40]"};
+    test_config_from(&cfg, tall, 1);
+    assert_true(scene_build_volume(&cfg, &vol));
+    stretch_levels(&vol);
+    assert_true(renderer_set_volume(renderer, &vol));
+    clear = check_cells(renderer_cells(renderer), &vol, NULL);
+    print_message("storm 44x37x40, stretched: %.0f %% of the cells empty\n", 100.0 * clear);
+    assert_true(clear > 0.1 && clear < 0.95);
+    assert_int_equal(renderer_cells(renderer)->cell_voxels, RENDER_CELL_VOXELS_STRETCHED);
     ext_volume_finish(&vol);
 
     const char *one[] = {"scene.kind=voxel", "scene.size=[17,17,17]", "scene.extent=[17,17,17]"};
     test_config_from(&cfg, one, 3);
     assert_true(scene_build_volume(&cfg, &vol));
     assert_true(renderer_set_volume(renderer, &vol));
-    /* Voxel (8, 8, 8) is the first of cell 1 along each axis: trilinear samples in cell 0
-     * within a voxel of it read it, so cell 0 must hold it too, and cell 2 must not. */
+    /* Voxel (8, 8, 8) is the first of cell k = 8 / b along each axis: trilinear samples in
+     * cell k - 1 within a voxel of it read it, so cell k - 1 must hold it too, and cell k + 1
+     * must not. */
     const struct render_cells *c = renderer_cells(renderer);
     check_cells(c, &vol, NULL);
     float *got = render_cells_read(c);
-    const int *d = c->dims[0];
-    assert_true(got[0 + d[0] * (0 + d[1] * 0)] > 0.0f);
-    assert_true(got[1 + d[0] * (1 + d[1] * 1)] > 0.0f);
-    assert_true(got[2 + d[0] * (2 + d[1] * 2)] == 0.0f);
+    const int *d = c->dims[0], k = 8 / c->cell_voxels;
+    assert_int_equal(8 % c->cell_voxels, 0);
+    for (int i = k - 1; i <= k + 1; i++)
+        assert_true((got[i + d[0] * (i + d[1] * i)] > 0.0f) == (i <= k));
     free(got);
     ext_volume_finish(&vol);
+}
+
+/* The eye pass's walk starts at the finest level of at most RENDER_CELL_WALK_CELLS cells: a
+ * level of the pyramid, below its one top cell on a volume of more cells than that. */
+static void test_walk_top(void **state)
+{
+    const int sizes[][3] = {{128, 128, 64}, {500, 500, 100}, {44, 37, 21}, {3, 3, 3}};
+    for (size_t i = 0; i < sizeof(sizes) / sizeof(sizes[0]); i++) {
+        struct render_cells c;
+        render_cells_layout(sizes[i], RENDER_CELL_VOXELS, &c);
+        const int *d = c.dims[c.walk_top];
+        assert_true(c.walk_top >= 0 && c.walk_top < c.levels);
+        assert_true(d[0] * d[1] * d[2] <= RENDER_CELL_WALK_CELLS);
+        if (c.walk_top > 0) {
+            const int *e = c.dims[c.walk_top - 1];
+            assert_true(e[0] * e[1] * e[2] > RENDER_CELL_WALK_CELLS);
+        }
+        /* Volumes of more than RENDER_CELL_WALK_CELLS level-0 cells skip the top levels. */
+        if (c.dims[0][0] * c.dims[0][1] * c.dims[0][2] > RENDER_CELL_WALK_CELLS * 8)
+            assert_true(c.walk_top < c.levels - 2);
+        print_message("%d x %d x %d voxels: %d levels, the walk starts at level %d\n",
+                      sizes[i][0], sizes[i][1], sizes[i][2], c.levels, c.walk_top);
+    }
 }
 
 /* The config's scene drawn with its own light map, with empty-space skipping and without;
  * *WITH and *WITHOUT what the rays did.  Returns the largest relative difference of any
  * channel. */
-static double skip_against_plain(const char **sets, int n, struct render_counts *with,
-                                 struct render_counts *without)
+static double skip_against_plain_on(const char **sets, int n, bool stretched,
+                                    struct render_counts *with, struct render_counts *without)
 {
     struct config cfg;
     test_config_from(&cfg, sets, n);
     struct ext_volume vol = {0};
-    test_upload_scene(renderer, &cfg, &vol);
+    assert_true(scene_build_volume(&cfg, &vol));
+    if (stretched)
+        stretch_levels(&vol);
+    assert_true(renderer_set_volume(renderer, &vol));
+    assert_true(renderer_set_optics(renderer, &cfg.optics.params));
     struct lightmaps light;
     assert_true(lightmaps_init(&light, &cfg));
     struct effects e;
@@ -192,10 +259,17 @@ static double skip_against_plain(const char **sets, int n, struct render_counts 
     return worst;
 }
 
+static double skip_against_plain(const char **sets, int n, struct render_counts *with,
+                                 struct render_counts *without)
+{
+    return skip_against_plain_on(sets, n, false, with, without);
+}
+
 /* Pictures within 1e-4 relative of the plain eye pass (on llvmpipe: bit for bit), on scenes
  * that take each path of the march: the storm (equal steps), a wide flat storm under a low sun
  * (its sheared light map makes the thick steps go in parts), a camera inside the storm, the
- * single voxel, a compressed light map, and fewer samples every time. */
+ * single voxel, a compressed light map, the storm and the flat storm on the model's uneven
+ * levels (larger cells, read by height), and fewer samples every time. */
 static void test_skipping_keeps_pictures(void **state)
 {
     static const char *storm[] = {"scene.size=[48,48,24]", "render.width=96", "render.height=72"};
@@ -223,15 +297,18 @@ static void test_skipping_keeps_pictures(void **state)
         const char *name;
         const char **sets;
         int n;
-        bool inside;
-    } cases[] = {{"storm", storm, 3, false},
-                 {"flat storm, low sun", flat, 7, false},
-                 {"inside", inside, 5, true},
-                 {"one voxel", voxel, 9, false},
-                 {"compressed", compressed, 4, false}};
+        bool inside, stretched;
+    } cases[] = {{"storm", storm, 3, false, false},
+                 {"flat storm, low sun", flat, 7, false, false},
+                 {"inside", inside, 5, true, false},
+                 {"one voxel", voxel, 9, false, false},
+                 {"compressed", compressed, 4, false, false},
+                 {"storm, stretched", storm, 3, false, true},
+                 {"flat storm, stretched", flat, 7, false, true}};
     for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
         struct render_counts with, without;
-        double d = skip_against_plain(cases[i].sets, cases[i].n, &with, &without);
+        double d = skip_against_plain_on(cases[i].sets, cases[i].n, cases[i].stretched, &with,
+                                         &without);
         print_message("%-20s relative difference %.3g; beta samples %llu -> %llu, %llu steps "
                       "leapt, %llu of %llu rays marched\n",
                       cases[i].name, d, (unsigned long long)without.beta_samples,
@@ -334,6 +411,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cells_match_cpu),
+        cmocka_unit_test(test_walk_top),
         cmocka_unit_test(test_skipping_keeps_pictures),
         cmocka_unit_test(test_empty_box_reads_nothing),
         cmocka_unit_test(test_temporal_pair),

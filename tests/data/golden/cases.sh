@@ -7,7 +7,9 @@
 # Reinhard tone mapping (they had been made for an older 1 - exp(-x) one), and when the menu
 # gained its Probe page and Save view button, its Layers and Slices pages, the Time page's
 # Frame button, and tabs as wide as their titles.  katrina.pfm is on uniform levels, as it was made; katrina-native.pfm, made
-# when the model's own levels became the default, on those.  The data cases keep the cameras
+# when the model's own levels became the default, on those, and made again when empty-space
+# skipping on those levels was made exact (the eye pass steps over clear cells as the plain
+# march steps through them; the light build finds each level's cells by height).  The data cases keep the cameras
 # they were made with (a scene of data without a camera is framed), the tracked displays their
 # navigation.  All were made again when the rays came from the projection and the view
 # inverted apart (shaders/common.glsl view_ray) instead of one float inverse of their product.
