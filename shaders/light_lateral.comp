@@ -17,7 +17,7 @@
 #define SKIP 0
 #endif
 
-// voxels a stretch of a row holds (eight 4³ macro cells, four 8³ ones on the model's levels)
+// voxels a stretch of a row holds (eight 4^3 macro cells, four 8^3 ones on the model's levels)
 #define SEGMENT 32
 
 layout(local_size_x = 8, local_size_y = 1, local_size_z = 8) in;
