@@ -60,16 +60,8 @@ static double gpu_vs_cpu_on(const char **sets, int n, bool multiple, double *dif
     struct ext_volume vol = {0};
     test_config_from(&cfg, sets, n);
     assert_true(scene_build_volume(&cfg, &vol));
-    if (stretched) {
-        struct grid3 *g = &vol.grid;
-        int nz = g->n[2];
-        double h = nz * g->spacing[2], zc[GRID3_LEVELS_MAX];
-        for (int k = 0; k < nz; k++) {
-            double a = (double)k / nz, b = (double)(k + 1) / nz;
-            zc[k] = g->origin[2] + 0.5 * (a * a + b * b) * h;
-        }
-        assert_true(grid3_set_levels(g, zc, nz, g->origin[2], g->origin[2] + h));
-    }
+    if (stretched)
+        test_stretch_levels(&vol);
     assert_true(renderer_set_volume(renderer, &vol));
     assert_true(renderer_set_optics(renderer, &cfg.optics.params));
     struct light_settings s;

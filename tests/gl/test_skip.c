@@ -18,21 +18,6 @@
 static struct gpu_context *ctx;
 static struct renderer *renderer;
 
-/* VOL's levels moved onto uneven ones in the same box (the model's own levels of a WRF file,
- * data/volume.h): faces at (k / n)^2 of the height, thin at the bottom, thick aloft. */
-static void stretch_levels(struct ext_volume *vol)
-{
-    struct grid3 *g = &vol->grid;
-    int nz = g->n[2];
-    double h = nz * g->spacing[2], zc[GRID3_LEVELS_MAX];
-    for (int k = 0; k < nz; k++) {
-        double a = (double)k / nz, b = (double)(k + 1) / nz;
-        zc[k] = g->origin[2] + 0.5 * (a * a + b * b) * h;
-    }
-    assert_true(grid3_set_levels(g, zc, nz, g->origin[2], g->origin[2] + h));
-    assert_true(grid3_stretched(g));
-}
-
 /* What the GPU's cells must hold: per level-0 cell the largest ice + water extinction (NaN and
  * negative as 0, infinity as 1e30) over the cell's voxels and one voxel around it, clamped to
  * the volume; each further level the largest of its 2 x 2 x 2 children.  Cells are
@@ -148,7 +133,7 @@ static void test_cells_match_cpu(void **state)
     const char *tall[] = {"scene.size=[44,37,40]"};
     test_config_from(&cfg, tall, 1);
     assert_true(scene_build_volume(&cfg, &vol));
-    stretch_levels(&vol);
+    test_stretch_levels(&vol);
     assert_true(renderer_set_volume(renderer, &vol));
     clear = check_cells(renderer_cells(renderer), &vol, NULL);
     print_message("storm 44x37x40, stretched: %.0f %% of the cells empty\n", 100.0 * clear);
@@ -208,7 +193,7 @@ static double skip_against_plain_on(const char **sets, int n, bool stretched,
     struct ext_volume vol = {0};
     assert_true(scene_build_volume(&cfg, &vol));
     if (stretched)
-        stretch_levels(&vol);
+        test_stretch_levels(&vol);
     assert_true(renderer_set_volume(renderer, &vol));
     assert_true(renderer_set_optics(renderer, &cfg.optics.params));
     struct lightmaps light;

@@ -108,3 +108,16 @@ void test_write_wrf_step(const char *path, const struct field_volume *in)
     assert_true(wrf_writer_add(ww, in, "2000-01-01_00:00:00"));
     assert_true(wrf_writer_finish(ww));
 }
+
+void test_stretch_levels(struct ext_volume *vol)
+{
+    struct grid3 *g = &vol->grid;
+    int nz = g->n[2];
+    double h = nz * g->spacing[2], zc[GRID3_LEVELS_MAX];
+    for (int k = 0; k < nz; k++) {
+        double a = (double)k / nz, b = (double)(k + 1) / nz;
+        zc[k] = g->origin[2] + 0.5 * (a * a + b * b) * h;
+    }
+    assert_true(grid3_set_levels(g, zc, nz, g->origin[2], g->origin[2] + h));
+    assert_true(grid3_stretched(g));
+}

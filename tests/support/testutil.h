@@ -39,6 +39,10 @@ struct renderer;
 struct ext_volume;
 struct field_volume;
 
+/* VOL's levels moved onto uneven ones in the same box (the model's own levels of a WRF file,
+ * data/volume.h): faces at (k / n)^2 of the height, thin at the bottom, thick aloft. */
+void test_stretch_levels(struct ext_volume *vol);
+
 /* Writes IN as a one-step WRF file (time 2000-01-01_00:00:00) at PATH (asserts). */
 void test_write_wrf_step(const char *path, const struct field_volume *in);
 
