@@ -20,6 +20,17 @@ bool cell_clear_at_voxel(vec3 x)
     return cell_max[cell_index(c, 0)] <= 0.0;
 }
 
+// Whether the whole volume holds nothing: its one top cell reads 0 (an empty box, or a step
+// with no cloud), known from one read where the walk would read a row of its top level.
+bool cells_all_clear(inout uint cells)
+{
+    int root = cell_header.x - 1;
+    if (any(notEqual(cell_dims[root].xyz, ivec3(1))))
+        return false; // the pyramid stopped short of one cell (RENDER_CELL_LEVELS)
+    cells++;
+    return cell_max[cell_dims[root].w] <= 0.0;
+}
+
 // From T on, the ray ORIGIN + t DIR (INV_DIR: 1 / DIR, finite) crosses cells that hold
 // nothing up to the returned parameter (T itself when T's level-0 cell is occupied, at most
 // T_END); OCCUPIED_END is where the occupied level-0 cell it stopped at ends (the return value

@@ -567,8 +567,11 @@ void main()
     float t_clear = t0, t_occupied;
     bool listed = false;
     if (inside && t1 > t0) {
-        t_clear = cells_skip(origin, dir, inv_dir, t0, t1, box_min, cell_size, nudge,
-                             t_occupied, n_cells);
+        if (cells_all_clear(n_cells))
+            t_clear = t1;
+        else
+            t_clear = cells_skip(origin, dir, inv_dir, t0, t1, box_min, cell_size, nudge,
+                                 t_occupied, n_cells);
         listed = t_clear < t1;
     }
     if (gl_LocalInvocationIndex == 0u)

@@ -311,7 +311,8 @@ static void test_skipping_keeps_pictures(void **state)
     }
 }
 
-/* An empty box: no ray is marched, no voxel read, and the picture is the background. */
+/* An empty box: no ray is marched, no voxel read, and the picture is the background; a ray
+ * reads one macro cell, the pyramid's top (the walk alone reads a row of its top level's). */
 static void test_empty_box_reads_nothing(void **state)
 {
     const char *sets[] = {"scene.kind=empty", "scene.size=[32,32,16]", "render.width=64",
@@ -322,6 +323,8 @@ static void test_empty_box_reads_nothing(void **state)
     assert_int_equal(with.rays_marched, 0);
     assert_int_equal(with.beta_samples, 0);
     assert_int_equal(with.light_reads, 0);
+    assert_true(with.cells_read > 0);
+    assert_true(with.cells_read <= with.rays);
     assert_true(without.beta_samples > 10 * without.rays); /* the plain pass marched */
 }
 
