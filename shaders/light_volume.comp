@@ -43,6 +43,8 @@ layout(local_size_x = GROUP) in;
 #error "light_volume.comp needs LIGHT_VOLUME_BRICK and LIGHT_VOLUME_BRICK_SWEEPS"
 #endif
 #define BRICK LIGHT_VOLUME_BRICK
+// volume.c: the least coarse diagonal, relative to the sum of its brick's diagonals.
+#define COARSE_DIAG_MIN 1e-6
 
 uniform ivec3 cells_n;   // cells along x, y, z
 uniform vec3 cell_size;  // metres
@@ -438,12 +440,14 @@ void main()
     if (start == 1) {
         // P^T A P, P constant over each brick: the faces inside a brick cancel.
         vec4 cs = vec4(0.0);
+        float diags = 0.0;
         for (int k = lo.z; k < hi.z; k++) {
             for (int j = lo.y; j < hi.y; j++) {
                 for (int i = lo.x; i < hi.x; i++) {
                     ivec3 idx = ivec3(i, j, k);
                     vec4 s = sys[cell_index(idx)];
                     cs.x += s.x;
+                    diags += s.x;
                     for (int a = 0; a < 3; a++) {
                         if (idx[a] + 1 >= cells_n[a])
                             continue;
@@ -455,6 +459,10 @@ void main()
                 }
             }
         }
+        // What the cancellation leaves may be below the floats' rounding (a clear brick
+        // walled in by opaque cloud): the diagonal alone then, still positive definite.
+        if (!(cs.x > COARSE_DIAG_MIN * diags))
+            cs.x = diags;
         for (int k = 0; k < 4; k++)
             COARSE(b, k) = cs[k];
     } else {

@@ -263,6 +263,8 @@ static double dot(const double *a, const double *b, size_t n)
     return s;
 }
 
+#define COARSE_DIAG_MIN 1e-6 /* the least coarse diagonal over its brick's sum of diagonals */
+
 /* The coarse system of the bricks' preconditioner, one cell a brick: A_c = P^T A P, P the
  * prolongation constant over each brick (the faces inside a brick cancel: its diagonal is the
  * conductance out of the brick, its off-diagonals the sums over the faces between two
@@ -283,6 +285,7 @@ static bool coarse_init(struct system *s)
         s->coff[a] = calloc(m, sizeof(double));
     if (!s->cdiag || !s->crhs || !s->cz || !s->coff[0] || !s->coff[1] || !s->coff[2])
         return false;
+    double *diags = s->cz; /* per brick the sum of its diagonals, for the floor below */
     for (int k = 0; k < n[2]; k++) {
         for (int j = 0; j < n[1]; j++) {
             for (int i = 0; i < n[0]; i++) {
@@ -291,6 +294,7 @@ static bool coarse_init(struct system *s)
                 size_t b = cell_index(s->nc, i / LIGHT_VOLUME_BRICK, j / LIGHT_VOLUME_BRICK,
                                       k / LIGHT_VOLUME_BRICK);
                 s->cdiag[b] += s->diag[c];
+                diags[b] += s->diag[c];
                 for (int a = 0; a < 3; a++) {
                     if (idx[a] + 1 >= n[a])
                         continue;
@@ -301,6 +305,13 @@ static bool coarse_init(struct system *s)
                 }
             }
         }
+    }
+    /* What the cancellation leaves may be below the rounding (in floats on the GPU, which
+     * mirrors this): a clear brick walled in by opaque cloud.  The diagonal alone then, still
+     * positive definite. */
+    for (size_t b = 0; b < m; b++) {
+        if (!(s->cdiag[b] > COARSE_DIAG_MIN * diags[b]))
+            s->cdiag[b] = diags[b];
     }
     return true;
 }
@@ -345,7 +356,7 @@ static void coarse_apply(const struct system *s)
  * additive two-level preconditioner), so conjugate gradients stay valid.  The bricks are
  * independent: on the GPU one invocation a brick (shaders/light_volume.comp mirrors this in the
  * same order).  Measured on the storm's 32 x 32 x 32 cells to 1e-8: 140 iterations with
- * Jacobi, 77 with the bricks alone, 41 with the coarse correction. */
+ * Jacobi, 77 with the bricks alone, 43 with the coarse correction. */
 static void precondition(const struct system *s, enum light_volume_precond kind, const double *r,
                          double *z)
 {

@@ -203,7 +203,7 @@ static void test_hard_cases_stay_finite(void **state)
 }
 
 /* The bricks' preconditioner (the default) against the diagonal alone on a storm at the default
- * grid (32 x 32 x 32 cells): a third of the iterations or fewer (41 against 140 when written;
+ * grid (32 x 32 x 32 cells): a third of the iterations or fewer (43 against 140 when written;
  * the bricks without the coarse correction take 77), and the same solution within the solve's
  * tolerance. */
 static void test_bricks_need_fewer_iterations(void **state)
