@@ -99,11 +99,11 @@
 #define BIND_VOLUME_TEX_BETA 0      /* PASS 1: the volume's extinction, texelFetch only */
 #define BIND_VOLUME_TEX_LIGHT 1     /* PASS 1: the dense light map, texelFetch only */
 #define BIND_VOLUME_TEX_ZMAP 2      /* PASS 1, STRETCHED 1: the volume's height table (zmap.glsl) */
-#define BIND_VOLUME_IMG_FIELD 0     /* PASS 7: RGBA32F phi and net flux per cell, written */
+#define BIND_VOLUME_IMG_FIELD 0     /* PASS 6: RGBA32F phi and net flux per cell, written */
 #define BIND_VOLUME_BUF_TERMS 0     /* per cell: source, its moments, transport extinction */
 #define BIND_VOLUME_BUF_SYSTEM 1    /* per cell: diagonal and conductances */
-#define BIND_VOLUME_BUF_VECTORS 2   /* the solve's vectors b, x, r, z, p, q */
-#define BIND_VOLUME_BUF_SCALARS 3   /* the solve's scalars and partial sums */
+#define BIND_VOLUME_BUF_VECTORS 2   /* the solve's vectors b, x, r, z, p (two), q */
+#define BIND_VOLUME_BUF_SCALARS 3   /* the solve's scalars, per-brick sums, coarse system */
 
 /* ---- the peak fetch rate of anvil bench --gpu (shaders/fetch_peak.comp) -------------- */
 #define BIND_PEAK_TEX_VOLUME 0

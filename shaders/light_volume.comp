@@ -1,19 +1,27 @@
 // The diffuse light volume on the GPU (src/light/volume_gpu.c): the passes of
 // light_volume_build() in src/light/volume.c, in float32.  The contract is the converged
 // solution of the discrete diffusion system, not the iteration; the CPU solves it in double
-// by Jacobi-preconditioned conjugate gradients, these passes by the same method in floats,
-// every scalar of the iteration kept on the GPU.
+// by conjugate gradients preconditioned with block Jacobi on bricks plus a coarse correction
+// (volume.c, precondition), these passes by the same method in floats, every scalar of the
+// iteration kept on the GPU.  Bricks are LIGHT_VOLUME_BRICK cells a side; the per-brick
+// passes run one invocation a brick, which walks its cells in order, so a brick's sums need
+// no barrier.
 //   PASS 1 (terms): per cell the source Q0, its first moment Q1, the transport extinction and
 //     the source's offset from the cell centre, from 3^3 samples of the extinction and the
 //     dense light map (both read with texelFetch and the CPU's trilinear weights).
 //   PASS 2 (assemble): per cell the diagonal, the conductances to the +x, +y, +z neighbours and
-//     the right-hand side; x = 0, r = b, z = r / diag, p = z; partial sums of r.z and b.b.
-//   PASS 3 (spmv): q = A p; partial sums of p.q.
-//   PASS 4 (reduce): one work group sums the partial sums: WHAT 0 the start (rz, bb), 1 p.q
-//     (alpha = rz / pq), 2 the update's (beta = rz' / rz, the residual).
-//   PASS 5 (update): x += alpha p, r -= alpha q, z = r / diag; partial sums of r.z and r.r.
-//   PASS 6 (direction): p = z + beta p.
-//   PASS 7 (field): phi = x and the net flux per cell, the mean of its two face fluxes per
+//     the right-hand side; x = 0, r = b, p = 0.
+//   PASS 3 (spmv, per brick): beta from PASS 4; p = z + P e + beta p into the other p
+//     buffer and q = A p, the neighbours' p made on the fly from the same terms; the brick's
+//     sum of p.q.
+//   PASS 4 (coarse, one invocation): the coarse system's symmetric red-black Gauss-Seidel on
+//     the bricks' sums of r (e, one value a brick), then the iteration's scalars: r.z (the
+//     bricks' r.z plus their sums of r times e), beta, the residual, whether it converged.
+//   PASS 5 (update, per brick): alpha = r.z / p.q (the bricks' sums of PASS 3); x += alpha p,
+//     r -= alpha q; z = the brick's own system solved by red-black Gauss-Seidel; the brick's
+//     r.z, r.r and sum of r.  START: x and r stay, and first the coarse system, A summed over
+//     each brick.
+//   PASS 6 (field): phi = x and the net flux per cell, the mean of its two face fluxes per
 //     axis, into the RGBA32F field image.
 
 #include "bindings.h"
@@ -22,8 +30,21 @@
 #define PASS 1
 #endif
 
+#if PASS == 3 || PASS == 5
+#define GROUP 8
+#elif PASS == 4
+#define GROUP 1
+#else
 #define GROUP 256
+#endif
 layout(local_size_x = GROUP) in;
+
+#ifndef LIGHT_VOLUME_BRICK
+#error "light_volume.comp needs LIGHT_VOLUME_BRICK and LIGHT_VOLUME_BRICK_SWEEPS"
+#endif
+#define BRICK LIGHT_VOLUME_BRICK
+// volume.c: the least coarse diagonal, relative to the sum of its brick's diagonals.
+#define COARSE_DIAG_MIN 1e-6
 
 uniform ivec3 cells_n;   // cells along x, y, z
 uniform vec3 cell_size;  // metres
@@ -37,12 +58,15 @@ layout(std430, binding = BIND_VOLUME_BUF_TERMS) buffer volume_terms {
 layout(std430, binding = BIND_VOLUME_BUF_SYSTEM) buffer volume_system {
     vec4 sys[];
 };
-// Six vectors of cells_count floats: b, x, r, z, p, q.
+// Seven vectors of cells_count floats: b, x, r, z (the bricks' part), p (two: the last
+// iteration's and this one's), q.
 layout(std430, binding = BIND_VOLUME_BUF_VECTORS) buffer volume_vectors {
     float cg[];
 };
-// [0] rz, [1] bb, [2] pq, [3] alpha, [4] beta, [5] rr, [6] relative residual, [7] unused;
-// from [8] on two partial sums per work group.
+// The head: [0] rz, [1] bb, [2] pq, [3] alpha, [4] beta, [5] rr, [6] relative residual,
+// [7] 1 once converged, [8] iterations done; then per brick four sums (p.q, r.z, r.r, sum of
+// r), the coarse system (four per brick: diagonal, coupling to the +x, +y, +z brick) and e
+// (one per brick).
 layout(std430, binding = BIND_VOLUME_BUF_SCALARS) buffer volume_scalars {
     float scal[];
 };
@@ -67,12 +91,39 @@ int cells_count()
 #define X(c) cg[cells_count() + (c)]
 #define R(c) cg[2 * cells_count() + (c)]
 #define Z(c) cg[3 * cells_count() + (c)]
-#define P(c) cg[4 * cells_count() + (c)]
-#define Q(c) cg[5 * cells_count() + (c)]
+#define PB(k, c) cg[(4 + (k)) * cells_count() + (c)]
+#define Q(c) cg[6 * cells_count() + (c)]
+
+#define HEAD 16
+ivec3 bricks_n()
+{
+    return (cells_n + BRICK - 1) / BRICK;
+}
+
+int bricks_count()
+{
+    ivec3 n = bricks_n();
+    return n.x * n.y * n.z;
+}
+
+int brick_of(ivec3 idx)
+{
+    ivec3 b = idx / BRICK, n = bricks_n();
+    return b.x + n.x * (b.y + n.y * b.z);
+}
+
+#define SUMS(b, k) scal[HEAD + 4 * (b) + (k)]
+#define COARSE(b, k) scal[HEAD + 4 * bricks_count() + 4 * (b) + (k)]
+#define E(b) scal[HEAD + 8 * bricks_count() + (b)]
 
 ivec3 cell_of(int c)
 {
     return ivec3(c % cells_n.x, (c / cells_n.x) % cells_n.y, c / (cells_n.x * cells_n.y));
+}
+
+int cell_index(ivec3 idx)
+{
+    return idx.x + cells_n.x * (idx.y + cells_n.y * idx.z);
 }
 
 int stride_of(int a)
@@ -99,28 +150,6 @@ float face_push(int c, int a, int side, float r, float dx)
     float dq = t1[1 + a];
     float shift = side == 1 ? max(dq, 0.0) : min(dq, 0.0);
     return 1.5 * dx * t0[1 + a] + 2.0 * r * shift;
-}
-
-shared float part0[GROUP], part1[GROUP];
-
-// Sums V0 and V1 over the work group into scal[8 + 2 group] and the next.
-void group_sums(float v0, float v1)
-{
-    uint l = gl_LocalInvocationID.x;
-    part0[l] = v0;
-    part1[l] = v1;
-    barrier();
-    for (uint s = GROUP / 2u; s > 0u; s >>= 1u) {
-        if (l < s) {
-            part0[l] += part0[l + s];
-            part1[l] += part1[l + s];
-        }
-        barrier();
-    }
-    if (l == 0u) {
-        scal[8u + 2u * gl_WorkGroupID.x] = part0[0];
-        scal[9u + 2u * gl_WorkGroupID.x] = part1[0];
-    }
 }
 
 #if PASS == 1
@@ -280,140 +309,262 @@ void main()
 void main()
 {
     int c = int(gl_GlobalInvocationID.x);
-    float v0 = 0.0, v1 = 0.0;
-    if (c < cells_count()) {
-        ivec3 idx = cell_of(c);
-        vec4 t0 = terms[2 * c], t1 = terms[2 * c + 1];
-        float diag = 0.0, rhs = t0.x;
-        vec3 off = vec3(0.0);
-        for (int a = 0; a < 3; a++) {
-            float dx = cell_size[a];
-            float ra = half_r(t1.x, dx), ca = clearness(t1.x, dx);
-            for (int side = 0; side < 2; side++) {
-                bool edge = side == 0 ? idx[a] == 0 : idx[a] == cells_n[a] - 1;
-                if (edge) {
-                    float g = 1.0 / (ra + BOUNDARY_R) / dx;
-                    float push = face_push(c, a, side, ra, dx) * (side == 1 ? 1.0 : -1.0);
-                    diag += g;
-                    rhs -= g * push;
-                    continue;
-                }
-                int o = side == 0 ? c - stride_of(a) : c + stride_of(a);
-                float rb = half_r(terms[2 * o + 1].x, dx), cb = clearness(terms[2 * o + 1].x, dx);
-                float g = 1.0 / (ra + rb + BOUNDARY_R * abs(ca - cb)) / dx;
+    if (c >= cells_count())
+        return;
+    ivec3 idx = cell_of(c);
+    vec4 t0 = terms[2 * c], t1 = terms[2 * c + 1];
+    float diag = 0.0, rhs = t0.x;
+    vec3 off = vec3(0.0);
+    for (int a = 0; a < 3; a++) {
+        float dx = cell_size[a];
+        float ra = half_r(t1.x, dx), ca = clearness(t1.x, dx);
+        for (int side = 0; side < 2; side++) {
+            bool edge = side == 0 ? idx[a] == 0 : idx[a] == cells_n[a] - 1;
+            if (edge) {
+                float g = 1.0 / (ra + BOUNDARY_R) / dx;
+                float push = face_push(c, a, side, ra, dx) * (side == 1 ? 1.0 : -1.0);
                 diag += g;
-                // the flux along +a through this face, lower cell first
-                int lo = side == 0 ? o : c, hi = side == 0 ? c : o;
-                float rl = side == 0 ? rb : ra, rh = side == 0 ? ra : rb;
-                float b = face_push(lo, a, 1, rl, dx) + face_push(hi, a, 0, rh, dx);
-                rhs += side == 0 ? g * b : -g * b;
-                if (side == 1)
-                    off[a] = -g;
+                rhs -= g * push;
+                continue;
+            }
+            int o = side == 0 ? c - stride_of(a) : c + stride_of(a);
+            float rb = half_r(terms[2 * o + 1].x, dx), cb = clearness(terms[2 * o + 1].x, dx);
+            float g = 1.0 / (ra + rb + BOUNDARY_R * abs(ca - cb)) / dx;
+            diag += g;
+            // the flux along +a through this face, lower cell first
+            int lo = side == 0 ? o : c, hi = side == 0 ? c : o;
+            float rl = side == 0 ? rb : ra, rh = side == 0 ? ra : rb;
+            float b = face_push(lo, a, 1, rl, dx) + face_push(hi, a, 0, rh, dx);
+            rhs += side == 0 ? g * b : -g * b;
+            if (side == 1)
+                off[a] = -g;
+        }
+    }
+    sys[c] = vec4(diag, off);
+    B(c) = rhs;
+    X(c) = 0.0;
+    R(c) = rhs;
+    PB(0, c) = 0.0;
+    PB(1, c) = 0.0;
+}
+
+#elif PASS == 3 || PASS == 5
+uniform int parity; // this iteration's p buffer
+
+// The cells of brick B: [lo, hi).
+int brick_cells(out ivec3 lo, out ivec3 hi)
+{
+    int b = int(gl_GlobalInvocationID.x);
+    ivec3 n = bricks_n();
+    ivec3 bi = ivec3(b % n.x, (b / n.x) % n.y, b / (n.x * n.y));
+    lo = bi * BRICK;
+    hi = min(lo + BRICK, cells_n);
+    return b;
+}
+
+#if PASS == 3
+// This iteration's direction at cell IDX: z + P e + beta p.
+float direction(ivec3 idx, float beta)
+{
+    int c = cell_index(idx);
+    return Z(c) + E(brick_of(idx)) + beta * PB(1 - parity, c);
+}
+
+void main()
+{
+    int b = int(gl_GlobalInvocationID.x);
+    if (b >= bricks_count() || scal[7] != 0.0)
+        return;
+    ivec3 lo, hi;
+    brick_cells(lo, hi);
+    float beta = scal[4], pq = 0.0;
+    for (int k = lo.z; k < hi.z; k++) {
+        for (int j = lo.y; j < hi.y; j++) {
+            for (int i = lo.x; i < hi.x; i++) {
+                ivec3 idx = ivec3(i, j, k);
+                int c = cell_index(idx);
+                vec4 s = sys[c];
+                float pc = direction(idx, beta);
+                float v = s.x * pc;
+                for (int a = 0; a < 3; a++) {
+                    ivec3 e = ivec3(0);
+                    e[a] = 1;
+                    if (idx[a] + 1 < cells_n[a])
+                        v += s[1 + a] * direction(idx + e, beta);
+                    if (idx[a] > 0)
+                        v += sys[c - stride_of(a)][1 + a] * direction(idx - e, beta);
+                }
+                PB(parity, c) = pc;
+                Q(c) = v;
+                pq += pc * v;
             }
         }
-        sys[c] = vec4(diag, off);
-        B(c) = rhs;
-        X(c) = 0.0;
-        R(c) = rhs;
-        float z = rhs / diag;
-        Z(c) = z;
-        P(c) = z;
-        v0 = rhs * z;
-        v1 = rhs * rhs;
     }
-    group_sums(v0, v1);
+    SUMS(b, 0) = pq;
 }
 
-#elif PASS == 3
+#else
+uniform int start; // 1: the start, r = b; the coarse system first
+
+// One half sweep of red-black Gauss-Seidel on the brick's own system over the cells of
+// COLOUR (the parity of i + j + k).
+void half_sweep(ivec3 lo, ivec3 hi, int colour)
+{
+    for (int k = lo.z; k < hi.z; k++) {
+        for (int j = lo.y; j < hi.y; j++) {
+            for (int i = lo.x + ((lo.x + j + k + colour) & 1); i < hi.x; i += 2) {
+                ivec3 idx = ivec3(i, j, k);
+                int c = cell_index(idx);
+                vec4 s = sys[c];
+                float v = R(c);
+                for (int a = 0; a < 3; a++) {
+                    int st = stride_of(a);
+                    if (idx[a] + 1 < hi[a])
+                        v -= s[1 + a] * Z(c + st);
+                    if (idx[a] > lo[a])
+                        v -= sys[c - st][1 + a] * Z(c - st);
+                }
+                Z(c) = v / s.x;
+            }
+        }
+    }
+}
+
 void main()
 {
-    int c = int(gl_GlobalInvocationID.x);
-    float v0 = 0.0;
-    if (c < cells_count()) {
-        ivec3 idx = cell_of(c);
-        vec4 s = sys[c];
-        float v = s.x * P(c);
-        for (int a = 0; a < 3; a++) {
-            int st = stride_of(a);
-            if (idx[a] + 1 < cells_n[a])
-                v += s[1 + a] * P(c + st);
-            if (idx[a] > 0)
-                v += sys[c - st][1 + a] * P(c - st);
+    int b = int(gl_GlobalInvocationID.x);
+    if (b >= bricks_count() || scal[7] != 0.0)
+        return;
+    ivec3 lo, hi;
+    brick_cells(lo, hi);
+    if (start == 1) {
+        // P^T A P, P constant over each brick: the faces inside a brick cancel.
+        vec4 cs = vec4(0.0);
+        float diags = 0.0;
+        for (int k = lo.z; k < hi.z; k++) {
+            for (int j = lo.y; j < hi.y; j++) {
+                for (int i = lo.x; i < hi.x; i++) {
+                    ivec3 idx = ivec3(i, j, k);
+                    vec4 s = sys[cell_index(idx)];
+                    cs.x += s.x;
+                    diags += s.x;
+                    for (int a = 0; a < 3; a++) {
+                        if (idx[a] + 1 >= cells_n[a])
+                            continue;
+                        if (idx[a] + 1 < hi[a])
+                            cs.x += 2.0 * s[1 + a];
+                        else
+                            cs[1 + a] += s[1 + a];
+                    }
+                }
+            }
         }
-        Q(c) = v;
-        v0 = P(c) * v;
+        // What the cancellation leaves may be below the floats' rounding (a clear brick
+        // walled in by opaque cloud): the diagonal alone then, still positive definite.
+        if (!(cs.x > COARSE_DIAG_MIN * diags))
+            cs.x = diags;
+        for (int k = 0; k < 4; k++)
+            COARSE(b, k) = cs[k];
+    } else {
+        float pq = 0.0;
+        for (int g = 0; g < bricks_count(); g++)
+            pq += SUMS(g, 0);
+        float alpha = pq > 0.0 ? scal[0] / pq : 0.0;
+        if (b == 0) {
+            scal[2] = pq;
+            scal[3] = alpha;
+        }
+        for (int k = lo.z; k < hi.z; k++) {
+            for (int j = lo.y; j < hi.y; j++) {
+                for (int i = lo.x; i < hi.x; i++) {
+                    int c = cell_index(ivec3(i, j, k));
+                    X(c) += alpha * PB(parity, c);
+                    R(c) -= alpha * Q(c);
+                }
+            }
+        }
     }
-    group_sums(v0, 0.0);
+    for (int k = lo.z; k < hi.z; k++) {
+        for (int j = lo.y; j < hi.y; j++) {
+            for (int i = lo.x; i < hi.x; i++)
+                Z(cell_index(ivec3(i, j, k))) = 0.0;
+        }
+    }
+    for (int h = 0; h <= 2 * LIGHT_VOLUME_BRICK_SWEEPS; h++)
+        half_sweep(lo, hi, h & 1);
+    float rz = 0.0, rr = 0.0, rs = 0.0;
+    for (int k = lo.z; k < hi.z; k++) {
+        for (int j = lo.y; j < hi.y; j++) {
+            for (int i = lo.x; i < hi.x; i++) {
+                int c = cell_index(ivec3(i, j, k));
+                float r = R(c);
+                rz += r * Z(c);
+                rr += r * r;
+                rs += r;
+            }
+        }
+    }
+    SUMS(b, 1) = rz;
+    SUMS(b, 2) = rr;
+    SUMS(b, 3) = rs;
 }
+#endif
 
 #elif PASS == 4
-uniform int groups; // work groups whose partial sums to add
-uniform int what;   // 0 the start, 1 p.q, 2 the update's sums
+uniform int start;      // 1: the start (bb, no beta)
+uniform float tolerance; // the relative residual the solve stops at
 void main()
 {
-    uint l = gl_LocalInvocationID.x;
-    float v0 = 0.0, v1 = 0.0;
-    for (int g = int(l); g < groups; g += GROUP) {
-        v0 += scal[8 + 2 * g];
-        v1 += scal[9 + 2 * g];
-    }
-    part0[l] = v0;
-    part1[l] = v1;
-    barrier();
-    for (uint s = GROUP / 2u; s > 0u; s >>= 1u) {
-        if (l < s) {
-            part0[l] += part0[l + s];
-            part1[l] += part1[l + s];
-        }
-        barrier();
-    }
-    if (l != 0u)
+    if (scal[7] != 0.0)
         return;
-    if (what == 0) {
-        scal[0] = part0[0];
-        scal[1] = part1[0];
-        scal[5] = part1[0];
-        scal[6] = part1[0] > 0.0 ? 1.0 : 0.0;
-    } else if (what == 1) {
-        float pq = part0[0];
-        scal[2] = pq;
-        scal[3] = pq > 0.0 ? scal[0] / pq : 0.0;
+    ivec3 n = bricks_n();
+    int m = bricks_count();
+    for (int b = 0; b < m; b++)
+        E(b) = 0.0;
+    for (int h = 0; h <= 2 * LIGHT_VOLUME_COARSE_SWEEPS; h++) {
+        for (int k = 0; k < n.z; k++) {
+            for (int j = 0; j < n.y; j++) {
+                for (int i = (j + k + h) & 1; i < n.x; i += 2) {
+                    int b = i + n.x * (j + n.y * k);
+                    ivec3 idx = ivec3(i, j, k);
+                    ivec3 st = ivec3(1, n.x, n.x * n.y);
+                    float v = SUMS(b, 3);
+                    for (int a = 0; a < 3; a++) {
+                        if (idx[a] + 1 < n[a])
+                            v -= COARSE(b, 1 + a) * E(b + st[a]);
+                        if (idx[a] > 0)
+                            v -= COARSE(b - st[a], 1 + a) * E(b - st[a]);
+                    }
+                    E(b) = v / COARSE(b, 0);
+                }
+            }
+        }
+    }
+    float rz = 0.0, rr = 0.0;
+    for (int b = 0; b < m; b++) {
+        rz += SUMS(b, 1) + SUMS(b, 3) * E(b);
+        rr += SUMS(b, 2);
+    }
+    if (start == 1) {
+        scal[1] = rr;
+        scal[4] = 0.0;
+        scal[6] = rr > 0.0 ? 1.0 : 0.0;
+        scal[7] = rr > 0.0 ? 0.0 : 1.0;
+        scal[8] = 0.0;
     } else {
-        float rz = part0[0];
         scal[4] = scal[0] > 0.0 ? rz / scal[0] : 0.0;
-        scal[0] = rz;
-        scal[5] = part1[0];
-        scal[6] = scal[1] > 0.0 ? sqrt(max(part1[0], 0.0) / scal[1]) : 0.0;
+        float res = scal[1] > 0.0 ? sqrt(max(rr, 0.0) / scal[1]) : 0.0;
+        scal[6] = res;
+        scal[8] += 1.0;
+        // a residual that is not a number stops the solve too (the CPU reports it)
+        if (!(res > tolerance))
+            scal[7] = 1.0;
     }
-}
-
-#elif PASS == 5
-void main()
-{
-    int c = int(gl_GlobalInvocationID.x);
-    float v0 = 0.0, v1 = 0.0;
-    if (c < cells_count()) {
-        float alpha = scal[3];
-        X(c) += alpha * P(c);
-        float r = R(c) - alpha * Q(c);
-        R(c) = r;
-        float z = r / sys[c].x;
-        Z(c) = z;
-        v0 = r * z;
-        v1 = r * r;
-    }
-    group_sums(v0, v1);
+    scal[0] = rz;
+    scal[5] = rr;
 }
 
 #elif PASS == 6
-void main()
-{
-    int c = int(gl_GlobalInvocationID.x);
-    if (c < cells_count())
-        P(c) = Z(c) + scal[4] * P(c);
-}
-
-#elif PASS == 7
 layout(rgba32f, binding = BIND_VOLUME_IMG_FIELD) uniform writeonly image3D field_img;
 void main()
 {

@@ -20,12 +20,27 @@
 #include "data/volume.h"
 #include "light/light.h"
 
+/* The solve's preconditioner (light_volume_build; the GPU build mirrors both). */
+enum light_volume_precond {
+    LIGHT_VOLUME_PRECOND_BRICKS, /* block Jacobi on bricks plus a coarse correction */
+    LIGHT_VOLUME_PRECOND_JACOBI, /* the diagonal alone */
+};
+
+/* The bricks' preconditioner: bricks of LIGHT_VOLUME_BRICK cells a side, each solved by
+ * LIGHT_VOLUME_BRICK_SWEEPS symmetric red-black Gauss-Seidel sweeps, and the coarse system
+ * (one cell a brick) by LIGHT_VOLUME_COARSE_SWEEPS (light_volume_build; chosen on the storm,
+ * docs/lightmap.md "The diffuse light volume", "Solve"). */
+#define LIGHT_VOLUME_BRICK 4
+#define LIGHT_VOLUME_BRICK_SWEEPS 2
+#define LIGHT_VOLUME_COARSE_SWEEPS 4
+
 /* Zero means default. */
 struct light_volume_desc {
     int resolution[3];   /* cells along x, y, z; 0 = the volume's voxels / 2, within [2, 32] */
     int substeps;        /* samples of the source and the extinction per cell and axis; 0 = 3 */
     double tolerance;    /* relative residual the solve stops at; 0 = 1e-6 */
     int max_iterations;  /* 0 = 4000 */
+    enum light_volume_precond preconditioner; /* 0 = bricks */
 };
 
 struct light_volume {

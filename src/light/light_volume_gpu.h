@@ -2,9 +2,10 @@
  * light/volume_gpu: the diffuse light volume (light_volume.h) built on the GPU by
  * shaders/light_volume.comp, after the dense light map it reads, for the eye pass to read
  * (effects.multiple = "volume", MULTIPLE 2 in shaders/lightmap_lookup.glsl).  Same grid, same
- * source and the same discrete system as light_volume_build; solved in floats by
- * Jacobi-preconditioned conjugate gradients whose scalars stay on the GPU (the CPU reads the
- * residual back every few iterations to know when to stop).  Every function needs the GL
+ * source and the same discrete system as light_volume_build; solved in floats by conjugate
+ * gradients with light_volume_build's bricks' preconditioner (LIGHT_VOLUME_PRECOND_BRICKS
+ * whatever the desc says), whose scalars stay on the GPU (the CPU reads the state back every
+ * few iterations to know when to stop).  Every function needs the GL
  * context current.
  */
 #ifndef ANVIL_LIGHT_VOLUME_GPU_H
@@ -17,7 +18,7 @@
 #include "light/light_volume.h"
 
 struct light_volume_gpu {
-    struct gpu_program pass[8];  /* PASS 1 .. 7, made on first use; [7] PASS 1 on the model's
+    struct gpu_program pass[7];  /* PASS 1 .. 6, made on first use; [6] PASS 1 on the model's
                                     own levels (STRETCHED) */
     struct gpu_texture zmap;     /* the volume's height table, for [7] */
     struct gpu_texture field;    /* RGBA32F phi and F per cell over the volume box */

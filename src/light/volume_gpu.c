@@ -10,20 +10,23 @@
 #include "render/render.h" /* render_zmap_upload */
 #include "shaders/bindings.h"
 
-#define GROUP 256
-#define SCALARS_HEAD 8
-/* Iterations between two reads of the residual: each read waits for the GPU. */
-#define CHECK_EVERY 16
+#define SCALARS_HEAD 16
+/* Iterations between two reads of the solve's state: each read waits for the GPU.  Once
+ * converged the passes return at once, so the iterations past it cost their dispatches only. */
+#define CHECK_EVERY 8
 
 /* PASS K's program; STRETCHED (PASS 1 only): the one that samples through the height table. */
 static const struct gpu_program *pass(struct light_volume_gpu *v, int k, bool stretched)
 {
-    struct gpu_program *p = stretched ? &v->pass[7] : &v->pass[k - 1];
+    struct gpu_program *p = stretched ? &v->pass[6] : &v->pass[k - 1];
     if (!p->id) {
-        char defines[128];
+        char defines[256];
         snprintf(defines, sizeof(defines),
-                 "#define PASS %d\n#define STRETCHED %d\n#define LIGHT_VOLUME_BOUNDARY_R %.17g\n",
-                 k, stretched ? 1 : 0, LIGHT_VOLUME_BOUNDARY_R);
+                 "#define PASS %d\n#define STRETCHED %d\n#define LIGHT_VOLUME_BOUNDARY_R %.17g\n"
+                 "#define LIGHT_VOLUME_BRICK %d\n#define LIGHT_VOLUME_BRICK_SWEEPS %d\n"
+                 "#define LIGHT_VOLUME_COARSE_SWEEPS %d\n",
+                 k, stretched ? 1 : 0, LIGHT_VOLUME_BOUNDARY_R, LIGHT_VOLUME_BRICK,
+                 LIGHT_VOLUME_BRICK_SWEEPS, LIGHT_VOLUME_COARSE_SWEEPS);
         if (!gpu_program_init(p, "light_volume.comp", defines))
             return NULL;
     }
@@ -40,7 +43,7 @@ static void scratch_finish(struct light_volume_gpu *v)
 
 void light_volume_gpu_finish(struct light_volume_gpu *v)
 {
-    for (int k = 0; k < 8; k++)
+    for (int k = 0; k < 7; k++)
         gpu_program_finish(&v->pass[k]);
     gpu_texture_finish(&v->field);
     gpu_texture_finish(&v->zmap);
@@ -68,13 +71,32 @@ static void bind_buffers(const struct light_volume_gpu *v)
     gpu_buffer_bind(&v->scalars, BIND_VOLUME_BUF_SCALARS);
 }
 
-static void reduce(struct light_volume_gpu *v, const struct gpu_program *p, int groups, int what)
+static int bricks_count(const struct grid3 *g)
+{
+    int m = 1;
+    for (int a = 0; a < 3; a++)
+        m *= (g->n[a] + LIGHT_VOLUME_BRICK - 1) / LIGHT_VOLUME_BRICK;
+    return m;
+}
+
+/* PASS 5, the update and the bricks' preconditioner (START: the first, from r = b). */
+static void update(const struct light_volume_gpu *v, const struct gpu_program *p, int start)
 {
     gpu_program_use(p);
     common_uniforms(v, p);
-    gpu_uniform_int(p, "groups", groups);
-    gpu_uniform_int(p, "what", what);
-    gpu_dispatch(p, GROUP, 1, 1);
+    gpu_uniform_int(p, "parity", v->iterations & 1);
+    gpu_uniform_int(p, "start", start);
+    gpu_dispatch(p, bricks_count(&v->grid), 1, 1);
+}
+
+/* PASS 4, the coarse correction and the iteration's scalars. */
+static void coarse(const struct light_volume_gpu *v, const struct gpu_program *p, int start)
+{
+    gpu_program_use(p);
+    common_uniforms(v, p);
+    gpu_uniform_int(p, "start", start);
+    gpu_uniform_float(p, "tolerance", (float)v->tolerance);
+    gpu_dispatch(p, 1, 1, 1);
 }
 
 bool light_volume_gpu_build_begin(struct light_volume_gpu *v, const struct gpu_texture *beta,
@@ -88,8 +110,8 @@ bool light_volume_gpu_build_begin(struct light_volume_gpu *v, const struct gpu_t
     struct light_volume_desc d = desc ? *desc : (struct light_volume_desc){0};
     light_volume_desc_defaults(&d, vol_grid);
     double tol = fmax(d.tolerance, 1e-5);
-    const struct gpu_program *p[7];
-    for (int k = 1; k <= 7; k++) {
+    const struct gpu_program *p[6];
+    for (int k = 1; k <= 6; k++) {
         if (!(p[k - 1] = pass(v, k, k == 1 && grid3_stretched(vol_grid))))
             return false;
     }
@@ -99,7 +121,7 @@ bool light_volume_gpu_build_begin(struct light_volume_gpu *v, const struct gpu_t
         v->grid.spacing[a] = vol_grid->n[a] * vol_grid->spacing[a] / d.resolution[a];
     }
     const int count = (int)grid3_count(&v->grid);
-    const int groups = (count + GROUP - 1) / GROUP;
+    const int bricks = bricks_count(&v->grid);
     if (!v->field.id || memcmp(v->field.size, v->grid.n, sizeof(v->grid.n)) != 0) {
         gpu_texture_finish(&v->field);
         if (!gpu_texture_init(&v->field, 3, v->grid.n, GPU_RGBA32F, NULL))
@@ -107,9 +129,17 @@ bool light_volume_gpu_build_begin(struct light_volume_gpu *v, const struct gpu_t
     }
     if (!gpu_buffer_init(&v->terms, (size_t)count * 8 * sizeof(float), NULL) ||
         !gpu_buffer_init(&v->system, (size_t)count * 4 * sizeof(float), NULL) ||
-        !gpu_buffer_init(&v->vectors, (size_t)count * 6 * sizeof(float), NULL) ||
-        !gpu_buffer_init(&v->scalars, (size_t)(SCALARS_HEAD + 2 * groups) * sizeof(float),
-                         NULL)) {
+        !gpu_buffer_init(&v->vectors, (size_t)count * 7 * sizeof(float), NULL)) {
+        scratch_finish(v);
+        return false;
+    }
+    /* The head zeroed (not converged, no iterations); per brick its sums, the coarse system
+     * and e. */
+    size_t scalars = (size_t)SCALARS_HEAD + 9 * (size_t)bricks;
+    float *zero = calloc(scalars, sizeof(float));
+    bool have = zero && gpu_buffer_init(&v->scalars, scalars * sizeof(float), zero);
+    free(zero);
+    if (!have) {
         scratch_finish(v);
         return false;
     }
@@ -149,17 +179,18 @@ bool light_volume_gpu_build_begin(struct light_volume_gpu *v, const struct gpu_t
     }
     gpu_dispatch(p[0], count, 1, 1);
 
-    /* PASS 2: the system, and the iteration's start. */
+    /* PASS 2: the system; then the coarse system and the iteration's start. */
     gpu_program_use(p[1]);
     common_uniforms(v, p[1]);
     gpu_dispatch(p[1], count, 1, 1);
-    reduce(v, p[3], groups, 0);
-    float head[SCALARS_HEAD];
-    gpu_buffer_read(&v->scalars, 0, sizeof(head), head);
     v->iterations = 0;
     v->residual = 0.0f;
     v->max_iterations = d.max_iterations;
     v->tolerance = tol;
+    update(v, p[4], 1);
+    coarse(v, p[3], 1);
+    float head[SCALARS_HEAD];
+    gpu_buffer_read(&v->scalars, 0, sizeof(head), head);
     v->converged = !(head[1] > 0.0f);
     v->solving = true;
     return true;
@@ -170,12 +201,11 @@ bool light_volume_gpu_build_step(struct light_volume_gpu *v, int iterations, boo
     *done = !v->solving;
     if (!v->solving)
         return true;
-    const struct gpu_program *p[7];
-    for (int k = 2; k <= 7; k++)
+    const struct gpu_program *p[6];
+    for (int k = 2; k <= 6; k++)
         p[k - 1] = &v->pass[k - 1]; /* made by light_volume_gpu_build_begin */
     bind_buffers(v); /* a frame may have come between two pieces */
     const int count = (int)grid3_count(&v->grid);
-    const int groups = (count + GROUP - 1) / GROUP;
     float head[SCALARS_HEAD];
     double tol = v->tolerance;
     bool ok = v->converged, stop = v->converged;
@@ -184,25 +214,22 @@ bool light_volume_gpu_build_step(struct light_volume_gpu *v, int iterations, boo
                         (iterations <= 0 || n < iterations);
              n++) {
             int it = v->iterations + 1;
+            v->iterations = it; /* its parity picks the p buffer */
             gpu_program_use(p[2]);
             common_uniforms(v, p[2]);
-            gpu_dispatch(p[2], count, 1, 1);
-            reduce(v, p[3], groups, 1);
-            gpu_program_use(p[4]);
-            common_uniforms(v, p[4]);
-            gpu_dispatch(p[4], count, 1, 1);
-            reduce(v, p[3], groups, 2);
-            gpu_program_use(p[5]);
-            common_uniforms(v, p[5]);
-            gpu_dispatch(p[5], count, 1, 1);
-            v->iterations = it;
+            gpu_uniform_int(p[2], "parity", it & 1);
+            gpu_dispatch(p[2], bricks_count(&v->grid), 1, 1);
+            update(v, p[4], 0);
+            coarse(v, p[3], 0);
             if (it % CHECK_EVERY == 0 || it == v->max_iterations) {
+                /* [6] the residual, [7] converged, [8] the iterations it took */
                 gpu_buffer_read(&v->scalars, 0, sizeof(head), head);
                 v->residual = head[6];
-                if (!isfinite(head[6]))
+                if (head[7] != 0.0f) {
+                    v->iterations = (int)head[8];
                     stop = true;
-                else if (head[6] <= tol)
-                    ok = stop = true;
+                    ok = isfinite(head[6]) && head[6] <= tol;
+                }
             }
         }
     }
@@ -221,11 +248,11 @@ bool light_volume_gpu_build_step(struct light_volume_gpu *v, int iterations, boo
 
     log_info("light volume: %dx%dx%d cells, %d iterations to a relative residual of %.2g",
              v->grid.n[0], v->grid.n[1], v->grid.n[2], v->iterations, (double)v->residual);
-    /* PASS 7: the field. */
-    gpu_program_use(p[6]);
-    common_uniforms(v, p[6]);
+    /* PASS 6: the field. */
+    gpu_program_use(p[5]);
+    common_uniforms(v, p[5]);
     gpu_image_bind(&v->field, BIND_VOLUME_IMG_FIELD, true);
-    gpu_dispatch(p[6], count, 1, 1);
+    gpu_dispatch(p[5], count, 1, 1);
     scratch_finish(v);
     return true;
 }

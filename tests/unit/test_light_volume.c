@@ -202,6 +202,38 @@ static void test_hard_cases_stay_finite(void **state)
     scene_finish(&sc);
 }
 
+/* The bricks' preconditioner (the default) against the diagonal alone on a storm at the default
+ * grid (32 x 32 x 32 cells): a third of the iterations or fewer (43 against 140 when written;
+ * the bricks without the coarse correction take 77), and the same solution within the solve's
+ * tolerance. */
+static void test_bricks_need_fewer_iterations(void **state)
+{
+    (void)state;
+    struct scene sc;
+    scene_init(&sc, SYNTH_STORM, (int[3]){64, 64, 32}, (double[3]){6e4, 6e4, 1.6e4}, 0.0, 135.0,
+               35.0, (int[3]){48, 48, 48}, true, false, 0.0);
+    struct light_volume b = {0}, j = {0};
+    struct light_volume_desc d = {.tolerance = 1e-8};
+    assert_true(light_volume_build(&sc.vol, &sc.map, &sc.s, &d, &b));
+    d.preconditioner = LIGHT_VOLUME_PRECOND_JACOBI;
+    assert_true(light_volume_build(&sc.vol, &sc.map, &sc.s, &d, &j));
+    print_message("iterations: bricks %d, Jacobi %d\n", b.iterations, j.iterations);
+    assert_int_equal(b.grid.n[0], 32);
+    assert_true(b.iterations > 0 && 3 * b.iterations <= j.iterations);
+    size_t n = grid3_count(&b.grid);
+    double phi_max = 0.0, worst = 0.0;
+    for (size_t c = 0; c < n; c++)
+        phi_max = fmax(phi_max, j.field[4 * c]);
+    for (size_t c = 0; c < 4 * n; c++)
+        worst = fmax(worst, fabs((double)b.field[c] - j.field[c]));
+    print_message("largest difference %.3g of the largest phi %.3g\n", worst, phi_max);
+    assert_true(phi_max > 0.5 && worst < 1e-5 * phi_max);
+    assert_finite_and_conserving(&b, 1e-6);
+    light_volume_finish(&b);
+    light_volume_finish(&j);
+    scene_finish(&sc);
+}
+
 static void test_scattered_light_toward_the_eye(void **state)
 {
     (void)state;
@@ -261,6 +293,7 @@ int main(void)
         cmocka_unit_test(test_slab_matches_closed_form),
         cmocka_unit_test(test_storm_conserves_energy),
         cmocka_unit_test(test_hard_cases_stay_finite),
+        cmocka_unit_test(test_bricks_need_fewer_iterations),
         cmocka_unit_test(test_scattered_light_toward_the_eye),
         cmocka_unit_test(test_volume_is_in_the_key),
     };
