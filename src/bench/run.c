@@ -257,7 +257,7 @@ static bool run_quality(const struct bench_options *o, const char *device, struc
     for (int self = 0; self < 2; self++) {
         char path[PATH_MAX], title[256];
         snprintf(path, sizeof(path), "%s/accuracy%s.png", o->out, self ? "-self" : "");
-        snprintf(title, sizeof(title), "%s vs time (red: Pareto front, blue ring: default)",
+        snprintf(title, sizeof(title), "%s vs time",
                  self ? "error against the converged renderer" : "error against Monte Carlo");
         if (bench_plot_png(path, title, n, names, res, counts, self))
             echo(o, "wrote %s\n", path);
