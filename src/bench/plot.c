@@ -185,18 +185,40 @@ static double error_of(const struct bench_result *r, bool self)
     return bench_error(r, self);
 }
 
-/* The markers' key, right-aligned at X1 below Y0: what grey, red, the blue ring and (when
- * VOLUME) the green square stand for. */
-static void legend(struct canvas *c, int x1, int y0, bool volume)
+/* The markers' key in the corner of the plot area (AX, AY) that holds fewest of RES's N
+ * points, the top right on a tie: what grey, red, the blue ring and (when VOLUME) the green
+ * square stand for. */
+static void legend(struct canvas *c, const struct axis *ax, const struct axis *ay,
+                   const struct bench_result *res, int n, bool self, bool volume)
 {
     static const char *const what[] = {"a setting", "Pareto front", "default (multiple: columns)",
                                        "multiple: volume (3-D)"};
     int rows = volume ? 4 : 3, wmax = 0;
     for (int i = 0; i < rows; i++)
         wmax = text_width(what[i], 1) > wmax ? text_width(what[i], 1) : wmax;
-    int tx = x1 - 6 - wmax, mx = tx - 12;
+    int w = wmax + 24, h = 13 * rows + 4, best = -1, best_count = 0;
+    int corners[4][2] = {{ax->p1 - w, ay->p1},
+                         {ax->p0 + 4, ay->p1},
+                         {ax->p1 - w, ay->p0 - h - 4},
+                         {ax->p0 + 4, ay->p0 - h - 4}};
+    for (int k = 0; k < 4; k++) {
+        int count = 0;
+        for (int i = 0; i < n; i++) {
+            double t = res[i].build_ms + res[i].view_ms, e = error_of(&res[i], self);
+            if (!(t > 0) || !(e > 0) || !isfinite(e))
+                continue;
+            int px = to_pixel(ax, t), py = to_pixel(ay, e);
+            count += px >= corners[k][0] - 10 && px <= corners[k][0] + w + 10 &&
+                     py >= corners[k][1] - 10 && py <= corners[k][1] + h + 10;
+        }
+        if (best < 0 || count < best_count) {
+            best = k;
+            best_count = count;
+        }
+    }
+    int mx = corners[best][0] + 8, tx = mx + 12;
     for (int i = 0; i < rows; i++) {
-        int y = y0 + 8 + 13 * i;
+        int y = corners[best][1] + 8 + 13 * i;
         if (i == 0)
             disc(c, mx, y, 3, GREY);
         else if (i == 1)
@@ -286,7 +308,7 @@ static void panel(struct canvas *c, int x0, const char *name, const struct bench
             volume_shown = true;
         }
     }
-    legend(c, ax.p1, ay.p1, volume_shown);
+    legend(c, &ax, &ay, res, n, self, volume_shown);
     for (int i = 0; i < n; i++) {
         double e = error_of(&res[i], self);
         if (res[i].v.is_default && e > 0 && isfinite(e)) {

@@ -311,6 +311,35 @@ static void test_plot_marks_the_volume_tier(void **state)
     assert_false(bench_is_volume_tier(&res[2].v));
 }
 
+/* The key goes to the corner of the plot with fewest points: with the 3-D diffusion row the
+ * slowest and worst (top right), the top-right quarter of the panel holds that row's square and
+ * nothing else green, and the key's green square and words are elsewhere. */
+static void test_plot_key_avoids_the_points(void **state)
+{
+    (void)state;
+    struct bench_result res[4] = {timed(100.0, 0.0, 1.0), timed(50.0, 0.0, 2.0),
+                                  timed(300.0, 0.0, 0.8), timed(1000.0, 0.0, 3.0)};
+    res[0].v.is_default = true;
+    res[3].v.light.volume = true;
+    const struct bench_result *all[1] = {res};
+    const char *names[1] = {"storm"};
+    int n[1] = {4}, w = 0, h = 0;
+    uint8_t *rgb = bench_plot_rgb("t", 1, names, all, n, false, &w, &h);
+    assert_non_null(rgb);
+    size_t top_right = 0, all_green = 0;
+    for (int y = 0; y < h; y++) {
+        for (int x = 0; x < w; x++) {
+            bool green = memcmp(&rgb[3 * ((size_t)y * w + x)], bench_plot_volume_rgb, 3) == 0;
+            all_green += green;
+            top_right += green && x >= w / 2 && y < h / 2;
+        }
+    }
+    free(rgb);
+    /* The marker: a square 15 px wide, 2 px thick. */
+    assert_in_range(top_right, 100, 120);
+    assert_true(all_green > top_right + 100);
+}
+
 int main(void)
 {
     log_set_level(LOG_WARN);
@@ -322,6 +351,7 @@ int main(void)
         cmocka_unit_test(test_pareto),
         cmocka_unit_test(test_verdicts),
         cmocka_unit_test(test_plot_marks_the_volume_tier),
+        cmocka_unit_test(test_plot_key_avoids_the_points),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
