@@ -15,7 +15,7 @@ static int usage(FILE *out)
             "                   --scale-only | --gpu | --cluster-only | --load-only |\n"
             "                   --playback-only | --volume-only]\n"
             "                   [-o DIR]\n"
-            "                   [--cache DIR]\n"
+            "                   [--cache DIR] [--images DIR]\n"
             "                   [--configs DIR] [--spp N] [--scene sphere|storm|katrina]...\n"
             "                   [--paraview] [--quiet]\n"
             "What accuracy costs in time (docs/accuracy.md):\n"
@@ -53,6 +53,10 @@ static int usage(FILE *out)
             "                 and angles-table.md go (default docs/bench)\n"
             "  --cache DIR    Monte Carlo references are kept here (default: bench-cache\n"
             "                 beside the anvil binary)\n"
+            "  --images DIR   also write each swept scene's reference (NAME-reference.pfm,\n"
+            "                 NAME-reference.stderr.pfm) and the pictures it is compared\n"
+            "                 with: the default (NAME-default.pfm) and the 3-D diffusion\n"
+            "                 tier (NAME-volume.pfm)\n"
             "  --configs DIR  sphere.cfg and katrina.cfg, which names the WRF sample relative\n"
             "                 to itself (default: the source tree's configs/, reading\n"
             "                 ../shared/data beside the tree); a scene without its data file\n"
@@ -71,17 +75,16 @@ static int usage(FILE *out)
 static int parse(int argc, char **argv, struct bench_options *o)
 {
     static const struct option longopts[] = {
-        {"quick", no_argument, NULL, 'Q'},        {"views-only", no_argument, NULL, 'V'},
-        {"quality-only", no_argument, NULL, 'A'}, {"output", required_argument, NULL, 'o'},
-        {"cache", required_argument, NULL, 'c'},  {"spp", required_argument, NULL, 'n'},
-        {"scene", required_argument, NULL, 's'},  {"quiet", no_argument, NULL, 'q'},
-        {"paraview", no_argument, NULL, 'P'},     {"configs", required_argument, NULL, 'C'},
-        {"movie-only", no_argument, NULL, 'M'},   {"help", no_argument, NULL, 'h'},
-        {"scale-only", no_argument, NULL, 'S'},   {"gpu", no_argument, NULL, 'G'},
-        {"cluster-only", no_argument, NULL, 'L'}, {"load-only", no_argument, NULL, 'D'},
-        {"playback-only", no_argument, NULL, 'Y'},
-        {"volume-only", no_argument, NULL, 'W'},
-        {NULL, 0, NULL, 0},
+        {"quick", no_argument, NULL, 'Q'},         {"views-only", no_argument, NULL, 'V'},
+        {"quality-only", no_argument, NULL, 'A'},  {"output", required_argument, NULL, 'o'},
+        {"cache", required_argument, NULL, 'c'},   {"spp", required_argument, NULL, 'n'},
+        {"scene", required_argument, NULL, 's'},   {"quiet", no_argument, NULL, 'q'},
+        {"paraview", no_argument, NULL, 'P'},      {"configs", required_argument, NULL, 'C'},
+        {"movie-only", no_argument, NULL, 'M'},    {"help", no_argument, NULL, 'h'},
+        {"scale-only", no_argument, NULL, 'S'},    {"gpu", no_argument, NULL, 'G'},
+        {"cluster-only", no_argument, NULL, 'L'},  {"load-only", no_argument, NULL, 'D'},
+        {"playback-only", no_argument, NULL, 'Y'}, {"volume-only", no_argument, NULL, 'W'},
+        {"images", required_argument, NULL, 'I'},  {NULL, 0, NULL, 0},
     };
     bench_options_defaults(o);
     o->out = "docs/bench";
@@ -143,6 +146,9 @@ static int parse(int argc, char **argv, struct bench_options *o)
         case 'c':
             o->cache = optarg;
             break;
+        case 'I':
+            o->images = optarg;
+            break;
         case 'C':
             o->configs = optarg;
             break;
@@ -183,6 +189,11 @@ static int parse(int argc, char **argv, struct bench_options *o)
     }
     if (o->paraview && !o->views) {
         log_error("bench: --paraview compares the views benchmark; it excludes --quality-only");
+        return EXIT_USAGE;
+    }
+    if (o->images && !o->quality) {
+        log_error("bench: --images writes the quality sweep's pictures; it needs the quality "
+                  "benchmark (no --views-only, --movie-only, ...)");
         return EXIT_USAGE;
     }
     return EXIT_OK;

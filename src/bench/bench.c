@@ -418,6 +418,11 @@ static bool same_build_work(const struct bench_variant *a, const struct bench_va
            (a->mode == LIGHT_GPU_DENSE || x->epsilon == y->epsilon);
 }
 
+bool bench_is_volume_tier(const struct bench_variant *v)
+{
+    return v->shadows && v->light.multiple && v->light.volume;
+}
+
 bool bench_same_work(const struct bench_variant *a, const struct bench_variant *b)
 {
     return same_build_work(a, b) && a->step_m == b->step_m;

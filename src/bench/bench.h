@@ -25,6 +25,7 @@
 #define ANVIL_BENCH_BENCH_H
 
 #include <stdbool.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "data/volume.h"
@@ -186,10 +187,23 @@ bool bench_make_dir(const char *dir);
 
 /* ---- plots -------------------------------------------------------------------------- */
 
+/* Whether V is the 3-D diffusion tier of multiple scattering (effects.multiple = "volume"),
+ * the one the plots mark apart from the columns. */
+bool bench_is_volume_tier(const struct bench_variant *v);
+
+/* The colour of the plots' marker of the 3-D diffusion tier (bench_is_volume_tier), RGB. */
+extern const uint8_t bench_plot_volume_rgb[3];
+
 /* A plot of RMSE (SELF: self_rmse) against milliseconds (build + view, both axes
- * logarithmic), one panel per scene, the Pareto front joined and the default ringed, into a
- * PNG at PATH.
- * RES[s] holds N[s] results of scene NAMES[s].  Returns false (logged) on a failed write. */
+ * logarithmic), one panel per scene, the Pareto front joined, the default ringed and the 3-D
+ * diffusion tier squared, with a key, as 8-bit RGB rows from the top.  *W and *H get its
+ * size; the caller frees the pixels.  RES[s] holds N[s] results of scene NAMES[s].  NULL
+ * (logged) when out of memory. */
+uint8_t *bench_plot_rgb(const char *title, int n_scenes, const char *const *names,
+                        const struct bench_result *const *res, const int *n, bool self, int *w,
+                        int *h);
+
+/* bench_plot_rgb into a PNG at PATH.  Returns false (logged) on a failed write. */
 bool bench_plot_png(const char *path, const char *title, int n_scenes, const char *const *names,
                     const struct bench_result *const *res, const int *n, bool self);
 

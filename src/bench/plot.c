@@ -32,6 +32,9 @@ struct canvas {
 static const uint8_t BLACK[3] = {0, 0, 0}, GREY[3] = {150, 150, 150}, LIGHT[3] = {225, 225, 225},
                      RED[3] = {200, 30, 30}, BLUE[3] = {30, 70, 200};
 
+const uint8_t bench_plot_volume_rgb[3] = {20, 150, 60};
+#define GREEN bench_plot_volume_rgb
+
 static void put(struct canvas *c, int x, int y, const uint8_t col[3])
 {
     if (x < 0 || y < 0 || x >= c->w || y >= c->h)
@@ -83,6 +86,18 @@ static void ring(struct canvas *c, int cx, int cy, int r, const uint8_t col[3])
             if (d <= (r + 1) * (r + 1) && d >= (r - 1) * (r - 1))
                 put(c, cx + x, cy + y, col);
         }
+}
+
+static void square(struct canvas *c, int cx, int cy, int r, const uint8_t col[3])
+{
+    for (int k = -r; k <= r; k++) {
+        for (int w = 0; w < 2; w++) {
+            put(c, cx + k, cy - r + w, col);
+            put(c, cx + k, cy + r - w, col);
+            put(c, cx - r + w, cy + k, col);
+            put(c, cx + r - w, cy + k, col);
+        }
+    }
 }
 
 /* Text with its top-left corner at (X, Y), glyphs scaled by SCALE. */
@@ -170,6 +185,52 @@ static double error_of(const struct bench_result *r, bool self)
     return bench_error(r, self);
 }
 
+/* The markers' key in the corner of the plot area (AX, AY) that holds fewest of RES's N
+ * points, the top right on a tie: what grey, red, the blue ring and (when VOLUME) the green
+ * square stand for. */
+static void legend(struct canvas *c, const struct axis *ax, const struct axis *ay,
+                   const struct bench_result *res, int n, bool self, bool volume)
+{
+    static const char *const what[] = {"a setting", "Pareto front", "default (multiple: columns)",
+                                       "multiple: volume (3-D)"};
+    int rows = volume ? 4 : 3, wmax = 0;
+    for (int i = 0; i < rows; i++)
+        wmax = text_width(what[i], 1) > wmax ? text_width(what[i], 1) : wmax;
+    int w = wmax + 24, h = 13 * rows + 4, best = -1, best_count = 0;
+    int corners[4][2] = {{ax->p1 - w, ay->p1},
+                         {ax->p0 + 4, ay->p1},
+                         {ax->p1 - w, ay->p0 - h - 4},
+                         {ax->p0 + 4, ay->p0 - h - 4}};
+    for (int k = 0; k < 4; k++) {
+        int count = 0;
+        for (int i = 0; i < n; i++) {
+            double t = res[i].build_ms + res[i].view_ms, e = error_of(&res[i], self);
+            if (!(t > 0) || !(e > 0) || !isfinite(e))
+                continue;
+            int px = to_pixel(ax, t), py = to_pixel(ay, e);
+            count += px >= corners[k][0] - 10 && px <= corners[k][0] + w + 10 &&
+                     py >= corners[k][1] - 10 && py <= corners[k][1] + h + 10;
+        }
+        if (best < 0 || count < best_count) {
+            best = k;
+            best_count = count;
+        }
+    }
+    int mx = corners[best][0] + 8, tx = mx + 12;
+    for (int i = 0; i < rows; i++) {
+        int y = corners[best][1] + 8 + 13 * i;
+        if (i == 0)
+            disc(c, mx, y, 3, GREY);
+        else if (i == 1)
+            disc(c, mx, y, 4, RED);
+        else if (i == 2)
+            ring(c, mx, y, 5, BLUE);
+        else
+            square(c, mx, y, 5, GREEN);
+        text(c, tx, y - 4, 1, what[i], i == 3 ? GREEN : i == 2 ? BLUE : i == 1 ? RED : BLACK);
+    }
+}
+
 static void panel(struct canvas *c, int x0, const char *name, const struct bench_result *res,
                   int n, bool self)
 {
@@ -237,6 +298,17 @@ static void panel(struct canvas *c, int x0, const char *name, const struct bench
         boxes[nb][0] = tx, boxes[nb][1] = py - 5, boxes[nb][2] = tx + tw, boxes[nb][3] = py + 6;
         nb++;
     }
+    /* The 3-D diffusion tier of multiple scattering: a square around its point, so that both
+     * tiers (the columns are the default's) can be told apart whatever their place. */
+    bool volume_shown = false;
+    for (int i = 0; i < n; i++) {
+        double e = error_of(&res[i], self), t = res[i].build_ms + res[i].view_ms;
+        if (bench_is_volume_tier(&res[i].v) && t > 0 && e > 0 && isfinite(e)) {
+            square(c, to_pixel(&ax, t), to_pixel(&ay, e), 7, GREEN);
+            volume_shown = true;
+        }
+    }
+    legend(c, &ax, &ay, res, n, self, volume_shown);
     for (int i = 0; i < n; i++) {
         double e = error_of(&res[i], self);
         if (res[i].v.is_default && e > 0 && isfinite(e)) {
@@ -270,28 +342,43 @@ static float linear_for(int v)
     return hi;
 }
 
-bool bench_plot_png(const char *path, const char *title, int n_scenes, const char *const *names,
-                    const struct bench_result *const *res, const int *n, bool self)
+uint8_t *bench_plot_rgb(const char *title, int n_scenes, const char *const *names,
+                        const struct bench_result *const *res, const int *n, bool self, int *w,
+                        int *h)
 {
     struct canvas c = {.w = PANEL_W * (n_scenes > 0 ? n_scenes : 1), .h = TITLE_H + PANEL_H};
     c.rgb = malloc((size_t)c.w * c.h * 3);
-    struct image img = {0};
-    if (!c.rgb || !image_init(&img, c.w, c.h)) {
-        free(c.rgb);
-        log_error("%s: out of memory for the plot", path);
-        return false;
+    if (!c.rgb) {
+        log_error("out of memory for the plot");
+        return NULL;
     }
     memset(c.rgb, 255, (size_t)c.w * c.h * 3);
     text(&c, 8, 8, 2, title, BLACK);
     for (int s = 0; s < n_scenes; s++)
         panel(&c, s * PANEL_W, names[s], res[s], n[s], self);
+    *w = c.w;
+    *h = c.h;
+    return c.rgb;
+}
+
+bool bench_plot_png(const char *path, const char *title, int n_scenes, const char *const *names,
+                    const struct bench_result *const *res, const int *n, bool self)
+{
+    int w = 0, h = 0;
+    uint8_t *rgb = bench_plot_rgb(title, n_scenes, names, res, n, self, &w, &h);
+    struct image img = {0};
+    if (!rgb || !image_init(&img, w, h)) {
+        free(rgb);
+        log_error("%s: out of memory for the plot", path);
+        return false;
+    }
     float lut[256];
     for (int v = 0; v < 256; v++)
         lut[v] = linear_for(v);
-    for (int y = 0; y < c.h; y++) {
-        for (int x = 0; x < c.w; x++) {
-            const uint8_t *p = &c.rgb[3 * ((size_t)y * c.w + x)];
-            float *q = &img.rgba[4 * ((size_t)(c.h - 1 - y) * c.w + x)]; /* rows bottom up */
+    for (int y = 0; y < h; y++) {
+        for (int x = 0; x < w; x++) {
+            const uint8_t *p = &rgb[3 * ((size_t)y * w + x)];
+            float *q = &img.rgba[4 * ((size_t)(h - 1 - y) * w + x)]; /* rows bottom up */
             for (int k = 0; k < 3; k++)
                 q[k] = lut[p[k]];
             q[3] = 1.0f;
@@ -299,6 +386,6 @@ bool bench_plot_png(const char *path, const char *title, int n_scenes, const cha
     }
     bool ok = image_write_png(&img, path, 1.0f);
     image_finish(&img);
-    free(c.rgb);
+    free(rgb);
     return ok;
 }

@@ -127,6 +127,37 @@ static bool run_views(const struct bench_options *o, const char *device, struct 
 
 /* ---- quality ---------------------------------------------------------------------------- */
 
+/* Writes IMG to DIR/NAME-WHAT.pfm.  False, logged, on a failed write. */
+static bool write_pfm(const char *dir, const char *name, const char *what, const struct image *img)
+{
+    char path[PATH_MAX];
+    snprintf(path, sizeof(path), "%s/%s-%s.pfm", dir, name, what);
+    return image_write_pfm(img, path);
+}
+
+/* --images: scene NAME's reference and its standard error, and the pictures of its default
+ * and of the 3-D diffusion tier (when the sweep has it), as the sweep compares them. */
+static bool write_images(const char *dir, const char *name, struct renderer *r,
+                         struct light_gpu *lg, const struct bench_scene *sc,
+                         const struct bench_variant *variants, int n, const struct image *ref,
+                         const struct image *err)
+{
+    if (!bench_make_dir(dir))
+        return false;
+    bool ok =
+        write_pfm(dir, name, "reference", ref) && write_pfm(dir, name, "reference.stderr", err);
+    for (int i = 0; ok && i < n; i++) {
+        bool volume = bench_is_volume_tier(&variants[i]) && !variants[i].is_default;
+        if (!variants[i].is_default && !volume)
+            continue;
+        struct image img = {0};
+        ok = bench_render(r, lg, sc, &variants[i], &img) &&
+             write_pfm(dir, name, volume ? "volume" : "default", &img);
+        image_finish(&img);
+    }
+    return ok;
+}
+
 /* The sweep around the defaults of scene NAME (its config CFG) into OUT: the Monte Carlo
  * reference, the renderer's own converged image, every variant's error and timings, the
  * pooled timings and the Pareto front. */
@@ -182,6 +213,8 @@ static bool sweep_scene(const struct bench_options *o, const char *name, const s
         progress_update(&pr, (uint64_t)i + 1);
     }
     out->n = n;
+    if (o->images && !write_images(o->images, name, r, lg, &sc, variants, n, &ref, &err))
+        goto done;
     for (int k = 0; k < rounds; k++) {
         for (int i = 0; i < n; i++) {
             if (!bench_time_once(r, lg, &sc, k < build_rounds, &out->res[i])) {
@@ -257,7 +290,7 @@ static bool run_quality(const struct bench_options *o, const char *device, struc
     for (int self = 0; self < 2; self++) {
         char path[PATH_MAX], title[256];
         snprintf(path, sizeof(path), "%s/accuracy%s.png", o->out, self ? "-self" : "");
-        snprintf(title, sizeof(title), "%s vs time (red: Pareto front, blue ring: default)",
+        snprintf(title, sizeof(title), "%s vs time",
                  self ? "error against the converged renderer" : "error against Monte Carlo");
         if (bench_plot_png(path, title, n, names, res, counts, self))
             echo(o, "wrote %s\n", path);

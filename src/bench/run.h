@@ -50,6 +50,9 @@ struct bench_options {
                              bench-cache beside the running program */
     const char *configs;  /* folder of the named scenes' configs (sphere.cfg, katrina.cfg) */
     const char *paraview_script; /* paraview_views.py */
+    const char *images;          /* --images DIR: each swept scene's reference, its standard error
+                                    and the pictures of the default and of the 3-D diffusion tier,
+                                    PFM (bench_write_images); NULL: none */
     int spp;              /* reference samples per pixel (the sphere gets 64 times as many);
                              0: 256, 32 with quick */
     const char *scenes[BENCH_MAX_SCENES]; /* named scenes of the quality sweep; */

@@ -67,6 +67,7 @@ check "volume table: the wall under a 10 degree sun" \
 check "volume table: both builds timed" grep -q "volume's [0-9]* ms on top" "$tmp/v/volume-table.md"
 expect_exit 1 "bench: unknown scene" "$anvil" bench --scene nowhere
 expect_exit 2 "bench: exclusive options" "$anvil" bench --views-only --quality-only
+expect_exit 2 "bench: --images needs the quality sweep" "$anvil" bench --views-only --images "$tmp/i"
 
 # CI-sized runs of the scale and GPU benchmarks: their tables, with what the rays did.
 "$anvil" bench --quick --scale-only -o "$tmp/s" >"$tmp/out" 2>"$tmp/err"
@@ -98,8 +99,10 @@ check "gpu table: an HMD frame of two views and a CAVE frame of eight" \
     bash -c "grep -q '^| HMD | 2 |' '$tmp/g/gpu-table.md' && grep -q '^| cave4 | 8 |' '$tmp/g/gpu-table.md'"
 check "gpu table names the device" grep -q "Device: " "$tmp/g/gpu-table.md"
 
-# A CI-sized quality run on the sphere: tables, CSV and both plots.
+# A CI-sized quality run on the sphere: tables, CSV and both plots, and (--images) the
+# pictures it compares.
 "$anvil" bench --quick --quality-only --scene sphere -o "$tmp/b" --cache "$tmp/cache" \
+    --images "$tmp/img" \
     >"$tmp/out" 2>"$tmp/err"
 rc=$?
 if [ "$rc" -eq 3 ]; then echo "skip: no GL context"; exit 77; fi
@@ -108,6 +111,12 @@ for f in accuracy.csv accuracy-table.md accuracy.png accuracy-self.png angles-ta
     check "bench wrote $f" test -s "$tmp/b/$f"
 done
 check "CSV has the default row" grep -q "^sphere,default," "$tmp/b/accuracy.csv"
+for f in reference reference.stderr default volume; do
+    check "--images wrote sphere-$f.pfm (48 x 36)" \
+        bash -c "head -c 12 '$tmp/img/sphere-$f.pfm' | tr '\\n' ' ' | grep -q '^PF 48 36 '"
+done
+check "the sweep has both tiers of multiple scattering" \
+    grep -q '^sphere,multiple,"volume (3-D diffusion)",' "$tmp/b/accuracy.csv"
 check "table records the device" grep -q "Device: " "$tmp/b/accuracy-table.md"
 # The sphere's reference gets 64 times the base samples (32 with --quick).
 check "reference cached" test -n "$(ls "$tmp/cache"/ref-sphere-2048-*.pfm 2>/dev/null)"

@@ -2,6 +2,7 @@
  * work, how their timings are pooled, when one setting beats another on the Pareto front, and
  * what the accuracy table says about it. */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -267,6 +268,78 @@ static void test_verdicts(void **state)
     free(text);
 }
 
+static size_t count_rgb(const uint8_t *rgb, int w, int h, const uint8_t col[3])
+{
+    size_t k = 0;
+    for (size_t i = 0; i < (size_t)w * h; i++)
+        k += memcmp(&rgb[3 * i], col, 3) == 0;
+    return k;
+}
+
+/* Both tiers of multiple scattering in the plot: the 3-D diffusion row gets its own marker and
+ * a key, on both plots, and a sweep without that row draws neither. */
+static void test_plot_marks_the_volume_tier(void **state)
+{
+    (void)state;
+    struct bench_result res[3] = {timed(100.0, 0.0, 1.0), timed(50.0, 0.0, 2.0),
+                                  timed(300.0, 0.0, 0.8)};
+    res[0].v.is_default = true;
+    res[1].v.light.multiple = false;
+    const struct bench_result *all[1] = {res};
+    const char *names[1] = {"storm"};
+    int n[1] = {3}, w = 0, h = 0;
+    for (int self = 0; self < 2; self++) {
+        res[2].v.light.volume = false;
+        uint8_t *rgb = bench_plot_rgb("t", 1, names, all, n, self, &w, &h);
+        assert_non_null(rgb);
+        assert_int_equal(count_rgb(rgb, w, h, bench_plot_volume_rgb), 0);
+        free(rgb);
+        res[2].v.light.volume = true;
+        assert_true(bench_is_volume_tier(&res[2].v));
+        rgb = bench_plot_rgb("t", 1, names, all, n, self, &w, &h);
+        assert_non_null(rgb);
+        /* The square (7 px half-width, 2 px thick: 4 * 2 * 15 px less the corners) and the
+         * key's square and words. */
+        assert_true(count_rgb(rgb, w, h, bench_plot_volume_rgb) > 100);
+        free(rgb);
+    }
+    /* Without multiple scattering (or without the light map) "volume" is no tier. */
+    res[2].v.light.multiple = false;
+    assert_false(bench_is_volume_tier(&res[2].v));
+    res[2].v.light.multiple = true;
+    res[2].v.shadows = false;
+    assert_false(bench_is_volume_tier(&res[2].v));
+}
+
+/* The key goes to the corner of the plot with fewest points: with the 3-D diffusion row the
+ * slowest and worst (top right), the top-right quarter of the panel holds that row's square and
+ * nothing else green, and the key's green square and words are elsewhere. */
+static void test_plot_key_avoids_the_points(void **state)
+{
+    (void)state;
+    struct bench_result res[4] = {timed(100.0, 0.0, 1.0), timed(50.0, 0.0, 2.0),
+                                  timed(300.0, 0.0, 0.8), timed(1000.0, 0.0, 3.0)};
+    res[0].v.is_default = true;
+    res[3].v.light.volume = true;
+    const struct bench_result *all[1] = {res};
+    const char *names[1] = {"storm"};
+    int n[1] = {4}, w = 0, h = 0;
+    uint8_t *rgb = bench_plot_rgb("t", 1, names, all, n, false, &w, &h);
+    assert_non_null(rgb);
+    size_t top_right = 0, all_green = 0;
+    for (int y = 0; y < h; y++) {
+        for (int x = 0; x < w; x++) {
+            bool green = memcmp(&rgb[3 * ((size_t)y * w + x)], bench_plot_volume_rgb, 3) == 0;
+            all_green += green;
+            top_right += green && x >= w / 2 && y < h / 2;
+        }
+    }
+    free(rgb);
+    /* The marker: a square 15 px wide, 2 px thick. */
+    assert_in_range(top_right, 100, 120);
+    assert_true(all_green > top_right + 100);
+}
+
 int main(void)
 {
     log_set_level(LOG_WARN);
@@ -277,6 +350,8 @@ int main(void)
         cmocka_unit_test(test_shared_timings_do_not_widen_the_margin),
         cmocka_unit_test(test_pareto),
         cmocka_unit_test(test_verdicts),
+        cmocka_unit_test(test_plot_marks_the_volume_tier),
+        cmocka_unit_test(test_plot_key_avoids_the_points),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
