@@ -207,6 +207,31 @@ bool render_cells_build(struct render_cells *c, const struct render_cells_progra
            render_cells_build_step(c, p, beta, next, grid, 0, &done);
 }
 
+bool render_cells_max(struct render_cells *c, const struct render_cells *a,
+                      const struct render_cells *b, const struct gpu_texture *beta,
+                      const struct grid3 *grid)
+{
+    if (!render_cells_build_begin(c, beta, grid))
+        return false;
+    if (a->count != c->count || b->count != c->count) {
+        log_error("macro cells: %zu and %zu cells do not make a pair of %zu", a->count, b->count,
+                  c->count);
+        return false;
+    }
+    float *x = render_cells_read(a), *y = render_cells_read(b);
+    bool ok = x && y;
+    if (ok) {
+        /* Every level is a maximum over the same voxels: the maximum of the two. */
+        for (size_t i = 0; i < c->count; i++)
+            x[i] = y[i] > x[i] ? y[i] : x[i];
+        gpu_buffer_upload(&c->buf, HEADER_INTS * sizeof(int), c->count * sizeof(float), x);
+        c->built_layers = c->dims[0][2];
+    }
+    free(x);
+    free(y);
+    return ok;
+}
+
 void render_cells_finish(struct render_cells *c)
 {
     gpu_buffer_finish(&c->buf);

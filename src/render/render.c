@@ -882,6 +882,17 @@ bool renderer_pair_cells_step(struct renderer *r, int layers, bool *done)
     if (!pair_possible(r) || !r->pair_stale)
         return true;
     *done = false;
+    const struct render_cells *a = &r->cells, *b = &r->next_cells;
+    if (!r->pair_building && r->next_whole && a->levels > 0 && b->levels > 0 &&
+        a->count == b->count && a->cell_voxels == b->cell_voxels &&
+        grid3_equal(&r->grid, &r->grid_next)) {
+        /* Both volumes' cells are made: the pair's are their maxima. */
+        if (!render_cells_max(&r->pair_cells, a, b, &r->beta, &r->grid))
+            return false;
+        r->pair_stale = false;
+        *done = true;
+        return true;
+    }
     if (!r->pair_building) {
         if (!render_cells_build_begin(&r->pair_cells, &r->beta, &r->grid))
             return false;

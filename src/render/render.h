@@ -336,6 +336,14 @@ void render_cells_bind(const struct render_cells *c, const struct gpu_program *p
                        unsigned binding, const struct grid3 *grid);
 /* Every cell's value, level 0 first (malloc'd, the caller frees; NULL logged).  Waits. */
 float *render_cells_read(const struct render_cells *c);
+/* C (laid out for BETA on GRID) as the cells of two volumes of that grid whose cells A and B
+ * were built alone: the largest of the two, cell by cell, at every level.  The same cells as
+ * render_cells_build of the pair (every cell is a maximum over the same voxels), from the
+ * cells read back rather than the volumes.  A and B must have C's layout.  False (logged) on
+ * failure. */
+bool render_cells_max(struct render_cells *c, const struct render_cells *a,
+                      const struct render_cells *b, const struct gpu_texture *beta,
+                      const struct grid3 *grid);
 
 /* The cells of the last volume set (levels 0 before one): valid until the next
  * renderer_set_volume. */
@@ -344,11 +352,12 @@ const struct render_cells *renderer_cells(const struct renderer *r);
  * first asked for after either changed; NULL without a next volume of the same size.  They
  * serve the next volume's light build too: a cell empty in the pair is empty in both. */
 const struct render_cells *renderer_pair_cells(struct renderer *r);
-/* The same cells in pieces (between frames): LAYERS more of level 0's layers of cells a call
- * (a multiple of cells_build.comp's local_size_z; 0: all the rest), the coarser levels in the
- * call after the last.  *DONE: they are made (now or before, or there is no pair); until
- * then renderer_pair_cells would make them again whole.  Bit-identical to the whole build.
- * False (logged) on a GL failure. */
+/* The same cells in pieces (between frames): when both volumes' own cells are whole (a staged
+ * next volume, on the grid of the one shown), in one piece from them (render_cells_max);
+ * else LAYERS more of level 0's layers of cells a call (a multiple of cells_build.comp's
+ * local_size_z; 0: all the rest), the coarser levels in the call after the last.  *DONE: they are
+ * made (now or before, or there is no pair); until then renderer_pair_cells would make them again
+ * whole.  Bit-identical to the whole build. False (logged) on a GL failure. */
 bool renderer_pair_cells_step(struct renderer *r, int layers, bool *done);
 /* Whether renderer_pair_cells would return cells made before (or NULL) without making any. */
 bool renderer_pair_cells_ready(const struct renderer *r);

@@ -330,6 +330,55 @@ static void test_pair_cells_pieces(void **state)
     renderer_destroy(r);
 }
 
+/* With a staged next volume (its own cells made) on the grid shown: the pair's cells in one
+ * piece from the two volumes' cells, the same as made whole from the volumes. */
+static void test_pair_cells_from_cells(void **state)
+{
+    (void)state;
+    struct renderer *r = renderer_create();
+    assert_non_null(r);
+    struct grid3 g = {.n = {20, 12, 40}, .spacing = {1.0, 1.0, 1.0}};
+    struct ext_volume a = {0}, b = {0};
+    assert_true(ext_volume_init(&a, &g) && ext_volume_init(&b, &g));
+    size_t n = grid3_count(&g);
+    for (size_t i = 0; i < n; i++) {
+        a.beta[2 * i] = (i / 97) % 3 == 0 ? 0.0f : 1e-3f * (float)(i % 89);
+        b.beta[2 * i + 1] = (i / 53) % 4 == 0 ? 0.0f : 2e-3f * (float)(i % 71);
+    }
+    assert_true(renderer_set_volume(r, &a));
+    bool started = false, ready = false;
+    assert_true(renderer_stage_next(r, &b, NULL, &started));
+    assert_true(started);
+    for (int k = 0; k < 10000 && !ready; k++) {
+        assert_true(renderer_stage_step(r, 0, &ready));
+        usleep(200);
+    }
+    assert_true(ready);
+    bool done = false;
+    assert_true(renderer_pair_cells_step(r, 4, &done));
+    assert_true(done); /* one piece */
+    const struct render_cells *c = renderer_pair_cells(r);
+    assert_non_null(c);
+    float *from_cells = render_cells_read(c);
+    assert_non_null(from_cells);
+    struct render_cells_programs p;
+    assert_true(render_cells_programs_init(&p));
+    struct render_cells whole = {0};
+    assert_true(render_cells_build(&whole, &p, renderer_volume_texture(r), renderer_next_texture(r),
+                                   renderer_grid(r)));
+    assert_int_equal(whole.count, c->count);
+    float *want = render_cells_read(&whole);
+    assert_non_null(want);
+    assert_memory_equal(from_cells, want, whole.count * sizeof(float));
+    free(from_cells);
+    free(want);
+    render_cells_finish(&whole);
+    render_cells_programs_finish(&p);
+    ext_volume_finish(&a);
+    ext_volume_finish(&b);
+    renderer_destroy(r);
+}
+
 /* The upload slab session_prepare asks for: what fits into the time left at the last slab's
  * rate, within 4 and 64 MiB. */
 static void test_slab_bytes(void **state)
@@ -387,15 +436,11 @@ int main(void)
         return TEST_SKIP;
     }
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_stage_floats),
-        cmocka_unit_test(test_stage_half),
-        cmocka_unit_test(test_stage_paced_floats),
-        cmocka_unit_test(test_stage_paced_half),
-        cmocka_unit_test(test_pair_cells_pieces),
-        cmocka_unit_test(test_slab_bytes),
-        cmocka_unit_test(test_plain),
-        cmocka_unit_test(test_temporal),
-        cmocka_unit_test(test_fields),
+        cmocka_unit_test(test_stage_floats),       cmocka_unit_test(test_stage_half),
+        cmocka_unit_test(test_stage_paced_floats), cmocka_unit_test(test_stage_paced_half),
+        cmocka_unit_test(test_pair_cells_pieces),  cmocka_unit_test(test_pair_cells_from_cells),
+        cmocka_unit_test(test_slab_bytes),         cmocka_unit_test(test_plain),
+        cmocka_unit_test(test_temporal),           cmocka_unit_test(test_fields),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
