@@ -698,6 +698,9 @@ static int stage_pieces(struct renderer *r, struct stage_piece out[5])
 /* Layers of level-0 macro cells one renderer_stage_step makes (cells_build.comp's
  * local_size_z). */
 #define STAGE_CELL_LAYERS 4
+/* And rows of them (a multiple of its local_size_y): a 500 x 500 volume's 125 rows of cells
+ * in two pieces a layer. */
+#define STAGE_CELL_ROWS 64
 
 bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
 {
@@ -776,9 +779,9 @@ bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
     }
     bool built = false;
     do {
-        if (!render_cells_build_step(&r->next_cells, &r->cell_programs, &r->beta_next, NULL,
-                                     &r->stage_grid, budget == 0 ? 0 : STAGE_CELL_LAYERS,
-                                     &built)) {
+        if (!render_cells_build_piece(&r->next_cells, &r->cell_programs, &r->beta_next, NULL,
+                                      &r->stage_grid, budget == 0 ? 0 : STAGE_CELL_LAYERS,
+                                      budget == 0 ? 0 : STAGE_CELL_ROWS, &built)) {
             r->stage_state = STAGE_IDLE;
             return false;
         }
@@ -899,8 +902,8 @@ bool renderer_pair_cells_step(struct renderer *r, int layers, bool *done)
         r->pair_building = true;
     }
     bool built = false;
-    if (!render_cells_build_step(&r->pair_cells, &r->cell_programs, &r->beta, &r->beta_next,
-                                 &r->grid, layers, &built)) {
+    if (!render_cells_build_piece(&r->pair_cells, &r->cell_programs, &r->beta, &r->beta_next,
+                                  &r->grid, layers, layers > 0 ? STAGE_CELL_ROWS : 0, &built)) {
         r->pair_building = false;
         return false;
     }

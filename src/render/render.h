@@ -290,6 +290,7 @@ struct render_cells {
     size_t count;                         /* cells of all levels */
     int cell_voxels;                      /* voxels along a level-0 cell's edge */
     int built_layers;                     /* a build in pieces: level 0's layers made */
+    int built_rows;                       /* and the rows of cells made of the layers next */
     int walk_top;                         /* the level the eye pass's walk starts at */
 };
 
@@ -319,6 +320,11 @@ bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *
 bool render_cells_build_step(struct render_cells *c, const struct render_cells_programs *p,
                              const struct gpu_texture *beta, const struct gpu_texture *next,
                              const struct grid3 *grid, int layers, bool *done);
+/* The same with ROWS of level 0's rows of cells (along y) a call too (a multiple of
+ * cells_build.comp's local_size_y; 0: all): a layer's rows, then the next layers. */
+bool render_cells_build_piece(struct render_cells *c, const struct render_cells_programs *p,
+                              const struct gpu_texture *beta, const struct gpu_texture *next,
+                              const struct grid3 *grid, int layers, int rows, bool *done);
 void render_cells_finish(struct render_cells *c);
 /* A stretched GRID's height table (shaders/zmap.glsl) into TEX (made or remade, RG32F 1-D),
  * and PROG's (NULL: none) uniforms zmap_n and zmap_inv_height as render_zmap_uniforms sets

@@ -1820,6 +1820,9 @@ bool session_prepare(struct session *s, bool *more)
         }
         if ((kind == SESSION_PIECE_UPLOAD || slice) && now > t)
             *rate = (double)slab / (now - t);
+        if (now - t > budget)
+            log_debug("playback: %s took %.1f ms (%.1f ms of CPU), over the call's %.1f ms", what,
+                      now - t, piece_cpu, budget);
         if (piece_cpu > s->stats.prepare_piece_ms) {
             s->stats.prepare_piece = what;
             s->stats.prepare_piece_ms = piece_cpu;
