@@ -31,6 +31,7 @@ layout(std430, binding = BIND_CELLS_BUF_CELLS) buffer macro_cells {
 
 uniform ivec3 vol_n;
 uniform int base_z; // the first cell layer of this dispatch (a build in pieces)
+uniform int base_y; // the first cell row of this dispatch (a build in pieces)
 #if STRETCHED
 uniform ivec2 cell_levels[32]; // per cell row: the first and last level it reads
 #endif
@@ -42,7 +43,7 @@ float clean(vec2 b)
 
 void main()
 {
-    ivec3 c = ivec3(gl_GlobalInvocationID) + ivec3(0, 0, base_z);
+    ivec3 c = ivec3(gl_GlobalInvocationID) + ivec3(0, base_y, base_z);
     ivec3 dims = cell_dims[0].xyz;
     if (any(greaterThanEqual(c, dims)))
         return;

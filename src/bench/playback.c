@@ -113,6 +113,8 @@ static bool play(const struct bench_playback_desc *d, const struct config *cfg, 
     int shown = session_step_shown(s), normals = 0;
     double play_start = time_now_ms(), last = play_start, first_change = 0.0, last_change = 0.0;
     int steps_after_first = 0;
+    double kind_start[SESSION_PIECE_KINDS]; /* the work by kind before the clock started */
+    memcpy(kind_start, session_stats(s)->prepare_kind_ms, sizeof(kind_start));
     while (shown < steps - 1 && out->frames < MAX_FRAMES) {
         double t0 = time_now_ms(), c0 = cpu_now_ms();
         double bytes = (double)rs->upload_bytes;
@@ -156,7 +158,18 @@ static bool play(const struct bench_playback_desc *d, const struct config *cfg, 
         if (!session_prepare(s, &more))
             goto done;
         double t2 = time_now_ms(), c2 = cpu_now_ms();
-        out->prepare_max_ms = fmax(out->prepare_max_ms, c2 - c1);
+        if (c2 - c1 > out->prepare_max_ms) {
+            /* What that stretch's longest piece was. */
+            const struct session_stats *st = session_stats(s);
+            out->prepare_max_ms = c2 - c1;
+            out->prepare_piece = st->prepare_piece;
+            out->prepare_piece_ms = st->prepare_piece_ms;
+        }
+        out->work_ms += c2 - c1;
+        if (session_stats(s)->prepare_piece_ms > out->longest_piece_ms) {
+            out->longest_piece = session_stats(s)->prepare_piece;
+            out->longest_piece_ms = session_stats(s)->prepare_piece_ms;
+        }
         out->interval_max_ms = fmax(out->interval_max_ms, c2 - c0);
         if (t2 - play_start > PLAY_LIMIT_MS) {
             log_error("bench: playback: %d of %d step changes within %.0f s", out->changes,
@@ -167,6 +180,8 @@ static bool play(const struct bench_playback_desc *d, const struct config *cfg, 
     if (steps_after_first > 0 && last_change > first_change)
         out->steps_per_s = steps_after_first / ((last_change - first_change) * 1e-3);
     out->median_ms = median(normal, normals);
+    for (int k = 0; k < SESSION_PIECE_KINDS; k++)
+        out->kind_ms[k] = session_stats(s)->prepare_kind_ms[k] - kind_start[k];
     ok = shown == steps - 1;
     if (!ok)
         log_error("bench: playback: %d frames played to step %d of %d", out->frames, shown,
@@ -260,13 +275,25 @@ void bench_write_playback_table(FILE *f, const struct bench_playback_desc *d,
         u->median_ms > 0.0 ? u->max_ms / u->median_ms : 0.0);
     ROW("the longest step-change frame ÷ a normal one", "%.2f",
         u->median_ms > 0.0 ? u->change_max_ms / u->median_ms : 0.0);
-    ROW("the longest frame beside the stage's copy thread ÷ a normal one", "%.2f",
+    ROW("the longest frame while the stage's copy was under way ÷ a normal one", "%.2f",
         u->median_ms > 0.0 ? u->copy_max_ms / u->median_ms : 0.0);
     ROW("the longest of the other frames ÷ a normal one", "%.2f",
         u->median_ms > 0.0 ? u->quiet_max_ms / u->median_ms : 0.0);
     ROW("bytes uploaded in step-change frames", "%.0f", u->change_bytes);
     ROW("light maps built in step-change frames", "%u", u->change_builds);
     ROW("the longest work between two frames, CPU ms", "%.0f", u->prepare_max_ms);
+    ROW("the longest stretch's longest piece", "%s", u->prepare_piece ? u->prepare_piece : "—");
+    ROW("that piece, CPU ms", "%.0f", u->prepare_piece_ms);
+    ROW("the longest piece while playing", "%s", u->longest_piece ? u->longest_piece : "—");
+    ROW("that piece, CPU ms", "%.0f", u->longest_piece_ms);
+    ROW("the work between frames per step change, CPU ms", "%.0f",
+        u->changes > 0 ? u->work_ms / u->changes : 0.0);
+    for (int k = 0; k < SESSION_PIECE_KINDS; k++) {
+        char label[96];
+        snprintf(label, sizeof(label), "of which %s, CPU ms",
+                 session_piece_kind_name((enum session_piece_kind)k));
+        ROW(label, "%.0f", u->changes > 0 ? u->kind_ms[k] / u->changes : 0.0);
+    }
     ROW("the longest frame with the work after it ÷ a normal frame", "%.2f",
         u->median_ms > 0.0 ? u->interval_max_ms / u->median_ms : 0.0);
     ROW("frames the cursor waited for a step (stalls)", "%u", u->stalls);

@@ -16,6 +16,8 @@
 #include <stdbool.h>
 #include <stdio.h>
 
+#include "session/stats.h"
+
 struct gpu_context;
 
 struct bench_playback_desc {
@@ -41,6 +43,12 @@ struct bench_playback_run {
                                a copy */
     double interval_max_ms; /* the longest frame plus the work after it, before the next */
     double prepare_max_ms;  /* the longest work between two frames */
+    const char *prepare_piece; /* its longest piece (session_stats.prepare_piece), NULL: none */
+    double prepare_piece_ms;
+    const char *longest_piece; /* the longest piece while playing, and its CPU ms */
+    double longest_piece_ms;
+    double work_ms;                      /* all the work between frames while playing */
+    double kind_ms[SESSION_PIECE_KINDS]; /* the same by kind (session_stats.prepare_kind_ms) */
     unsigned stalls;        /* frames whose step was due but not ready (the cursor waited) */
     double change_bytes;    /* volume bytes uploaded inside step-change frames, in all */
     unsigned change_builds; /* light map builds inside step-change frames, in all */

@@ -657,7 +657,7 @@ static void arrive(struct gpu_timer_queue *q, struct gpu_timings *log, unsigned 
 
 /* Drivers that run compute work on the calling thread, whose timestamps do not advance
  * across it. */
-static bool software_driver(void)
+bool gpu_software_driver(void)
 {
     const char *name = (const char *)glGetString(GL_RENDERER);
     return name && (strstr(name, "llvmpipe") || strstr(name, "softpipe"));
@@ -666,7 +666,7 @@ static bool software_driver(void)
 void gpu_timer_queue_init(struct gpu_timer_queue *q, enum gpu_timer_clock clock)
 {
     memset(q, 0, sizeof(*q));
-    q->wall_clock = clock == GPU_TIMER_WALL || (clock == GPU_TIMER_AUTO && software_driver());
+    q->wall_clock = clock == GPU_TIMER_WALL || (clock == GPU_TIMER_AUTO && gpu_software_driver());
     if (q->wall_clock)
         return;
     for (int i = 0; i < GPU_TIMER_QUEUE_SIZE; i++)

@@ -306,6 +306,10 @@ struct gpu_timings {
  * a light map on the CPU), whether or not its GPU time arrived yet. */
 void gpu_timings_add(struct gpu_timings *log, unsigned number, double ms);
 
+/* Whether the current context's driver is one of those (it then shares the CPU's cores with
+ * the caller: work off the render thread competes with the frame's). */
+bool gpu_software_driver(void);
+
 /* How a queue measures.  AUTO (zero) takes WALL on software drivers and QUERIES elsewhere;
  * QUERIES there would measure next to nothing, but follows the same bookkeeping (tests). */
 enum gpu_timer_clock { GPU_TIMER_AUTO, GPU_TIMER_QUERIES, GPU_TIMER_WALL };

@@ -924,6 +924,29 @@ bool light_gpu_build_step(struct light_gpu *lg, double budget_ms, bool *done)
     return true;
 }
 
+const char *light_gpu_build_doing(const struct light_gpu *lg)
+{
+    if (!lg->job.active)
+        return "the light build's start";
+    switch (lg->job.phase) {
+    case JOB_RATES:
+        return "light build: lateral rates";
+    case JOB_SLICES:
+        return "light build: slices";
+    case JOB_SWEEP:
+        return "light build: sweep";
+    case JOB_DIFFUSE:
+        return "light build: the columns' diffuse light";
+    case JOB_VOLUME:
+        return "light build: the diffuse light volume's solve";
+    case JOB_COMPRESS:
+        return "light build: compression";
+    case JOB_DONE:
+        break;
+    }
+    return "light build: its end";
+}
+
 bool light_gpu_building(const struct light_gpu *lg)
 {
     return lg->job.active;

@@ -58,6 +58,9 @@ bool light_gpu_build_begin(struct light_gpu *lg, const struct light_gpu_source *
                            enum light_gpu_mode mode, bool *needed);
 bool light_gpu_build_step(struct light_gpu *lg, double budget_ms, bool *done);
 bool light_gpu_building(const struct light_gpu *lg);
+/* The pass the next light_gpu_build_step works on, in words (the playback bench's
+ * breakdown of the work between frames). */
+const char *light_gpu_build_doing(const struct light_gpu *lg);
 void light_gpu_build_cancel(struct light_gpu *lg);
 
 /* Stores the following dense maps in half floats (R16F light, RG16F diffuse light: half the

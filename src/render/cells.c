@@ -150,6 +150,7 @@ bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *
     *c = layout;
     c->buf = buf;
     c->built_layers = 0;
+    c->built_rows = 0;
     int header[HEADER_INTS] = {0};
     memcpy(header, c->dims, sizeof(c->dims));
     header[4 * RENDER_CELL_LEVELS] = c->levels;
@@ -162,6 +163,13 @@ bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *
 bool render_cells_build_step(struct render_cells *c, const struct render_cells_programs *p,
                              const struct gpu_texture *beta, const struct gpu_texture *next,
                              const struct grid3 *grid, int layers, bool *done)
+{
+    return render_cells_build_piece(c, p, beta, next, grid, layers, 0, done);
+}
+
+bool render_cells_build_piece(struct render_cells *c, const struct render_cells_programs *p,
+                              const struct gpu_texture *beta, const struct gpu_texture *next,
+                              const struct grid3 *grid, int layers, int rows, bool *done)
 {
     *done = false;
     if (c->built_layers >= c->dims[0][2]) {
@@ -177,6 +185,9 @@ bool render_cells_build_step(struct render_cells *c, const struct render_cells_p
     int from = c->built_layers, count = c->dims[0][2] - from;
     if (layers > 0 && layers < count)
         count = layers;
+    int y0 = c->built_rows, ny = c->dims[0][1] - y0;
+    if (rows > 0 && rows < ny)
+        ny = rows;
     bool stretched = grid && grid3_stretched(grid);
     const struct gpu_program *b = &p->build[(next ? 1 : 0) | (stretched ? 2 : 0)];
     gpu_uniform_ivec3(b, "vol_n", beta->size);
@@ -188,12 +199,18 @@ bool render_cells_build_step(struct render_cells *c, const struct render_cells_p
         gpu_uniform_ivec2(b, name, range);
     }
     gpu_uniform_int(b, "base_z", from);
+    gpu_uniform_int(b, "base_y", y0);
     gpu_texture_bind(beta, BIND_CELLS_TEX_BETA);
     if (next)
         gpu_texture_bind(next, BIND_CELLS_TEX_BETA_NEXT);
     gpu_buffer_bind(&c->buf, BIND_CELLS_BUF_CELLS);
-    gpu_dispatch(b, c->dims[0][0], c->dims[0][1], count);
-    c->built_layers = from + count;
+    gpu_dispatch(b, c->dims[0][0], ny, count);
+    if (y0 + ny < c->dims[0][1]) {
+        c->built_rows = y0 + ny; /* the same layers' next rows next */
+    } else {
+        c->built_layers = from + count;
+        c->built_rows = 0;
+    }
     return true;
 }
 
@@ -205,6 +222,31 @@ bool render_cells_build(struct render_cells *c, const struct render_cells_progra
     return render_cells_build_begin(c, beta, grid) &&
            render_cells_build_step(c, p, beta, next, grid, 0, &done) &&
            render_cells_build_step(c, p, beta, next, grid, 0, &done);
+}
+
+bool render_cells_max(struct render_cells *c, const struct render_cells *a,
+                      const struct render_cells *b, const struct gpu_texture *beta,
+                      const struct grid3 *grid)
+{
+    if (!render_cells_build_begin(c, beta, grid))
+        return false;
+    if (a->count != c->count || b->count != c->count) {
+        log_error("macro cells: %zu and %zu cells do not make a pair of %zu", a->count, b->count,
+                  c->count);
+        return false;
+    }
+    float *x = render_cells_read(a), *y = render_cells_read(b);
+    bool ok = x && y;
+    if (ok) {
+        /* Every level is a maximum over the same voxels: the maximum of the two. */
+        for (size_t i = 0; i < c->count; i++)
+            x[i] = y[i] > x[i] ? y[i] : x[i];
+        gpu_buffer_upload(&c->buf, HEADER_INTS * sizeof(int), c->count * sizeof(float), x);
+        c->built_layers = c->dims[0][2];
+    }
+    free(x);
+    free(y);
+    return ok;
 }
 
 void render_cells_finish(struct render_cells *c)

@@ -72,6 +72,7 @@ struct renderer {
     struct grid3 stage_grid;
     struct held_fields stage_held;
     size_t stage_done; /* bytes of the staged volume uploaded so far */
+    bool stage_paced;  /* the copy in slices in renderer_stage_step (renderer_set_stage_paced) */
     struct gpu_texture phase;
     float mean_cosine[2]; /* g of the ice and the water phase (MULTIPLE) */
     struct gpu_program tonemap, tonemap_packed;
@@ -91,6 +92,7 @@ struct renderer {
     struct render_cells cells;      /* of beta */
     struct render_cells pair_cells; /* of beta and beta_next (effects.temporal) */
     bool pair_stale;                /* either changed since pair_cells were made */
+    bool pair_building;             /* pair_cells under way in pieces (renderer_pair_cells_step) */
     bool counting;                  /* COUNT 1 (renderer_set_counting) */
     bool half;                      /* volumes in RG16F (renderer_set_half) */
     struct gpu_buffer counters;     /* 6 counts of two words each */
@@ -152,6 +154,7 @@ struct renderer *renderer_create(void)
         return NULL;
     }
     gpu_timer_queue_init(&r->timers, GPU_TIMER_AUTO);
+    r->stage_paced = gpu_software_driver();
     return r;
 }
 
@@ -195,6 +198,16 @@ void renderer_destroy(struct renderer *r)
 void renderer_set_half(struct renderer *r, bool half)
 {
     r->half = half;
+}
+
+void renderer_set_stage_paced(struct renderer *r, bool paced)
+{
+    r->stage_paced = paced;
+}
+
+bool renderer_stage_paced(const struct renderer *r)
+{
+    return r->stage_paced;
 }
 
 /* Puts VOL's extinction into TEX (made or remade for its size and the renderer's storage).
@@ -545,6 +558,7 @@ bool renderer_set_volume(struct renderer *r, const struct ext_volume *vol)
         return false;
     r->have_volume = true;
     r->pair_stale = true;
+    r->pair_building = false;
     size_t voxels = (size_t)n[0] * n[1] * n[2];
     r->stats.upload_bytes += voxels * (r->half ? 4 : 8) + (vol->tint ? voxels * 4 : 0) +
                              (r->layer_fields.id ? voxels * 16 : 0) +
@@ -572,6 +586,7 @@ bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol)
     r->grid_next = vol->grid;
     r->have_next = true;
     r->pair_stale = true;
+    r->pair_building = false;
     r->stats.upload_bytes += (size_t)n[0] * n[1] * n[2] * (r->half ? 4 : 8);
     r->stats.uploads++;
     return true;
@@ -616,11 +631,12 @@ bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, float
     if (r->stage_state != STAGE_IDLE)
         return true;
     bool failed = false;
-    if (!render_stage_begin(&r->stage, vol, also, r->half, &failed))
+    if (!render_stage_begin(&r->stage, vol, also, r->half, r->stage_paced, &failed))
         return !failed;
     r->have_next = false; /* beta_next is about to hold another volume */
     r->next_whole = false;
     r->pair_stale = true;
+    r->pair_building = false;
     r->stage_grid = vol->grid;
     held_of(vol, &r->stage_held);
     r->stage_state = STAGE_COPYING;
@@ -682,6 +698,9 @@ static int stage_pieces(struct renderer *r, struct stage_piece out[5])
 /* Layers of level-0 macro cells one renderer_stage_step makes (cells_build.comp's
  * local_size_z). */
 #define STAGE_CELL_LAYERS 4
+/* And rows of them (a multiple of its local_size_y): a 500 x 500 volume's 125 rows of cells
+ * in two pieces a layer. */
+#define STAGE_CELL_ROWS 64
 
 bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
 {
@@ -691,6 +710,13 @@ bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
         return true;
     }
     if (r->stage_state == STAGE_COPYING) {
+        if (r->stage.paced && !render_stage_copied(&r->stage)) {
+            /* A slice of the copy is this call's piece (BUDGET 0: all of it, and on). */
+            size_t copied = 0;
+            render_stage_copy_some(&r->stage, budget == 0 ? SIZE_MAX : budget, &copied);
+            if (budget != 0)
+                return true;
+        }
         if (!render_stage_copied(&r->stage))
             return true;
         const struct render_stage_layout *lay = &r->stage.lay;
@@ -708,6 +734,8 @@ bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
             return false;
         }
         r->stage_state = STAGE_UPLOADING;
+        if (budget != 0)
+            return true; /* the textures made (once): the slabs from the next call */
     }
     /* Whole z layers, as many as BUDGET allows (at least one): a long upload is spread over
      * several calls. */
@@ -751,9 +779,9 @@ bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
     }
     bool built = false;
     do {
-        if (!render_cells_build_step(&r->next_cells, &r->cell_programs, &r->beta_next, NULL,
-                                     &r->stage_grid, budget == 0 ? 0 : STAGE_CELL_LAYERS,
-                                     &built)) {
+        if (!render_cells_build_piece(&r->next_cells, &r->cell_programs, &r->beta_next, NULL,
+                                      &r->stage_grid, budget == 0 ? 0 : STAGE_CELL_LAYERS,
+                                      budget == 0 ? 0 : STAGE_CELL_ROWS, &built)) {
             r->stage_state = STAGE_IDLE;
             return false;
         }
@@ -766,6 +794,7 @@ bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
     r->have_next = true;
     r->next_whole = true;
     r->pair_stale = true;
+    r->pair_building = false;
     r->stats.upload_bytes += total;
     r->stats.uploads++;
     *ready = true;
@@ -816,6 +845,7 @@ bool renderer_swap_next(struct renderer *r)
     r->have_next = false;
     r->next_whole = false;
     r->pair_stale = true;
+    r->pair_building = false;
     return true;
 }
 
@@ -829,18 +859,85 @@ const struct render_cells *renderer_cells(const struct renderer *r)
     return &r->cells;
 }
 
+static bool pair_possible(const struct renderer *r)
+{
+    return r->have_next && r->have_volume &&
+           memcmp(r->beta.size, r->beta_next.size, sizeof(r->beta.size)) == 0;
+}
+
 const struct render_cells *renderer_pair_cells(struct renderer *r)
 {
-    if (!r->have_next || !r->have_volume ||
-        memcmp(r->beta.size, r->beta_next.size, sizeof(r->beta.size)) != 0)
+    if (!pair_possible(r))
         return NULL;
     if (r->pair_stale) {
+        r->pair_building = false; /* the pieces so far are made again, whole */
         if (!render_cells_build(&r->pair_cells, &r->cell_programs, &r->beta, &r->beta_next,
                                 &r->grid))
             return NULL;
         r->pair_stale = false;
     }
     return &r->pair_cells;
+}
+
+bool renderer_pair_cells_step(struct renderer *r, int layers, bool *done)
+{
+    *done = true;
+    if (!pair_possible(r) || !r->pair_stale)
+        return true;
+    *done = false;
+    const struct render_cells *a = &r->cells, *b = &r->next_cells;
+    if (!r->pair_building && r->next_whole && a->levels > 0 && b->levels > 0 &&
+        a->count == b->count && a->cell_voxels == b->cell_voxels &&
+        grid3_equal(&r->grid, &r->grid_next)) {
+        /* Both volumes' cells are made: the pair's are their maxima. */
+        if (!render_cells_max(&r->pair_cells, a, b, &r->beta, &r->grid))
+            return false;
+        r->pair_stale = false;
+        *done = true;
+        return true;
+    }
+    if (!r->pair_building) {
+        if (!render_cells_build_begin(&r->pair_cells, &r->beta, &r->grid))
+            return false;
+        r->pair_building = true;
+    }
+    bool built = false;
+    if (!render_cells_build_piece(&r->pair_cells, &r->cell_programs, &r->beta, &r->beta_next,
+                                  &r->grid, layers, layers > 0 ? STAGE_CELL_ROWS : 0, &built)) {
+        r->pair_building = false;
+        return false;
+    }
+    if (built) {
+        r->pair_building = false;
+        r->pair_stale = false;
+        *done = true;
+    }
+    return true;
+}
+
+bool renderer_pair_cells_ready(const struct renderer *r)
+{
+    return !pair_possible(r) || !r->pair_stale;
+}
+
+bool renderer_stage_uploading(const struct renderer *r)
+{
+    return r->stage_state == STAGE_UPLOADING;
+}
+
+const char *renderer_stage_doing(const struct renderer *r)
+{
+    switch (r->stage_state) {
+    case STAGE_COPYING:
+        return r->stage.paced ? "a slice of the copy" : "the copy's end";
+    case STAGE_UPLOADING:
+        return "an upload slab";
+    case STAGE_CELLS:
+        return "a piece of the staged cells";
+    case STAGE_IDLE:
+        break;
+    }
+    return "nothing";
 }
 
 bool renderer_has_next(const struct renderer *r)

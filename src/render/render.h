@@ -97,6 +97,13 @@ void renderer_destroy(struct renderer *r);
  * clamps to it, NaN and negative stay as they are and read as 0) or, HALF false (the default),
  * in floats (RG32F). */
 void renderer_set_half(struct renderer *r, bool half);
+/* How renderer_stage_next copies the next volume into the pixel buffer: PACED, in slices of
+ * renderer_stage_step's budget on the render thread between frames; else on the stage's
+ * thread beside the frames.  Paced from the start on a software driver (gpu_software_driver:
+ * there a copy thread competes with the rasteriser's for the cores); takes effect at the
+ * next renderer_stage_next. */
+void renderer_set_stage_paced(struct renderer *r, bool paced);
+bool renderer_stage_paced(const struct renderer *r);
 
 /* Uploads the extinction volume (replacing the last one; the texture is reused when the size
  * and storage are unchanged).  The volume is not kept. */
@@ -119,15 +126,22 @@ bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol);
  * before is gone from now on (renderer_has_next false). */
 bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, float *also,
                          bool *started);
-/* Moves the staged volume on: once the copy is complete, uploads at most BUDGET bytes of it
- * (whole z layers, at least one; 0: all) from the buffer into the next volume's textures, and
- * after the last builds its cells, a few layers of them a call (BUDGET 0: all in the last
- * upload's).  *READY: the next volume is whole on the GPU (now or before).  Never waits for the copy.  False (logged) on a GL failure. */
+/* Moves the staged volume on: with a paced copy (renderer_set_stage_paced), first copies about
+ * BUDGET bytes of it into the buffer a call (0: all, and on); once the copy is complete, uploads at
+ * most BUDGET bytes of it (whole z layers, at least one; 0: all) from the buffer into the next
+ * volume's textures, and after the last builds its cells, a few layers of them a call (BUDGET 0:
+ * all in the last upload's).  *READY: the next volume is whole on the GPU (now or before).  Never
+ * waits for the copy.  False (logged) on a GL failure. */
 bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready);
 /* Whether a staged volume is being copied or uploaded; whether it is still being copied (the
  * stage's thread is on it: renderer_stage_step cannot move it on yet). */
 bool renderer_stage_busy(const struct renderer *r);
 bool renderer_stage_copying(const struct renderer *r);
+/* What the next renderer_stage_step works on, in words ("an upload slab", ...): what the
+ * playback bench names as the longest piece between two frames. */
+const char *renderer_stage_doing(const struct renderer *r);
+/* Whether the staged volume is being uploaded (copied, not yet all uploaded). */
+bool renderer_stage_uploading(const struct renderer *r);
 /* Waits for a copy in flight and drops the staged volume (its source may then go). */
 void renderer_stage_cancel(struct renderer *r);
 /* Makes the staged next volume the volume (and the volume the spare one): its extinction,
@@ -276,6 +290,7 @@ struct render_cells {
     size_t count;                         /* cells of all levels */
     int cell_voxels;                      /* voxels along a level-0 cell's edge */
     int built_layers;                     /* a build in pieces: level 0's layers made */
+    int built_rows;                       /* and the rows of cells made of the layers next */
     int walk_top;                         /* the level the eye pass's walk starts at */
 };
 
@@ -305,6 +320,11 @@ bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *
 bool render_cells_build_step(struct render_cells *c, const struct render_cells_programs *p,
                              const struct gpu_texture *beta, const struct gpu_texture *next,
                              const struct grid3 *grid, int layers, bool *done);
+/* The same with ROWS of level 0's rows of cells (along y) a call too (a multiple of
+ * cells_build.comp's local_size_y; 0: all): a layer's rows, then the next layers. */
+bool render_cells_build_piece(struct render_cells *c, const struct render_cells_programs *p,
+                              const struct gpu_texture *beta, const struct gpu_texture *next,
+                              const struct grid3 *grid, int layers, int rows, bool *done);
 void render_cells_finish(struct render_cells *c);
 /* A stretched GRID's height table (shaders/zmap.glsl) into TEX (made or remade, RG32F 1-D),
  * and PROG's (NULL: none) uniforms zmap_n and zmap_inv_height as render_zmap_uniforms sets
@@ -322,6 +342,14 @@ void render_cells_bind(const struct render_cells *c, const struct gpu_program *p
                        unsigned binding, const struct grid3 *grid);
 /* Every cell's value, level 0 first (malloc'd, the caller frees; NULL logged).  Waits. */
 float *render_cells_read(const struct render_cells *c);
+/* C (laid out for BETA on GRID) as the cells of two volumes of that grid whose cells A and B
+ * were built alone: the largest of the two, cell by cell, at every level.  The same cells as
+ * render_cells_build of the pair (every cell is a maximum over the same voxels), from the
+ * cells read back rather than the volumes.  A and B must have C's layout.  False (logged) on
+ * failure. */
+bool render_cells_max(struct render_cells *c, const struct render_cells *a,
+                      const struct render_cells *b, const struct gpu_texture *beta,
+                      const struct grid3 *grid);
 
 /* The cells of the last volume set (levels 0 before one): valid until the next
  * renderer_set_volume. */
@@ -330,6 +358,15 @@ const struct render_cells *renderer_cells(const struct renderer *r);
  * first asked for after either changed; NULL without a next volume of the same size.  They
  * serve the next volume's light build too: a cell empty in the pair is empty in both. */
 const struct render_cells *renderer_pair_cells(struct renderer *r);
+/* The same cells in pieces (between frames): when both volumes' own cells are whole (a staged
+ * next volume, on the grid of the one shown), in one piece from them (render_cells_max);
+ * else LAYERS more of level 0's layers of cells a call (a multiple of cells_build.comp's
+ * local_size_z; 0: all the rest), the coarser levels in the call after the last.  *DONE: they are
+ * made (now or before, or there is no pair); until then renderer_pair_cells would make them again
+ * whole.  Bit-identical to the whole build. False (logged) on a GL failure. */
+bool renderer_pair_cells_step(struct renderer *r, int layers, bool *done);
+/* Whether renderer_pair_cells would return cells made before (or NULL) without making any. */
+bool renderer_pair_cells_ready(const struct renderer *r);
 
 /* The rate of trilinear RG32F 3D texture fetches this device reaches, per second: a
  * fetch-only pass (shaders/fetch_peak.comp) over a volume that stays in the texture cache, the

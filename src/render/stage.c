@@ -39,28 +39,58 @@ static void interleave(float *out, float *const v[4], size_t count)
             out[4 * i + c] = v[c] ? v[c][i] : 0.0f;
 }
 
-static void copy(const struct render_stage *st, const struct ext_volume *vol)
+/* Bytes of the buffer (and of ALSO) one voxel of VOL takes, its columns' surfaces aside. */
+static size_t voxel_bytes(const struct render_stage *st)
+{
+    size_t b = 2 * sizeof(float) * (st->also ? 2 : 1);
+    if (st->lay.tint != RENDER_STAGE_NONE)
+        b += 4;
+    if (st->lay.layers != RENDER_STAGE_NONE)
+        b += 4 * sizeof(float);
+    if (st->lay.slices != RENDER_STAGE_NONE)
+        b += 4 * sizeof(float);
+    return b;
+}
+
+/* Voxels FROM .. TO of VOL into the buffer (and ALSO); the surfaces with the last voxel. */
+static void copy_range(const struct render_stage *st, const struct ext_volume *vol, size_t from,
+                       size_t to)
 {
     const int *n = vol->grid.n;
-    size_t voxels = (size_t)n[0] * n[1] * n[2], plane = (size_t)n[0] * n[1];
+    size_t voxels = (size_t)n[0] * n[1] * n[2], plane = (size_t)n[0] * n[1], count = to - from;
     char *base = st->pbo.map;
     float *beta = (float *)(base + st->lay.beta);
     if (st->half) {
-        for (size_t i = 0; i < 2 * voxels; i++)
+        for (size_t i = 2 * from; i < 2 * to; i++)
             beta[i] = vol->beta[i] > RENDER_HALF_MAX ? RENDER_HALF_MAX : vol->beta[i];
     } else {
-        memcpy(beta, vol->beta, voxels * 2 * sizeof(float));
+        memcpy(beta + 2 * from, vol->beta + 2 * from, count * 2 * sizeof(float));
     }
     if (st->also)
-        memcpy(st->also, vol->beta, voxels * 2 * sizeof(float));
+        memcpy(st->also + 2 * from, vol->beta + 2 * from, count * 2 * sizeof(float));
     if (st->lay.tint != RENDER_STAGE_NONE)
-        memcpy(base + st->lay.tint, vol->tint, voxels * 4);
-    if (st->lay.layers != RENDER_STAGE_NONE)
-        interleave((float *)(base + st->lay.layers), vol->layer, voxels);
-    if (st->lay.slices != RENDER_STAGE_NONE)
-        interleave((float *)(base + st->lay.slices), vol->slice, voxels);
-    if (st->lay.surfaces != RENDER_STAGE_NONE)
+        memcpy(base + st->lay.tint + 4 * from, vol->tint + 4 * from, count * 4);
+    float *const *v;
+    float *part[4];
+    if (st->lay.layers != RENDER_STAGE_NONE) {
+        v = vol->layer;
+        for (int c = 0; c < 4; c++)
+            part[c] = v[c] ? v[c] + from : NULL;
+        interleave((float *)(base + st->lay.layers) + 4 * from, part, count);
+    }
+    if (st->lay.slices != RENDER_STAGE_NONE) {
+        v = vol->slice;
+        for (int c = 0; c < 4; c++)
+            part[c] = v[c] ? v[c] + from : NULL;
+        interleave((float *)(base + st->lay.slices) + 4 * from, part, count);
+    }
+    if (to == voxels && st->lay.surfaces != RENDER_STAGE_NONE)
         interleave((float *)(base + st->lay.surfaces), vol->slice_surface, plane);
+}
+
+static size_t volume_voxels(const struct ext_volume *vol)
+{
+    return (size_t)vol->grid.n[0] * vol->grid.n[1] * vol->grid.n[2];
 }
 
 static void *run(void *arg)
@@ -68,13 +98,14 @@ static void *run(void *arg)
     struct render_stage *st = arg;
     pthread_mutex_lock(&st->lock);
     for (;;) {
-        while (!st->quit && (!st->job || st->copied))
+        while (!st->quit && (!st->job || st->copied || st->paced))
             pthread_cond_wait(&st->cond, &st->lock);
         if (st->quit)
             break;
         const struct ext_volume *vol = st->job;
         pthread_mutex_unlock(&st->lock);
-        copy(st, vol); /* the render thread leaves the buffer and the layout alone meanwhile */
+        /* The render thread leaves the buffer and the layout alone meanwhile. */
+        copy_range(st, vol, 0, volume_voxels(vol));
         pthread_mutex_lock(&st->lock);
         st->copied = true;
         pthread_cond_broadcast(&st->cond);
@@ -92,7 +123,7 @@ void render_stage_finish(struct render_stage *st)
 {
     if (st->started) {
         pthread_mutex_lock(&st->lock);
-        while (st->job && !st->copied)
+        while (st->job && !st->copied && !st->paced)
             pthread_cond_wait(&st->cond, &st->lock);
         st->quit = true;
         pthread_cond_broadcast(&st->cond);
@@ -108,6 +139,8 @@ void render_stage_finish(struct render_stage *st)
 
 bool render_stage_busy(struct render_stage *st)
 {
+    if (st->paced)
+        return st->job && !st->copied;
     if (!st->started)
         return false;
     pthread_mutex_lock(&st->lock);
@@ -117,7 +150,7 @@ bool render_stage_busy(struct render_stage *st)
 }
 
 bool render_stage_begin(struct render_stage *st, const struct ext_volume *vol, float *also,
-                        bool half, bool *failed)
+                        bool half, bool paced, bool *failed)
 {
     *failed = false;
     if (render_stage_busy(st))
@@ -128,7 +161,7 @@ bool render_stage_begin(struct render_stage *st, const struct ext_volume *vol, f
         gpu_fence_delete(st->fence);
         st->fence = 0;
     }
-    if (!st->started) {
+    if (!st->started && !paced) {
         if (pthread_mutex_init(&st->lock, NULL) != 0) {
             log_error("could not start the upload thread");
             *failed = true;
@@ -158,31 +191,56 @@ bool render_stage_begin(struct render_stage *st, const struct ext_volume *vol, f
             return false;
         }
     }
-    pthread_mutex_lock(&st->lock);
+    if (st->started)
+        pthread_mutex_lock(&st->lock);
     st->lay = lay;
     st->half = half;
     st->also = also;
+    st->paced = paced;
+    st->copy_at = 0;
     st->job = vol;
     st->copied = false;
-    pthread_cond_broadcast(&st->cond);
-    pthread_mutex_unlock(&st->lock);
+    if (st->started) {
+        pthread_cond_broadcast(&st->cond);
+        pthread_mutex_unlock(&st->lock);
+    }
     return true;
+}
+
+bool render_stage_copy_some(struct render_stage *st, size_t bytes, size_t *copied)
+{
+    *copied = 0;
+    if (!st->paced || !st->job)
+        return false;
+    if (st->copied)
+        return true;
+    size_t voxels = volume_voxels(st->job), per = voxel_bytes(st);
+    size_t count = bytes / per < 1 ? 1 : bytes / per;
+    if (count > voxels - st->copy_at)
+        count = voxels - st->copy_at;
+    copy_range(st, st->job, st->copy_at, st->copy_at + count);
+    st->copy_at += count;
+    *copied = count * per;
+    st->copied = st->copy_at == voxels;
+    return st->copied;
 }
 
 void render_stage_release(struct render_stage *st)
 {
     gpu_fence_delete(st->fence);
     st->fence = gpu_fence_insert();
-    if (!st->started)
-        return;
-    pthread_mutex_lock(&st->lock);
+    if (st->started)
+        pthread_mutex_lock(&st->lock);
     st->job = NULL;
     st->copied = false;
-    pthread_mutex_unlock(&st->lock);
+    if (st->started)
+        pthread_mutex_unlock(&st->lock);
 }
 
 bool render_stage_copied(struct render_stage *st)
 {
+    if (st->paced)
+        return st->job && st->copied;
     if (!st->started)
         return false;
     pthread_mutex_lock(&st->lock);
@@ -193,6 +251,8 @@ bool render_stage_copied(struct render_stage *st)
 
 void render_stage_wait(struct render_stage *st)
 {
+    if (st->paced)
+        return; /* nothing in flight: the copy goes in slices on the caller's thread */
     if (!st->started)
         return;
     pthread_mutex_lock(&st->lock);

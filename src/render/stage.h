@@ -41,6 +41,8 @@ struct render_stage {
     bool half;        /* clamp the extinction to RENDER_HALF_MAX (half-float textures) */
     float *also;      /* the extinction copied here too (2 floats a voxel), or NULL */
     uint64_t fence;   /* after the uploads that read the buffer (0: none in flight) */
+    bool paced;       /* the job is copied in slices by render_stage_copy_some, no thread */
+    size_t copy_at;   /* paced: the voxels copied so far */
 };
 
 /* The regions VOL needs. */
@@ -51,13 +53,19 @@ void render_stage_init(struct render_stage *st);
 /* Waits for a copy in flight, ends the thread, frees the buffer.  Needs the GL context. */
 void render_stage_finish(struct render_stage *st);
 
-/* Starts copying VOL into the buffer on the stage's thread (and its extinction, unclamped, into
- * ALSO: 2 floats a voxel, or NULL); VOL and ALSO must stay valid and VOL unchanged until
+/* Starts copying VOL into the buffer on the stage's thread, or with PACED in slices on the
+ * caller's (render_stage_copy_some), and its extinction, unclamped, into ALSO (2 floats a
+ * voxel, or NULL); VOL and ALSO must stay valid and VOL unchanged until
  * render_stage_copied returned true (or render_stage_wait returned).  False when the
  * buffer is still read by earlier uploads or a copy is in flight (try again next frame), or
  * on failure (logged, *FAILED set).  Needs the GL context (the buffer may be remade). */
 bool render_stage_begin(struct render_stage *st, const struct ext_volume *vol, float *also,
-                        bool half, bool *failed);
+                        bool half, bool paced, bool *failed);
+/* PACED (render_stage_begin): the copy is not started on the thread but made on the caller's,
+ * about BYTES of the buffer's (and ALSO's) bytes a call (at least one voxel; the columns'
+ * surfaces with the last), *COPIED of them; true once the copy is complete.  Bit-identical to
+ * the thread's copy.  No GL. */
+bool render_stage_copy_some(struct render_stage *st, size_t bytes, size_t *copied);
 /* Whether the copy started by render_stage_begin is complete (never waits). */
 bool render_stage_copied(struct render_stage *st);
 /* Waits for a copy in flight (before the volume it reads may go). */

@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <cglm/cglm.h>
 
@@ -29,6 +30,11 @@
 #define NAV_STEP 0.1    /* tracker metres per key press */
 #define TURN_STEP 5.0   /* degrees per key press */
 #define DRAG_DEG 0.3    /* degrees per pixel dragged */
+
+/* The share of the last frame's time that one session_prepare may spend between two frames
+ * (docs/architecture.md, "Time series": a frame and the work after it against the step
+ * rate). */
+#define PREPARE_SHARE 0.5
 
 struct session {
     struct config cfg; /* read once by session_create; never written */
@@ -73,6 +79,8 @@ struct session {
                                            CPU, swapped with probe_volume at its step change */
     uint64_t probe_next_id;             /* its step (player_step_id), 0: none */
     double frame_start_ms, frame_ms;    /* the last frame's session_apply .. session_draw */
+    double piece_ms[SESSION_PIECE_KINDS]; /* the last piece of each kind, wall ms (its estimate) */
+    double upload_rate, copy_rate;        /* the last slab's bytes per wall ms (0: none yet) */
 
     /* What the last session_apply made the GPU hold. */
     int shown;                /* the step on screen */
@@ -1661,14 +1669,60 @@ bool session_light(struct session *s)
     return lightmaps_update_params(&s->light, &p, s->renderer, &s->stats);
 }
 
-/* How much of a staged volume one session_prepare uploads from the pixel buffer: a volume of
- * Isabel's size (191 MiB of extinction) goes up over a few calls. */
-#define STAGE_SLAB_BYTES ((size_t)64 << 20)
+/* An upload slab from the pixel buffer: sized by the last slab's rate to the time left in
+ * the call, between these bounds (the first, before any rate is known, is the lower one). */
+#define STAGE_SLAB_MIN ((size_t)4 << 20)
+#define STAGE_SLAB_MAX ((size_t)64 << 20)
+/* Layers of level-0 cells a piece of the pair's cells (cells_build.comp's local_size_z). */
+#define PAIR_CELL_LAYERS 4
 
-/* One piece of readying the step after the one shown, the light map's taking about BUDGET_MS
- * (ms).  *PROGRESSED: the next piece can follow at once (not waiting for the stage's thread);
+size_t session_slab_bytes(double rate_bytes_per_ms, double left_ms)
+{
+    if (!(rate_bytes_per_ms > 0.0) || !(left_ms > 0.0))
+        return STAGE_SLAB_MIN;
+    double bytes = rate_bytes_per_ms * left_ms;
+    if (bytes >= (double)STAGE_SLAB_MAX)
+        return STAGE_SLAB_MAX;
+    return bytes <= (double)STAGE_SLAB_MIN ? STAGE_SLAB_MIN : (size_t)bytes;
+}
+
+/* The CPU time of all of this process's threads, ms (a CPU rasteriser's included). */
+static double cpu_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+/* What the next piece of readying the next step would be, *WHAT in words; SESSION_PIECE_KINDS: none
+ * can be done now. */
+static enum session_piece_kind next_piece(struct session *s, const char **what)
+{
+    *what = "nothing";
+    if (renderer_stage_busy(s->renderer)) {
+        *what = renderer_stage_doing(s->renderer);
+        return renderer_stage_copying(s->renderer)     ? SESSION_PIECE_COPY
+               : renderer_stage_uploading(s->renderer) ? SESSION_PIECE_UPLOAD
+                                                       : SESSION_PIECE_CELLS;
+    }
+    int next = step_after(s, s->shown);
+    if (next >= 0 && player_next_step(s->player) == next && renderer_next_cells(s->renderer)) {
+        if (s->effects.on[EFFECT_TEMPORAL] && !renderer_pair_cells_ready(s->renderer)) {
+            *what = "a piece of the pair's cells";
+            return SESSION_PIECE_PAIR;
+        }
+        *what = lightmaps_next_doing(&s->light);
+        return SESSION_PIECE_LIGHT;
+    }
+    *what = "the stage's start";
+    return SESSION_PIECE_START;
+}
+
+/* One piece of readying the step after the one shown, each waited for (so that its cost is
+ * known and counted where it was issued); SLAB: the bytes an upload slab may take.
+ * *PROGRESSED: the next piece can follow at once (not waiting for the stage's thread);
  * *MORE: work remains. */
-static bool prepare_piece(struct session *s, double budget_ms, bool *progressed, bool *more)
+static bool prepare_piece(struct session *s, size_t slab, bool *progressed, bool *more)
 {
     *progressed = *more = false;
     int next = step_after(s, s->shown);
@@ -1679,8 +1733,10 @@ static bool prepare_piece(struct session *s, double budget_ms, bool *progressed,
     if (renderer_stage_busy(s->renderer)) {
         /* The copy's end, then the upload in slabs, then the cells. */
         bool ready = false;
-        bool ok = renderer_stage_step(s->renderer, STAGE_SLAB_BYTES, &ready);
-        *progressed = ok && !renderer_stage_copying(s->renderer);
+        bool ok = renderer_stage_step(s->renderer, slab, &ready);
+        gpu_finish();
+        *progressed =
+            ok && (!renderer_stage_copying(s->renderer) || renderer_stage_paced(s->renderer));
         *more = ok;
         return ok;
     }
@@ -1696,14 +1752,19 @@ static bool prepare_piece(struct session *s, double budget_ms, bool *progressed,
             return true;
         struct lightmaps_params p;
         light_params(s, &p);
-        /* The blend reads the pair's cells: made now, not in the first blended frame. */
-        if (s->effects.on[EFFECT_TEMPORAL])
-            renderer_pair_cells(s->renderer);
-        /* In pieces over as many calls as it takes (light_gpu_build_step). */
+        /* The blend reads the pair's cells: made now in pieces, not in the first blended
+         * frame. */
         bool done = true;
-        bool ok = lightmaps_prepare_next(&s->light, &p, s->renderer,
-                                         budget_ms > 1.0 ? budget_ms : 1.0, &done, &s->stats);
-        *progressed = ok && done;
+        if (s->effects.on[EFFECT_TEMPORAL] && !renderer_pair_cells_ready(s->renderer)) {
+            bool ok = renderer_pair_cells_step(s->renderer, PAIR_CELL_LAYERS, &done);
+            gpu_finish();
+            *progressed = ok;
+            *more = ok;
+            return ok;
+        }
+        /* One piece of it a call (light_gpu_build_step with no time to spare does one). */
+        bool ok = lightmaps_prepare_next(&s->light, &p, s->renderer, 1e-6, &done, &s->stats);
+        *progressed = ok;
         *more = ok && !done;
         return ok;
     }
@@ -1713,8 +1774,8 @@ static bool prepare_piece(struct session *s, double budget_ms, bool *progressed,
     }
     if (!s->stage_src)
         return true; /* not loaded yet: the series' thread is on it */
-    /* With the probe, its copy of the extinction too, on the stage's thread rather than in
-     * the frame of the step change. */
+    /* With the probe, its copy of the extinction too, by the stage rather than in the frame
+     * of the step change. */
     if (s->probe && !room_probe_next(s, s->stage_src))
         return false;
     bool started = false;
@@ -1724,6 +1785,7 @@ static bool prepare_piece(struct session *s, double budget_ms, bool *progressed,
         s->probe_next_id = s->probe ? player_step_id(s->player, true) : 0;
         s->stage_src = NULL; /* the renderer has it until the copy is done */
     }
+    *progressed = ok && started && renderer_stage_paced(s->renderer); /* its first slice next */
     *more = ok;
     return ok;
 }
@@ -1733,12 +1795,43 @@ bool session_prepare(struct session *s, bool *more)
     *more = false;
     if (!s->staged)
         return true;
-    /* Pieces while they need not wait, for about as long as a frame takes (the light build
-     * too: it goes in pieces of a few slices or planes, resumed at the next call). */
-    double t0 = time_now_ms(), budget = s->frame_ms > 10.0 ? s->frame_ms : 10.0;
+    /* Pieces while they need not wait and the next, as long as the last of its kind, still
+     * fits into PREPARE_SHARE of a frame's time (at least one piece a call). */
+    double f = s->frame_ms > 10.0 ? s->frame_ms : 10.0, budget = PREPARE_SHARE * f;
+    double t0 = time_now_ms();
     bool ok = true, progressed = true;
-    while (ok && progressed && time_now_ms() - t0 < budget)
-        ok = prepare_piece(s, budget - (time_now_ms() - t0), &progressed, more);
+    s->stats.prepare_piece = NULL;
+    s->stats.prepare_piece_ms = 0.0;
+    for (int pieces = 0; ok && progressed; pieces++) {
+        const char *what;
+        enum session_piece_kind kind = next_piece(s, &what);
+        double t = time_now_ms(), left = budget - (t - t0);
+        if (pieces > 0 && (left <= 0.0 || (kind < SESSION_PIECE_KINDS && s->piece_ms[kind] > left)))
+            break;
+        bool slice = kind == SESSION_PIECE_COPY && renderer_stage_paced(s->renderer);
+        double *rate = slice ? &s->copy_rate : &s->upload_rate;
+        size_t slab = session_slab_bytes(*rate, left);
+        double c = cpu_ms();
+        ok = prepare_piece(s, slab, &progressed, more);
+        double now = time_now_ms(), piece_cpu = cpu_ms() - c;
+        if (kind < SESSION_PIECE_KINDS) {
+            s->piece_ms[kind] = now - t;
+            s->stats.prepare_kind_ms[kind] += piece_cpu;
+        }
+        if ((kind == SESSION_PIECE_UPLOAD || slice) && now > t)
+            *rate = (double)slab / (now - t);
+        if (now - t > budget)
+            log_debug("playback: %s took %.1f ms (%.1f ms of CPU), over the call's %.1f ms", what,
+                      now - t, piece_cpu, budget);
+        if (piece_cpu > s->stats.prepare_piece_ms) {
+            s->stats.prepare_piece = what;
+            s->stats.prepare_piece_ms = piece_cpu;
+        }
+    }
+    if (s->stats.prepare_piece_ms > s->stats.prepare_piece_max_ms) {
+        s->stats.prepare_piece_max = s->stats.prepare_piece;
+        s->stats.prepare_piece_max_ms = s->stats.prepare_piece_ms;
+    }
     s->stats.prepare_ms += time_now_ms() - t0;
     if (!ok) {
         /* Most likely GPU memory for the second set of volume textures: play on without. */

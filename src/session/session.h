@@ -111,6 +111,10 @@ bool session_light(struct session *s);
  * warned about once and turns staging off: step changes then upload in their frame.  Returns
  * true (false is kept for failures the frame loop must end on; there are none yet). */
 bool session_prepare(struct session *s, bool *more);
+/* The bytes of an upload slab session_prepare gives the renderer, from the last slab's rate
+ * (bytes per wall ms, 0: none yet) and the ms left in the call: what fits, within 4 and 64
+ * MiB. */
+size_t session_slab_bytes(double rate_bytes_per_ms, double left_ms);
 
 /* Places D's views for F, the menu's panel and ray, draws every view and presents them. */
 bool session_draw(struct session *s, struct display *d, const struct frame_state *f);

@@ -32,6 +32,14 @@ static void write_list(FILE *f, const struct gpu_timings *t)
 }
 
 /* TEXT as a JSON string (control characters left out). */
+const char *session_piece_kind_name(enum session_piece_kind kind)
+{
+    static const char *const names[SESSION_PIECE_KINDS] = {"the stage's start", "the copy",
+                                                           "the upload",        "the staged cells",
+                                                           "the pair's cells",  "the light build"};
+    return kind >= 0 && kind < SESSION_PIECE_KINDS ? names[kind] : "?";
+}
+
 static void write_string(FILE *f, const char *text)
 {
     fputc('"', f);
@@ -86,6 +94,16 @@ bool session_stats_json(const struct session_stats *st, int rank, const char *wa
             st->upload_ms_total);
     fprintf(f, "  \"volume_swaps\": %u,\n  \"prepare_ms\": %.3f,\n", st->volume_swaps,
             st->prepare_ms);
+    fprintf(f, "  \"prepare_piece_max\": ");
+    write_string(f, st->prepare_piece_max ? st->prepare_piece_max : "");
+    fprintf(f, ",\n  \"prepare_piece_max_ms\": %.3f,\n", st->prepare_piece_max_ms);
+    fprintf(f, "  \"prepare_kind_ms\": {");
+    for (int k = 0; k < SESSION_PIECE_KINDS; k++) {
+        fprintf(f, "%s", k ? ", " : "");
+        write_string(f, session_piece_kind_name((enum session_piece_kind)k));
+        fprintf(f, ": %.3f", st->prepare_kind_ms[k]);
+    }
+    fprintf(f, "},\n");
     fprintf(f, "  \"frame_ms_max\": %.3f,\n  \"loop_ms\": %.3f,\n  \"first_frame_ms\": %.3f,\n",
             st->frame_ms_max, st->loop_ms, st->first_frame_ms);
     fprintf(f, "  \"upload_bytes\": %.0f,\n", st->upload_bytes);

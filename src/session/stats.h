@@ -11,6 +11,22 @@
 #include "gpu/gpu.h"
 #include "render/render.h"
 
+/* The kinds of piece staged playback readies the next step in, between frames
+ * (session_prepare): the stage's start, a slice of the copy into the pixel buffer (or the
+ * check for its end), an upload slab, a piece of the staged cells, of the pair's cells, of
+ * the light build. */
+enum session_piece_kind {
+    SESSION_PIECE_START,
+    SESSION_PIECE_COPY,
+    SESSION_PIECE_UPLOAD,
+    SESSION_PIECE_CELLS,
+    SESSION_PIECE_PAIR,
+    SESSION_PIECE_LIGHT,
+    SESSION_PIECE_KINDS
+};
+/* "the copy", ...: the kind in words. */
+const char *session_piece_kind_name(enum session_piece_kind kind);
+
 struct session_stats {
     const char *command;
     const char *device;
@@ -38,6 +54,11 @@ struct session_stats {
                                  readied between frames (nothing uploaded in their frame) */
     double load_ms, convert_ms, wait_ms, upload_ms_total;
     double prepare_ms;        /* staged playback: time readying the next step between frames */
+    /* The longest piece of that work (in the CPU time of all the process's threads) in the
+     * last session_prepare and in all: what it worked on (static text, NULL: none) and ms. */
+    const char *prepare_piece, *prepare_piece_max;
+    double prepare_piece_ms, prepare_piece_max_ms;
+    double prepare_kind_ms[SESSION_PIECE_KINDS]; /* all of it by kind, CPU ms of the process */
     double frame_ms_max;      /* longest frame of the loop */
     double loop_ms;           /* the frame loop, start to end (total_ms less the start) */
     double first_frame_ms;    /* its first frame (shaders compiled, the first light map) */

@@ -92,6 +92,8 @@ check "playback table: nothing built in staged step changes" \
     grep -q '^| light maps built in step-change frames | [0-9]* | 0 |$' "$tmp/p/playback-table.md"
 check "playback table: every step shown" \
     grep -q '^| frames played / step changes among them | [0-9]* / 3 | [0-9]* / 3 |$' "$tmp/p/playback-table.md"
+check "playback table: the longest work between frames named, staged only" \
+    grep -q "^| the longest stretch's longest piece | — | [a-z][^|]* |$" "$tmp/p/playback-table.md"
 check "playback series removed" test -z "$(ls "$tmp" | grep anvil-bench-playback)"
 expect_exit 0 "gpu bench" "$anvil" bench --quick --gpu -o "$tmp/g"
 check "gpu table written" test -s "$tmp/g/gpu-table.md"

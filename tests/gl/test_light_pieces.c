@@ -156,9 +156,10 @@ static int compare(const char **sets, int n, enum variant v)
     return calls;
 }
 
-/* The macro cells of the scene uploaded last built whole and a layer of cells a piece (another
- * volume's cells built between every two pieces, with the same programs); returns the pieces. */
-static int compare_cells(void)
+/* The macro cells of the scene uploaded last built whole and 4 layers of cells a piece, ROWS
+ * rows of them (0: all; another volume's cells built between every two pieces, with the same
+ * programs); returns the pieces. */
+static int compare_cells(int rows)
 {
     const struct gpu_texture *beta = renderer_volume_texture(renderer);
     const struct grid3 *grid = renderer_grid(renderer);
@@ -171,7 +172,7 @@ static int compare_cells(void)
     for (bool done = false; !done; calls++) {
         /* 4 layers a piece (a multiple of cells_build.comp's local size); between two, the
          * same program run whole over the same volume, and the one over two volumes. */
-        assert_true(render_cells_build_step(&pieces, &p, beta, NULL, grid, 4, &done));
+        assert_true(render_cells_build_piece(&pieces, &p, beta, NULL, grid, 4, rows, &done));
         assert_true(render_cells_build(&other, &p, beta, NULL, grid));
         assert_true(render_cells_build(&other, &p, beta, beta, grid));
         assert_true(calls < 1000);
@@ -219,8 +220,8 @@ static void test_pieces_match_whole(void **state)
     assert_true(calls[VOLUME] - calls[PERIPHERAL] > 2);
 }
 
-/* The macro cells in pieces of 4 layers (the storm 72 voxels high: 9 layers of cells): the same
- * cells as built whole, on even levels and on the model's own. */
+/* The macro cells in pieces of 4 layers, and of 4 layers and 4 rows (the storm 72 voxels high:
+ * 9 layers of cells): the same cells as built whole, on even levels and on the model's own. */
 static void test_cells_pieces_match_whole(void **state)
 {
     (void)state;
@@ -229,9 +230,12 @@ static void test_cells_pieces_match_whole(void **state)
     const char *tall[] = {"scene.size=[48,48,72]"};
     test_config_from(&cfg, tall, 1);
     test_upload_scene(renderer, &cfg, &vol);
-    int calls = compare_cells();
+    int calls = compare_cells(0);
     print_message("cells: %d pieces\n", calls);
     assert_true(calls > 2); /* 9 layers: 3 pieces of level 0, then the coarser levels */
+    /* 4 rows of cells a piece too (12 rows: 3 pieces for each of the 5 pieces above but the
+     * last, the coarser levels'). */
+    assert_int_equal(compare_cells(4), 3 * (calls - 1) + 1);
     ext_volume_finish(&vol);
 }
 
@@ -246,7 +250,8 @@ static void test_pieces_match_whole_native_levels(void **state)
     const char *levels[] = {"scene.kind=data", files, "data.vertical=native",
                             "lightmap.resolution=[16,16,64]", "light.elevation=30"};
     assert_true(compare(levels, 5, DIFFUSE) > 20);
-    assert_true(compare_cells() >= 2);
+    assert_true(compare_cells(0) >= 2);
+    assert_true(compare_cells(4) >= 2);
     remove(path);
 }
 

@@ -196,11 +196,12 @@ static void test_fields(void **state)
  * budget (several calls), swapped in: the texture holds the volume exactly (in half floats,
  * clamped to their largest value), and the call that finishes the upload is the first to say
  * ready. */
-static void stage_in_slabs(bool half)
+static void stage_in_slabs(bool half, bool paced)
 {
     struct renderer *r = renderer_create();
     assert_non_null(r);
     renderer_set_half(r, half);
+    renderer_set_stage_paced(r, paced);
     struct grid3 g = {.n = {12, 10, 9}, .spacing = {1.0, 1.0, 1.0}};
     struct ext_volume first = {0}, vol = {0};
     assert_true(ext_volume_init(&first, &g) && ext_volume_init(&vol, &g));
@@ -218,15 +219,21 @@ static void stage_in_slabs(bool half)
     assert_true(started);
     assert_false(renderer_has_next(r));
     const size_t layer = (size_t)12 * 10 * 8; /* one z layer of RG32F */
-    int calls = 0;
+    int calls = 0, slices = 0;
     for (int k = 0; k < 10000 && !ready; k++) {
+        bool copying = renderer_stage_copying(r);
         assert_true(renderer_stage_step(r, 2 * layer, &ready));
         if (!ready && renderer_stage_busy(r))
             calls++;
-        usleep(200);
+        slices += copying && paced;
+        usleep(paced ? 0 : 200);
     }
     assert_true(ready);
     assert_true(calls >= 9 / 2); /* the extinction alone takes five calls of two layers */
+    /* Paced: the copy itself went in slices of about the budget (20 bytes a voxel with the
+     * tint and the CPU copy: 96 voxels a slice, 12 slices, then the call that moves on). */
+    if (paced)
+        assert_int_equal(slices, 13);
     assert_true(renderer_swap_next(r));
     assert_false(renderer_swap_next(r)); /* nothing staged any more */
     float *back = malloc(2 * n * sizeof(float));
@@ -250,13 +257,139 @@ static void stage_in_slabs(bool half)
 static void test_stage_floats(void **state)
 {
     (void)state;
-    stage_in_slabs(false);
+    stage_in_slabs(false, false);
 }
 
 static void test_stage_half(void **state)
 {
     (void)state;
-    stage_in_slabs(true);
+    stage_in_slabs(true, false);
+}
+
+/* The copy in slices between frames (as on a software driver): the same volume. */
+static void test_stage_paced_floats(void **state)
+{
+    (void)state;
+    stage_in_slabs(false, true);
+}
+
+static void test_stage_paced_half(void **state)
+{
+    (void)state;
+    stage_in_slabs(true, true);
+}
+
+/* The pair's cells (effects.temporal) in pieces of 4 layers, as session_prepare makes them:
+ * the same cells as made whole, and more than one piece. */
+static void test_pair_cells_pieces(void **state)
+{
+    (void)state;
+    struct renderer *r = renderer_create();
+    assert_non_null(r);
+    struct grid3 g = {.n = {20, 12, 40}, .spacing = {1.0, 1.0, 1.0}};
+    struct ext_volume a = {0}, b = {0};
+    assert_true(ext_volume_init(&a, &g) && ext_volume_init(&b, &g));
+    size_t n = grid3_count(&g);
+    for (size_t i = 0; i < n; i++) { /* cells empty in one, the other or neither */
+        a.beta[2 * i] = (i / 97) % 3 == 0 ? 0.0f : 1e-3f * (float)(i % 89);
+        b.beta[2 * i + 1] = (i / 53) % 4 == 0 ? 0.0f : 2e-3f * (float)(i % 71);
+    }
+    assert_true(renderer_set_volume(r, &a));
+    assert_true(renderer_set_next_volume(r, &b));
+    assert_false(renderer_pair_cells_ready(r));
+    bool done = false;
+    int pieces = 0;
+    while (!done && pieces < 100) {
+        assert_true(renderer_pair_cells_step(r, 4, &done));
+        pieces++;
+    }
+    assert_true(done);
+    assert_true(renderer_pair_cells_ready(r));
+    assert_int_equal(pieces, 4); /* 10 layers of cells: 4, 4, 2, then the coarser levels */
+    const struct render_cells *c = renderer_pair_cells(r); /* made: not made again */
+    assert_non_null(c);
+    size_t count = c->count;
+    float *in_pieces = render_cells_read(c);
+    assert_non_null(in_pieces);
+    assert_true(renderer_set_next_volume(r, &b)); /* stale again: made whole */
+    assert_false(renderer_pair_cells_ready(r));
+    c = renderer_pair_cells(r);
+    assert_non_null(c);
+    assert_int_equal(c->count, count);
+    float *whole = render_cells_read(c);
+    assert_non_null(whole);
+    assert_memory_equal(in_pieces, whole, count * sizeof(float));
+    bool nonzero = false;
+    for (size_t i = 0; i < count; i++)
+        nonzero |= whole[i] > 0.0f;
+    assert_true(nonzero);
+    free(in_pieces);
+    free(whole);
+    ext_volume_finish(&a);
+    ext_volume_finish(&b);
+    renderer_destroy(r);
+}
+
+/* With a staged next volume (its own cells made) on the grid shown: the pair's cells in one
+ * piece from the two volumes' cells, the same as made whole from the volumes. */
+static void test_pair_cells_from_cells(void **state)
+{
+    (void)state;
+    struct renderer *r = renderer_create();
+    assert_non_null(r);
+    struct grid3 g = {.n = {20, 12, 40}, .spacing = {1.0, 1.0, 1.0}};
+    struct ext_volume a = {0}, b = {0};
+    assert_true(ext_volume_init(&a, &g) && ext_volume_init(&b, &g));
+    size_t n = grid3_count(&g);
+    for (size_t i = 0; i < n; i++) {
+        a.beta[2 * i] = (i / 97) % 3 == 0 ? 0.0f : 1e-3f * (float)(i % 89);
+        b.beta[2 * i + 1] = (i / 53) % 4 == 0 ? 0.0f : 2e-3f * (float)(i % 71);
+    }
+    assert_true(renderer_set_volume(r, &a));
+    bool started = false, ready = false;
+    assert_true(renderer_stage_next(r, &b, NULL, &started));
+    assert_true(started);
+    for (int k = 0; k < 10000 && !ready; k++) {
+        assert_true(renderer_stage_step(r, 0, &ready));
+        usleep(200);
+    }
+    assert_true(ready);
+    bool done = false;
+    assert_true(renderer_pair_cells_step(r, 4, &done));
+    assert_true(done); /* one piece */
+    const struct render_cells *c = renderer_pair_cells(r);
+    assert_non_null(c);
+    float *from_cells = render_cells_read(c);
+    assert_non_null(from_cells);
+    struct render_cells_programs p;
+    assert_true(render_cells_programs_init(&p));
+    struct render_cells whole = {0};
+    assert_true(render_cells_build(&whole, &p, renderer_volume_texture(r), renderer_next_texture(r),
+                                   renderer_grid(r)));
+    assert_int_equal(whole.count, c->count);
+    float *want = render_cells_read(&whole);
+    assert_non_null(want);
+    assert_memory_equal(from_cells, want, whole.count * sizeof(float));
+    free(from_cells);
+    free(want);
+    render_cells_finish(&whole);
+    render_cells_programs_finish(&p);
+    ext_volume_finish(&a);
+    ext_volume_finish(&b);
+    renderer_destroy(r);
+}
+
+/* The upload slab session_prepare asks for: what fits into the time left at the last slab's
+ * rate, within 4 and 64 MiB. */
+static void test_slab_bytes(void **state)
+{
+    (void)state;
+    const size_t mib = (size_t)1 << 20;
+    assert_int_equal(session_slab_bytes(0.0, 100.0), 4 * mib);     /* no rate yet */
+    assert_int_equal(session_slab_bytes(1e6, 0.0), 4 * mib);       /* no time left */
+    assert_int_equal(session_slab_bytes(1e6, 20.0), (size_t)20e6); /* 1 MB a ms, 20 ms */
+    assert_int_equal(session_slab_bytes(1e6, 1.0), 4 * mib);       /* at least 4 MiB */
+    assert_int_equal(session_slab_bytes(1e7, 1000.0), 64 * mib);   /* at most 64 MiB */
 }
 
 static int setup(void **state)
@@ -303,11 +436,11 @@ int main(void)
         return TEST_SKIP;
     }
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_stage_floats),
-        cmocka_unit_test(test_stage_half),
-        cmocka_unit_test(test_plain),
-        cmocka_unit_test(test_temporal),
-        cmocka_unit_test(test_fields),
+        cmocka_unit_test(test_stage_floats),       cmocka_unit_test(test_stage_half),
+        cmocka_unit_test(test_stage_paced_floats), cmocka_unit_test(test_stage_paced_half),
+        cmocka_unit_test(test_pair_cells_pieces),  cmocka_unit_test(test_pair_cells_from_cells),
+        cmocka_unit_test(test_slab_bytes),         cmocka_unit_test(test_plain),
+        cmocka_unit_test(test_temporal),           cmocka_unit_test(test_fields),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
