@@ -25,8 +25,8 @@ static struct renderer *renderer;
  * cell row is that many mean levels tall and holds every level a sample within half a mean
  * level of it reads.  NEXT (may be NULL) is a second volume of the same grid whose values
  * count too. */
-static float *cpu_cells(const struct ext_volume *vol, const struct ext_volume *next,
-                        struct render_cells *layout)
+static float *cpu_cells_halo(const struct ext_volume *vol, const struct ext_volume *next, int halo,
+                             struct render_cells *layout)
 {
     const int *n = vol->grid.n;
     const struct grid3 *g = &vol->grid;
@@ -41,8 +41,8 @@ static float *cpu_cells(const struct ext_volume *vol, const struct ext_volume *n
             for (int cx = 0; cx < d0[0]; cx++) {
                 int c[3] = {cx, cy, cz}, lo[3], hi[3];
                 for (int a = 0; a < 3; a++) {
-                    lo[a] = c[a] * b - 1 < 0 ? 0 : c[a] * b - 1;
-                    hi[a] = c[a] * b + b > n[a] - 1 ? n[a] - 1 : c[a] * b + b;
+                    lo[a] = c[a] * b - halo < 0 ? 0 : c[a] * b - halo;
+                    hi[a] = c[a] * b + b - 1 + halo > n[a] - 1 ? n[a] - 1 : c[a] * b + b - 1 + halo;
                 }
                 if (stretched) {
                     double h = b * g->spacing[2], z0 = g->origin[2] + cz * h;
@@ -80,6 +80,12 @@ static float *cpu_cells(const struct ext_volume *vol, const struct ext_volume *n
                 }
     }
     return out;
+}
+
+static float *cpu_cells(const struct ext_volume *vol, const struct ext_volume *next,
+                        struct render_cells *layout)
+{
+    return cpu_cells_halo(vol, next, 1, layout);
 }
 
 /* Compares the GPU's cells CELLS with the CPU's for VOL (and NEXT); returns the share of
@@ -157,6 +163,64 @@ static void test_cells_match_cpu(void **state)
         assert_true((got[i + d[0] * (i + d[1] * i)] > 0.0f) == (i <= k));
     free(got);
     ext_volume_finish(&vol);
+}
+
+/* The cells of the volume shown built with PROGRAMS over several of cells_build.comp's work
+ * groups (partly outside the volume at its far faces): whole, over the pair (the volume with
+ * itself), and in pieces of 4 layers and 8 rows, each the CPU's cells. */
+static void check_cells_ways(const struct render_cells_programs *p, const struct ext_volume *vol)
+{
+    const struct gpu_texture *beta = renderer_volume_texture(renderer);
+    const struct grid3 *grid = renderer_grid(renderer);
+    struct render_cells c = {0};
+    assert_true(render_cells_build(&c, p, beta, NULL, grid));
+    check_cells(&c, vol, NULL);
+    assert_true(render_cells_build(&c, p, beta, beta, grid));
+    check_cells(&c, vol, vol);
+    assert_true(render_cells_build_begin(&c, beta, grid));
+    int calls = 0;
+    for (bool done = false; !done; calls++) {
+        assert_true(render_cells_build_piece(&c, p, beta, NULL, grid, 4, 8, &done));
+        assert_true(calls < 1000);
+    }
+    assert_true(calls > 2);
+    check_cells(&c, vol, NULL);
+    render_cells_finish(&c);
+    /* The halo counts on this storm: cells without it would differ. */
+    struct render_cells layout;
+    float *with = cpu_cells_halo(vol, NULL, 1, &layout),
+          *without = cpu_cells_halo(vol, NULL, 0, &layout);
+    size_t differ = 0;
+    for (size_t i = 0; i < layout.count; i++)
+        differ += with[i] != without[i];
+    assert_true(differ > 0);
+    free(with);
+    free(without);
+}
+
+/* The cells on storms of several work groups of cells a side, uniform and on the model's
+ * levels, the same as the CPU's in every way of building them. */
+static void test_cells_work_groups(void **state)
+{
+    struct render_cells_programs p;
+    assert_true(render_cells_programs_init(&p));
+    struct config cfg;
+    const char *sets[] = {"scene.size=[70,45,30]"};
+    test_config_from(&cfg, sets, 1);
+    struct ext_volume vol = {0};
+    assert_true(scene_build_volume(&cfg, &vol));
+    assert_true(renderer_set_volume(renderer, &vol));
+    check_cells_ways(&p, &vol);
+    ext_volume_finish(&vol);
+    const char *tall[] = {"scene.size=[140,75,40]"};
+    test_config_from(&cfg, tall, 1);
+    assert_true(scene_build_volume(&cfg, &vol));
+    test_stretch_levels(&vol);
+    assert_true(renderer_set_volume(renderer, &vol));
+    assert_int_equal(renderer_cells(renderer)->cell_voxels, RENDER_CELL_VOXELS_STRETCHED);
+    check_cells_ways(&p, &vol);
+    ext_volume_finish(&vol);
+    render_cells_programs_finish(&p);
 }
 
 /* The eye pass's walk starts at the finest level of at most RENDER_CELL_WALK_CELLS cells: a
@@ -399,6 +463,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cells_match_cpu),
+        cmocka_unit_test(test_cells_work_groups),
         cmocka_unit_test(test_walk_top),
         cmocka_unit_test(test_skipping_keeps_pictures),
         cmocka_unit_test(test_empty_box_reads_nothing),
