@@ -58,12 +58,11 @@ static void built_one(struct lightmaps *al, int which, struct light_gpu *lg,
     double ms = 0.0;
     bool known = light_gpu_last_build_ms(lg, &ms);
     al->log_pending[which] = al->timing && !known;
-    char when[64] = "queued";
-    if (known)
-        snprintf(when, sizeof(when), "built in %.1f ms", ms);
-    log_info("light map %dx%dx%d %s (%s%s%s%s)", s->resolution[0], s->resolution[1],
-             s->resolution[2], when,
-             mode != LIGHT_GPU_DENSE ? "compressed" : half ? "dense, half floats" : "dense",
+    char what[sizeof(al->logged)];
+    snprintf(what, sizeof(what), "(%s%s%s%s)",
+             mode != LIGHT_GPU_DENSE ? "compressed"
+             : half                  ? "dense, half floats"
+                                     : "dense",
              s->forward ? (s->peripheral ? ", forward and peripheral" : ", forward")
                         : ", shadow only",
              !s->multiple ? ""
@@ -71,6 +70,18 @@ static void built_one(struct lightmaps *al, int which, struct light_gpu *lg,
              : s->lateral ? ", diffuse light with lateral escape"
                           : ", diffuse light",
              one_phase ? ", one phase" : "");
+    char dims[48];
+    snprintf(dims, sizeof(dims), "%dx%dx%d", s->resolution[0], s->resolution[1], s->resolution[2]);
+    bool again = strncmp(what, al->logged, sizeof(what)) == 0 && strcmp(dims, al->logged_dims) == 0;
+    al->log_quiet[which] = again;
+    if (!again) {
+        snprintf(al->logged, sizeof(al->logged), "%s", what);
+        snprintf(al->logged_dims, sizeof(al->logged_dims), "%s", dims);
+    }
+    char when[64] = "queued";
+    if (known)
+        snprintf(when, sizeof(when), "built in %.1f ms", ms);
+    log_msg(again ? LOG_DEBUG : LOG_INFO, "light map %s %s %s", dims, when, what);
 }
 
 static void build_failed(const struct light_settings *s)
@@ -292,7 +303,8 @@ int lightmaps_collect_timings(struct lightmaps *al, bool wait)
         in_flight += light_gpu_collect_timings(maps[i], wait);
         double ms;
         if (al->log_pending[i] && light_gpu_last_build_ms(maps[i], &ms)) {
-            log_info("light map built in %.1f ms on the GPU", ms);
+            log_msg(al->log_quiet[i] ? LOG_DEBUG : LOG_INFO,
+                    "light map built in %.1f ms on the GPU", ms);
             al->log_pending[i] = false;
         }
     }

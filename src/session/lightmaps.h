@@ -41,6 +41,11 @@ struct lightmaps {
     char pair_defines[96];
     struct gpu_timings *timing; /* where build times go (lightmaps_set_timing), or NULL */
     bool log_pending[2];        /* gpu's, spare's last build is logged when its time arrives */
+    bool log_quiet[2];          /* ... at LOG_DEBUG: its description was the last logged */
+    /* What the last build logged at LOG_INFO said of the map: a build that says the same again
+     * (every step of a played series, every sun a key moves) goes to LOG_DEBUG (--verbose). */
+    char logged[160];
+    char logged_dims[48];
 };
 
 /* What a build depends on besides the volume: the sun, the light map settings (the effects'

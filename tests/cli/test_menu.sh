@@ -28,6 +28,14 @@ check "played 3 steps, paused, stepped to 4" test "$(json "$tmp/play.json" time_
 check "steps came through the cache" test "$(json "$tmp/play.json" cache_loads)" -ge 4
 check "one light map build per new step" test "$(json "$tmp/play.json" light_map_builds)" -eq \
     $(($(json "$tmp/play.json" volume_uploads) + 1))
+# Each step's build says the same of the map: one line at the default level, the rest with
+# --verbose.
+"$anvil" render "$tmp/series.cfg" $small --input "$tmp/play.txt" -o "$tmp/play.png" \
+    --set 'effects.temporal="off"' 2>"$tmp/play.log"
+check "a played series logs its light map once" test "$(grep -c 'light map 32x32x32' "$tmp/play.log")" -eq 1
+"$anvil" render --verbose "$tmp/series.cfg" $small --input "$tmp/play.txt" -o "$tmp/play.png" \
+    --set 'effects.temporal="off"' 2>"$tmp/play.log"
+check "--verbose logs every build" test "$(grep -c 'light map 32x32x32' "$tmp/play.log")" -ge 4
 
 # --- The same with temporal interpolation (auto: on for a scripted series).  One light map per
 # step that reached the GPU, never one per frame: steps 0..4 shown and 5 held as the next one.
