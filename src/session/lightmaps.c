@@ -58,7 +58,7 @@ static void built_one(struct lightmaps *al, int which, struct light_gpu *lg,
     double ms = 0.0;
     bool known = light_gpu_last_build_ms(lg, &ms);
     al->log_pending[which] = al->timing && !known;
-    char what[sizeof(al->logged)];
+    char what[160];
     snprintf(what, sizeof(what), "(%s%s%s%s)",
              mode != LIGHT_GPU_DENSE ? "compressed"
              : half                  ? "dense, half floats"
@@ -70,14 +70,12 @@ static void built_one(struct lightmaps *al, int which, struct light_gpu *lg,
              : s->lateral ? ", diffuse light with lateral escape"
                           : ", diffuse light",
              one_phase ? ", one phase" : "");
-    char dims[48];
+    char dims[48], key[sizeof(al->logged)];
     snprintf(dims, sizeof(dims), "%dx%dx%d", s->resolution[0], s->resolution[1], s->resolution[2]);
-    bool again = strncmp(what, al->logged, sizeof(what)) == 0 && strcmp(dims, al->logged_dims) == 0;
+    snprintf(key, sizeof(key), "%s %s", dims, what);
+    bool again = strcmp(key, al->logged) == 0;
     al->log_quiet[which] = again;
-    if (!again) {
-        snprintf(al->logged, sizeof(al->logged), "%s", what);
-        snprintf(al->logged_dims, sizeof(al->logged_dims), "%s", dims);
-    }
+    memcpy(al->logged, key, sizeof(key));
     char when[64] = "queued";
     if (known)
         snprintf(when, sizeof(when), "built in %.1f ms", ms);

@@ -44,8 +44,7 @@ struct lightmaps {
     bool log_quiet[2];          /* ... at LOG_DEBUG: its description was the last logged */
     /* What the last build logged at LOG_INFO said of the map: a build that says the same again
      * (every step of a played series, every sun a key moves) goes to LOG_DEBUG (--verbose). */
-    char logged[160];
-    char logged_dims[48];
+    char logged[208];
 };
 
 /* What a build depends on besides the volume: the sun, the light map settings (the effects'
