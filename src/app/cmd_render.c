@@ -10,6 +10,7 @@
 #include "app/cluster_walls.h"
 #include "cluster/cluster.h"
 #include "app/loop.h"
+#include "common/fatal.h"
 #include "common/log.h"
 #include "common/progress.h"
 #include "config/display_config.h"
@@ -659,7 +660,15 @@ static int command(int argc, char **argv, bool run)
     }
     app_cluster_swap_group(d);
     double loop_start = time_now_ms();
+    /* Ctrl-C or a SIGTERM ends a run as closing its window does: the recording and --stats
+     * are written, the exit code still says what stopped it.  (A cluster's ranks each get the
+     * signal from mpirun and end at once; a render abandons its files.) */
+    bool graceful = run && !cluster_active();
+    fatal_stop_gracefully(graceful);
     rc = loop_run(d, s, &ld);
+    fatal_stop_gracefully(false);
+    int stopped = graceful ? fatal_stop_requested() : 0;
+    session_stats(s)->stopped_by = stopped ? fatal_signal_name(stopped) : NULL;
     session_stats(s)->loop_ms = time_now_ms() - loop_start;
     if (counted) {
         session_set_progress(s, NULL);
@@ -688,6 +697,8 @@ static int command(int argc, char **argv, bool run)
     if (o.stats && (rc == EXIT_OK || cw->active) &&
         !app_cluster_stats(st, cw, o.stats, rc == EXIT_OK))
         rc = rc == EXIT_OK ? EXIT_FAILED : rc;
+    if (stopped && rc == EXIT_OK)
+        rc = 128 + stopped;
 done:
     if (!gated && cluster_active())
         app_cluster_gate(false, cw);

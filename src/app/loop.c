@@ -19,6 +19,7 @@
 
 #include "app/app.h"
 #include "cluster/cluster.h"
+#include "common/fatal.h"
 #include "common/log.h"
 #include "common/progress.h"
 #include "render/image.h"
@@ -90,7 +91,8 @@ static void synced(struct loop *l, double t)
 /* A run: the input since the last frame, drawn when something changed. */
 static bool produce_run(struct loop *l, struct frame_state *f, uint32_t *flags)
 {
-    if (session_quit_requested(l->s) || display_should_close(l->d) || l->frames_left == 0) {
+    if (session_quit_requested(l->s) || display_should_close(l->d) || l->frames_left == 0 ||
+        fatal_stop_requested()) {
         *flags = SF_QUIT;
         return true;
     }

@@ -22,6 +22,7 @@ static struct {
 
 static _Thread_local struct fatal_scope scope;
 static volatile sig_atomic_t exiting, exit_code;
+static volatile sig_atomic_t graceful, stop_signal;
 
 static const int crash_signals[] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
 static const int stop_signals[] = {SIGINT, SIGTERM, SIGHUP};
@@ -158,6 +159,14 @@ static void on_crash(int sig, siginfo_t *info, void *context)
 static void on_stop(int sig)
 {
     struct line l = {.len = 0};
+    if (graceful && !stop_signal) {
+        stop_signal = sig;
+        put(&l, "anvil: interrupted (");
+        put(&l, signal_name(sig));
+        put(&l, "): ending as if the window were closed (again to end at once)");
+        emit(&l);
+        return;
+    }
     put(&l, "anvil: interrupted (");
     put(&l, signal_name(sig));
     put(&l, ")");
@@ -191,12 +200,28 @@ void fatal_install(void)
         struct sigaction sa, old;
         memset(&sa, 0, sizeof(sa));
         sa.sa_handler = on_stop;
+        sa.sa_flags = SA_RESTART; /* a graceful stop returns: reads and waits go on */
         sigfillset(&sa.sa_mask);
         /* A signal the caller ignores (nohup, a shell's background job) stays ignored. */
         if (sigaction(stop_signals[i], NULL, &old) == 0 && old.sa_handler == SIG_IGN)
             continue;
         sigaction(stop_signals[i], &sa, NULL);
     }
+}
+
+void fatal_stop_gracefully(bool on)
+{
+    graceful = on;
+}
+
+int fatal_stop_requested(void)
+{
+    return stop_signal;
+}
+
+const char *fatal_signal_name(int sig)
+{
+    return signal_name(sig);
 }
 
 void fatal_enter(struct fatal_scope *saved, const char *library, const char *doing,

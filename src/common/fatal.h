@@ -15,6 +15,9 @@
  *     signal takes its course (a core dump, a sanitizer's report).
  *   - SIGINT, SIGTERM and SIGHUP remove the temporary files and exit with 128 + the signal
  *     (130, 143, 129): the write in progress is abandoned, the old file stays as it was.
+ *     While a caller has asked for a graceful stop (fatal_stop_gracefully: a window's frame
+ *     loop, which can end as if its window were closed), the first such signal is only
+ *     recorded and said (fatal_stop_requested); a second one ends the program as above.
  *
  * Temporary files are those registered with fatal_track (file_write_atomic and the NetCDF
  * writers register theirs).  Everything the handler does is async-signal-safe: it writes
@@ -54,6 +57,15 @@ bool fatal_track(const char *path);
 int fatal_mkstemp(char *template);
 /* Forgets PATH (one not tracked is fine): once it is renamed into place or removed. */
 void fatal_untrack(const char *path);
+
+/* From ON on (true), the first SIGINT, SIGTERM or SIGHUP asks the caller to stop instead of
+ * ending the program: fatal_stop_requested then returns it.  False restores the immediate
+ * end (a signal recorded meanwhile stays recorded). */
+void fatal_stop_gracefully(bool on);
+/* The stop signal recorded while a graceful stop was on, or 0. */
+int fatal_stop_requested(void);
+/* "SIGTERM", ... ("a signal" for one this file does not handle). */
+const char *fatal_signal_name(int sig);
 
 /* The work is done and ends with exit code CODE: a crash from here on (a library's exit
  * handler) exits with CODE after saying so. */

@@ -72,6 +72,11 @@ bool session_stats_json(const struct session_stats *st, int rank, const char *wa
     }
     fprintf(f, ",\n  \"device\": ");
     write_string(f, st->device);
+    fprintf(f, ",\n  \"stopped_by\": ");
+    if (st->stopped_by)
+        write_string(f, st->stopped_by);
+    else
+        fputs("null", f);
     fprintf(f, ",\n  \"views\": %u,\n  \"light_map_builds\": %u,\n", st->views,
             st->light_builds);
     fprintf(f, "  \"view_ms\": ");

@@ -30,6 +30,7 @@ const char *session_piece_kind_name(enum session_piece_kind kind);
 struct session_stats {
     const char *command;
     const char *device;
+    const char *stopped_by; /* "SIGTERM", ...: the signal that ended a run early, NULL: none */
     unsigned views;
     unsigned light_builds;
     /* The times of the timed views and light map builds (view_ms and build_ms in the file),

@@ -1,7 +1,8 @@
 /* common/fatal: what a signal does to the process, in forked children: a crash inside a
  * library's scope is reported as the library's (exit 1 reading, 4 writing), one after the work
  * keeps the work's exit code, one of ours stays a crash; SIGINT, SIGTERM and SIGHUP exit
- * 128 + the signal; every time the tracked temporary files are removed. */
+ * 128 + the signal; every time the tracked temporary files are removed.  With a graceful stop
+ * asked for, the first stop signal is only recorded, a second one ends the process. */
 #include "testutil.h"
 
 #include <fcntl.h>
@@ -15,7 +16,7 @@
 
 #include "common/fatal.h"
 
-enum what { CRASH_READING, CRASH_WRITING, CRASH_AT_EXIT, CRASH_OURS, STOP };
+enum what { CRASH_READING, CRASH_WRITING, CRASH_AT_EXIT, CRASH_OURS, STOP, GRACEFUL };
 
 struct outcome {
     int status;      /* from waitpid */
@@ -57,6 +58,16 @@ static struct outcome run_child(enum what what, int sig)
         case CRASH_AT_EXIT:
             fatal_exiting(4);
             break;
+        case GRACEFUL:
+            /* The first signal is recorded and the child goes on: it exits 50 + the signal
+             * it saw; a second one ends it at once, as without a graceful stop. */
+            fatal_stop_gracefully(true);
+            raise(sig);
+            if (fatal_stop_requested() != sig)
+                _exit(98);
+            if (sig == SIGHUP) /* the second signal, on SIGHUP's turn */
+                raise(SIGTERM);
+            _exit(50 + fatal_stop_requested());
         case CRASH_OURS:
         case STOP:
             /* a scope entered and left is no scope */
@@ -148,6 +159,29 @@ static void test_interrupted(void **state)
     }
 }
 
+static void test_stop_gracefully(void **state)
+{
+    (void)state;
+    /* One signal: recorded, said, the temporary file left for the caller to finish. */
+    const int sigs[] = {SIGINT, SIGTERM};
+    const char *names[] = {"SIGINT", "SIGTERM"};
+    for (int i = 0; i < 2; i++) {
+        struct outcome o = run_child(GRACEFUL, sigs[i]);
+        if (!WIFEXITED(o.status) || WEXITSTATUS(o.status) != 50 + sigs[i]) {
+            fprintf(stderr, "status %#x; stderr: %s\n", o.status, o.err);
+            fail();
+        }
+        assert_false(o.temp_gone);
+        char want[96];
+        snprintf(want, sizeof(want), "anvil: interrupted (%s): ending as if", names[i]);
+        expect_err(&o, want);
+    }
+    /* A second signal ends the process as before: 128 + it, the temporary file removed. */
+    struct outcome o = run_child(GRACEFUL, SIGHUP);
+    expect_exit(&o, 128 + SIGTERM);
+    expect_err(&o, "anvil: interrupted (SIGTERM); removed ");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -156,6 +190,7 @@ int main(void)
         cmocka_unit_test(test_crash_while_ending),
         cmocka_unit_test(test_our_crash_stays_a_crash),
         cmocka_unit_test(test_interrupted),
+        cmocka_unit_test(test_stop_gracefully),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
