@@ -85,12 +85,89 @@ static bool take_kind(const char *command, const char *path, bool first, struct 
     return true;
 }
 
+/* Keeps TEXT (copied) for as long as OUT: NULL (logged) when there is no room. */
+static const char *own(const char *command, const char *text, struct app_inputs *out)
+{
+    char *one = out->n_owned < APP_INPUTS_MAX_OWNED ? strdup(text) : NULL;
+    if (!one) {
+        log_error("%s: out of memory", command);
+        return NULL;
+    }
+    out->owned[out->n_owned++] = one;
+    return one;
+}
+
+/* A pattern anvil expands (sorted, as the WRF reader does); every match must be data of one
+ * kind.  A WRF, CM1 or CF series keeps the pattern itself (any number of files); PATTERN must
+ * then outlive OUT. */
+static bool add_pattern(const char *command, const char *pattern, struct app_inputs *out)
+{
+    glob_t g;
+    int rc = glob(pattern, 0, NULL, &g);
+    if (rc == GLOB_NOMATCH || (rc == 0 && g.gl_pathc == 0)) {
+        log_error("%s: no file matches the pattern %s", command, pattern);
+        globfree(&g);
+        return false;
+    }
+    if (rc != 0) {
+        log_error("%s: the pattern %s cannot be expanded (out of memory or a folder that "
+                  "cannot be read)",
+                  command, pattern);
+        globfree(&g);
+        return false;
+    }
+    bool ok = true;
+    for (size_t m = 0; ok && m < g.gl_pathc; m++)
+        ok = take_kind(command, g.gl_pathv[m], false, out);
+    if (ok && !data_kind_is_series(out->kind)) {
+        /* Extinction files and Isabel folders: one, named by its path. */
+        const char *one = own(command, g.gl_pathv[0], out);
+        ok = one && add_entry(command, one, out);
+    } else if (ok) {
+        ok = add_entry(command, pattern, out);
+    }
+    globfree(&g);
+    return ok;
+}
+
+/* A folder that is not an Isabel folder: its WRF output or its NetCDF files, as a pattern
+ * (data_folder_pattern).  False with the detector's message WHY when it holds neither. */
+static bool add_folder(const char *command, const char *dir, const char *why,
+                       struct app_inputs *out)
+{
+    char pattern[CONFIG_PATH_MAX];
+    size_t count;
+    const char *what;
+    if (!data_folder_pattern(dir, pattern, sizeof(pattern), &count, &what)) {
+        log_error("%s", why);
+        return false;
+    }
+    log_info("%s: %zu %s (%s)", dir, count, what, pattern);
+    const char *kept = own(command, pattern, out);
+    return kept && add_pattern(command, kept, out);
+}
+
+static bool is_folder(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
 bool app_inputs_collect(const char *command, char **args, int n, struct app_inputs *out)
 {
     memset(out, 0, sizeof(*out));
     out->kind = DATA_KIND_UNREADABLE; /* none yet */
     for (int i = 0; i < n; i++) {
         const char *a = args[i];
+        if (is_folder(a)) {
+            char why[2048];
+            enum data_kind k = data_detect(a, why, sizeof(why));
+            if (k == DATA_KIND_UNKNOWN) { /* not Isabel's: the model output in it */
+                if (!add_folder(command, a, why, out))
+                    goto error;
+                continue;
+            }
+        }
         if (!is_pattern(a) || exists(a)) {
             bool was_config = out->config != NULL;
             if (!take_kind(command, a, i == 0, out))
@@ -101,41 +178,7 @@ bool app_inputs_collect(const char *command, char **args, int n, struct app_inpu
                 goto error;
             continue;
         }
-        /* A pattern anvil expands (sorted, as the WRF reader does); every match must be data
-         * of one kind.  A WRF, CM1 or CF series keeps the pattern itself (any number of files). */
-        glob_t g;
-        int rc = glob(a, 0, NULL, &g);
-        if (rc == GLOB_NOMATCH || (rc == 0 && g.gl_pathc == 0)) {
-            log_error("%s: no file matches the pattern %s", command, a);
-            globfree(&g);
-            goto error;
-        }
-        if (rc != 0) {
-            log_error("%s: the pattern %s cannot be expanded (out of memory or a folder that "
-                      "cannot be read)",
-                      command, a);
-            globfree(&g);
-            goto error;
-        }
-        bool ok = true;
-        for (size_t m = 0; ok && m < g.gl_pathc; m++)
-            ok = take_kind(command, g.gl_pathv[m], false, out);
-        if (ok && !data_kind_is_series(out->kind)) {
-            /* Extinction files and Isabel folders: one, named by its path. */
-            char *one = strdup(g.gl_pathv[0]);
-            ok = one && out->n_owned < APP_INPUTS_MAX_OWNED;
-            if (ok) {
-                out->owned[out->n_owned++] = one;
-                ok = add_entry(command, one, out);
-            } else {
-                free(one);
-                log_error("%s: out of memory", command);
-            }
-        } else if (ok) {
-            ok = add_entry(command, a, out);
-        }
-        globfree(&g);
-        if (!ok)
+        if (!add_pattern(command, a, out))
             goto error;
     }
     return true;

@@ -2,6 +2,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <glob.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -45,7 +46,8 @@ static const char expected_netcdf[] =
     "with CF standard_names of the hydrometeors) or an extinction file of anvil convert (the "
     "variable beta_ice)";
 static const char expected_folder[] =
-    "expected a folder of Isabel bricks (QCLOUDf01.bin, QRAINf01.bin, ...)";
+    "expected a folder of Isabel bricks (QCLOUDf01.bin, QRAINf01.bin, ...), of WRF output "
+    "(wrfout_d01_...) or of NetCDF files (*.nc)";
 
 const char *data_kind_name(enum data_kind k)
 {
@@ -213,4 +215,55 @@ enum data_kind data_detect(const char *path, char *why, size_t why_size)
              path, n > 0 ? head[0] : 0, n > 1 ? head[1] : 0, n > 2 ? head[2] : 0,
              n > 3 ? head[3] : 0, hint);
     return DATA_KIND_UNKNOWN;
+}
+
+/* DIR with the characters glob(3) reads as a pattern escaped, then SUFFIX, into OUT. */
+static bool escaped_pattern(const char *dir, const char *suffix, char *out, size_t size)
+{
+    size_t n = 0, len = strlen(dir);
+    while (len > 1 && dir[len - 1] == '/')
+        len--; /* "run/" names the folder "run" */
+    for (size_t i = 0; i < len; i++) {
+        if (strchr("*?[\\", dir[i])) {
+            if (n + 1 >= size)
+                return false;
+            out[n++] = '\\';
+        }
+        if (n + 1 >= size)
+            return false;
+        out[n++] = dir[i];
+    }
+    int w = snprintf(out + n, size - n, "%s%s", len == 1 && dir[0] == '/' ? "" : "/", suffix);
+    return w >= 0 && (size_t)w < size - n;
+}
+
+bool data_folder_pattern(const char *dir, char *pattern, size_t size, size_t *count,
+                         const char **what)
+{
+    /* WRF names its history files wrfout_d<domain>_<date> (every domain of a run with nests:
+     * the pattern groups them by domain); anything else a folder holds is taken by its
+     * extension, as a run folder also holds namelists, logs and boundary files. */
+    static const struct {
+        const char *suffix, *what;
+    } kinds[] = {{"wrfout_d*", "files of WRF output"}, {"*.nc", "NetCDF files"}};
+    for (size_t i = 0; i < sizeof(kinds) / sizeof(kinds[0]); i++) {
+        if (!escaped_pattern(dir, kinds[i].suffix, pattern, size))
+            return false;
+        glob_t g;
+        int rc = glob(pattern, 0, NULL, &g);
+        size_t files = 0;
+        for (size_t m = 0; rc == 0 && m < g.gl_pathc; m++) {
+            struct stat st;
+            if (stat(g.gl_pathv[m], &st) == 0 && !S_ISDIR(st.st_mode))
+                files++;
+        }
+        globfree(&g);
+        if (files > 0) {
+            *count = files;
+            *what = kinds[i].what;
+            return true;
+        }
+    }
+    pattern[0] = '\0';
+    return false;
 }

@@ -23,8 +23,32 @@ expect_exit 0 "info on it" "$anvil" info ll_d02.nc ll_d01.nc
 check "it is placed by its latitude and longitude, on the same columns" \
     stdout_has "d02 18 x 27 columns of 833.333 m in d01 from its column 3, 5 (ratio 3), placed by its XLAT/XLONG ([0-9] m off the grid)"
 
+# A run's folder as it is: its history files by WRF's names (every domain), whatever else
+# it holds; a folder of .nc files (its name's pattern characters taken as they are); a folder
+# of neither, refused with what was expected.
+mkdir -p run "odd [1]" none
+cp wrfout_d01.nc run/wrfout_d01_2005-08-28_00:00:00
+cp wrfout_d02.nc run/wrfout_d02_2005-08-28_00:00:00
+echo "&time_control /" >run/namelist.input
+echo "d01 2005-08-28_00:00:00 wrf: SUCCESS COMPLETE WRF" >run/rsl.out.0000
+expect_exit 0 "info on a run's folder" "$anvil" info run/
+check "it says what it took" stderr_has "run/: 2 files of WRF output (run/wrfout_d\*)"
+check "both domains, composed" stdout_has "2 WRF domains in one scene, composed on 72 x 72 columns"
+cp wrfout_d01.nc "odd [1]/parent.nc"
+expect_exit 0 "info on a folder of .nc files" "$anvil" info "odd [1]"
+check "it says what it took" stderr_has "odd \[1\]: 1 NetCDF files"
+check "the file is read" stdout_has "24 x 24 columns x 16 mass levels"
+echo "notes" >none/README
+expect_exit 1 "a folder of neither" "$anvil" info none
+check "it says what was expected" stderr_has "none: a folder that no reader of anvil takes: expected a folder of Isabel bricks (QCLOUDf01.bin, QRAINf01.bin, ...), of WRF output (wrfout_d01_...) or of NetCDF files (\*.nc)"
+echo "not data" >"odd [1]/notes.nc"
+expect_exit 1 "a folder whose .nc files are not all data" "$anvil" info "odd [1]"
+check "it names the file" stderr_has "notes.nc is a text file (a scene config) among data files"
+
 # Rendering needs a GL context from here on.
 require_gl
+expect_exit 0 "render a run's folder" "$anvil" render run $small -o folder.png
+check "the volume is the composite" stderr_has "volume 72x72x16"
 expect_exit 0 "render with both files as arguments" "$anvil" render wrfout_d01.nc wrfout_d02.nc \
     $small -o both.png
 check "the volume is the composite" stderr_has "volume 72x72x16"
