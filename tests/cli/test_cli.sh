@@ -104,10 +104,12 @@ if command -v xvfb-run >/dev/null; then
     check "run drew two frames" grep -q '"views": 2,' "$tmp/run.json"
     # SIGTERM (or Ctrl-C) ends a run as closing its window does: the recording and --stats
     # are written, the exit code says what stopped it.
-    rm -f "$tmp/run.pid" "$tmp/run.json"
-    env --default-signal=INT timeout 120 xvfb-run -a -s "-screen 0 800x600x24" sh -c \
-        'echo $$ >"$0"; exec "$@"' "$tmp/run.pid" "$anvil" run "$src/configs/default.cfg" \
-        $small --stats "$tmp/run.json" --record "$tmp/run.rec" 2>"$tmp/err" &
+    # (anvil's own exit code is kept beside its pid: xvfb-run's may be that of its clean-up.)
+    rm -f "$tmp/run.pid" "$tmp/run.pid.rc" "$tmp/run.json"
+    timeout 120 xvfb-run -a -s "-screen 0 800x600x24" sh -c \
+        '"$@" & echo $! >"$0"; wait $!; echo $? >"$0.rc"' "$tmp/run.pid" \
+        "$anvil" run "$src/configs/default.cfg" $small --stats "$tmp/run.json" \
+        --record "$tmp/run.rec" 2>"$tmp/err" &
     waiter=$! n=0
     # The first frame is drawn once the recording has its first frame's lines.
     until [ -s "$tmp/run.pid" ] && grep -qs "^1 " "$tmp/run.rec".tmp* || [ $n -ge 600 ]; do
@@ -116,8 +118,8 @@ if command -v xvfb-run >/dev/null; then
     done
     kill -TERM "$(cat "$tmp/run.pid")"
     wait $waiter
-    rc=$?
-    check "a run stopped by SIGTERM exits 143 (got $rc)" test $rc -eq 143
+    rc=$(cat "$tmp/run.pid.rc" 2>/dev/null)
+    check "a run stopped by SIGTERM exits 143 (got $rc)" test "$rc" = 143
     check "it says how it ends" stderr_has "interrupted (SIGTERM): ending as if the window"
     check "its --stats are written and say so" grep -q '"stopped_by": "SIGTERM"' "$tmp/run.json"
     check "its recording is kept" grep -q "^recorded run" "$tmp/run.rec"
