@@ -351,6 +351,41 @@ bool render_cells_max(struct render_cells *c, const struct render_cells *a,
                       const struct render_cells *b, const struct gpu_texture *beta,
                       const struct grid3 *grid);
 
+/* The same cells made on the CPU from the extinction in memory (2 floats a voxel, as
+ * ext_volume holds it), a z plane at a time, then uploaded whole (render_cells_upload): the
+ * cells the GPU builds from a float texture of those values, bit for bit (not from a
+ * half-float one, which rounds them).  HALO is the voxels around each cell that count along x
+ * and y (and z on a uniform grid): 1 for the cells the renderer reads (0 only for tests).
+ * No GL; the memory is the builder's, freed by render_cells_cpu_finish. */
+struct render_cells_cpu {
+    struct render_cells layout; /* the levels' sizes (its buffer unused) */
+    struct grid3 grid;
+    int halo;
+    int planes_done; /* z planes of the volume reduced so far */
+    float *planes;   /* per z plane, the maxima over each level-0 cell's x and y window */
+    float *row;      /* scratch: one row of voxels, then a plane's maxima along x */
+    float *cells;    /* every cell's value, level 0 first, once render_cells_cpu_levels ran */
+};
+
+/* Lays W out for a volume on GRID (its memory kept when the layout is the same).  False
+ * (logged) when out of memory. */
+bool render_cells_cpu_begin(struct render_cells_cpu *w, const struct grid3 *grid, int halo);
+/* Z planes FROM .. TO - 1 of BETA (the whole volume's array) reduced along x and y. */
+void render_cells_cpu_planes(struct render_cells_cpu *w, const float *beta, int from, int to);
+/* Once every plane is reduced: level 0 from the planes, then the coarser levels, into
+ * W->cells. */
+void render_cells_cpu_levels(struct render_cells_cpu *w);
+void render_cells_cpu_finish(struct render_cells_cpu *w);
+/* The cells of VOL (and of NEXT, of VOL's grid, the larger of the two; may be NULL) in one
+ * go: malloc'd, the caller frees, *LAYOUT their sizes; NULL (logged) when out of memory. */
+float *render_cells_cpu(const struct ext_volume *vol, const struct ext_volume *next, int halo,
+                        struct render_cells *layout);
+/* C laid out for BETA on GRID (render_cells_build_begin) and filled with the COUNT VALUES of
+ * every cell (render_cells_cpu's): complete.  Needs the GL context.  False (logged) when the
+ * buffer cannot be made or COUNT is not C's. */
+bool render_cells_upload(struct render_cells *c, const struct gpu_texture *beta,
+                         const struct grid3 *grid, const float *values, size_t count);
+
 /* The cells of the last volume set (levels 0 before one): valid until the next
  * renderer_set_volume. */
 const struct render_cells *renderer_cells(const struct renderer *r);
