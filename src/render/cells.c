@@ -320,8 +320,7 @@ bool render_cells_cpu_begin(struct render_cells_cpu *w, const struct grid3 *grid
         w->cells = malloc(layout.count * sizeof(float));
         if (!w->planes || !w->row || !w->cells) {
             render_cells_cpu_finish(w);
-            log_error("out of memory for the macro cells of %d x %d x %d voxels", n[0], n[1],
-                      n[2]);
+            log_error("out of memory for the macro cells of %d x %d x %d voxels", n[0], n[1], n[2]);
             return false;
         }
     }
@@ -405,7 +404,8 @@ void render_cells_cpu_levels(struct render_cells_cpu *w)
                     for (int z = 2 * cz; z <= 2 * cz + 1 && z < e[2]; z++)
                         for (int y = 2 * cy; y <= 2 * cy + 1 && y < e[1]; y++)
                             for (int x = 2 * cx; x <= 2 * cx + 1 && x < e[0]; x++) {
-                                float v = w->cells[e[3] + x + (size_t)e[0] * (y + (size_t)e[1] * z)];
+                                float v =
+                                    w->cells[e[3] + x + (size_t)e[0] * (y + (size_t)e[1] * z)];
                                 m = v > m ? v : m;
                             }
                     w->cells[d[3] + cx + (size_t)d[0] * (cy + (size_t)d[1] * cz)] = m;

@@ -59,8 +59,9 @@ struct render_stats {
     unsigned views;         /* views drawn */
     double upload_ms;       /* CPU+GPU time of the last volume upload */
     uint64_t upload_bytes;  /* bytes of every volume uploaded (extinction, tints, the layers'
-                               and slices' fields, next) */
+                               and slices' fields, next) and of macro cells made on the CPU */
     unsigned uploads;       /* volumes uploaded */
+    unsigned cpu_cells;     /* staged volumes whose macro cells the CPU made */
 };
 
 /* What the views' rays did, summed over every view drawn since renderer_set_counting turned
@@ -104,6 +105,15 @@ void renderer_set_half(struct renderer *r, bool half);
  * next renderer_stage_next. */
 void renderer_set_stage_paced(struct renderer *r, bool paced);
 bool renderer_stage_paced(const struct renderer *r);
+/* Whether renderer_stage_next has the stage make the next volume's macro cells on the CPU with
+ * its copy (render_cells_cpu; on from the start), so that renderer_stage_step only uploads
+ * them, or the GPU build them from the uploaded texture in pieces.  Half floats
+ * (renderer_set_half) always take the GPU's.  The cells are the same either way.  Takes effect
+ * at the next renderer_stage_next. */
+void renderer_set_stage_cpu_cells(struct renderer *r, bool cpu);
+/* The CPU time the stage's cells have taken so far, ms (on the stage's thread, or with a paced
+ * copy within renderer_stage_step's slices of it). */
+double renderer_stage_cells_ms(struct renderer *r);
 
 /* Uploads the extinction volume (replacing the last one; the texture is reused when the size
  * and storage are unchanged).  The volume is not kept. */
@@ -129,9 +139,9 @@ bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, float
 /* Moves the staged volume on: with a paced copy (renderer_set_stage_paced), first copies about
  * BUDGET bytes of it into the buffer a call (0: all, and on); once the copy is complete, uploads at
  * most BUDGET bytes of it (whole z layers, at least one; 0: all) from the buffer into the next
- * volume's textures, and after the last builds its cells, a few layers of them a call (BUDGET 0:
- * all in the last upload's).  *READY: the next volume is whole on the GPU (now or before).  Never
- * waits for the copy.  False (logged) on a GL failure. */
+ * volume's textures, and after the last uploads the cells the stage made or builds them, a few
+ * layers of them a call (BUDGET 0: all in the last upload's).  *READY: the next volume is whole on
+ * the GPU (now or before).  Never waits for the copy.  False (logged) on a GL failure. */
 bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready);
 /* Whether a staged volume is being copied or uploaded; whether it is still being copied (the
  * stage's thread is on it: renderer_stage_step cannot move it on yet). */

@@ -111,8 +111,9 @@ int main(int argc, char **argv)
             free(g);
             free(h);
         }
-        printf("round %d: upload %.0f, cells first %.0f | touch %.0f then cells %.0f | again %.0f\n",
-               r, up[r], a[r], tb[r], b[r], warm[r]);
+        printf(
+            "round %d: upload %.0f, cells first %.0f | touch %.0f then cells %.0f | again %.0f\n",
+            r, up[r], a[r], tb[r], b[r], warm[r]);
         fflush(stdout);
     }
     qsort(up, reps, sizeof(double), cmp);
