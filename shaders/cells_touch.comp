@@ -1,4 +1,6 @@
-// Experiment only: one texelFetch of every voxel, the maximum of a work group's kept.
+// For tests/tools/time_cells: one texelFetch of every voxel of the extinction texture and
+// nothing else (a store no value reaches, so that the fetch stays), to time what a first read
+// of a texture just uploaded costs apart from the macro cells' build (cells_build.comp).
 #include "bindings.h"
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 layout(binding = BIND_CELLS_TEX_BETA) uniform sampler3D beta_tex;

@@ -1,7 +1,9 @@
 /* The macro-cell pyramid of empty-space skipping (render.h, "empty-space skipping"): level 0
  * from the extinction texture (shaders/cells_build.comp), each further level the maxima of
  * the one below (shaders/cells_reduce.comp), all in one storage buffer behind a header of the
- * levels' sizes, so that the eye pass and the light build read it without uniform arrays. */
+ * levels' sizes, so that the eye pass and the light build read it without uniform arrays.  The
+ * same cells on the CPU (render_cells_cpu: a staged step's, and the tests' reference) from the
+ * extinction in memory, uploaded into that buffer. */
 #include "render/render.h"
 
 #include <assert.h>
@@ -310,6 +312,7 @@ bool render_cells_cpu_begin(struct render_cells_cpu *w, const struct grid3 *grid
     int b = grid3_stretched(grid) ? RENDER_CELL_VOXELS_STRETCHED : RENDER_CELL_VOXELS;
     render_cells_layout(grid->n, b, &layout);
     bool same = w->cells && w->layout.count == layout.count &&
+                w->layout.cell_voxels == layout.cell_voxels &&
                 memcmp(w->layout.dims, layout.dims, sizeof(layout.dims)) == 0 &&
                 memcmp(w->grid.n, grid->n, sizeof(grid->n)) == 0;
     if (!same) {

@@ -1,4 +1,5 @@
-/* A volume's arrays into a persistently mapped pixel buffer, copied on the stage's thread. */
+/* A volume's arrays into a persistently mapped pixel buffer, copied on the stage's thread (or in
+ * paced slices on the caller's), and its macro cells made on the CPU with the copy. */
 #include "render/stage.h"
 
 #include <string.h>

@@ -1,5 +1,12 @@
-/* Experiment: what the staged step's macro cells cost on this driver, the compute or the first
- * read of a texture just uploaded from a pixel buffer. */
+/* Times what the staged step's macro cells cost on the device, on the procedural storm at
+ * 500 x 500 x 100 (the playback bench's size), in the CPU time of the process: the upload of
+ * the extinction from a pixel buffer (in slabs of 32 layers), the GPU's build of the cells
+ * right after it, the same build after a pass that reads every texel once
+ * (shaders/cells_touch.comp: what a conversion of the texture paid at its first read would
+ * cost), the build again on a texture read before, and the CPU's cells (render_cells_cpu) with
+ * their upload, checked equal to the GPU's.  Rounds interleaved, medians.
+ * Usage: time_cells [ROUNDS] (not a test: timings). */
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -37,9 +44,50 @@ static double cells(struct render_cells *c, const struct render_cells_programs *
     return cpu_ms() - t0;
 }
 
+/* The CPU's cells of VOL, timed into *MS, uploaded into C and checked against the GPU's build
+ * from T (VOL's texture); false when they differ. */
+static bool cpu_cells(struct render_cells *c, const struct render_cells_programs *p,
+                      struct gpu_texture *t, const struct ext_volume *vol, double *ms)
+{
+    double t0 = cpu_ms();
+    struct render_cells lay;
+    float *v = render_cells_cpu(vol, NULL, 1, &lay);
+    *ms = cpu_ms() - t0;
+    if (!v || !render_cells_upload(c, t, &vol->grid, v, lay.count))
+        exit(1);
+    gpu_finish();
+    double up = cpu_ms() - t0 - *ms;
+    float *got = render_cells_read(c);
+    if (!render_cells_build(c, p, t, NULL, &vol->grid))
+        exit(1);
+    float *want = render_cells_read(c);
+    bool equal = got && want && memcmp(got, want, lay.count * sizeof(float)) == 0;
+    free(v);
+    free(got);
+    free(want);
+    /* The two halves apart. */
+    struct render_cells_cpu w = {0};
+    if (!render_cells_cpu_begin(&w, &vol->grid, 1))
+        exit(1);
+    double t1 = cpu_ms();
+    render_cells_cpu_planes(&w, vol->beta, 0, vol->grid.n[2]);
+    double t2 = cpu_ms();
+    render_cells_cpu_levels(&w);
+    printf("cpu cells %.1f ms (planes %.1f, levels %.2f), upload %.2f ms (%zu bytes)\n", *ms,
+           t2 - t1, cpu_ms() - t2, up, lay.count * sizeof(float));
+    render_cells_cpu_finish(&w);
+    if (!equal)
+        fprintf(stderr, "time_cells: the CPU's cells are not the GPU's\n");
+    return equal;
+}
+
 int main(int argc, char **argv)
 {
     int reps = argc > 1 ? atoi(argv[1]) : 5;
+    if (reps < 1) {
+        fprintf(stderr, "usage: time_cells [ROUNDS] (ROUNDS at least 1)\n");
+        return 2;
+    }
     struct gpu_context *ctx = test_gl_context_or_skip();
     struct synth_desc d;
     synth_desc_defaults(&d);
@@ -66,7 +114,7 @@ int main(int argc, char **argv)
             return 1;
     struct render_cells c = {0};
     double *up = calloc(4 * reps, sizeof(double)), *a = up + reps, *tb = a + reps, *b = tb + reps;
-    double warm[64];
+    double *warm = calloc(2 * reps, sizeof(double)), *cpu = warm + reps;
     for (int r = 0; r < reps; r++) {
         for (int v = 0; v < 2; v++) {
             struct gpu_texture *t = &tex[(2 * r + v) & 1];
@@ -93,24 +141,8 @@ int main(int argc, char **argv)
             }
         }
         warm[r] = cells(&c, &p, &tex[1], &vol.grid); /* the same texture again */
-        {
-            double t2 = cpu_ms();
-            struct render_cells lay;
-            float *v = render_cells_cpu(&vol, NULL, 1, &lay);
-            double t3 = cpu_ms();
-            if (!render_cells_upload(&c, &tex[1], &vol.grid, v, lay.count))
-                exit(1);
-            gpu_finish();
-            double t4 = cpu_ms();
-            float *g = render_cells_read(&c);
-            (void)render_cells_build(&c, &p, &tex[1], NULL, &vol.grid);
-            float *h = render_cells_read(&c);
-            printf("cpu cells %.1f ms, upload %.2f ms (%zu bytes), equal %d\n", t3 - t2, t4 - t3,
-                   lay.count * sizeof(float), memcmp(g, h, lay.count * sizeof(float)) == 0);
-            free(v);
-            free(g);
-            free(h);
-        }
+        if (!cpu_cells(&c, &p, &tex[1], &vol, &cpu[r]))
+            return 1;
         printf(
             "round %d: upload %.0f, cells first %.0f | touch %.0f then cells %.0f | again %.0f\n",
             r, up[r], a[r], tb[r], b[r], warm[r]);
@@ -121,9 +153,10 @@ int main(int argc, char **argv)
     qsort(tb, reps, sizeof(double), cmp);
     qsort(b, reps, sizeof(double), cmp);
     qsort(warm, reps, sizeof(double), cmp);
+    qsort(cpu, reps, sizeof(double), cmp);
     printf("medians, CPU ms: upload %.0f; cells first %.0f; touch %.0f + cells %.0f; cells again "
-           "%.0f\n",
-           up[reps / 2], a[reps / 2], tb[reps / 2], b[reps / 2], warm[reps / 2]);
+           "%.0f; CPU cells %.1f\n",
+           up[reps / 2], a[reps / 2], tb[reps / 2], b[reps / 2], warm[reps / 2], cpu[reps / 2]);
     (void)ctx;
     return 0;
 }
