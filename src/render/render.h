@@ -130,7 +130,8 @@ bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol);
  * already on the GPU (nothing uploaded, nothing built in that frame).  renderer_stage_next
  * starts copying VOL's arrays (extinction, tints, layers, slices, surfaces) into a
  * persistently mapped buffer on a thread of the renderer's (no GL there), and its extinction
- * into ALSO (2 floats a voxel, may be NULL: a CPU copy the caller keeps); VOL and ALSO are
+ * into ALSO (2 floats a voxel, may be NULL: a CPU copy the caller keeps), making its macro
+ * cells with the copy (renderer_set_stage_cpu_cells); VOL and ALSO are
  * borrowed and must stay valid until renderer_stage_step said *READY or renderer_stage_cancel
  * returned.  *STARTED false: the buffer is busy (try again later).  The next volume held
  * before is gone from now on (renderer_has_next false). */
