@@ -1,9 +1,12 @@
 /* The macro-cell pyramid of empty-space skipping (render.h, "empty-space skipping"): level 0
  * from the extinction texture (shaders/cells_build.comp), each further level the maxima of
  * the one below (shaders/cells_reduce.comp), all in one storage buffer behind a header of the
- * levels' sizes, so that the eye pass and the light build read it without uniform arrays. */
+ * levels' sizes, so that the eye pass and the light build read it without uniform arrays.  The
+ * same cells on the CPU (render_cells_cpu: a staged step's, and the tests' reference) from the
+ * extinction in memory, uploaded into that buffer. */
 #include "render/render.h"
 
+#include <assert.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -276,4 +279,177 @@ float *render_cells_read(const struct render_cells *c)
     }
     gpu_buffer_read(&c->buf, HEADER_INTS * sizeof(int), c->count * sizeof(float), out);
     return out;
+}
+
+/* ---- the same cells on the CPU ------------------------------------------------------------ */
+
+/* A voxel's ice plus water extinction as cells_build.comp's clean() reads it. */
+static inline float clean_sum(const float *b)
+{
+    float x = b[0] > 0.0f ? (b[0] < 1e30f ? b[0] : 1e30f) : 0.0f;
+    float y = b[1] > 0.0f ? (b[1] < 1e30f ? b[1] : 1e30f) : 0.0f;
+    return x + y;
+}
+
+/* The voxels along one axis of N that cell C of B voxels reads, HALO more each side. */
+static void window(int c, int b, int halo, int n, int *lo, int *hi)
+{
+    *lo = c * b - halo < 0 ? 0 : c * b - halo;
+    *hi = c * b + b - 1 + halo > n - 1 ? n - 1 : c * b + b - 1 + halo;
+}
+
+void render_cells_cpu_finish(struct render_cells_cpu *w)
+{
+    free(w->planes);
+    free(w->row);
+    free(w->cells);
+    memset(w, 0, sizeof(*w));
+}
+
+bool render_cells_cpu_begin(struct render_cells_cpu *w, const struct grid3 *grid, int halo)
+{
+    struct render_cells layout = {0};
+    int b = grid3_stretched(grid) ? RENDER_CELL_VOXELS_STRETCHED : RENDER_CELL_VOXELS;
+    render_cells_layout(grid->n, b, &layout);
+    bool same = w->cells && w->layout.count == layout.count &&
+                w->layout.cell_voxels == layout.cell_voxels &&
+                memcmp(w->layout.dims, layout.dims, sizeof(layout.dims)) == 0 &&
+                memcmp(w->grid.n, grid->n, sizeof(grid->n)) == 0;
+    if (!same) {
+        render_cells_cpu_finish(w);
+        const int *d0 = layout.dims[0], *n = grid->n;
+        w->planes = malloc((size_t)n[2] * d0[0] * d0[1] * sizeof(float));
+        w->row = malloc(((size_t)n[0] + (size_t)n[1] * d0[0]) * sizeof(float));
+        w->cells = malloc(layout.count * sizeof(float));
+        if (!w->planes || !w->row || !w->cells) {
+            render_cells_cpu_finish(w);
+            log_error("out of memory for the macro cells of %d x %d x %d voxels", n[0], n[1], n[2]);
+            return false;
+        }
+    }
+    w->layout = layout;
+    w->grid = *grid;
+    w->halo = halo;
+    w->planes_done = 0;
+    return true;
+}
+
+void render_cells_cpu_planes(struct render_cells_cpu *w, const float *beta, int from, int to)
+{
+    const int *n = w->grid.n, *d0 = w->layout.dims[0];
+    const int b = w->layout.cell_voxels, halo = w->halo, dx = d0[0], dy = d0[1];
+    float *row = w->row, *xr = w->row + n[0];
+    for (int z = from; z < to; z++) {
+        const float *plane = beta + 2 * (size_t)n[0] * n[1] * z;
+        /* Along x: each row's cells' windows. */
+        for (int y = 0; y < n[1]; y++) {
+            const float *v = plane + 2 * (size_t)n[0] * y;
+            for (int x = 0; x < n[0]; x++)
+                row[x] = clean_sum(v + 2 * x);
+            for (int cx = 0; cx < dx; cx++) {
+                int lo, hi;
+                window(cx, b, halo, n[0], &lo, &hi);
+                float m = 0.0f;
+                for (int x = lo; x <= hi; x++)
+                    m = row[x] > m ? row[x] : m;
+                xr[(size_t)y * dx + cx] = m;
+            }
+        }
+        /* Along y: the plane's share of every cell of a layer. */
+        float *out = w->planes + (size_t)z * dx * dy;
+        for (int cy = 0; cy < dy; cy++) {
+            float *o = out + (size_t)cy * dx;
+            int lo, hi;
+            window(cy, b, halo, n[1], &lo, &hi);
+            for (int cx = 0; cx < dx; cx++)
+                o[cx] = 0.0f;
+            for (int y = lo; y <= hi; y++) {
+                const float *r = xr + (size_t)y * dx;
+                for (int cx = 0; cx < dx; cx++)
+                    o[cx] = r[cx] > o[cx] ? r[cx] : o[cx];
+            }
+        }
+    }
+    if (to > w->planes_done)
+        w->planes_done = to;
+}
+
+void render_cells_cpu_levels(struct render_cells_cpu *w)
+{
+    assert(w->planes_done == w->grid.n[2]);
+    const struct render_cells *c = &w->layout;
+    const int *d0 = c->dims[0], nz = w->grid.n[2];
+    const size_t plane = (size_t)d0[0] * d0[1];
+    bool stretched = grid3_stretched(&w->grid);
+    for (int cz = 0; cz < d0[2]; cz++) {
+        int range[2];
+        if (stretched)
+            row_levels(&w->grid, c->cell_voxels, cz, range); /* as cell_levels[] has it */
+        else
+            window(cz, c->cell_voxels, w->halo, nz, &range[0], &range[1]);
+        assert(range[0] >= 0 && range[1] < nz);
+        float *o = w->cells + (size_t)cz * plane;
+        for (size_t i = 0; i < plane; i++)
+            o[i] = 0.0f;
+        for (int z = range[0]; z <= range[1]; z++) {
+            const float *p = w->planes + (size_t)z * plane;
+            for (size_t i = 0; i < plane; i++)
+                o[i] = p[i] > o[i] ? p[i] : o[i];
+        }
+    }
+    /* Each further level as cells_reduce.comp makes it. */
+    for (int level = 1; level < c->levels; level++) {
+        const int *d = c->dims[level], *e = c->dims[level - 1];
+        for (int cz = 0; cz < d[2]; cz++)
+            for (int cy = 0; cy < d[1]; cy++)
+                for (int cx = 0; cx < d[0]; cx++) {
+                    float m = 0.0f;
+                    for (int z = 2 * cz; z <= 2 * cz + 1 && z < e[2]; z++)
+                        for (int y = 2 * cy; y <= 2 * cy + 1 && y < e[1]; y++)
+                            for (int x = 2 * cx; x <= 2 * cx + 1 && x < e[0]; x++) {
+                                float v =
+                                    w->cells[e[3] + x + (size_t)e[0] * (y + (size_t)e[1] * z)];
+                                m = v > m ? v : m;
+                            }
+                    w->cells[d[3] + cx + (size_t)d[0] * (cy + (size_t)d[1] * cz)] = m;
+                }
+    }
+}
+
+float *render_cells_cpu(const struct ext_volume *vol, const struct ext_volume *next, int halo,
+                        struct render_cells *layout)
+{
+    struct render_cells_cpu w[2] = {0};
+    for (int k = 0; k < (next ? 2 : 1); k++) {
+        const struct ext_volume *v = k ? next : vol;
+        if (!render_cells_cpu_begin(&w[k], &vol->grid, halo)) {
+            render_cells_cpu_finish(&w[0]);
+            return NULL;
+        }
+        render_cells_cpu_planes(&w[k], v->beta, 0, vol->grid.n[2]);
+        render_cells_cpu_levels(&w[k]);
+    }
+    float *out = w[0].cells;
+    /* Every cell is a maximum over the same voxels in both: the larger of the two. */
+    for (size_t i = 0; next && i < w[0].layout.count; i++)
+        out[i] = w[1].cells[i] > out[i] ? w[1].cells[i] : out[i];
+    *layout = w[0].layout;
+    w[0].cells = NULL;
+    render_cells_cpu_finish(&w[0]);
+    render_cells_cpu_finish(&w[1]);
+    return out;
+}
+
+bool render_cells_upload(struct render_cells *c, const struct gpu_texture *beta,
+                         const struct grid3 *grid, const float *values, size_t count)
+{
+    if (!render_cells_build_begin(c, beta, grid))
+        return false;
+    if (count != c->count) {
+        log_error("macro cells: %zu values for %zu cells", count, c->count);
+        return false;
+    }
+    gpu_buffer_upload(&c->buf, HEADER_INTS * sizeof(int), count * sizeof(float), values);
+    c->built_layers = c->dims[0][2];
+    return true;
 }

@@ -73,6 +73,7 @@ struct renderer {
     struct held_fields stage_held;
     size_t stage_done; /* bytes of the staged volume uploaded so far */
     bool stage_paced;  /* the copy in slices in renderer_stage_step (renderer_set_stage_paced) */
+    bool stage_cpu_cells; /* the stage makes the cells (renderer_set_stage_cpu_cells) */
     struct gpu_texture phase;
     float mean_cosine[2]; /* g of the ice and the water phase (MULTIPLE) */
     struct gpu_program tonemap, tonemap_packed;
@@ -155,6 +156,7 @@ struct renderer *renderer_create(void)
     }
     gpu_timer_queue_init(&r->timers, GPU_TIMER_AUTO);
     r->stage_paced = gpu_software_driver();
+    r->stage_cpu_cells = true;
     return r;
 }
 
@@ -208,6 +210,16 @@ void renderer_set_stage_paced(struct renderer *r, bool paced)
 bool renderer_stage_paced(const struct renderer *r)
 {
     return r->stage_paced;
+}
+
+void renderer_set_stage_cpu_cells(struct renderer *r, bool cpu)
+{
+    r->stage_cpu_cells = cpu;
+}
+
+double renderer_stage_cells_ms(struct renderer *r)
+{
+    return render_stage_cells_ms(&r->stage);
 }
 
 /* Puts VOL's extinction into TEX (made or remade for its size and the renderer's storage).
@@ -631,7 +643,8 @@ bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, float
     if (r->stage_state != STAGE_IDLE)
         return true;
     bool failed = false;
-    if (!render_stage_begin(&r->stage, vol, also, r->half, r->stage_paced, &failed))
+    if (!render_stage_begin(&r->stage, vol, also, r->half, r->stage_paced, r->stage_cpu_cells,
+                            &failed))
         return !failed;
     r->have_next = false; /* beta_next is about to hold another volume */
     r->next_whole = false;
@@ -767,25 +780,42 @@ bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready)
     if (r->stage_done < total)
         return true;
     if (r->stage_state == STAGE_UPLOADING) {
-        /* Uploaded: the cells next, a few layers a call. */
+        /* Uploaded: the cells next, the stage's in one piece, else a few layers a call. */
         render_stage_release(&r->stage);
         r->stage_state = STAGE_CELLS;
-        if (!render_cells_build_begin(&r->next_cells, &r->beta_next, &r->stage_grid)) {
+        size_t made;
+        if (!render_stage_cells(&r->stage, &made) &&
+            !render_cells_build_begin(&r->next_cells, &r->beta_next, &r->stage_grid)) {
             r->stage_state = STAGE_IDLE;
             return false;
         }
         if (budget != 0)
             return true;
     }
+    size_t cell_count = 0;
+    const float *cells = render_stage_cells(&r->stage, &cell_count);
     bool built = false;
-    do {
+    if (cells) {
+        /* Made with the copy: a few MB to upload. */
+        if (!render_cells_upload(&r->next_cells, &r->beta_next, &r->stage_grid, cells,
+                                 cell_count)) {
+            r->stage_state = STAGE_IDLE;
+            return false;
+        }
+        r->stats.upload_bytes += cell_count * sizeof(float);
+        r->stats.cpu_cells++;
+        built = true;
+    }
+    while (!built) {
         if (!render_cells_build_piece(&r->next_cells, &r->cell_programs, &r->beta_next, NULL,
                                       &r->stage_grid, budget == 0 ? 0 : STAGE_CELL_LAYERS,
                                       budget == 0 ? 0 : STAGE_CELL_ROWS, &built)) {
             r->stage_state = STAGE_IDLE;
             return false;
         }
-    } while (budget == 0 && !built);
+        if (budget != 0)
+            break;
+    }
     if (!built)
         return true;
     r->stage_state = STAGE_IDLE;
@@ -892,6 +922,7 @@ bool renderer_pair_cells_step(struct renderer *r, int layers, bool *done)
         /* Both volumes' cells are made: the pair's are their maxima. */
         if (!render_cells_max(&r->pair_cells, a, b, &r->beta, &r->grid))
             return false;
+        r->stats.upload_bytes += r->pair_cells.count * sizeof(float);
         r->pair_stale = false;
         *done = true;
         return true;
@@ -932,8 +963,11 @@ const char *renderer_stage_doing(const struct renderer *r)
         return r->stage.paced ? "a slice of the copy" : "the copy's end";
     case STAGE_UPLOADING:
         return "an upload slab";
-    case STAGE_CELLS:
-        return "a piece of the staged cells";
+    case STAGE_CELLS: {
+        size_t count;
+        return render_stage_cells(&r->stage, &count) ? "the staged cells' upload"
+                                                     : "a piece of the staged cells";
+    }
     case STAGE_IDLE:
         break;
     }

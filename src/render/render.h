@@ -59,8 +59,9 @@ struct render_stats {
     unsigned views;         /* views drawn */
     double upload_ms;       /* CPU+GPU time of the last volume upload */
     uint64_t upload_bytes;  /* bytes of every volume uploaded (extinction, tints, the layers'
-                               and slices' fields, next) */
+                               and slices' fields, next) and of macro cells made on the CPU */
     unsigned uploads;       /* volumes uploaded */
+    unsigned cpu_cells;     /* staged volumes whose macro cells the CPU made */
 };
 
 /* What the views' rays did, summed over every view drawn since renderer_set_counting turned
@@ -104,6 +105,15 @@ void renderer_set_half(struct renderer *r, bool half);
  * next renderer_stage_next. */
 void renderer_set_stage_paced(struct renderer *r, bool paced);
 bool renderer_stage_paced(const struct renderer *r);
+/* Whether renderer_stage_next has the stage make the next volume's macro cells on the CPU with
+ * its copy (render_cells_cpu; on from the start), so that renderer_stage_step only uploads
+ * them, or the GPU build them from the uploaded texture in pieces.  Half floats
+ * (renderer_set_half) always take the GPU's.  The cells are the same either way.  Takes effect
+ * at the next renderer_stage_next. */
+void renderer_set_stage_cpu_cells(struct renderer *r, bool cpu);
+/* The CPU time the stage's cells have taken so far, ms (on the stage's thread, or with a paced
+ * copy within renderer_stage_step's slices of it). */
+double renderer_stage_cells_ms(struct renderer *r);
 
 /* Uploads the extinction volume (replacing the last one; the texture is reused when the size
  * and storage are unchanged).  The volume is not kept. */
@@ -120,7 +130,8 @@ bool renderer_set_next_volume(struct renderer *r, const struct ext_volume *vol);
  * already on the GPU (nothing uploaded, nothing built in that frame).  renderer_stage_next
  * starts copying VOL's arrays (extinction, tints, layers, slices, surfaces) into a
  * persistently mapped buffer on a thread of the renderer's (no GL there), and its extinction
- * into ALSO (2 floats a voxel, may be NULL: a CPU copy the caller keeps); VOL and ALSO are
+ * into ALSO (2 floats a voxel, may be NULL: a CPU copy the caller keeps), making its macro
+ * cells with the copy (renderer_set_stage_cpu_cells); VOL and ALSO are
  * borrowed and must stay valid until renderer_stage_step said *READY or renderer_stage_cancel
  * returned.  *STARTED false: the buffer is busy (try again later).  The next volume held
  * before is gone from now on (renderer_has_next false). */
@@ -129,9 +140,9 @@ bool renderer_stage_next(struct renderer *r, const struct ext_volume *vol, float
 /* Moves the staged volume on: with a paced copy (renderer_set_stage_paced), first copies about
  * BUDGET bytes of it into the buffer a call (0: all, and on); once the copy is complete, uploads at
  * most BUDGET bytes of it (whole z layers, at least one; 0: all) from the buffer into the next
- * volume's textures, and after the last builds its cells, a few layers of them a call (BUDGET 0:
- * all in the last upload's).  *READY: the next volume is whole on the GPU (now or before).  Never
- * waits for the copy.  False (logged) on a GL failure. */
+ * volume's textures, and after the last uploads the cells the stage made or builds them, a few
+ * layers of them a call (BUDGET 0: all in the last upload's).  *READY: the next volume is whole on
+ * the GPU (now or before).  Never waits for the copy.  False (logged) on a GL failure. */
 bool renderer_stage_step(struct renderer *r, size_t budget, bool *ready);
 /* Whether a staged volume is being copied or uploaded; whether it is still being copied (the
  * stage's thread is on it: renderer_stage_step cannot move it on yet). */
@@ -350,6 +361,41 @@ float *render_cells_read(const struct render_cells *c);
 bool render_cells_max(struct render_cells *c, const struct render_cells *a,
                       const struct render_cells *b, const struct gpu_texture *beta,
                       const struct grid3 *grid);
+
+/* The same cells made on the CPU from the extinction in memory (2 floats a voxel, as
+ * ext_volume holds it), a z plane at a time, then uploaded whole (render_cells_upload): the
+ * cells the GPU builds from a float texture of those values, bit for bit (not from a
+ * half-float one, which rounds them).  HALO is the voxels around each cell that count along x
+ * and y (and z on a uniform grid): 1 for the cells the renderer reads (0 only for tests).
+ * No GL; the memory is the builder's, freed by render_cells_cpu_finish. */
+struct render_cells_cpu {
+    struct render_cells layout; /* the levels' sizes (its buffer unused) */
+    struct grid3 grid;
+    int halo;
+    int planes_done; /* z planes of the volume reduced so far */
+    float *planes;   /* per z plane, the maxima over each level-0 cell's x and y window */
+    float *row;      /* scratch: one row of voxels, then a plane's maxima along x */
+    float *cells;    /* every cell's value, level 0 first, once render_cells_cpu_levels ran */
+};
+
+/* Lays W out for a volume on GRID (its memory kept when the layout is the same).  False
+ * (logged) when out of memory. */
+bool render_cells_cpu_begin(struct render_cells_cpu *w, const struct grid3 *grid, int halo);
+/* Z planes FROM .. TO - 1 of BETA (the whole volume's array) reduced along x and y. */
+void render_cells_cpu_planes(struct render_cells_cpu *w, const float *beta, int from, int to);
+/* Once every plane is reduced: level 0 from the planes, then the coarser levels, into
+ * W->cells. */
+void render_cells_cpu_levels(struct render_cells_cpu *w);
+void render_cells_cpu_finish(struct render_cells_cpu *w);
+/* The cells of VOL (and of NEXT, of VOL's grid, the larger of the two; may be NULL) in one
+ * go: malloc'd, the caller frees, *LAYOUT their sizes; NULL (logged) when out of memory. */
+float *render_cells_cpu(const struct ext_volume *vol, const struct ext_volume *next, int halo,
+                        struct render_cells *layout);
+/* C laid out for BETA on GRID (render_cells_build_begin) and filled with the COUNT VALUES of
+ * every cell (render_cells_cpu's): complete.  Needs the GL context.  False (logged) when the
+ * buffer cannot be made or COUNT is not C's. */
+bool render_cells_upload(struct render_cells *c, const struct gpu_texture *beta,
+                         const struct grid3 *grid, const float *values, size_t count);
 
 /* The cells of the last volume set (levels 0 before one): valid until the next
  * renderer_set_volume. */

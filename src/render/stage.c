@@ -1,7 +1,9 @@
-/* A volume's arrays into a persistently mapped pixel buffer, copied on the stage's thread. */
+/* A volume's arrays into a persistently mapped pixel buffer, copied on the stage's thread (or in
+ * paced slices on the caller's), and its macro cells made on the CPU with the copy. */
 #include "render/stage.h"
 
 #include <string.h>
+#include <time.h>
 
 #include "common/log.h"
 #include "render/render.h"
@@ -93,6 +95,40 @@ static size_t volume_voxels(const struct ext_volume *vol)
     return (size_t)vol->grid.n[0] * vol->grid.n[1] * vol->grid.n[2];
 }
 
+static double thread_cpu_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+/* copy_range, and with the cells each z plane completed reduced while it is in the cache, the
+ * cells' levels after the last; the cells' CPU time is added to *CELLS_MS. */
+static void copy_and_reduce(struct render_stage *st, const struct ext_volume *vol, size_t from,
+                            size_t to, double *cells_ms)
+{
+    if (!st->cells) {
+        copy_range(st, vol, from, to);
+        return;
+    }
+    size_t plane = (size_t)vol->grid.n[0] * vol->grid.n[1], voxels = volume_voxels(vol);
+    while (from < to) {
+        size_t end = (from / plane + 1) * plane;
+        if (end > to)
+            end = to;
+        copy_range(st, vol, from, end);
+        if (end % plane == 0) {
+            double t = thread_cpu_ms();
+            int z = (int)(end / plane) - 1;
+            render_cells_cpu_planes(&st->cpu_cells, vol->beta, z, z + 1);
+            if (end == voxels)
+                render_cells_cpu_levels(&st->cpu_cells);
+            *cells_ms += thread_cpu_ms() - t;
+        }
+        from = end;
+    }
+}
+
 static void *run(void *arg)
 {
     struct render_stage *st = arg;
@@ -104,9 +140,11 @@ static void *run(void *arg)
             break;
         const struct ext_volume *vol = st->job;
         pthread_mutex_unlock(&st->lock);
-        /* The render thread leaves the buffer and the layout alone meanwhile. */
-        copy_range(st, vol, 0, volume_voxels(vol));
+        /* The render thread leaves the buffer, the layout and the cells alone meanwhile. */
+        double cells_ms = 0.0;
+        copy_and_reduce(st, vol, 0, volume_voxels(vol), &cells_ms);
         pthread_mutex_lock(&st->lock);
+        st->cells_ms += cells_ms;
         st->copied = true;
         pthread_cond_broadcast(&st->cond);
     }
@@ -134,6 +172,7 @@ void render_stage_finish(struct render_stage *st)
     }
     gpu_fence_delete(st->fence);
     gpu_upload_buffer_finish(&st->pbo);
+    render_cells_cpu_finish(&st->cpu_cells);
     memset(st, 0, sizeof(*st));
 }
 
@@ -150,7 +189,7 @@ bool render_stage_busy(struct render_stage *st)
 }
 
 bool render_stage_begin(struct render_stage *st, const struct ext_volume *vol, float *also,
-                        bool half, bool paced, bool *failed)
+                        bool half, bool paced, bool cells, bool *failed)
 {
     *failed = false;
     if (render_stage_busy(st))
@@ -191,8 +230,11 @@ bool render_stage_begin(struct render_stage *st, const struct ext_volume *vol, f
             return false;
         }
     }
+    /* Without memory for the cells the GPU builds them, as from a half-float texture. */
+    bool with_cells = cells && !half && render_cells_cpu_begin(&st->cpu_cells, &vol->grid, 1);
     if (st->started)
         pthread_mutex_lock(&st->lock);
+    st->cells = with_cells;
     st->lay = lay;
     st->half = half;
     st->also = also;
@@ -218,7 +260,7 @@ bool render_stage_copy_some(struct render_stage *st, size_t bytes, size_t *copie
     size_t count = bytes / per < 1 ? 1 : bytes / per;
     if (count > voxels - st->copy_at)
         count = voxels - st->copy_at;
-    copy_range(st, st->job, st->copy_at, st->copy_at + count);
+    copy_and_reduce(st, st->job, st->copy_at, st->copy_at + count, &st->cells_ms);
     st->copy_at += count;
     *copied = count * per;
     st->copied = st->copy_at == voxels;
@@ -247,6 +289,22 @@ bool render_stage_copied(struct render_stage *st)
     bool done = st->job && st->copied;
     pthread_mutex_unlock(&st->lock);
     return done;
+}
+
+const float *render_stage_cells(const struct render_stage *st, size_t *count)
+{
+    *count = st->cells ? st->cpu_cells.layout.count : 0;
+    return st->cells ? st->cpu_cells.cells : NULL;
+}
+
+double render_stage_cells_ms(struct render_stage *st)
+{
+    if (!st->started)
+        return st->cells_ms;
+    pthread_mutex_lock(&st->lock);
+    double ms = st->cells_ms;
+    pthread_mutex_unlock(&st->lock);
+    return ms;
 }
 
 void render_stage_wait(struct render_stage *st)

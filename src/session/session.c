@@ -1811,12 +1811,15 @@ bool session_prepare(struct session *s, bool *more)
         bool slice = kind == SESSION_PIECE_COPY && renderer_stage_paced(s->renderer);
         double *rate = slice ? &s->copy_rate : &s->upload_rate;
         size_t slab = session_slab_bytes(*rate, left);
-        double c = cpu_ms();
+        double c = cpu_ms(), cells = renderer_stage_cells_ms(s->renderer);
         ok = prepare_piece(s, slab, &progressed, more);
         double now = time_now_ms(), piece_cpu = cpu_ms() - c;
         if (kind < SESSION_PIECE_KINDS) {
+            /* A slice of the copy makes the cells of the planes it copied: theirs. */
+            double cells_cpu = slice ? renderer_stage_cells_ms(s->renderer) - cells : 0.0;
             s->piece_ms[kind] = now - t;
-            s->stats.prepare_kind_ms[kind] += piece_cpu;
+            s->stats.prepare_kind_ms[kind] += piece_cpu - cells_cpu;
+            s->stats.prepare_kind_ms[SESSION_PIECE_CELLS] += cells_cpu;
         }
         if ((kind == SESSION_PIECE_UPLOAD || slice) && now > t)
             *rate = (double)slab / (now - t);

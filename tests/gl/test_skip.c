@@ -18,67 +18,16 @@
 static struct gpu_context *ctx;
 static struct renderer *renderer;
 
-/* What the GPU's cells must hold: per level-0 cell the largest ice + water extinction (NaN and
- * negative as 0, infinity as 1e30) over the cell's voxels and one voxel around it, clamped to
- * the volume; each further level the largest of its 2 x 2 x 2 children.  Cells are
- * RENDER_CELL_VOXELS on a side, RENDER_CELL_VOXELS_STRETCHED on the model's levels, where a
- * cell row is that many mean levels tall and holds every level a sample within half a mean
- * level of it reads.  NEXT (may be NULL) is a second volume of the same grid whose values
- * count too. */
+/* What the GPU's cells must hold: the CPU's cells of the same voxels (render_cells_cpu: per
+ * level-0 cell the largest ice + water extinction, NaN and negative as 0, infinity as 1e30,
+ * over the cell's voxels and HALO voxels around it, clamped to the volume; each further level
+ * the largest of its 2 x 2 x 2 children).  NEXT (may be NULL) is a second volume of the same
+ * grid whose values count too. */
 static float *cpu_cells_halo(const struct ext_volume *vol, const struct ext_volume *next, int halo,
                              struct render_cells *layout)
 {
-    const int *n = vol->grid.n;
-    const struct grid3 *g = &vol->grid;
-    const bool stretched = grid3_stretched(g);
-    const int b = stretched ? RENDER_CELL_VOXELS_STRETCHED : RENDER_CELL_VOXELS;
-    render_cells_layout(n, b, layout);
-    float *out = calloc(layout->count, sizeof(float));
+    float *out = render_cells_cpu(vol, next, halo, layout);
     assert_non_null(out);
-    const int *d0 = layout->dims[0];
-    for (int cz = 0; cz < d0[2]; cz++)
-        for (int cy = 0; cy < d0[1]; cy++)
-            for (int cx = 0; cx < d0[0]; cx++) {
-                int c[3] = {cx, cy, cz}, lo[3], hi[3];
-                for (int a = 0; a < 3; a++) {
-                    lo[a] = c[a] * b - halo < 0 ? 0 : c[a] * b - halo;
-                    hi[a] = c[a] * b + b - 1 + halo > n[a] - 1 ? n[a] - 1 : c[a] * b + b - 1 + halo;
-                }
-                if (stretched) {
-                    double h = b * g->spacing[2], z0 = g->origin[2] + cz * h;
-                    grid3_z_voxel_range(g, z0 - 0.5 * g->spacing[2], z0 + h + 0.5 * g->spacing[2],
-                                        &lo[2], &hi[2]);
-                }
-                float m = 0.0f;
-                for (int z = lo[2]; z <= hi[2]; z++)
-                    for (int y = lo[1]; y <= hi[1]; y++)
-                        for (int x = lo[0]; x <= hi[0]; x++) {
-                            size_t v = (size_t)x + (size_t)n[0] * ((size_t)y + (size_t)n[1] * z);
-                            for (int k = 0; k < (next ? 2 : 1); k++) {
-                                const float *beta = k ? next->beta : vol->beta;
-                                float s = 0.0f;
-                                for (int ch = 0; ch < 2; ch++) {
-                                    float f = beta[2 * v + ch];
-                                    s += f > 0.0f ? fminf(f, 1e30f) : 0.0f;
-                                }
-                                m = fmaxf(m, s);
-                            }
-                        }
-                out[cx + d0[0] * (cy + d0[1] * cz)] = m;
-            }
-    for (int l = 1; l < layout->levels; l++) {
-        const int *d = layout->dims[l], *e = layout->dims[l - 1];
-        for (int cz = 0; cz < d[2]; cz++)
-            for (int cy = 0; cy < d[1]; cy++)
-                for (int cx = 0; cx < d[0]; cx++) {
-                    float m = 0.0f;
-                    for (int z = 2 * cz; z <= 2 * cz + 1 && z < e[2]; z++)
-                        for (int y = 2 * cy; y <= 2 * cy + 1 && y < e[1]; y++)
-                            for (int x = 2 * cx; x <= 2 * cx + 1 && x < e[0]; x++)
-                                m = fmaxf(m, out[e[3] + x + e[0] * (y + e[1] * z)]);
-                    out[d[3] + cx + d[0] * (cy + d[1] * cz)] = m;
-                }
-    }
     return out;
 }
 

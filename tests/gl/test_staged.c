@@ -11,9 +11,11 @@
 #include "testutil.h"
 
 #include "common/log.h"
+#include "config/config.h"
 #include "config/display_config.h"
 #include "display/display.h"
 #include "gpu/gpu.h"
+#include "render/render.h"
 #include "session/frame.h"
 #include "session/scene.h"
 #include "session/session.h"
@@ -65,11 +67,58 @@ static void counts_of(struct session *s, struct counts *c)
     c->swaps = session_stats(s)->volume_swaps;
 }
 
+/* What the macro cells of the step just swapped in show, against the GPU's build of them. */
+struct cells_seen {
+    float *last; /* the last step's cells */
+    size_t last_count;
+    int differ_step;   /* step changes whose cells differ from the step's before */
+    int differ_border; /* steps whose cells without the voxels around each cell would differ */
+};
+
+/* The swapped-in step's cells on R (made by the stage's CPU or by the GPU in pieces) are the
+ * GPU's whole build from the step's texture, bit for bit. */
+static void check_step_cells(struct renderer *r, const struct render_cells_programs *p,
+                             struct cells_seen *seen)
+{
+    const struct render_cells *have = renderer_cells(r);
+    struct render_cells want = {0};
+    assert_true(render_cells_build(&want, p, renderer_volume_texture(r), NULL, renderer_grid(r)));
+    assert_int_equal(have->count, want.count);
+    assert_memory_equal(have->dims, want.dims, sizeof(want.dims));
+    float *got = render_cells_read(have), *gpu = render_cells_read(&want);
+    assert_non_null(got);
+    assert_non_null(gpu);
+    size_t bytes = want.count * sizeof(float);
+    if (memcmp(got, gpu, bytes) != 0)
+        fail_msg("step cells: the staged step's macro cells are not the GPU's of its texture");
+    if (seen->last && seen->last_count == want.count && memcmp(seen->last, gpu, bytes) != 0)
+        seen->differ_step++;
+    /* The step's extinction read back: its cells without the border are other cells. */
+    struct ext_volume vol = {0};
+    assert_true(ext_volume_init(&vol, renderer_grid(r)));
+    gpu_texture_read(renderer_volume_texture(r), vol.beta,
+                     2 * grid3_count(renderer_grid(r)) * sizeof(float));
+    struct render_cells layout;
+    float *no_border = render_cells_cpu(&vol, NULL, 0, &layout);
+    assert_non_null(no_border);
+    seen->differ_border += memcmp(no_border, gpu, bytes) != 0;
+    free(no_border);
+    ext_volume_finish(&vol);
+    free(seen->last);
+    seen->last = gpu;
+    seen->last_count = want.count;
+    free(got);
+    render_cells_finish(&want);
+}
+
 /* Plays the series through on a run's session, frame by frame with the preparation between
  * frames, and checks every step change; each new step's picture is compared with the
- * reference's of the same frame state.  Returns the step changes seen; *MOVED counts the
- * frames whose picture changed while the step did not (the blend). */
-static int play(const char *path, const char *const *sets, int n_sets, int *moved)
+ * reference's of the same frame state, and its macro cells with the GPU's build of them:
+ * made by the stage on the CPU, or with GPU_CELLS by the GPU in pieces.  Returns the step
+ * changes seen; *MOVED counts the frames whose picture changed while the step did not (the
+ * blend). */
+static int play_cells(const char *path, const char *const *sets, int n_sets, bool gpu_cells,
+                      int *moved)
 {
     struct config cfg;
     const char *base[8] = {"render.width=40", "render.height=30",
@@ -85,6 +134,13 @@ static int play(const char *path, const char *const *sets, int n_sets, int *move
     dcfg.window_size[1] = cfg.render.height;
     struct display *da = open_display(&cfg, &dcfg), *db = open_display(&cfg, &dcfg);
     struct session *a = make(&cfg, &dcfg, true), *b = make(&cfg, &dcfg, true);
+    struct renderer *ra = session_renderer(a);
+    renderer_set_stage_cpu_cells(ra, !gpu_cells);
+    bool half = cfg.render.precision == PRECISION_HALF;
+    struct render_cells_programs programs;
+    assert_true(render_cells_programs_init(&programs));
+    struct cells_seen seen = {0};
+    unsigned cpu_cells = renderer_stats(ra)->cpu_cells;
     session_set_playing(a, true);
     struct counts before, after, start;
     counts_of(a, &start);
@@ -122,7 +178,12 @@ static int play(const char *path, const char *const *sets, int n_sets, int *move
             assert_int_equal(after.builds, before.builds);
             assert_int_equal(after.uploads, before.uploads);
             assert_int_equal(after.swaps, before.swaps + 1);
+            /* Its cells were made between frames: by the CPU unless asked otherwise. */
+            unsigned made = renderer_stats(ra)->cpu_cells;
+            assert_true(gpu_cells || half ? made == cpu_cells : made > cpu_cells);
+            cpu_cells = made;
             }
+            check_step_cells(ra, &programs, &seen);
             /* The same picture as a session that uploads and builds that step itself. */
             struct frame_state g = f;
             for (int k = 0; k < 500 && session_step_shown(b) != session_step_shown(a); k++) {
@@ -154,6 +215,11 @@ static int play(const char *path, const char *const *sets, int n_sets, int *move
     }
     assert_int_equal(shown, session_step_count(a) - 1); /* played to the end */
     image_finish(&prev);
+    /* The cells' check would see cells of the step before, or without their border. */
+    assert_true(seen.differ_step > 0);
+    assert_true(seen.differ_border > 0);
+    free(seen.last);
+    render_cells_programs_finish(&programs);
     /* The uploads and builds did happen, between frames. */
     counts_of(a, &after);
     assert_true(after.bytes > start.bytes);
@@ -165,6 +231,11 @@ static int play(const char *path, const char *const *sets, int n_sets, int *move
     return changes;
 }
 
+static int play(const char *path, const char *const *sets, int n_sets, int *moved)
+{
+    return play_cells(path, sets, n_sets, false, moved);
+}
+
 static void test_plain(void **state)
 {
     (void)state;
@@ -172,6 +243,26 @@ static void test_plain(void **state)
     const char *sets[] = {"effects.temporal=\"off\""};
     assert_int_equal(play(series_cfg, sets, 1, &moved), 3);
     assert_int_equal(moved, 0); /* one picture per step */
+}
+
+/* The same played with the staged cells built by the GPU, and in half floats (where the
+ * GPU builds them from the rounded values). */
+static void test_plain_gpu_cells(void **state)
+{
+    (void)state;
+    int moved;
+    const char *sets[] = {"effects.temporal=\"off\""};
+    assert_int_equal(play_cells(series_cfg, sets, 1, true, &moved), 3);
+    assert_int_equal(moved, 0);
+}
+
+static void test_half(void **state)
+{
+    (void)state;
+    int moved;
+    const char *sets[] = {"effects.temporal=\"on\"", "render.precision=\"half\""};
+    assert_int_equal(play(series_cfg, sets, 2, &moved), 3);
+    assert_true(moved > 0);
 }
 
 static void test_temporal(void **state)
@@ -440,6 +531,7 @@ int main(void)
         cmocka_unit_test(test_stage_paced_floats), cmocka_unit_test(test_stage_paced_half),
         cmocka_unit_test(test_pair_cells_pieces),  cmocka_unit_test(test_pair_cells_from_cells),
         cmocka_unit_test(test_slab_bytes),         cmocka_unit_test(test_plain),
+        cmocka_unit_test(test_plain_gpu_cells),    cmocka_unit_test(test_half),
         cmocka_unit_test(test_temporal),           cmocka_unit_test(test_fields),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
