@@ -92,7 +92,14 @@ fps 10
 5 key sun-left
 EOF
 # A render with a live, moving head, recorded; replayed without any tracker: the same images.
-start_dtrack "$tmp/dtrack.txt" 20
+# The head walks 30 tracked poses, 20 mm apart (a different one every 1/60 s), so two drawn
+# frames record the same head only if they fall on one datagram; the stick still, no buttons.
+for i in $(seq 0 29); do
+    printf 'ts %d.0\n6dcal 2\n6d 1 [0 1.000][%d.0 -500.0 1650.0][1 0 0 0 1 0 0 0 1]\n' \
+        "$i" $((20 * i - 300))
+    printf '6df2 1 1 [0 1.000 6 2][200.0 -900.0 1200.0][1 0 0 0 1 0 0 0 1][0 0.0 0.5]\n---\n'
+done >"$tmp/dtrack-walk.txt"
+start_dtrack "$tmp/dtrack-walk.txt" 20
 expect_exit 0 "render a live tracked CAVE with --record" "$anvil" render \
     "$src/configs/default.cfg" $small --display "$cave_dtrack" --set head.address=$port \
     --set wand.address=$port --input "$tmp/script.txt" --record "$tmp/rec.txt" -o "$tmp/live/"
