@@ -28,6 +28,13 @@
 // STRETCHED 1 = the volume is on the model's own levels (data/volume.h): heights reach the
 // textures through vol_tex (zmap.glsl), and the automatic step follows the local level
 // thickness instead of one voxel size.
+// BALLOT 1 (PASS 1, where the driver offers GL_ARB_shader_ballot and 64-bit integers): the rays
+// left to PASS 2 are listed by a subgroup ballot, one atomic a subgroup, instead of through a
+// work group's shared count between three barriers (render.h, renderer_set_ballot).
+#if defined(BALLOT) && BALLOT
+#extension GL_ARB_shader_ballot : require
+#extension GL_ARB_gpu_shader_int64 : require
+#endif
 uniform vec2 mean_cosine;    // g of the ice and the water phase (MULTIPLE)
 
 #include "bindings.h"
@@ -63,7 +70,10 @@ layout(std430, binding = BIND_EYE_BUF_RAYS) buffer ray_list {
     uvec2 rays[];
 };
 #endif
-#if PASS == 1
+#ifndef BALLOT
+#define BALLOT 0
+#endif
+#if PASS == 1 && !BALLOT
 shared uint group_count, group_base;
 #endif
 
@@ -574,6 +584,26 @@ void main()
                                  t_occupied, n_cells);
         listed = t_clear < t1;
     }
+#if BALLOT
+    // The subgroup's listed rays take consecutive slots: the lowest listed lane reserves them
+    // all and the others read its base; a lane's slot follows the listed lanes below it.
+    uint64_t vote = ballotARB(listed);
+    uvec2 voted = unpackUint2x32(vote);
+    uvec2 below = unpackUint2x32(vote & gl_SubGroupLtMaskARB);
+    uint listed_n = uint(bitCount(voted.x) + bitCount(voted.y));
+    uint rank = uint(bitCount(below.x) + bitCount(below.y));
+    uint base = 0u;
+    if (listed && rank == 0u) {
+        base = atomicAdd(rays_count, listed_n);
+        atomicMax(rays_groups[0], (base + listed_n + 63u) / 64u);
+    }
+    if (listed_n > 0u) { // the same in every lane of the subgroup
+        uint leader = voted.x != 0u ? uint(findLSB(voted.x)) : 32u + uint(findLSB(voted.y));
+        base = readInvocationARB(base, leader);
+    }
+    if (listed)
+        rays[base + rank] = uvec2(uint(pix.x) | (uint(pix.y) << 16), floatBitsToUint(t_clear));
+#else
     if (gl_LocalInvocationIndex == 0u)
         group_count = 0u;
     barrier();
@@ -589,6 +619,7 @@ void main()
     if (listed)
         rays[group_base + local] = uvec2(uint(pix.x) | (uint(pix.y) << 16),
                                          floatBitsToUint(t_clear));
+#endif
 #if COUNT
     if (listed)
         count_add(2, n_cells); // the others count theirs below

@@ -244,8 +244,9 @@ bool data_folder_pattern(const char *dir, char *pattern, size_t size, size_t *co
      * the pattern groups them by domain); anything else a folder holds is taken by its
      * extension, as a run folder also holds namelists, logs and boundary files. */
     static const struct {
-        const char *suffix, *what;
-    } kinds[] = {{"wrfout_d*", "files of WRF output"}, {"*.nc", "NetCDF files"}};
+        const char *suffix, *one, *many;
+    } kinds[] = {{"wrfout_d*", "file of WRF output", "files of WRF output"},
+                 {"*.nc", "NetCDF file", "NetCDF files"}};
     for (size_t i = 0; i < sizeof(kinds) / sizeof(kinds[0]); i++) {
         if (!escaped_pattern(dir, kinds[i].suffix, pattern, size))
             return false;
@@ -260,7 +261,7 @@ bool data_folder_pattern(const char *dir, char *pattern, size_t size, size_t *co
         globfree(&g);
         if (files > 0) {
             *count = files;
-            *what = kinds[i].what;
+            *what = files == 1 ? kinds[i].one : kinds[i].many;
             return true;
         }
     }

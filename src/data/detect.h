@@ -42,9 +42,9 @@ bool data_kind_is_series(enum data_kind k);
 /* A folder that is not an Isabel folder, named as its data: the glob pattern (into PATTERN,
  * SIZE bytes, DIR's own pattern characters escaped) of WRF's history files in it
  * (DIR/wrfout_d*, every domain) when it holds any, else of its files named .nc.
- * COUNT: how many files the pattern matches; WHAT: "files of WRF output" or "NetCDF files".  False
- * when DIR holds neither (or the pattern does not fit).  What the files are is for
- * data_detect to say, file by file. */
+ * COUNT: how many files the pattern matches; WHAT: "files of WRF output" or "NetCDF files"
+ * ("file of WRF output", "NetCDF file" for one).  False when DIR holds neither (or the
+ * pattern does not fit).  What the files are is for data_detect to say, file by file. */
 bool data_folder_pattern(const char *dir, char *pattern, size_t size, size_t *count,
                          const char **what);
 

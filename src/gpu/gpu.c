@@ -663,6 +663,11 @@ bool gpu_software_driver(void)
     return name && (strstr(name, "llvmpipe") || strstr(name, "softpipe"));
 }
 
+bool gpu_has_extension(const char *name)
+{
+    return epoxy_has_gl_extension(name);
+}
+
 void gpu_timer_queue_init(struct gpu_timer_queue *q, enum gpu_timer_clock clock)
 {
     memset(q, 0, sizeof(*q));

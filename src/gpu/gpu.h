@@ -310,6 +310,9 @@ void gpu_timings_add(struct gpu_timings *log, unsigned number, double ms);
  * the caller: work off the render thread competes with the frame's). */
 bool gpu_software_driver(void);
 
+/* Whether the current context offers the OpenGL extension NAME ("GL_ARB_shader_ballot"). */
+bool gpu_has_extension(const char *name);
+
 /* How a queue measures.  AUTO (zero) takes WALL on software drivers and QUERIES elsewhere;
  * QUERIES there would measure next to nothing, but follows the same bookkeeping (tests). */
 enum gpu_timer_clock { GPU_TIMER_AUTO, GPU_TIMER_QUERIES, GPU_TIMER_WALL };

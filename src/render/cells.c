@@ -323,7 +323,6 @@ bool render_cells_cpu_begin(struct render_cells_cpu *w, const struct grid3 *grid
         w->cells = malloc(layout.count * sizeof(float));
         if (!w->planes || !w->row || !w->cells) {
             render_cells_cpu_finish(w);
-            log_error("out of memory for the macro cells of %d x %d x %d voxels", n[0], n[1], n[2]);
             return false;
         }
     }
@@ -423,6 +422,8 @@ float *render_cells_cpu(const struct ext_volume *vol, const struct ext_volume *n
     for (int k = 0; k < (next ? 2 : 1); k++) {
         const struct ext_volume *v = k ? next : vol;
         if (!render_cells_cpu_begin(&w[k], &vol->grid, halo)) {
+            log_error("out of memory for the macro cells of %d x %d x %d voxels",
+                      vol->grid.n[0], vol->grid.n[1], vol->grid.n[2]);
             render_cells_cpu_finish(&w[0]);
             return NULL;
         }

@@ -74,6 +74,8 @@ struct renderer {
     size_t stage_done; /* bytes of the staged volume uploaded so far */
     bool stage_paced;  /* the copy in slices in renderer_stage_step (renderer_set_stage_paced) */
     bool stage_cpu_cells; /* the stage makes the cells (renderer_set_stage_cpu_cells) */
+    bool ballot_offered;  /* GL_ARB_shader_ballot with 64-bit integers */
+    bool ballot;          /* the first pass lists its rays by ballot (renderer_set_ballot) */
     struct gpu_texture phase;
     float mean_cosine[2]; /* g of the ice and the water phase (MULTIPLE) */
     struct gpu_program tonemap, tonemap_packed;
@@ -157,6 +159,9 @@ struct renderer *renderer_create(void)
     gpu_timer_queue_init(&r->timers, GPU_TIMER_AUTO);
     r->stage_paced = gpu_software_driver();
     r->stage_cpu_cells = true;
+    r->ballot_offered = gpu_has_extension("GL_ARB_shader_ballot") &&
+                        gpu_has_extension("GL_ARB_gpu_shader_int64");
+    r->ballot = r->ballot_offered;
     return r;
 }
 
@@ -215,6 +220,12 @@ bool renderer_stage_paced(const struct renderer *r)
 void renderer_set_stage_cpu_cells(struct renderer *r, bool cpu)
 {
     r->stage_cpu_cells = cpu;
+}
+
+bool renderer_set_ballot(struct renderer *r, bool on)
+{
+    r->ballot = on && r->ballot_offered;
+    return r->ballot;
 }
 
 double renderer_stage_cells_ms(struct renderer *r)
@@ -1179,7 +1190,7 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
     bool opaque = false;
     for (int i = 0; i < r->n_meshes; i++)
         opaque |= r->meshes[i]->visible;
-    char defines[384];
+    char defines[512];
     /* Temporal interpolation needs the next volume; without it the pass is the plain one. */
     bool temporal = s->temporal && r->have_next;
     /* Effects that are off are compiled out (app/effects.h). */
@@ -1205,7 +1216,8 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
         cells = temporal ? renderer_pair_cells(r) : (r->cells.levels ? &r->cells : NULL);
     const struct gpu_program *progs[2] = {NULL, NULL};
     for (int pass = 0; pass < (cells ? 2 : 1); pass++) {
-        snprintf(defines, sizeof(defines), "%s%s%s%s%s%s%s%s%s%s#define PASS %d\n",
+        snprintf(defines, sizeof(defines), "%s%s%s%s%s%s%s%s%s%s%s#define PASS %d\n",
+                 cells && pass == 0 && r->ballot ? "#define BALLOT 1\n" : "",
                  light_defines, grid3_stretched(&r->grid) ? "#define STRETCHED 1\n" : "",
                  opaque ? "#define OPAQUE 1\n" : "", phase,
                  s->no_ground_shadow ? "#define GROUND_SHADOW 0\n" : "",

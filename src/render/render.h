@@ -111,6 +111,12 @@ bool renderer_stage_paced(const struct renderer *r);
  * (renderer_set_half) always take the GPU's.  The cells are the same either way.  Takes effect
  * at the next renderer_stage_next. */
 void renderer_set_stage_cpu_cells(struct renderer *r, bool cpu);
+/* Whether the eye pass's first pass (with empty-space skipping) lists the rays it leaves to the
+ * second by a subgroup ballot, one atomic a subgroup and no barrier (GL_ARB_shader_ballot and
+ * GL_ARB_gpu_shader_int64; on from the start where the driver offers both), or by a work
+ * group's shared count between barriers.  The rays listed, and so the picture, are the same
+ * either way; only their order in the list differs.  Returns whether the ballot is used. */
+bool renderer_set_ballot(struct renderer *r, bool on);
 /* The CPU time the stage's cells have taken so far, ms (on the stage's thread, or with a paced
  * copy within renderer_stage_step's slices of it). */
 double renderer_stage_cells_ms(struct renderer *r);
@@ -378,8 +384,8 @@ struct render_cells_cpu {
     float *cells;    /* every cell's value, level 0 first, once render_cells_cpu_levels ran */
 };
 
-/* Lays W out for a volume on GRID (its memory kept when the layout is the same).  False
- * (logged) when out of memory. */
+/* Lays W out for a volume on GRID (its memory kept when the layout is the same).  False when
+ * out of memory (not logged: the caller says what it does instead). */
 bool render_cells_cpu_begin(struct render_cells_cpu *w, const struct grid3 *grid, int halo);
 /* Z planes FROM .. TO - 1 of BETA (the whole volume's array) reduced along x and y. */
 void render_cells_cpu_planes(struct render_cells_cpu *w, const float *beta, int from, int to);

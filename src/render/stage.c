@@ -232,6 +232,8 @@ bool render_stage_begin(struct render_stage *st, const struct ext_volume *vol, f
     }
     /* Without memory for the cells the GPU builds them, as from a half-float texture. */
     bool with_cells = cells && !half && render_cells_cpu_begin(&st->cpu_cells, &vol->grid, 1);
+    if (cells && !half && !with_cells)
+        log_warn("no memory for the next step's macro cells on the CPU: the GPU builds them");
     if (st->started)
         pthread_mutex_lock(&st->lock);
     st->cells = with_cells;

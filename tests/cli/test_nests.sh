@@ -36,7 +36,7 @@ check "it says what it took" stderr_has "run/: 2 files of WRF output (run/wrfout
 check "both domains, composed" stdout_has "2 WRF domains in one scene, composed on 72 x 72 columns"
 cp wrfout_d01.nc "odd [1]/parent.nc"
 expect_exit 0 "info on a folder of .nc files" "$anvil" info "odd [1]"
-check "it says what it took" stderr_has "odd \[1\]: 1 NetCDF files"
+check "it says what it took" stderr_has "odd \[1\]: 1 NetCDF file ("
 check "the file is read" stdout_has "24 x 24 columns x 16 mass levels"
 echo "notes" >none/README
 expect_exit 1 "a folder of neither" "$anvil" info none

@@ -225,28 +225,39 @@ static double skip_against_plain_on(const char **sets, int n, bool stretched,
     struct render_settings s;
     scene_render_settings(&cfg, &s);
     effects_apply_render(&e, &s);
-    struct image img[2] = {{0}};
-    for (int k = 0; k < 2; k++) {
-        s.no_skip = k == 1;
+    /* Skipping with the rays listed by ballot (where the driver offers it), skipping with
+     * them listed through the work group's shared count, and the plain pass. */
+    bool ballot = gpu_has_extension("GL_ARB_shader_ballot") &&
+                  gpu_has_extension("GL_ARB_gpu_shader_int64");
+    struct image img[3] = {{0}};
+    struct render_counts shared;
+    for (int k = 0; k < 3; k++) {
+        s.no_skip = k == 2;
+        assert_true(renderer_set_ballot(renderer, k == 0) == (k == 0 && ballot));
         struct gpu_texture out = {0};
         assert_true(renderer_set_counting(renderer, true));
         assert_true(renderer_draw(renderer, &s, &view, &out));
-        assert_true(renderer_counts(renderer, k ? without : with));
+        assert_true(renderer_counts(renderer, k == 0 ? with : k == 1 ? &shared : without));
         assert_true(renderer_set_counting(renderer, false));
         assert_true(renderer_read(&out, &img[k]));
         gpu_texture_finish(&out);
     }
+    renderer_set_ballot(renderer, true);
+    /* The two ways of listing give the same rays the same work, bit for bit. */
+    assert_memory_equal(img[0].rgba, img[1].rgba,
+                        (size_t)img[0].width * img[0].height * 4 * sizeof(float));
+    assert_memory_equal(with, &shared, sizeof(shared));
     double worst = 0.0;
     size_t values = (size_t)img[0].width * img[0].height * 4;
     for (size_t i = 0; i < values; i++) {
-        double a = img[0].rgba[i], b = img[1].rgba[i];
+        double a = img[0].rgba[i], b = img[2].rgba[i];
         assert_true(isfinite(a));
         double scale = fmax(fabs(a), fabs(b));
         double rel = scale > 0.0 ? fabs(a - b) / scale : 0.0;
         worst = fmax(worst, rel);
     }
-    image_finish(&img[0]);
-    image_finish(&img[1]);
+    for (int k = 0; k < 3; k++)
+        image_finish(&img[k]);
     lightmaps_finish(&light);
     ext_volume_finish(&vol);
     /* Every ray counted once, with skipping or without; the plain pass marches them all. */
