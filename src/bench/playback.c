@@ -115,6 +115,8 @@ static bool play(const struct bench_playback_desc *d, const struct config *cfg, 
     int steps_after_first = 0;
     double kind_start[SESSION_PIECE_KINDS]; /* the work by kind before the clock started */
     memcpy(kind_start, session_stats(s)->prepare_kind_ms, sizeof(kind_start));
+    double light_start[LIGHT_BUILD_PHASES];
+    memcpy(light_start, session_stats(s)->prepare_light_ms, sizeof(light_start));
     while (shown < steps - 1 && out->frames < MAX_FRAMES) {
         double t0 = time_now_ms(), c0 = cpu_now_ms();
         double bytes = (double)rs->upload_bytes;
@@ -182,6 +184,8 @@ static bool play(const struct bench_playback_desc *d, const struct config *cfg, 
     out->median_ms = median(normal, normals);
     for (int k = 0; k < SESSION_PIECE_KINDS; k++)
         out->kind_ms[k] = session_stats(s)->prepare_kind_ms[k] - kind_start[k];
+    for (int k = 0; k < LIGHT_BUILD_PHASES; k++)
+        out->light_ms[k] = session_stats(s)->prepare_light_ms[k] - light_start[k];
     ok = shown == steps - 1;
     if (!ok)
         log_error("bench: playback: %d frames played to step %d of %d", out->frames, shown,
@@ -293,6 +297,21 @@ void bench_write_playback_table(FILE *f, const struct bench_playback_desc *d,
         snprintf(label, sizeof(label), "of which %s, CPU ms",
                  session_piece_kind_name((enum session_piece_kind)k));
         ROW(label, "%.0f", u->changes > 0 ? u->kind_ms[k] / u->changes : 0.0);
+    }
+    /* The light build by its passes, those the staged run spent time in. */
+    for (int k = 0; k < LIGHT_BUILD_PHASES; k++) {
+        const struct bench_playback_run *st = runs[1];
+        if (st->changes == 0 || st->light_ms[k] / st->changes < 0.5)
+            continue; /* a pass it went through in no time (or not at all) */
+        const char *name = light_build_phase_name((enum light_build_phase)k);
+        const char *prefix = "light build: ";
+        if (k == LIGHT_BUILD_START)
+            name = "its start (its textures, and its first piece)";
+        else if (strncmp(name, prefix, strlen(prefix)) == 0)
+            name += strlen(prefix);
+        char label[96];
+        snprintf(label, sizeof(label), "of the light build, %s, CPU ms", name);
+        ROW(label, "%.0f", u->changes > 0 ? u->light_ms[k] / u->changes : 0.0);
     }
     ROW("the longest frame with the work after it ÷ a normal frame", "%.2f",
         u->median_ms > 0.0 ? u->interval_max_ms / u->median_ms : 0.0);

@@ -49,6 +49,7 @@ struct bench_playback_run {
     double longest_piece_ms;
     double work_ms;                      /* all the work between frames while playing */
     double kind_ms[SESSION_PIECE_KINDS]; /* the same by kind (session_stats.prepare_kind_ms) */
+    double light_ms[LIGHT_BUILD_PHASES]; /* the light build's by pass (prepare_light_ms) */
     unsigned stalls;        /* frames whose step was due but not ready (the cursor waited) */
     double change_bytes;    /* volume bytes uploaded inside step-change frames, in all */
     unsigned change_builds; /* light map builds inside step-change frames, in all */

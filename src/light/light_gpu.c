@@ -924,27 +924,53 @@ bool light_gpu_build_step(struct light_gpu *lg, double budget_ms, bool *done)
     return true;
 }
 
-const char *light_gpu_build_doing(const struct light_gpu *lg)
+enum light_build_phase light_gpu_build_phase(const struct light_gpu *lg)
 {
     if (!lg->job.active)
-        return "the light build's start";
+        return LIGHT_BUILD_START;
     switch (lg->job.phase) {
     case JOB_RATES:
-        return "light build: lateral rates";
+        return LIGHT_BUILD_RATES;
     case JOB_SLICES:
-        return "light build: slices";
+        return LIGHT_BUILD_SLICES;
     case JOB_SWEEP:
-        return "light build: sweep";
+        return LIGHT_BUILD_SWEEP;
     case JOB_DIFFUSE:
-        return "light build: the columns' diffuse light";
+        return LIGHT_BUILD_DIFFUSE;
     case JOB_VOLUME:
-        return "light build: the diffuse light volume's solve";
+        return LIGHT_BUILD_VOLUME;
     case JOB_COMPRESS:
-        return "light build: compression";
-    case JOB_DONE:
+    case JOB_DONE: /* not seen: a job that reaches it is no longer active */
         break;
     }
-    return "light build: its end";
+    return LIGHT_BUILD_COMPRESS;
+}
+
+const char *light_build_phase_name(enum light_build_phase phase)
+{
+    switch (phase) {
+    case LIGHT_BUILD_START:
+        return "the light build's start";
+    case LIGHT_BUILD_RATES:
+        return "light build: lateral rates";
+    case LIGHT_BUILD_SLICES:
+        return "light build: slices";
+    case LIGHT_BUILD_SWEEP:
+        return "light build: sweep";
+    case LIGHT_BUILD_DIFFUSE:
+        return "light build: the columns' diffuse light";
+    case LIGHT_BUILD_VOLUME:
+        return "light build: the diffuse light volume's solve";
+    case LIGHT_BUILD_COMPRESS:
+    case LIGHT_BUILD_PHASES:
+        break;
+    }
+    return "light build: compression";
+}
+
+const char *light_gpu_build_doing(const struct light_gpu *lg)
+{
+    return light_build_phase_name(light_gpu_build_phase(lg));
 }
 
 bool light_gpu_building(const struct light_gpu *lg)

@@ -58,8 +58,23 @@ bool light_gpu_build_begin(struct light_gpu *lg, const struct light_gpu_source *
                            enum light_gpu_mode mode, bool *needed);
 bool light_gpu_build_step(struct light_gpu *lg, double budget_ms, bool *done);
 bool light_gpu_building(const struct light_gpu *lg);
-/* The pass the next light_gpu_build_step works on, in words (the playback bench's
- * breakdown of the work between frames). */
+/* The pass the next light_gpu_build_step works on (the playback bench's breakdown of the work
+ * between frames): LIGHT_BUILD_START when no build is under way (the next step begins one: its
+ * textures, and its first piece), then the passes in their order. */
+enum light_build_phase {
+    LIGHT_BUILD_START,
+    LIGHT_BUILD_RATES,
+    LIGHT_BUILD_SLICES,
+    LIGHT_BUILD_SWEEP,
+    LIGHT_BUILD_DIFFUSE,
+    LIGHT_BUILD_VOLUME,
+    LIGHT_BUILD_COMPRESS,
+    LIGHT_BUILD_PHASES
+};
+enum light_build_phase light_gpu_build_phase(const struct light_gpu *lg);
+/* PHASE in words: "the light build's start", "light build: lateral rates", ... */
+const char *light_build_phase_name(enum light_build_phase phase);
+/* The same for the pass the next piece works on. */
 const char *light_gpu_build_doing(const struct light_gpu *lg);
 void light_gpu_build_cancel(struct light_gpu *lg);
 

@@ -186,10 +186,15 @@ bool lightmaps_prepare_next(struct lightmaps *al, const struct lightmaps_params 
     return build_next(al, 1 - serving_slot(al, true), r, p, budget_ms, done, st);
 }
 
-const char *lightmaps_next_doing(const struct lightmaps *al)
+enum light_build_phase lightmaps_next_phase(const struct lightmaps *al)
 {
     const struct light_gpu *lg = 1 - serving_slot(al, true) ? al->spare : al->gpu;
-    return lg ? light_gpu_build_doing(lg) : "the light build's start";
+    return lg ? light_gpu_build_phase(lg) : LIGHT_BUILD_START;
+}
+
+const char *lightmaps_next_doing(const struct lightmaps *al)
+{
+    return light_build_phase_name(lightmaps_next_phase(al));
 }
 
 bool lightmaps_next_built(const struct lightmaps *al, uint64_t next_id)

@@ -82,7 +82,8 @@ bool lightmaps_update_params(struct lightmaps *al, const struct lightmaps_params
 bool lightmaps_prepare_next(struct lightmaps *al, const struct lightmaps_params *p,
                             struct renderer *r, double budget_ms, bool *done,
                             struct session_stats *st);
-/* What the next lightmaps_prepare_next works on, in words (light_gpu_build_doing). */
+/* What the next lightmaps_prepare_next works on (light_gpu_build_phase), and in words. */
+enum light_build_phase lightmaps_next_phase(const struct lightmaps *al);
 const char *lightmaps_next_doing(const struct lightmaps *al);
 /* Whether the ring holds a map built for step NEXT_ID (true without light maps). */
 bool lightmaps_next_built(const struct lightmaps *al, uint64_t next_id);

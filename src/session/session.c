@@ -1805,6 +1805,7 @@ bool session_prepare(struct session *s, bool *more)
     for (int pieces = 0; ok && progressed; pieces++) {
         const char *what;
         enum session_piece_kind kind = next_piece(s, &what);
+        enum light_build_phase phase = lightmaps_next_phase(&s->light);
         double t = time_now_ms(), left = budget - (t - t0);
         if (pieces > 0 && (left <= 0.0 || (kind < SESSION_PIECE_KINDS && s->piece_ms[kind] > left)))
             break;
@@ -1820,6 +1821,8 @@ bool session_prepare(struct session *s, bool *more)
             s->piece_ms[kind] = now - t;
             s->stats.prepare_kind_ms[kind] += piece_cpu - cells_cpu;
             s->stats.prepare_kind_ms[SESSION_PIECE_CELLS] += cells_cpu;
+            if (kind == SESSION_PIECE_LIGHT)
+                s->stats.prepare_light_ms[phase] += piece_cpu;
         }
         if ((kind == SESSION_PIECE_UPLOAD || slice) && now > t)
             *rate = (double)slab / (now - t);

@@ -9,6 +9,7 @@
 #include <stddef.h>
 
 #include "gpu/gpu.h"
+#include "light/light_gpu.h"
 #include "render/render.h"
 
 /* The kinds of piece staged playback readies the next step in, between frames
@@ -60,6 +61,8 @@ struct session_stats {
     const char *prepare_piece, *prepare_piece_max;
     double prepare_piece_ms, prepare_piece_max_ms;
     double prepare_kind_ms[SESSION_PIECE_KINDS]; /* all of it by kind, CPU ms of the process */
+    /* Of SESSION_PIECE_LIGHT, by the pass each piece worked on (light_gpu_build_phase). */
+    double prepare_light_ms[LIGHT_BUILD_PHASES];
     double frame_ms_max;      /* longest frame of the loop */
     double loop_ms;           /* the frame loop, start to end (total_ms less the start) */
     double first_frame_ms;    /* its first frame (shaders compiled, the first light map) */

@@ -94,6 +94,16 @@ check "playback table: every step shown" \
     grep -q '^| frames played / step changes among them | [0-9]* / 3 | [0-9]* / 3 |$' "$tmp/p/playback-table.md"
 check "playback table: the longest work between frames named, staged only" \
     grep -q "^| the longest stretch's longest piece | — | [a-z][^|]* |$" "$tmp/p/playback-table.md"
+# The light build's passes add up to the light build (each row rounded to a millisecond).
+light_sum() { # the staged column: the light build's row, then the sum of its passes' rows
+    awk -F'|' '/^\| of which the light build, CPU ms/ { total = $4 }
+               /^\| of the light build, / { sum += $4; n++ }
+               END { printf "%d %d %d\n", total, sum, n }' "$tmp/p/playback-table.md"
+}
+check "playback table: the light build by its passes" bash -c "
+    read total sum n <<<'$(light_sum)'
+    [ \$n -ge 2 ] && [ \$total -gt 0 ] && [ \$(( sum - total )) -le \$n ] &&
+    [ \$(( total - sum )) -le \$n ]"
 check "playback series removed" test -z "$(ls "$tmp" | grep anvil-bench-playback)"
 expect_exit 0 "gpu bench" "$anvil" bench --quick --gpu -o "$tmp/g"
 check "gpu table written" test -s "$tmp/g/gpu-table.md"
