@@ -57,14 +57,23 @@ void main()
     ivec3 step = axis == 0 ? ivec3(1, 0, 0) : ivec3(0, 1, 0);
     ivec3 row = axis == 0 ? ivec3(0, id.x, id.z) : ivec3(id.x, 0, id.z);
     int stop = min(start + SEGMENT, len);
+#if SKIP
+    int b = cell_header.y, cell_row = level_rows[id.z >> 2][id.z & 3];
+    // A stretch is 2^L level-0 cells along the axis, one cell of level L: when that cell holds
+    // nothing, no voxel of the stretch is cloudy, nor the voxel before it (a cell's value
+    // covers one voxel around it), so the stretch writes nothing and is done at one read.
+    int stretch_level = findMSB(SEGMENT / b);
+    if (cell_row >= 0 && stretch_level < cell_header.x) {
+        ivec3 c = ivec3((row + start * step).xy / b, cell_row) >> stretch_level;
+        if (cell_max[cell_index(c, stretch_level)] <= 0.0)
+            return;
+    }
+#endif
     int i = start;
     // A run that came in from the stretch before is that stretch's: pass it.
     if (i > 0 && beta_at(row + (i - 1) * step) >= clear_beta)
         while (i < len && beta_at(row + i * step) >= clear_beta)
             i++;
-#if SKIP
-    int b = cell_header.y, cell_row = level_rows[id.z >> 2][id.z & 3];
-#endif
     while (i < stop) {
 #if SKIP
         ivec3 cell = ivec3((row + i * step).xy / b, cell_row);

@@ -645,6 +645,22 @@ bool light_gpu_read(const struct light_gpu *lg, struct light_map *map)
     return read_back(lg, map, true);
 }
 
+bool light_gpu_read_rates(const struct light_gpu *lg, float **out)
+{
+    *out = NULL;
+    if (!lg->have_rates || !lg->rates.id) {
+        log_error("light map: no lateral escape rates on the GPU");
+        return false;
+    }
+    size_t n = (size_t)lg->rates.size[0] * lg->rates.size[1] * lg->rates.size[2] * 2;
+    if (!(*out = malloc(n * sizeof(float)))) {
+        log_error("light map: out of memory for the lateral escape rates");
+        return false;
+    }
+    gpu_texture_read(&lg->rates, *out, n * sizeof(float));
+    return true;
+}
+
 /* Counts the nodes of part CH's (0 the light, 1 the diffuse light) columns on rows FROM ..
  * FROM + COUNT - 1 of the dense map into the columns buffer from word BASE on
  * (light_compress.comp, PASS 1). */

@@ -132,6 +132,10 @@ bool light_gpu_sample(const struct light_gpu *lg, const double p[3], float *beam
  * (initialised here, finish with light_map_finish): the same layout as the CPU reference.  Dense mode only: compressed mode
  * frees the dense volume once its columns are compressed. */
 bool light_gpu_read(const struct light_gpu *lg, struct light_map *map);
+/* The volume's lateral escape rates the last build with lateral escape made (as
+ * light_lateral_rates lays them out: two floats a voxel), malloc'd into *OUT; false (logged)
+ * when it made none. */
+bool light_gpu_read_rates(const struct light_gpu *lg, float **out);
 
 /* The diffuse light volume of the last build (settings.multiple and settings.volume) read back
  * into OUT (zeroed or finished; finish with light_volume_finish): light_volume_build's layout.

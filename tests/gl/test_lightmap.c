@@ -170,6 +170,86 @@ static void test_gpu_matches_cpu_stretched(void **state)
     assert_true(diffuse <= GPU_CPU_DIFFUSE_TOLERANCE);
 }
 
+/* The lateral escape rates (light_lateral.comp) of SETS' volume: built with the macro cells
+ * (whole stretches and empty cells passed at one read each) and without them, read back. */
+static void rates_both_ways(const char **sets, int n, bool stretched, struct ext_volume *vol,
+                            float **with, float **without)
+{
+    struct config cfg;
+    test_config_from(&cfg, sets, n);
+    assert_true(scene_build_volume(&cfg, vol));
+    if (stretched)
+        test_stretch_levels(vol);
+    assert_true(renderer_set_volume(renderer, vol));
+    assert_true(renderer_set_optics(renderer, &cfg.optics.params));
+    struct light_settings s;
+    settings_of(&cfg, &s);
+    s.multiple = true;
+    s.lateral = true;
+    double sun[3];
+    light_sun_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
+    for (int k = 0; k < 2; k++) {
+        struct light_gpu *lg = light_gpu_create();
+        assert_non_null(lg);
+        struct light_gpu_source src = {renderer_volume_texture(renderer),
+                                       renderer_grid(renderer), 1, 1,
+                                       k == 0 ? renderer_cells(renderer) : NULL};
+        assert_true(light_gpu_update(lg, &src, sun, &s, LIGHT_GPU_DENSE, NULL));
+        assert_true(light_gpu_read_rates(lg, k == 0 ? with : without));
+        light_gpu_destroy(lg);
+    }
+}
+
+/* Skipping leaves the rates as they were to the bit, on a storm whose clear air aloft fills
+ * whole 32-voxel stretches' cells (the coarse cell that ends a stretch at one read) and on the
+ * model's uneven levels; and the GPU's rates are the CPU's (light_lateral_rates, the same
+ * float32 operations), on llvmpipe to the bit. */
+static void test_lateral_rates_skip_exact(void **state)
+{
+    const char *storm[] = {"scene.size=[128,128,64]"};
+    for (int stretched = 0; stretched < 2; stretched++) {
+        struct ext_volume vol = {0};
+        float *with = NULL, *without = NULL;
+        rates_both_ways(storm, 1, stretched, &vol, &with, &without);
+        const int *nv = vol.grid.n;
+        size_t values = 2 * (size_t)nv[0] * nv[1] * nv[2], nonzero = 0;
+        assert_memory_equal(with, without, values * sizeof(float));
+        float *cpu = malloc(values * sizeof(float));
+        assert_non_null(cpu);
+        light_lateral_rates(&vol, cpu);
+        double worst = 0.0;
+        for (size_t i = 0; i < values; i++) {
+            nonzero += cpu[i] > 0.0f;
+            double scale = fmax(fabs(cpu[i]), 1e-30);
+            worst = fmax(worst, fabs((double)with[i] - cpu[i]) / scale);
+        }
+        /* The coarse cells that end stretches at one read: some hold nothing. */
+        struct render_cells layout;
+        float *cells = render_cells_cpu(&vol, NULL, 1, &layout);
+        assert_non_null(cells);
+        int level = 0;
+        while ((layout.cell_voxels << level) < 32)
+            level++;
+        assert_true(level < layout.levels);
+        const int *d = layout.dims[level];
+        size_t clear = 0, count = (size_t)d[0] * d[1] * d[2];
+        for (size_t i = 0; i < count; i++)
+            clear += cells[d[3] + i] <= 0.0f;
+        print_message("%s: %zu of %zu rates nonzero, %zu of %zu level-%d cells clear, "
+                      "largest relative |GPU - CPU| %.3g\n",
+                      stretched ? "storm, stretched" : "storm", nonzero, values, clear, count,
+                      level, worst);
+        assert_true(nonzero > values / 100); /* real clouds, not two empty volumes */
+        assert_true(clear > 0 && clear < count);
+        assert_true(worst <= 1e-6);
+        free(cells);
+        free(cpu);
+        free(with);
+        free(without);
+        ext_volume_finish(&vol);
+    }
+}
+
 /* Multiple scattering on the same three scenes: the column pass on the GPU
  * (light_diffuse.comp, after light_lateral.comp) against light_diffuse_column.  The thin
  * sphere (optical diameter 4) is where lateral escape takes most (a third of its diffuse
@@ -861,6 +941,7 @@ int main(void)
         cmocka_unit_test(test_gpu_matches_cpu_slab),
         cmocka_unit_test(test_gpu_matches_cpu_storm),
         cmocka_unit_test(test_gpu_matches_cpu_stretched),
+        cmocka_unit_test(test_lateral_rates_skip_exact),
         cmocka_unit_test(test_build_keeps_only_the_map),
         cmocka_unit_test(test_gpu_compression_matches_cpu),
         cmocka_unit_test(test_compressed_whole_map),
