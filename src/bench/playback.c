@@ -303,12 +303,9 @@ void bench_write_playback_table(FILE *f, const struct bench_playback_desc *d,
         const struct bench_playback_run *st = runs[1];
         if (st->changes == 0 || st->light_ms[k] / st->changes < 0.5)
             continue; /* a pass it went through in no time (or not at all) */
-        const char *name = light_build_phase_name((enum light_build_phase)k);
-        const char *prefix = "light build: ";
-        if (k == LIGHT_BUILD_START)
-            name = "its start (its textures, and its first piece)";
-        else if (strncmp(name, prefix, strlen(prefix)) == 0)
-            name += strlen(prefix);
+        const char *name = k == LIGHT_BUILD_START
+                               ? "its start (its textures, and its first piece)"
+                               : light_build_phase_name((enum light_build_phase)k);
         char label[96];
         snprintf(label, sizeof(label), "of the light build, %s, CPU ms", name);
         ROW(label, "%.0f", u->changes > 0 ? u->light_ms[k] / u->changes : 0.0);

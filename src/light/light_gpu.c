@@ -940,53 +940,37 @@ bool light_gpu_build_step(struct light_gpu *lg, double budget_ms, bool *done)
     return true;
 }
 
+/* The job's phases in light_build_phase's order, after its start. */
+_Static_assert(JOB_RATES + 1 == LIGHT_BUILD_RATES && JOB_SLICES + 1 == LIGHT_BUILD_SLICES &&
+                   JOB_SWEEP + 1 == LIGHT_BUILD_SWEEP && JOB_DIFFUSE + 1 == LIGHT_BUILD_DIFFUSE &&
+                   JOB_VOLUME + 1 == LIGHT_BUILD_VOLUME &&
+                   JOB_COMPRESS + 1 == LIGHT_BUILD_COMPRESS,
+               "job_phase and light_build_phase in one order");
+
 enum light_build_phase light_gpu_build_phase(const struct light_gpu *lg)
 {
-    if (!lg->job.active)
+    /* A job that reaches JOB_DONE is no longer active. */
+    if (!lg->job.active || lg->job.phase == JOB_DONE)
         return LIGHT_BUILD_START;
-    switch (lg->job.phase) {
-    case JOB_RATES:
-        return LIGHT_BUILD_RATES;
-    case JOB_SLICES:
-        return LIGHT_BUILD_SLICES;
-    case JOB_SWEEP:
-        return LIGHT_BUILD_SWEEP;
-    case JOB_DIFFUSE:
-        return LIGHT_BUILD_DIFFUSE;
-    case JOB_VOLUME:
-        return LIGHT_BUILD_VOLUME;
-    case JOB_COMPRESS:
-    case JOB_DONE: /* not seen: a job that reaches it is no longer active */
-        break;
-    }
-    return LIGHT_BUILD_COMPRESS;
+    return (enum light_build_phase)(lg->job.phase + 1);
 }
+
+static const char *const phase_names[LIGHT_BUILD_PHASES] = {
+    "start", "lateral rates", "slices", "sweep", "the columns' diffuse light",
+    "the diffuse light volume's solve", "compression"};
 
 const char *light_build_phase_name(enum light_build_phase phase)
 {
-    switch (phase) {
-    case LIGHT_BUILD_START:
-        return "the light build's start";
-    case LIGHT_BUILD_RATES:
-        return "light build: lateral rates";
-    case LIGHT_BUILD_SLICES:
-        return "light build: slices";
-    case LIGHT_BUILD_SWEEP:
-        return "light build: sweep";
-    case LIGHT_BUILD_DIFFUSE:
-        return "light build: the columns' diffuse light";
-    case LIGHT_BUILD_VOLUME:
-        return "light build: the diffuse light volume's solve";
-    case LIGHT_BUILD_COMPRESS:
-    case LIGHT_BUILD_PHASES:
-        break;
-    }
-    return "light build: compression";
+    return phase >= 0 && phase < LIGHT_BUILD_PHASES ? phase_names[phase] : "?";
 }
 
 const char *light_gpu_build_doing(const struct light_gpu *lg)
 {
-    return light_build_phase_name(light_gpu_build_phase(lg));
+    static const char *const doing[LIGHT_BUILD_PHASES] = {
+        "the light build's start", "light build: lateral rates", "light build: slices",
+        "light build: sweep", "light build: the columns' diffuse light",
+        "light build: the diffuse light volume's solve", "light build: compression"};
+    return doing[light_gpu_build_phase(lg)];
 }
 
 bool light_gpu_building(const struct light_gpu *lg)

@@ -72,9 +72,10 @@ enum light_build_phase {
     LIGHT_BUILD_PHASES
 };
 enum light_build_phase light_gpu_build_phase(const struct light_gpu *lg);
-/* PHASE in words: "the light build's start", "light build: lateral rates", ... */
+/* PHASE's pass in words: "start", "lateral rates", "slices", ... */
 const char *light_build_phase_name(enum light_build_phase phase);
-/* The same for the pass the next piece works on. */
+/* The pass the next piece works on, in a sentence's words: "the light build's start",
+ * "light build: lateral rates", ... */
 const char *light_gpu_build_doing(const struct light_gpu *lg);
 void light_gpu_build_cancel(struct light_gpu *lg);
 

@@ -194,7 +194,8 @@ enum light_build_phase lightmaps_next_phase(const struct lightmaps *al)
 
 const char *lightmaps_next_doing(const struct lightmaps *al)
 {
-    return light_build_phase_name(lightmaps_next_phase(al));
+    const struct light_gpu *lg = 1 - serving_slot(al, true) ? al->spare : al->gpu;
+    return lg ? light_gpu_build_doing(lg) : "the light build's start";
 }
 
 bool lightmaps_next_built(const struct lightmaps *al, uint64_t next_id)
