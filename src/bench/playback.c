@@ -98,7 +98,7 @@ static bool play(const struct bench_playback_desc *d, const struct config *cfg, 
             if (!more)
                 break;
         }
-        quiet = session_stats(s)->cache_loads >= (unsigned)(steps - 1) && !more ? quiet + 1 : 0;
+        quiet = session_stats(s)->cache_steps >= steps && !more ? quiet + 1 : 0;
         if (time_now_ms() - start > WARM_LIMIT_MS) {
             log_error("bench: playback: the series did not load within %.0f s",
                       WARM_LIMIT_MS / 1e3);

@@ -1,6 +1,8 @@
+#define _GNU_SOURCE /* pthread_setname_np */
 #include "common/parallel.h"
 
 #include <pthread.h>
+#include <stdio.h>
 #include <unistd.h>
 
 struct share {
@@ -17,6 +19,12 @@ static void *run_share(void *arg)
     struct share *s = arg;
     s->ok = s->begin >= s->end || s->fn(s->ctx, s->index, s->begin, s->end);
     return NULL;
+}
+
+static void *start_share(void *arg)
+{
+    parallel_name_thread("anvil-share");
+    return run_share(arg);
 }
 
 int parallel_share_count(size_t n, size_t min)
@@ -41,7 +49,7 @@ bool parallel_for(size_t n, size_t min, void *ctx,
         size_t begin = per * (size_t)t < n ? per * (size_t)t : n;
         size_t end = begin + per < n ? begin + per : n;
         jobs[t] = (struct share){.ctx = ctx, .fn = fn, .index = t, .begin = begin, .end = end};
-        if (t == tn - 1 || pthread_create(&jobs[t].thread, NULL, run_share, &jobs[t]) != 0)
+        if (t == tn - 1 || pthread_create(&jobs[t].thread, NULL, start_share, &jobs[t]) != 0)
             run_share(&jobs[t]);
         else
             started[t] = true;
@@ -53,4 +61,11 @@ bool parallel_for(size_t n, size_t min, void *ctx,
         ok = ok && jobs[t].ok;
     }
     return ok;
+}
+
+void parallel_name_thread(const char *name)
+{
+    char kept[16];
+    snprintf(kept, sizeof(kept), "%s", name);
+    (void)pthread_setname_np(pthread_self(), kept);
 }

@@ -21,4 +21,8 @@ bool parallel_for(size_t n, size_t min, void *ctx,
 /* The shares parallel_for(N, MIN) makes: how many threads it runs. */
 int parallel_share_count(size_t n, size_t min);
 
+/* Names the calling thread NAME (at most 15 bytes are kept), so that `top -H`, `ps -L` and a
+ * debugger tell anvil's threads apart; a name the system refuses is let go. */
+void parallel_name_thread(const char *name);
+
 #endif

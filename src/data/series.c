@@ -7,6 +7,7 @@
 #include <time.h>
 
 #include "common/log.h"
+#include "common/parallel.h"
 
 enum entry_state { ENTRY_EMPTY, ENTRY_LOADING, ENTRY_READY, ENTRY_FAILED };
 
@@ -104,9 +105,22 @@ static void evict(struct series *s)
     }
 }
 
+/* E holds *VOL from now on (ready, most recently used).  Called with the lock held. */
+static void keep(struct series *s, struct entry *e, struct ext_volume *vol)
+{
+    e->vol = *vol;
+    memset(vol, 0, sizeof(*vol));
+    e->bytes = grid3_count(&e->vol.grid) * (2 * sizeof(float) + (e->vol.tint ? 4 : 0));
+    e->state = ENTRY_READY;
+    e->last_used = ++s->clock;
+    s->stats.cached_bytes += e->bytes;
+    s->stats.cached_steps++;
+}
+
 static void *worker(void *arg)
 {
     struct series *s = arg;
+    parallel_name_thread("anvil-series");
     pthread_mutex_lock(&s->lock);
     for (;;) {
         int step = -1;
@@ -141,12 +155,7 @@ static void *worker(void *arg)
             ext_volume_finish(&vol); /* invalidated while loading: load again */
             e->state = ENTRY_EMPTY;
         } else if (ok) {
-            e->vol = vol;
-            e->bytes = grid3_count(&vol.grid) * (2 * sizeof(float) + (vol.tint ? 4 : 0));
-            e->state = ENTRY_READY;
-            e->last_used = ++s->clock;
-            s->stats.cached_bytes += e->bytes;
-            s->stats.cached_steps++;
+            keep(s, e, &vol);
             evict(s);
         } else {
             ext_volume_finish(&vol);
@@ -323,6 +332,41 @@ void series_want(struct series *s, int step)
     if (e->state != ENTRY_READY && e->state != ENTRY_FAILED)
         set_window(s, step, true);
     pthread_mutex_unlock(&s->lock);
+}
+
+void series_prefetch_around(struct series *s, int step)
+{
+    if (!valid_step(s, step))
+        return;
+    pthread_mutex_lock(&s->lock);
+    set_window(s, step, false);
+    pthread_mutex_unlock(&s->lock);
+}
+
+void series_adopt(struct series *s, int step, uint64_t generation, struct ext_volume *vol)
+{
+    if (!valid_step(s, step) || !vol->beta) {
+        ext_volume_finish(vol);
+        return;
+    }
+    pthread_mutex_lock(&s->lock);
+    struct entry *e = &s->entries[step];
+    if (e->state == ENTRY_EMPTY && generation == s->generation) {
+        keep(s, e, vol);
+        s->stats.adopted++;
+        set_window(s, step, false);
+        make_current(s, step);
+    }
+    pthread_mutex_unlock(&s->lock);
+    ext_volume_finish(vol); /* zeroed when kept */
+}
+
+uint64_t series_generation(struct series *s)
+{
+    pthread_mutex_lock(&s->lock);
+    uint64_t g = s->generation;
+    pthread_mutex_unlock(&s->lock);
+    return g;
 }
 
 void series_invalidate(struct series *s)

@@ -15,6 +15,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "data/volume.h"
 
@@ -42,6 +43,7 @@ struct series_stats {
     unsigned frame_waits; /* series_acquire calls that blocked until a load finished */
     unsigned stale;       /* series_try_acquire calls that returned NULL (step not ready) */
     unsigned loads, failures, evictions;
+    unsigned adopted; /* volumes the caller made and handed over (series_adopt), not loaded */
     double load_ms, convert_ms; /* totals over all loads, on the background thread */
     double wait_ms;             /* total time series_acquire blocked */
     size_t cached_bytes;        /* now */
@@ -68,6 +70,20 @@ const struct ext_volume *series_try_acquire(struct series *s, int step);
 /* Asks the background thread for STEP (and its neighbours) without making it current: the
  * current volume stays as it is (a cluster's rank loading the step the others wait for). */
 void series_want(struct series *s, int step);
+
+/* STEP's neighbours asked of the background thread, STEP itself not: the caller holds it (the
+ * first step, made before the series; series_adopt hands it over). */
+void series_prefetch_around(struct series *s, int step);
+
+/* Takes *VOL, made by the caller the way desc.load makes STEP's volume (with the loader's
+ * current inputs), as STEP's cached volume, so that it is not loaded a second time; STEP becomes
+ * the current step and its neighbours are prefetched.  *VOL is zeroed either way; where STEP is
+ * already cached or loading, or was made before a series_invalidate, it is freed instead.
+ * GENERATION: series_generation() when VOL's making began. */
+void series_adopt(struct series *s, int step, uint64_t generation, struct ext_volume *vol);
+
+/* Bumped by every series_invalidate: a volume made under another generation is stale. */
+uint64_t series_generation(struct series *s);
 
 /* Drops every cached step and any load in progress (its result is thrown away), because
  * what the loader produces has changed (species, tints, transfer function); the current step

@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "common/log.h"
+#include "common/parallel.h"
 
 #define KM 1000.0
 #define PI 3.14159265358979323846
@@ -516,6 +517,7 @@ static void storm_slices(const struct storm_job *job)
 
 static void *storm_thread(void *arg)
 {
+    parallel_name_thread("anvil-synth");
     storm_slices(arg);
     return NULL;
 }

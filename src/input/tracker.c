@@ -24,6 +24,7 @@
 #include <unistd.h>
 
 #include "common/log.h"
+#include "common/parallel.h"
 #include "input/input_impl.h"
 
 #define LINKS_MAX 16
@@ -347,6 +348,7 @@ static void apply_dtrack(struct link *l, const struct dtrack_frame *f, double no
 static void *dtrack_main(void *arg)
 {
     struct link *l = arg;
+    parallel_name_thread("anvil-dtrack");
     char *buf = malloc(DTRACK_DATAGRAM_MAX + 1);
     struct dtrack_frame *f = malloc(sizeof(*f));
     if (!buf || !f) {
@@ -667,6 +669,7 @@ static const char *vrpn_session(struct link *l, int fd, struct vrpn_parser *p, u
 static void *vrpn_main(void *arg)
 {
     struct link *l = arg;
+    parallel_name_thread("anvil-vrpn");
     struct vrpn_parser *p = malloc(sizeof(*p));
     size_t size = 16384;
     uint8_t *buf = malloc(size);

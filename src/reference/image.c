@@ -14,6 +14,7 @@
 
 #include "common/log.h"
 #include "common/mat4d.h"
+#include "common/parallel.h"
 #include "common/progress.h"
 
 static void normalize3(double v[3])
@@ -91,6 +92,7 @@ static void render_pixel(const struct render_job *job, int x, int y)
 static void *render_worker(void *arg)
 {
     struct render_job *job = arg;
+    parallel_name_thread("anvil-reference");
     for (;;) {
         int y = atomic_fetch_add(&job->next_row, 1);
         if (y >= job->height)

@@ -6,6 +6,7 @@
 #include <time.h>
 
 #include "common/log.h"
+#include "common/parallel.h"
 #include "render/render.h"
 
 static size_t region(size_t *at, size_t bytes)
@@ -132,6 +133,7 @@ static void copy_and_reduce(struct render_stage *st, const struct ext_volume *vo
 static void *run(void *arg)
 {
     struct render_stage *st = arg;
+    parallel_name_thread("anvil-stage");
     pthread_mutex_lock(&st->lock);
     for (;;) {
         while (!st->quit && (!st->job || st->copied || st->paced))

@@ -82,6 +82,8 @@ struct player {
     char (*dates)[DATE_LEN];
     struct data_source *src; /* read by the series' thread only once the series runs */
     struct ext_volume first; /* the first step, made by player_create until taken */
+    int first_step;          /* its step, or -1 once given back (player_keep_first) */
+    uint64_t first_series_gen; /* the series' generation when it started */
     struct ext_volume still; /* without a series: the last step made on the caller's thread */
 
     pthread_mutex_t lock; /* guards look, look_gen, present */
@@ -458,8 +460,15 @@ struct player *player_create(const struct config *cfg, const struct player_desc 
     p->series = series_create(&sd);
     if (!p->series)
         goto error;
-    /* The step on screen is the first volume; start prefetching around it. */
-    series_try_acquire(p->series, p->shown);
+    /* The step on screen is the first volume: prefetching starts around it, and the series
+     * keeps it once the caller is done with it (player_keep_first) rather than reading it
+     * again. */
+    p->first_step = p->first.beta ? p->shown : -1;
+    p->first_series_gen = series_generation(p->series);
+    if (p->first_step >= 0)
+        series_prefetch_around(p->series, p->shown);
+    else
+        series_try_acquire(p->series, p->shown);
     return p;
 
 error:
@@ -474,6 +483,15 @@ bool player_take_first(struct player *p, struct ext_volume *out)
     *out = p->first;
     memset(&p->first, 0, sizeof(p->first));
     return true;
+}
+
+void player_keep_first(struct player *p, struct ext_volume *vol)
+{
+    if (p->series && p->first_step >= 0) {
+        series_adopt(p->series, p->first_step, p->first_series_gen, vol);
+        p->first_step = -1;
+    }
+    ext_volume_finish(vol);
 }
 
 const struct wrf_meta *player_wrf_meta(struct player *p)
@@ -643,6 +661,7 @@ void player_stats(struct player *p, struct session_stats *st)
     st->cache_hits = ss.hits;
     st->cache_misses = ss.misses;
     st->cache_loads = ss.loads;
+    st->cache_steps = ss.cached_steps;
     st->frames_waited = ss.frame_waits;
     st->load_ms = ss.load_ms;
     st->convert_ms = ss.convert_ms;

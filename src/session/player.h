@@ -75,8 +75,13 @@ struct player_desc {
 struct player *player_create(const struct config *cfg, const struct player_desc *d);
 void player_destroy(struct player *p);
 
-/* Moves the first step's volume into OUT (the caller finishes it); false once it is taken. */
+/* Moves the first step's volume into OUT (the caller finishes it, or hands it back with
+ * player_keep_first); false once it is taken. */
 bool player_take_first(struct player *p, struct ext_volume *out);
+/* Takes back the first step's volume (*VOL, as player_take_first gave it, zeroed here) once
+ * the caller is done with it: the time series cache keeps it as that step's, so that the step
+ * is not read again (series_adopt); without a series, or after a new look, it is freed. */
+void player_keep_first(struct player *p, struct ext_volume *vol);
 /* The WRF metadata of a WRF scene (terrain, lat/lon), or NULL.  Immutable; valid until
  * player_destroy; safe to read while the series' thread loads. */
 const struct wrf_meta *player_wrf_meta(struct player *p);

@@ -417,10 +417,14 @@ struct session *session_create(const struct config *cfg, const struct session_de
             *rc = 1;
         ok = s->probe && keep_probe_volume(s, &vol);
     }
-    /* The first step's histogram for the menu, made below. */
-    s->first_histogram.histogram = vol.histogram;
-    vol.histogram = NULL;
-    ext_volume_finish(&vol);
+    /* The first step's histogram for the menu, made below (a copy: the cache keeps the step's
+     * own for when it is shown again). */
+    if (vol.histogram) {
+        s->first_histogram.histogram = malloc(sizeof(*vol.histogram));
+        if (s->first_histogram.histogram)
+            *s->first_histogram.histogram = *vol.histogram;
+    }
+    player_keep_first(s->player, &vol);
     if (!ok)
         goto error;
     s->stats.upload_ms = renderer_stats(s->renderer)->upload_ms;

@@ -90,8 +90,10 @@ bool session_stats_json(const struct session_stats *st, int rank, const char *wa
     fprintf(f, "  \"frames\": %u,\n  \"time_step\": %d,\n", st->frames, st->time_step);
     fprintf(f, "  \"cache_hits\": %u,\n  \"cache_misses\": %u,\n", st->cache_hits,
             st->cache_misses);
-    fprintf(f, "  \"cache_loads\": %u,\n  \"frames_waited\": %u,\n  \"frames_stale\": %u,\n",
-            st->cache_loads, st->frames_waited, st->frames_stale);
+    fprintf(f, "  \"cache_loads\": %u,\n  \"cache_steps\": %d,\n", st->cache_loads,
+            st->cache_steps);
+    fprintf(f, "  \"frames_waited\": %u,\n  \"frames_stale\": %u,\n", st->frames_waited,
+            st->frames_stale);
     fprintf(f, "  \"frames_held\": %u,\n", st->frames_held);
     fprintf(f, "  \"volume_uploads\": %u,\n  \"load_ms\": %.3f,\n  \"convert_ms\": %.3f,\n",
             st->volume_uploads, st->load_ms, st->convert_ms);

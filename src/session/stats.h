@@ -46,6 +46,7 @@ struct session_stats {
     unsigned frames;          /* frames drawn */
     int time_step;            /* the time step on screen at the end */
     unsigned cache_hits, cache_misses, cache_loads;
+    int cache_steps;          /* steps in the cache now (the first one kept, not read again) */
     unsigned frames_waited;   /* frames that blocked on a load (only a scripted run's end) */
     unsigned frames_stale;    /* frames that showed an older step: the wanted one was loading */
     unsigned frames_held;     /* a cluster: frames every rank showed the older step because some

@@ -28,6 +28,15 @@ check "played 3 steps, paused, stepped to 4" test "$(json "$tmp/play.json" time_
 check "steps came through the cache" test "$(json "$tmp/play.json" cache_loads)" -ge 4
 check "one light map build per new step" test "$(json "$tmp/play.json" light_map_builds)" -eq \
     $(($(json "$tmp/play.json" volume_uploads) + 1))
+# The first step is read once: the cache keeps the volume the session was made with, so
+# stepping forward and back again reads step 1 alone (no prefetch: data.prefetch = 0).
+printf 'fps 10\n0 key forward\n5 key back\n' >"$tmp/back.txt"
+"$anvil" render --quiet "$tmp/series.cfg" $small --input "$tmp/back.txt" -o "$tmp/back.png" \
+    --stats "$tmp/back.json" --set 'effects.temporal="off"' --set data.prefetch=0
+check "stepped forward and back exits 0" test $? -eq 0
+check "back on step 0" test "$(json "$tmp/back.json" time_step)" = 0
+check "the first step is not read again" test "$(json "$tmp/back.json" cache_loads)" -eq 1
+check "both steps in the cache" test "$(json "$tmp/back.json" cache_steps)" -eq 2
 # Each step's build says the same of the map: one line at the default level, the rest with
 # --verbose.
 "$anvil" render "$tmp/series.cfg" $small --input "$tmp/play.txt" -o "$tmp/play.png" \

@@ -21,6 +21,8 @@
 struct fake {
     atomic_int calls;
     int fail_step;
+    atomic_int step_calls[64];
+    char thread[32]; /* the loading thread's name, as `top -H` shows it (the last load's) */
 };
 
 /* Step S's volume holds S everywhere. */
@@ -29,6 +31,14 @@ static bool fake_load(void *user, int step, struct ext_volume *out, double *load
 {
     struct fake *f = user;
     atomic_fetch_add(&f->calls, 1);
+    if (step >= 0 && step < 64)
+        atomic_fetch_add(&f->step_calls[step], 1);
+    FILE *comm = fopen("/proc/thread-self/comm", "r");
+    if (comm) {
+        if (!fgets(f->thread, sizeof(f->thread), comm))
+            f->thread[0] = '\0';
+        fclose(comm);
+    }
     if (step == f->fail_step) {
         log_error("fake: step %d cannot be read", step);
         return false;
@@ -102,6 +112,67 @@ static void test_prefetch_hides_slow_reader(void **state)
     assert_non_null(series_acquire(s, 30));
     series_get_stats(s, &st);
     assert_int_equal(st.frame_waits, 2);
+    series_destroy(s);
+}
+
+/* A volume of NX x NY x NZ holding VALUE everywhere. */
+static void made_volume(struct ext_volume *v, float value)
+{
+    struct grid3 g = {.n = {NX, NY, NZ}, .spacing = {1, 1, 1}};
+    assert_true(ext_volume_init(v, &g));
+    for (size_t i = 0; i < grid3_count(&g) * 2; i++)
+        v->beta[i] = value;
+}
+
+/* The first step, made by the caller before the series, is handed over rather than read again;
+ * one made before a new look, or for a step already there, is dropped. */
+static void test_adopt_first(void **state)
+{
+    struct fake f = {.fail_step = -1};
+    struct series_desc d = {.step_count = 6, .load = fake_load, .user = &f, .prefetch = 2,
+                            .delay_ms = 10};
+    struct series *s = series_create(&d);
+    assert_non_null(s);
+    uint64_t gen = series_generation(s);
+    series_prefetch_around(s, 3);
+    struct ext_volume first = {0};
+    made_volume(&first, 99.0f);
+    series_adopt(s, 3, gen, &first);
+    assert_null(first.beta); /* the series holds it now */
+    assert_true(series_ready(s, 3));
+    for (int step = 1; step < 6; step++)
+        frames_until_ready(s, step);
+    const struct ext_volume *v = series_try_acquire(s, 3);
+    assert_non_null(v);
+    assert_true(v->beta[0] == 99.0f && v->beta[2 * NX * NY * NZ - 1] == 99.0f);
+    sleep_ms(50); /* time for a stray load of step 3 to show */
+    struct series_stats st;
+    series_get_stats(s, &st);
+    assert_int_equal(atomic_load(&f.step_calls[3]), 0);
+    assert_int_equal(st.adopted, 1);
+    assert_int_equal(st.loads, 4); /* steps 1, 2, 4, 5: the window of 2 around 3 */
+    assert_int_equal(st.cached_steps, 5);
+    assert_int_equal(st.frame_waits, 0);
+    assert_string_equal(f.thread, "anvil-series\n"); /* named, so that a person can tell */
+
+    /* Step 3 is there already: another volume for it is dropped, the cached one stays. */
+    made_volume(&first, 7.0f);
+    series_adopt(s, 3, series_generation(s), &first);
+    assert_null(first.beta);
+    v = series_try_acquire(s, 3);
+    assert_true(v->beta[0] == 99.0f);
+
+    /* A new look: a volume made under the old one is stale, and step 3 is read again. */
+    series_invalidate(s);
+    made_volume(&first, 7.0f);
+    series_adopt(s, 3, gen, &first);
+    assert_null(first.beta);
+    frames_until_ready(s, 3);
+    v = series_try_acquire(s, 3);
+    assert_true(v->beta[0] == 3.0f);
+    assert_true(atomic_load(&f.step_calls[3]) >= 1);
+    series_get_stats(s, &st);
+    assert_int_equal(st.adopted, 1);
     series_destroy(s);
 }
 
@@ -245,6 +316,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_prefetch_hides_slow_reader),
         cmocka_unit_test(test_budget_and_lru),
+        cmocka_unit_test(test_adopt_first),
         cmocka_unit_test(test_try_acquire_never_blocks),
         cmocka_unit_test(test_failed_load),
         cmocka_unit_test(test_wrf_series),
