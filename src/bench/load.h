@@ -32,6 +32,8 @@ struct bench_load_result {
                                    being read slab by slab, extinction) and what follows it
                                    (medians: data_source_load's LOAD_MS, CONVERT_MS) */
     double ratio;               /* median over the pairs of load / plain, side by side */
+    double vapour_ms, vapour_ratio;     /* the load with the menu's histogram of the water vapour
+                                           (anvil run's), and its median ratio to the plain read */
     double plain_peak_mb, load_peak_mb; /* the largest peak memory of either, MiB above what
                                            the process held before it */
     double volume_mb;                   /* the extinction volume a load returns, MiB */

@@ -78,6 +78,11 @@ bool derived_field_available(const struct field_volume *fv, enum transfer_field 
     }
 }
 
+double derived_vapour_standard(double z_m)
+{
+    return 0.010 * exp(-z_m / 2500.0);
+}
+
 void derived_field(const struct field_volume *fv, enum transfer_field field, float *out)
 {
     const struct grid3 *g = &fv->grid;
@@ -98,7 +103,7 @@ void derived_field(const struct field_volume *fv, enum transfer_field field, flo
     size_t idx = 0, layer = (size_t)g->n[0] * (size_t)g->n[1];
     for (int k = 0; k < g->n[2]; k++) {
         double z = grid3_centre_z(g, k);
-        double vapour_std = 0.010 * exp(-z / 2500.0), t_std, p_std;
+        double vapour_std = derived_vapour_standard(z), t_std, p_std;
         wrf_std_atmosphere(z, &t_std, &p_std);
         for (size_t ij = 0; ij < layer; ij++, idx++) {
             double t = fv->temperature ? fv->temperature[idx] : t_std;

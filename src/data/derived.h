@@ -24,6 +24,10 @@ double derived_theta(double t_k, double p_pa);
  * (T - 29.65)) hPa (Bolton 1980, eq. 10).  NAN for bad input. */
 double derived_rh(double t_k, double p_pa, double q_kg_kg);
 
+/* The water vapour mixing ratio, kg/kg, at height Z_M (m) where the data has none: 10 g/kg
+ * falling off with a 2.5 km scale height (TRANSFER_FIELD_QVAPOR's stand-in). */
+double derived_vapour_standard(double z_m);
+
 /* Vertical vorticity zeta = dv/dx - du/dy, 1/s, on one horizontal plane of NX x NY points
  * (x fastest) spaced DX, DY metres, from U and V at the same points into OUT: centred
  * differences (v[i+1] - v[i-1]) / 2dx - (u[j+1] - u[j-1]) / 2dy inside, one-sided at the edges,

@@ -277,13 +277,14 @@ bool data_source_can_load_ext(const struct data_source *s)
 }
 
 bool data_source_load_ext(struct data_source *s, int step, const struct optics_params *optics,
-                          const struct species_select *sel, struct ext_volume *out)
+                          const struct species_select *sel, struct transfer_histogram *vapour,
+                          struct ext_volume *out)
 {
     assert(data_source_can_load_ext(s));
     /* Straight to extinction, slab by slab: the step's fields are never held whole, and what
      * extinction does not use is not read. */
     struct wrf_stats st;
-    bool ok = wrf_read_step_ext(s->wrf, step, &s->desc.wrf, optics, sel, out, &st);
+    bool ok = wrf_read_step_ext(s->wrf, step, &s->desc.wrf, optics, sel, vapour, out, &st);
     if (ok)
         warn_empty_step(s, step, &st);
     return ok;
@@ -310,7 +311,7 @@ bool data_source_load(struct data_source *s, int step, struct ext_volume *out, d
         return ok;
     }
     if (data_source_can_load_ext(s) && !s->desc.detail.on) {
-        bool ok = data_source_load_ext(s, step, &s->desc.optics, &s->desc.select, out);
+        bool ok = data_source_load_ext(s, step, &s->desc.optics, &s->desc.select, NULL, out);
         double t1 = time_now_ms();
         if (ok)
             ext_volume_stretch_height(out, k);

@@ -60,10 +60,12 @@ bool data_source_can_load_ext(const struct data_source *s);
 
 /* Reads STEP straight to extinction with OPTICS and SEL (wrf_read_step_ext: the numbers
  * ext_volume_from_fields makes of data_source_load_fields, without the fields), no detail, no
- * height scale; OUT is initialised here (the caller finishes it).  Only where
- * data_source_can_load_ext. */
+ * height scale; OUT is initialised here (the caller finishes it).  VAPOUR (NULL: none, and
+ * QVAPOR is not read), initialised over its range, counts the water vapour as the histogram
+ * of the fields' would (wrf_read_step_ext).  Only where data_source_can_load_ext. */
 bool data_source_load_ext(struct data_source *s, int step, const struct optics_params *optics,
-                          const struct species_select *sel, struct ext_volume *out);
+                          const struct species_select *sel, struct transfer_histogram *vapour,
+                          struct ext_volume *out);
 
 /* Loads STEP as extinction into OUT, with the description's detail and height scale applied
  * (initialised here; the caller finishes it).  LOAD_MS and CONVERT_MS (may be NULL) receive

@@ -1674,6 +1674,10 @@ struct step_job {
     const double *rho_std;              /* per output level (extinction) */
     const double *zc;                   /* per output level: its height */
     float *beta_out;
+    /* Extinction and the histogram of the water vapour (the transfer editor's default field,
+     * what derived_field makes of the fields' QVAPOR): one per share of slabs, or NULL. */
+    struct transfer_histogram *vapour;
+    bool read_vapour;   /* QVAPOR in the file (else the histogram holds the stand-in profile) */
     struct plan *whole; /* NULL, or the step's plan, kept for the wind (read_wind) */
     bool scan;          /* only read and check (wrf_scan_step): no plan, no outputs */
     struct slab_result *res; /* one per slab */
@@ -1766,8 +1770,9 @@ static bool step_slabs(void *ctx, int share, size_t begin, size_t end)
     p.k = malloc(scm * no * sizeof(uint16_t));
     p.t = malloc(scm * no * sizeof(float));
     uint8_t *mark = ext && j->density ? malloc(scm * (nz + no)) : NULL;
-    bool ok = zw && phb && buf && buf2 && (buf3 || !j->temperature) && (slab_out || !outs) &&
-              p.k && p.t && (mark || !(ext && j->density));
+    float *vapour = j->read_vapour ? malloc(scm * no * sizeof(float)) : NULL;
+    bool ok = zw && phb && buf && buf2 && (buf3 || !j->temperature) && (slab_out || !outs) && p.k &&
+              p.t && (mark || !(ext && j->density)) && (vapour || !j->read_vapour);
     if (!ok)
         log_error("%s: out of memory reading time step %d", j->path, j->step);
     for (size_t sl = begin; sl < end && ok; sl++) {
@@ -1880,7 +1885,18 @@ static bool step_slabs(void *ctx, int share, size_t begin, size_t end)
                              j->beta_out + 2 * (o * j->cols + c0));
             }
         }
+        if (j->read_vapour) {
+            /* Read, checked and resampled as the fields' QVAPOR is, then counted. */
+            ok = slab_read(j, WRF_QVAPOR, &ss, j->nz, buf);
+            if (!ok)
+                break;
+            check_values(&j->check[WRF_QVAPOR], buf, sc * nz, 0.0f, &r->sum[WRF_QVAPOR]);
+            slab_apply(&p, buf, 0.0f, NULL, vapour, sc);
+            for (size_t i = 0; i < sc * no; i++)
+                transfer_histogram_add(&j->vapour[share], vapour[i]);
+        }
     }
+    free(vapour);
     free(zw);
     free(phb);
     free(buf);
@@ -1932,8 +1948,8 @@ static double step_scratch(const struct wrf *w, const struct wrf_desc *d,
 /* wrf_read_step (BETA NULL: fields into OUT), or wrf_read_step_ext (extinction with BETA's
  * species into EXT; OUT only holds the grid). */
 static bool read_step(struct wrf *w, int step, const struct wrf_desc *d, bool scan,
-                      const struct ext_beta *beta, struct field_volume *out,
-                      struct ext_volume *ext, struct wrf_stats *stats)
+                      const struct ext_beta *beta, struct field_volume *out, struct ext_volume *ext,
+                      struct transfer_histogram *vapour, struct wrf_stats *stats)
 {
     memset(out, 0, sizeof(*out));
     if (ext)
@@ -1954,8 +1970,9 @@ static bool read_step(struct wrf *w, int step, const struct wrf_desc *d, bool sc
         return false;
     size_t need;
     if (beta) {
-        double n = (double)s.nx * s.ny * s.nz * 2.0 * sizeof(float) +
-                   step_scratch(w, d, &s, beta->used + !d->no_density);
+        double n =
+            (double)s.nx * s.ny * s.nz * 2.0 * sizeof(float) +
+            step_scratch(w, d, &s, beta->used + !d->no_density + (vapour && w->meta.has_qvapor));
         need = n >= (double)SIZE_MAX ? SIZE_MAX : (size_t)n;
     } else {
         need = wrf_step_bytes(w, d);
@@ -1990,6 +2007,13 @@ static bool read_step(struct wrf *w, int step, const struct wrf_desc *d, bool sc
     double *rho_std = malloc(2 * (size_t)no * sizeof(double));
     j.res = malloc(j.slabs * sizeof(*j.res));
     bool ok = fill && rho_std && j.res;
+    if (beta && vapour) {
+        j.read_vapour = w->meta.has_qvapor && sf->varid[WRF_QVAPOR] >= 0;
+        j.vapour = malloc(PARALLEL_MAX * sizeof(*j.vapour));
+        ok = ok && j.vapour;
+        for (int t = 0; j.vapour && t < PARALLEL_MAX; t++)
+            transfer_histogram_init(&j.vapour[t], vapour->field, vapour->lo, vapour->hi);
+    }
     if (beta) {
         for (int u = 0; u < beta->used; u++)
             j.mass[j.nmass++] = (enum wrf_var)beta->species[u];
@@ -2119,6 +2143,21 @@ static bool read_step(struct wrf *w, int step, const struct wrf_desc *d, bool sc
         if (!report(w, step, v, &stats->var[v]))
             goto done;
     }
+    if (j.read_vapour) {
+        check_sum_stats(&sum[WRF_QVAPOR], &stats->var[WRF_QVAPOR]);
+        if (!report(w, step, WRF_QVAPOR, &stats->var[WRF_QVAPOR]))
+            goto done;
+    }
+    if (j.vapour) {
+        /* Shares in order (counts: any order adds up the same); without QVAPOR, the stand-in
+         * profile derived_field puts on each level. */
+        for (int t = 0; t < PARALLEL_MAX; t++)
+            transfer_histogram_merge(vapour, &j.vapour[t]);
+        size_t plane = (size_t)g->n[0] * (size_t)g->n[1];
+        for (int k = 0; !j.read_vapour && k < no; k++)
+            transfer_histogram_add_times(
+                vapour, (float)derived_vapour_standard(grid3_centre_z(g, k)), plane);
+    }
     if (want_wind && !read_wind(w, step, d, &s, &whole, out, stats))
         goto done;
     for (int v = WRF_P; j.air && v <= WRF_T; v++) {
@@ -2133,6 +2172,7 @@ done:
     free(fill);
     free(rho_std);
     free(j.res);
+    free(j.vapour);
     if (!ok) {
         field_volume_finish(out);
         if (ext)
@@ -2144,25 +2184,26 @@ done:
 bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct field_volume *out,
                    struct wrf_stats *stats)
 {
-    return read_step(w, step, d, false, NULL, out, NULL, stats);
+    return read_step(w, step, d, false, NULL, out, NULL, NULL, stats);
 }
 
 bool wrf_scan_step(struct wrf *w, int step, const struct wrf_desc *d, struct wrf_stats *stats)
 {
     struct field_volume grid;
-    bool ok = read_step(w, step, d, true, NULL, &grid, NULL, stats);
+    bool ok = read_step(w, step, d, true, NULL, &grid, NULL, NULL, stats);
     field_volume_finish(&grid);
     return ok;
 }
 
 bool wrf_read_step_ext(struct wrf *w, int step, const struct wrf_desc *d,
                        const struct optics_params *optics, const struct species_select *sel,
-                       struct ext_volume *out, struct wrf_stats *stats)
+                       struct transfer_histogram *vapour, struct ext_volume *out,
+                       struct wrf_stats *stats)
 {
     struct ext_beta b;
     ext_beta_init(&b, optics, sel, w->meta.has_species);
     struct field_volume grid;
-    bool ok = read_step(w, step, d, false, &b, &grid, out, stats);
+    bool ok = read_step(w, step, d, false, &b, &grid, out, vapour, stats);
     field_volume_finish(&grid);
     return ok;
 }

@@ -174,12 +174,16 @@ bool wrf_read_step(struct wrf *w, int step, const struct wrf_desc *d, struct fie
  * ext_volume_from_fields(OPTICS, SEL) makes, the same numbers, without holding the step's
  * fields (each slab of columns is read, checked, resampled and turned into extinction before
  * the next).  Reads only the species that add extinction, and P, PB and T unless
- * D->no_density: D's qvapor, temperature, wind and level heights are not read.  OUT is
+ * D->no_density: D's qvapor, temperature, wind and level heights are not read.  VAPOUR (NULL:
+ * none), initialised by the caller over its range, counts the water vapour on the output grid
+ * as derived_field makes it of the fields (TRANSFER_FIELD_QVAPOR: the file's QVAPOR, read,
+ * checked and resampled slab by slab like the species, else the stand-in profile).  OUT is
  * initialised here (the caller frees it with ext_volume_finish); STATS and failures as
  * wrf_read_step. */
 bool wrf_read_step_ext(struct wrf *w, int step, const struct wrf_desc *d,
                        const struct optics_params *optics, const struct species_select *sel,
-                       struct ext_volume *out, struct wrf_stats *stats);
+                       struct transfer_histogram *vapour, struct ext_volume *out,
+                       struct wrf_stats *stats);
 
 /* What wrf_read_step(D) would check of STEP, without resampling or keeping anything (anvil
  * info): every value of the variables it reads is checked, the heights too, and STATS gets

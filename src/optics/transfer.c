@@ -260,25 +260,47 @@ void transfer_histogram_init(struct transfer_histogram *h, enum transfer_field f
     h->hi = hi;
 }
 
-void transfer_histogram_add(struct transfer_histogram *h, double x)
+/* Bin COUNT after N more values, held at UINT32_MAX. */
+static uint32_t add_count(uint32_t count, uint64_t n)
 {
-    h->total++;
+    return n >= (uint64_t)(UINT32_MAX - count) ? UINT32_MAX : count + (uint32_t)n;
+}
+
+void transfer_histogram_add_times(struct transfer_histogram *h, double x, uint64_t n)
+{
+    if (n == 0)
+        return;
+    h->total += n;
     if (!isfinite(x)) {
-        h->nonfinite++;
+        h->nonfinite += n;
         return;
     }
     if (x < h->lo) {
-        h->below++;
+        h->below += n;
         return;
     }
     if (x > h->hi) {
-        h->above++;
+        h->above += n;
         return;
     }
     double f = floor((x - h->lo) / (h->hi - h->lo) * TRANSFER_HISTOGRAM_BINS);
     int i = f >= TRANSFER_HISTOGRAM_BINS ? TRANSFER_HISTOGRAM_BINS - 1 : f < 0.0 ? 0 : (int)f;
-    if (h->count[i] < UINT32_MAX)
-        h->count[i]++;
+    h->count[i] = add_count(h->count[i], n);
+}
+
+void transfer_histogram_add(struct transfer_histogram *h, double x)
+{
+    transfer_histogram_add_times(h, x, 1);
+}
+
+void transfer_histogram_merge(struct transfer_histogram *h, const struct transfer_histogram *from)
+{
+    for (int i = 0; i < TRANSFER_HISTOGRAM_BINS; i++)
+        h->count[i] = add_count(h->count[i], from->count[i]);
+    h->below += from->below;
+    h->above += from->above;
+    h->nonfinite += from->nonfinite;
+    h->total += from->total;
 }
 
 uint32_t transfer_histogram_max(const struct transfer_histogram *h)

@@ -143,6 +143,10 @@ void transfer_histogram_init(struct transfer_histogram *h, enum transfer_field f
                              double hi);
 /* Counts the value X into H. */
 void transfer_histogram_add(struct transfer_histogram *h, double x);
+/* Counts the value X into H N times (as N calls of transfer_histogram_add). */
+void transfer_histogram_add_times(struct transfer_histogram *h, double x, uint64_t n);
+/* Adds what FROM counted (over the same field and range) to H. */
+void transfer_histogram_merge(struct transfer_histogram *h, const struct transfer_histogram *from);
 /* The largest bin count. */
 uint32_t transfer_histogram_max(const struct transfer_histogram *h);
 

@@ -297,18 +297,29 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
         ok = synth_storm_fields(&ld->synth, &fv);
         break;
     case PLAYER_FIELDS: {
-        if (!p->histogram && look->layer_count == 0 && look->slice_count == 0 &&
-            species_tint_is_white(&look->tint) && !ld->detail.on &&
+        struct transfer_function edited;
+        look_edited_transfer(look, &edited);
+        if ((!p->histogram || edited.field == TRANSFER_FIELD_QVAPOR) && look->layer_count == 0 &&
+            look->slice_count == 0 && species_tint_is_white(&look->tint) && !ld->detail.on &&
             data_source_can_load_ext(p->src)) {
-            /* Nothing but extinction to make: straight to it, the fields never held whole. */
+            /* Nothing but extinction to make (and the water vapour's histogram for the
+             * transfer editor): straight to it, the fields never held whole. */
             const struct wrf_meta *m = wrf_get_meta(data_source_wrf(p->src));
             pthread_mutex_lock(&p->lock);
             for (int f = 0; f < SPECIES_COUNT; f++)
                 p->present[f] = m->has_species[f];
             pthread_mutex_unlock(&p->lock);
-            ok = data_source_load_ext(p->src, step, &ld->optics, &look->select, out);
-            if (ok && ld->height_k > 0.0)
-                ext_volume_stretch_height(out, ld->height_k);
+            struct transfer_histogram *h = p->histogram ? malloc(sizeof(*h)) : NULL;
+            if (h) /* else out of memory: no bars */
+                transfer_histogram_init(h, edited.field, edited.lo, edited.hi);
+            ok = data_source_load_ext(p->src, step, &ld->optics, &look->select, h, out);
+            if (ok) {
+                out->histogram = h;
+                h = NULL;
+                if (ld->height_k > 0.0)
+                    ext_volume_stretch_height(out, ld->height_k);
+            }
+            free(h);
             *load_ms += time_now_ms() - t0;
             free(look);
             return ok;
@@ -316,8 +327,6 @@ static bool load(void *user, int step, struct ext_volume *out, double *load_ms,
         /* The fields the layers and slices show, and the transfer editor's (read while the
          * menu is there: its histogram shows it). */
         bool qvapor = false, temperature = false, wind = false, components = false;
-        struct transfer_function edited;
-        look_edited_transfer(look, &edited);
         for (int i = p->histogram ? -1 : 0; i < look->layer_count + look->slice_count; i++) {
             const struct transfer_function *tf =
                 i < 0                   ? &edited

@@ -55,6 +55,9 @@ check "load table written" grep -q '^| a step, ms (median) | [0-9]* | [0-9]* | \
 check "load table: 64 x 64 x 20 and its peak memory" \
     grep -q '64 × 64 × 20 WRF series' "$tmp/l/load-table.md"
 check "load table: peak memory" grep -q '^| peak memory above the process' "$tmp/l/load-table.md"
+check "load table: the load anvil run makes, with the water vapour's histogram" \
+    grep -q "^| a step with the menu's histogram of the water vapour .* | | [0-9]* | \*\*[0-9.]*\*\* |$" \
+    "$tmp/l/load-table.md"
 check "load bench leaves no file behind" test -z "$(ls "$tmp"/anvil-bench-load-* 2>/dev/null)"
 # The diffuse light volume's experiments (no GL): the layer and the wall against Monte Carlo.
 expect_exit 2 "bench: --volume-only excludes --load-only" "$anvil" bench --volume-only --load-only

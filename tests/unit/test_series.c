@@ -129,8 +129,8 @@ static void made_volume(struct ext_volume *v, float value)
 static void test_adopt_first(void **state)
 {
     struct fake f = {.fail_step = -1};
-    struct series_desc d = {.step_count = 6, .load = fake_load, .user = &f, .prefetch = 2,
-                            .delay_ms = 10};
+    struct series_desc d = {
+        .step_count = 6, .load = fake_load, .user = &f, .prefetch = 2, .delay_ms = 10};
     struct series *s = series_create(&d);
     assert_non_null(s);
     uint64_t gen = series_generation(s);

@@ -14,11 +14,13 @@
 
 #include <netcdf.h>
 
+#include "data/derived.h"
 #include "data/source.h"
 #include "data/synth.h"
 #include "data/volume.h"
 #include "data/wrf.h"
 #include "optics/optics.h"
+#include "optics/transfer.h"
 
 #define CHECK(x) assert_int_equal((x), NC_NOERR)
 
@@ -317,7 +319,7 @@ static void check_slabs(const char *path, int step, const struct wrf_desc *base,
         struct ext_volume whole, slabs;
         assert_true(ext_volume_from_fields(&one, &op, &sel, &whole));
         struct wrf_stats st;
-        assert_true(wrf_read_step_ext(w, step, &d, &op, &sel, &slabs, &st));
+        assert_true(wrf_read_step_ext(w, step, &d, &op, &sel, NULL, &slabs, &st));
         assert_memory_equal(whole.grid.n, slabs.grid.n, sizeof(whole.grid.n));
         assert_true(memcmp(whole.beta, slabs.beta, grid3_count(&whole.grid) * 2 * sizeof(float)) ==
                     0);
@@ -340,6 +342,104 @@ static void check_slabs(const char *path, int step, const struct wrf_desc *base,
     field_volume_finish(&one);
     field_volume_finish(&many);
     wrf_close(w);
+}
+
+/* Straight to extinction with the water vapour's histogram (the transfer editor's default
+ * field, which anvil run's menu shows): the bins that the fields' QVAPOR fills through
+ * derived_field (HAS: the file has QVAPOR, else both hold the stand-in profile), QVAPOR's
+ * checks those of the fields' read, and the extinction the same as without it. */
+static void check_vapour(const char *path, int step, const struct wrf_desc *base, int rows,
+                         bool has)
+{
+    struct wrf *w = wrf_open(&path, 1, 0.0);
+    assert_non_null(w);
+    struct wrf_desc d = *base;
+    d.slab_rows = rows;
+    d.qvapor = true;
+    struct field_volume fv;
+    struct wrf_stats st_fields;
+    assert_true(wrf_read_step(w, step, &d, &fv, &st_fields));
+    assert_true(has == (fv.qvapor != NULL));
+    struct transfer_function tf;
+    transfer_defaults(&tf, TRANSFER_FIELD_QVAPOR);
+    struct transfer_histogram want, got;
+    transfer_histogram_init(&want, tf.field, tf.lo, tf.hi);
+    size_t n = grid3_count(&fv.grid);
+    float *v = malloc(n * sizeof(float));
+    assert_non_null(v);
+    derived_field(&fv, TRANSFER_FIELD_QVAPOR, v);
+    for (size_t i = 0; i < n; i++)
+        transfer_histogram_add(&want, v[i]);
+    free(v);
+
+    struct optics_params op;
+    optics_params_defaults(&op);
+    struct species_select sel;
+    species_select_defaults(&sel);
+    struct ext_volume with, without;
+    struct wrf_stats st;
+    transfer_histogram_init(&got, tf.field, tf.lo, tf.hi);
+    assert_true(wrf_read_step_ext(w, step, &d, &op, &sel, &got, &with, &st));
+    assert_true(wrf_read_step_ext(w, step, &d, &op, &sel, NULL, &without, NULL));
+    assert_memory_equal(with.grid.n, fv.grid.n, sizeof(fv.grid.n));
+    assert_true(memcmp(with.beta, without.beta, n * 2 * sizeof(float)) == 0);
+    assert_memory_equal(want.count, got.count, sizeof(want.count));
+    assert_int_equal(want.below, got.below);
+    assert_int_equal(want.above, got.above);
+    assert_int_equal(want.nonfinite, got.nonfinite);
+    assert_int_equal(got.total, n);
+    int bins = 0;
+    for (int i = 0; i < TRANSFER_HISTOGRAM_BINS; i++)
+        bins += got.count[i] > 0;
+    assert_true(bins >= 2); /* a histogram, not one bar */
+    assert_true(st.var[WRF_QVAPOR].read == has);
+    const struct wrf_var_stats *a = &st.var[WRF_QVAPOR], *b = &st_fields.var[WRF_QVAPOR];
+    assert_int_equal(a->count, has ? b->count : 0);
+    assert_int_equal(a->nan + a->inf + a->fill + a->negative + a->absurd,
+                     has ? b->nan + b->inf + b->fill + b->negative + b->absurd : 0);
+    ext_volume_finish(&with);
+    ext_volume_finish(&without);
+    field_volume_finish(&fv);
+    wrf_close(w);
+}
+
+/* A synthetic step written to PATH without QVAPOR (renamed away). */
+static void write_without_vapour(const char *path)
+{
+    struct synth_desc sd = {
+        .kind = SYNTH_STORM, .n = {24, 20, 10}, .extent_m = {48000.0, 40000.0, 12000.0}, .seed = 5};
+    struct field_volume in;
+    assert_true(synth_storm_fields(&sd, &in));
+    test_write_wrf_step(path, &in);
+    field_volume_finish(&in);
+    int nc, varid;
+    CHECK(nc_open(path, NC_WRITE, &nc));
+    CHECK(nc_redef(nc));
+    CHECK(nc_inq_varid(nc, "QVAPOR", &varid));
+    CHECK(nc_rename_var(nc, varid, "QVAPOR_OFF"));
+    CHECK(nc_close(nc));
+}
+
+static void test_vapour_histogram(void **state)
+{
+    char katrina[512], lambert[512], dry[512];
+    snprintf(katrina, sizeof(katrina), "%s", test_shared_data("wrf/katrina_2005_mercator_wsm3.nc"));
+    snprintf(lambert, sizeof(lambert), "%s", test_shared_data("wrf/lambert_thompson_cropped.nc"));
+    snprintf(dry, sizeof(dry), "%s", test_tmp_path("no_vapour.nc"));
+    struct wrf_desc d;
+    wrf_desc_defaults(&d);
+    check_vapour(katrina, 2, &d, 1, true);
+    check_vapour(katrina, 2, &d, 7, true);
+    check_vapour(lambert, 1, &d, 3, true);
+    d.native_levels = true;
+    check_vapour(lambert, 0, &d, 5, true);
+    wrf_desc_defaults(&d);
+    d.stride[0] = 2;
+    d.crop[2] = 5;
+    check_vapour(katrina, 1, &d, 2, true);
+    write_without_vapour(dry);
+    wrf_desc_defaults(&d);
+    check_vapour(dry, 0, &d, 3, false);
 }
 
 static void test_slabs(void **state)
@@ -376,8 +476,9 @@ static void test_slabs_bad_values(void **state)
     assert_true(synth_storm_fields(&sd, &in));
     test_write_wrf_step(path, &in);
     field_volume_finish(&in);
-    int nc, qc, qr, p;
+    int nc, qc, qr, p, qv;
     CHECK(nc_open(path, NC_WRITE, &nc));
+    CHECK(nc_inq_varid(nc, "QVAPOR", &qv));
     CHECK(nc_inq_varid(nc, "QCLOUD", &qc));
     CHECK(nc_inq_varid(nc, "QRAIN", &qr));
     CHECK(nc_inq_varid(nc, "P", &p));
@@ -388,12 +489,16 @@ static void test_slabs_bad_values(void **state)
         float fill = NC_FILL_FLOAT;
         if (i % 5 == 0)
             CHECK(nc_put_var1_float(nc, p, at, &fill));
+        if (i % 3 == 0)
+            CHECK(nc_put_var1_float(nc, qv, at, &bad[i % 4]));
     }
     CHECK(nc_close(nc));
     struct wrf_desc d;
     wrf_desc_defaults(&d);
     check_slabs(path, 0, &d, 1);
     check_slabs(path, 0, &d, 7);
+    check_vapour(path, 0, &d, 1, true);
+    check_vapour(path, 0, &d, 7, true);
 }
 
 int main(void)
@@ -404,6 +509,7 @@ int main(void)
         cmocka_unit_test(test_synth),
         cmocka_unit_test(test_qvapor_when_asked),
         cmocka_unit_test(test_slabs),
+        cmocka_unit_test(test_vapour_histogram),
         cmocka_unit_test(test_slabs_bad_values),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
