@@ -61,6 +61,7 @@ static int usage(FILE *out)
             "                 to itself (default: the source tree's configs/, reading\n"
             "                 ../shared/data beside the tree); a scene without its data file\n"
             "                 is left out with a warning\n"
+            "  --displays DIR cave4.cfg for --gpu (default: the source tree's displays/)\n"
             "  --spp N        reference samples per pixel (default 256, --quick 32; the\n"
             "                 sphere gets 64 times as many)\n"
             "  --quick        small scenes and images, one repeat: a CI-sized run\n"
@@ -84,7 +85,8 @@ static int parse(int argc, char **argv, struct bench_options *o)
         {"scale-only", no_argument, NULL, 'S'},    {"gpu", no_argument, NULL, 'G'},
         {"cluster-only", no_argument, NULL, 'L'},  {"load-only", no_argument, NULL, 'D'},
         {"playback-only", no_argument, NULL, 'Y'}, {"volume-only", no_argument, NULL, 'W'},
-        {"images", required_argument, NULL, 'I'},  {NULL, 0, NULL, 0},
+        {"images", required_argument, NULL, 'I'},  {"displays", required_argument, NULL, 'R'},
+        {NULL, 0, NULL, 0},
     };
     bench_options_defaults(o);
     o->out = "docs/bench";
@@ -151,6 +153,9 @@ static int parse(int argc, char **argv, struct bench_options *o)
             break;
         case 'C':
             o->configs = optarg;
+            break;
+        case 'R':
+            o->displays = optarg;
             break;
         case 'P':
             o->paraview = true;
