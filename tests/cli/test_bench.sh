@@ -113,6 +113,10 @@ check "gpu table written" test -s "$tmp/g/gpu-table.md"
 check "gpu table: an HMD frame of two views and a CAVE frame of eight" \
     bash -c "grep -q '^| HMD | 2 |' '$tmp/g/gpu-table.md' && grep -q '^| cave4 | 8 |' '$tmp/g/gpu-table.md'"
 check "gpu table names the device" grep -q "Device: " "$tmp/g/gpu-table.md"
+mkdir -p "$tmp/no-displays"
+expect_exit 4 "gpu bench: --displays without cave4.cfg" "$anvil" bench --quick --gpu \
+    --displays "$tmp/no-displays" -o "$tmp/g2"
+check "gpu bench: the missing display file named" grep -q "no-displays/cave4.cfg" "$tmp/err"
 
 # A CI-sized quality run on the sphere: tables, CSV and both plots, and (--images) the
 # pictures it compares.
