@@ -356,6 +356,7 @@ void series_adopt(struct series *s, int step, uint64_t generation, struct ext_vo
         s->stats.adopted++;
         set_window(s, step, false);
         make_current(s, step);
+        pthread_cond_broadcast(&s->done); /* a series_acquire of STEP waiting elsewhere */
     }
     pthread_mutex_unlock(&s->lock);
     ext_volume_finish(vol); /* zeroed when kept */

@@ -9,8 +9,9 @@
 
 bool video_path_supported(const char *path)
 {
-    static const char *const movies[] = {".mp4", ".mkv", ".mov", ".webm", ".avi",
-                                         ".m4v", ".ogv", ".mpg", ".mpeg"};
+    static const char *const movies[] = {".mp4", ".mkv", ".mov",  ".webm", ".avi",  ".m4v",
+                                         ".ogv", ".mpg", ".mpeg", ".ts",   ".m2ts", ".flv",
+                                         ".wmv", ".asf", ".3gp",  ".mxf",  ".nut",  ".y4m"};
     const char *dot = strrchr(path, '.');
     if (!dot || strchr(dot, '/'))
         return false;

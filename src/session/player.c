@@ -423,6 +423,7 @@ struct player *player_create(const struct config *cfg, const struct player_desc 
         log_error("out of memory");
         return NULL;
     }
+    p->first_step = -1;
     p->steps = 1;
     p->next_shown = -1;
     p->histogram = d && d->histogram;

@@ -1,6 +1,7 @@
 /* Time series cache: prefetch hides a slow reader, LRU budget, failures, try_acquire. */
 #include "testutil.h"
 
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -176,6 +177,49 @@ static void test_adopt_first(void **state)
     series_destroy(s);
 }
 
+struct waiter {
+    struct series *s;
+    int step;
+    float value; /* the volume's, once acquired */
+    double waited_ms;
+};
+
+static void *acquire_thread(void *arg)
+{
+    struct waiter *w = arg;
+    double t0 = time_now_ms();
+    const struct ext_volume *v = series_acquire(w->s, w->step);
+    w->waited_ms = time_now_ms() - t0;
+    w->value = v ? v->beta[0] : -1.0f;
+    return NULL;
+}
+
+/* A series_acquire waiting for a step that is handed over meanwhile gets it then, not when the
+ * worker's next load ends. */
+static void test_adopt_wakes_a_waiter(void **state)
+{
+    struct fake f = {.fail_step = -1};
+    struct series_desc d = {
+        .step_count = 6, .load = fake_load, .user = &f, .prefetch = -1, .delay_ms = 1500};
+    struct series *s = series_create(&d);
+    assert_non_null(s);
+    uint64_t gen = series_generation(s);
+    series_want(s, 1); /* the worker is busy with step 1 for 1.5 s (its delay, then the load) */
+    sleep_ms(200);     /* time for it to take step 1 before the waiter asks for step 3 */
+    struct waiter w = {.s = s, .step = 3};
+    pthread_t t;
+    assert_int_equal(pthread_create(&t, NULL, acquire_thread, &w), 0);
+    sleep_ms(100); /* the waiter is waiting for step 3 */
+    struct ext_volume first = {0};
+    made_volume(&first, 99.0f);
+    series_adopt(s, 3, gen, &first);
+    pthread_join(t, NULL);
+    assert_true(w.value == 99.0f);
+    assert_true(w.waited_ms < 900.0); /* not the 1.4 s left of step 1's load */
+    assert_int_equal(atomic_load(&f.step_calls[3]), 0);
+    series_destroy(s);
+}
+
 static void test_budget_and_lru(void **state)
 {
     struct fake f = {.fail_step = -1};
@@ -317,6 +361,7 @@ int main(void)
         cmocka_unit_test(test_prefetch_hides_slow_reader),
         cmocka_unit_test(test_budget_and_lru),
         cmocka_unit_test(test_adopt_first),
+        cmocka_unit_test(test_adopt_wakes_a_waiter),
         cmocka_unit_test(test_try_acquire_never_blocks),
         cmocka_unit_test(test_failed_load),
         cmocka_unit_test(test_wrf_series),
