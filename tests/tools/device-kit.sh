@@ -1,7 +1,7 @@
 #!/bin/bash
 # Makes build-device/: anvil for an NVIDIA GPU machine that has no Debian packages and can
 # download nothing (an image of its own with the driver mounted), with every library it loads
-# but the C library's and OpenGL's dispatch, packed, and glvnd's packages, through which EGL
+# but the C and C++ runtimes' and OpenGL's dispatch, packed, and glvnd's packages, through which EGL
 # finds the NVIDIA driver there.  Built without FFmpeg, MPI and OpenXR, which the GPU benchmark
 # does not use.  Run from the project folder on the Debian 12 machine (after apt-get update);
 # on the GPU machine, with build-device carried along: bash tests/tools/device-bench.sh
@@ -19,6 +19,8 @@ strip "$kit/anvil"
 ldd "$kit/anvil" | awk '$2 == "=>" && $3 ~ /^\// {print $1, $3}' | while read -r name path; do
     case $name in
     libc.so.* | libm.so.* | libpthread.so.* | libdl.so.* | librt.so.* | ld-linux*) ;;
+    # The machine's own, newer and compatible: the GPU driver may need its version.
+    libstdc++.so.* | libgcc_s.so.*) ;;
     libEGL.so.* | libGL.so.* | libGLX.so.* | libOpenGL.so.* | libGLdispatch.so.*) ;;
     *) cp -L "$path" "$work/lib/" ;;
     esac
