@@ -187,16 +187,24 @@ static void test_lambert(void **state)
     check_step(test_shared_data("wrf/lambert_thompson_cropped.nc"), 0, &d);
 }
 
-static void test_synth(void **state)
+/* The procedural storm on N mass points over EXTENT metres (SEED) as a one-step WRF file. */
+static void write_storm_step(const char *path, const int n[3], const double extent[3], int seed)
 {
-    char path[512];
-    snprintf(path, sizeof(path), "%s", test_tmp_path("synth.nc"));
-    struct synth_desc sd = {
-        .kind = SYNTH_STORM, .n = {40, 30, 24}, .extent_m = {80000.0, 60000.0, 15000.0}, .seed = 5};
+    struct synth_desc sd = {.kind = SYNTH_STORM, .seed = (unsigned)seed};
+    memcpy(sd.n, n, sizeof(sd.n));
+    memcpy(sd.extent_m, extent, sizeof(sd.extent_m));
     struct field_volume in;
     assert_true(synth_storm_fields(&sd, &in));
     test_write_wrf_step(path, &in);
     field_volume_finish(&in);
+}
+
+static void test_synth(void **state)
+{
+    char path[512];
+    snprintf(path, sizeof(path), "%s", test_tmp_path("synth.nc"));
+    write_storm_step(path, (const int[3]){40, 30, 24}, (const double[3]){80000.0, 60000.0, 15000.0},
+                     5);
     struct wrf_desc d;
     wrf_desc_defaults(&d);
     d.levels = 37; /* not the file's 24: every output between two levels */
@@ -406,12 +414,8 @@ static void check_vapour(const char *path, int step, const struct wrf_desc *base
 /* A synthetic step written to PATH without QVAPOR (renamed away). */
 static void write_without_vapour(const char *path)
 {
-    struct synth_desc sd = {
-        .kind = SYNTH_STORM, .n = {24, 20, 10}, .extent_m = {48000.0, 40000.0, 12000.0}, .seed = 5};
-    struct field_volume in;
-    assert_true(synth_storm_fields(&sd, &in));
-    test_write_wrf_step(path, &in);
-    field_volume_finish(&in);
+    write_storm_step(path, (const int[3]){24, 20, 10}, (const double[3]){48000.0, 40000.0, 12000.0},
+                     5);
     int nc, varid;
     CHECK(nc_open(path, NC_WRITE, &nc));
     CHECK(nc_redef(nc));
@@ -470,12 +474,8 @@ static void test_slabs_bad_values(void **state)
 {
     char path[512];
     snprintf(path, sizeof(path), "%s", test_tmp_path("bad.nc"));
-    struct synth_desc sd = {
-        .kind = SYNTH_STORM, .n = {20, 30, 12}, .extent_m = {40000.0, 60000.0, 12000.0}, .seed = 3};
-    struct field_volume in;
-    assert_true(synth_storm_fields(&sd, &in));
-    test_write_wrf_step(path, &in);
-    field_volume_finish(&in);
+    write_storm_step(path, (const int[3]){20, 30, 12}, (const double[3]){40000.0, 60000.0, 12000.0},
+                     3);
     int nc, qc, qr, p, qv;
     CHECK(nc_open(path, NC_WRITE, &nc));
     CHECK(nc_inq_varid(nc, "QVAPOR", &qv));
