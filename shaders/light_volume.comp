@@ -6,9 +6,10 @@
 // iteration kept on the GPU.  Bricks are LIGHT_VOLUME_BRICK cells a side; the per-brick
 // passes run one invocation a brick, which walks its cells in order, so a brick's sums need
 // no barrier.
-//   PASS 1 (terms): per cell the source Q0, its first moment Q1, the transport extinction and
-//     the source's offset from the cell centre, from 3^3 samples of the extinction and the
-//     dense light map (both read with texelFetch and the CPU's trilinear weights).
+//   PASS 1 (terms): per cell the source Q0 (the beam through its faces, in less out), its first
+//     moment Q1, the transport extinction and the source's offset from the cell centre, from
+//     3^3 samples of the extinction and of the dense light map inside the cell and 3^2 on each
+//     face (both read with texelFetch and the CPU's trilinear weights).
 //   PASS 2 (assemble): per cell the diagonal, the conductances to the +x, +y, +z neighbours and
 //     the right-hand side; x = 0, r = b, p = 0.
 //   PASS 3 (spmv, per brick): beta from PASS 4; p = z + P e + beta p into the other p
@@ -263,16 +264,40 @@ float beam_at(vec3 p)
     return c0 + t.z * (c1 - c0);
 }
 
+// The beam over face F of the cells (volume.c, face_beam): its mean and its first moments
+// about the face's centre along axes (A + 1) % 3 and (A + 2) % 3.  1 on a face of the box toward
+// the sun.  The points depend on F alone: both cells of a face see the same beam through it.
+vec3 face_beam(int a, ivec3 f)
+{
+    int b = (a + 1) % 3, c = (a + 2) % 3;
+    if ((f[a] == 0 && sdir[a] > 0.0) || (f[a] == cells_n[a] && sdir[a] < 0.0))
+        return vec3(1.0, 0.0, 0.0);
+    vec3 m = vec3(0.0);
+    for (int y = 0; y < sub; y++) {
+        for (int x = 0; x < sub; x++) {
+            float ob = ((float(x) + 0.5) / float(sub) - 0.5) * cell_size[b];
+            float oc = ((float(y) + 0.5) / float(sub) - 0.5) * cell_size[c];
+            vec3 p;
+            p[a] = box_origin[a] + float(f[a]) * cell_size[a];
+            p[b] = box_origin[b] + (float(f[b]) + 0.5) * cell_size[b] + ob;
+            p[c] = box_origin[c] + (float(f[c]) + 0.5) * cell_size[c] + oc;
+            float l = beam_at(p);
+            m += l * vec3(1.0, ob, oc);
+        }
+    }
+    return m / float(sub * sub);
+}
+
+// volume.c, cell_terms: the source from the beam through the cell's faces, only where the
+// cell holds cloud; the centroid from the same faces and the beam inside the cell.
 void main()
 {
     int c = int(gl_GlobalInvocationID.x);
     if (c >= cells_count())
         return;
     ivec3 ijk = cell_of(c);
-    float h = min(cell_size.x, min(cell_size.y, cell_size.z)) / float(sub);
-    vec3 centre = box_origin + (vec3(ijk) + 0.5) * cell_size;
-    float q0 = 0.0, q1 = 0.0, sigma = 0.0;
-    vec3 dq = vec3(0.0);
+    float m = float(sub * sub * sub);
+    float sigma = 0.0, wg = 0.0, wsum = 0.0;
     for (int k = 0; k < sub; k++) {
         for (int j = 0; j < sub; j++) {
             for (int i = 0; i < sub; i++) {
@@ -280,29 +305,48 @@ void main()
                 vec2 b = sample_beta(p);
                 float ice = b.x, water = b.y;
                 sigma += tr.y * ice + tr.x * water;
-                if (!(ice + water > 0.0))
-                    continue;
-                vec3 pa = p - 0.5 * h * sdir, pb = p + 0.5 * h * sdir;
-                float la = beam_at(pa), lb = beam_at(pb);
-                float q = max(la - lb, 0.0) / h;
                 float lw = loss.x * water, li = loss.y * ice;
-                q0 += q;
-                q1 += q * (lw * gs.x + li * gs.y) / (lw + li);
-                float s_bar = 0.5 * h;
-                if (q > 0.0) {
-                    float kh = lb > 0.0 ? log(la / lb) : 1e30;
-                    if (kh > 50.0)
-                        s_bar = h / kh;
-                    else if (kh > 1e-4)
-                        s_bar = h * (1.0 / kh - 1.0 / (exp(kh) - 1.0));
-                }
-                dq += q * (pa + s_bar * sdir - centre);
+                wg += lw * gs.x + li * gs.y;
+                wsum += lw + li;
             }
         }
     }
-    float n = float(sub * sub * sub);
-    terms[2 * c] = vec4(q0 / n, q1 / n * sdir);
-    terms[2 * c + 1] = vec4(sigma / n, dq / n);
+    if (!(wsum > 0.0)) {
+        terms[2 * c] = vec4(0.0);
+        terms[2 * c + 1] = vec4(sigma / m, 0.0, 0.0, 0.0);
+        return;
+    }
+    float q0 = 0.0;
+    vec3 dq = vec3(0.0);
+    for (int a = 0; a < 3; a++) {
+        if (sdir[a] == 0.0)
+            continue;
+        int b = (a + 1) % 3, cc = (a + 2) % 3;
+        for (int side = 0; side < 2; side++) {
+            ivec3 f = ijk;
+            f[a] += side;
+            vec3 fb = face_beam(a, f);
+            float in_s = side == 1 ? -sdir[a] : sdir[a];
+            q0 += in_s * fb.x / cell_size[a];
+            dq[a] += in_s * fb.x * (side == 1 ? 0.5 : -0.5);
+            dq[b] += in_s * fb.y / cell_size[a];
+            dq[cc] += in_s * fb.z / cell_size[a];
+        }
+    }
+    float inside = 0.0;
+    for (int k = 0; k < sub; k++) {
+        for (int j = 0; j < sub; j++) {
+            for (int i = 0; i < sub; i++)
+                inside += beam_at(box_origin +
+                                  (vec3(ijk) + (vec3(i, j, k) + 0.5) / float(sub)) * cell_size);
+        }
+    }
+    inside /= m;
+    q0 = max(q0, 0.0);
+    vec3 lim = 0.5 * cell_size * q0;
+    dq = clamp(dq + sdir * inside, -lim, lim);
+    terms[2 * c] = vec4(q0, q0 * (wg / wsum) * sdir);
+    terms[2 * c + 1] = vec4(sigma / m, dq);
 }
 
 #elif PASS == 2

@@ -96,72 +96,129 @@ void light_volume_phase_terms(const struct light_settings *s, const double sun[3
     }
 }
 
-/* Per cell, averaged over its sub-samples: the source Q0 (per metre: the beam's loss rate
- * -dL/ds), its first moment Q1 (a vector), and the transport extinction sigma_tr =
- * (1 - g) beta. */
+/* Per cell: the source Q0 (per metre, relative to E: the power the beam loses in the cell over
+ * its volume), its first moment Q1 (a vector), the transport extinction sigma_tr = (1 - g) beta
+ * (the mean of the cell's samples) and Q0 times the offset of the source's centroid from the
+ * cell's centre. */
 struct cell_terms {
     double q0, q1[3], sigma;
-    double dq[3]; /* Q0 times the offset of the source's centroid from the cell's centre */
+    double dq[3];
 };
 
+/* The beam over face F of the cells (F[A] the face's index along axis A, 0 .. n[A]; the other
+ * two the cell's) from SUB x SUB points: its mean, and its first moments about the face's
+ * centre along the next two axes, (A + 1) % 3 and (A + 2) % 3, in metres.  A face of the box
+ * toward the sun gets 1: nothing outside the box shades it, wherever the light map's nodes
+ * lie.  The points depend on F alone, so the two cells on either side of a face see the same
+ * beam through it. */
+static void face_beam(const struct light_map *map, const struct light_volume *v, int sub,
+                      const double sdir[3], int a, const int f[3], double out[3])
+{
+    const int *n = v->grid.n;
+    const double *sp = v->grid.spacing, *o = v->grid.origin;
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    if ((f[a] == 0 && sdir[a] > 0.0) || (f[a] == n[a] && sdir[a] < 0.0)) {
+        out[0] = 1.0;
+        out[1] = out[2] = 0.0;
+        return;
+    }
+    double m0 = 0.0, mb = 0.0, mc = 0.0;
+    for (int y = 0; y < sub; y++) {
+        for (int x = 0; x < sub; x++) {
+            double ob = ((x + 0.5) / sub - 0.5) * sp[b], oc = ((y + 0.5) / sub - 0.5) * sp[c];
+            double p[3];
+            p[a] = o[a] + f[a] * sp[a];
+            p[b] = o[b] + (f[b] + 0.5) * sp[b] + ob;
+            p[c] = o[c] + (f[c] + 0.5) * sp[c] + oc;
+            double l = beam_at(map, p);
+            m0 += l;
+            mb += l * ob;
+            mc += l * oc;
+        }
+    }
+    double m = (double)sub * sub;
+    out[0] = m0 / m;
+    out[1] = mb / m;
+    out[2] = mc / m;
+}
+
+/* The terms of cell (CI, CJ, CK).  The source is the divergence theorem applied to the beam:
+ * what enters through the cell's faces less what leaves, Q0 = sum over axes of s_a (B_lower -
+ * B_upper) / dx_a, B a face's mean beam (face_beam) and s the light's direction.  Summed over
+ * cells, the faces between cells cancel, so the volume's source is what enters the box less what
+ * leaves it, however sharp a cloud's face is against the light map's nodes.  Only cells that
+ * hold cloud (a sample with extinction) get a source: the beam a light map's interpolation
+ * lets fall in clear air beside a cloud is not scattered there.  The centroid follows from the
+ * same faces: the integral of (x - c) Q0 over the cell is the faces' sum of -(x - c) B s.n
+ * plus s times the integral of B, the latter from the cell's SUB^3 samples. */
 static void cell_terms(const struct ext_volume *vol, const struct light_map *map,
                        const struct light_volume *v, int sub, const double sdir[3],
                        const double tr[2], const double loss[2], const double gs[2], int ci,
                        int cj, int ck, struct cell_terms *out)
 {
-    const double *sp = v->grid.spacing;
-    double h = fmin(sp[0], fmin(sp[1], sp[2])) / sub;
-    const int ijk[3] = {ci, cj, ck};
-    double q0 = 0.0, q1 = 0.0, sigma = 0.0, dq[3] = {0.0, 0.0, 0.0};
+    const double *sp = v->grid.spacing, *o = v->grid.origin;
+    const int idx[3] = {ci, cj, ck};
+    const double m = (double)sub * sub * sub;
+    double sigma = 0.0, wg = 0.0, wsum = 0.0;
     for (int c = 0; c < sub; c++) {
         for (int b = 0; b < sub; b++) {
             for (int a = 0; a < sub; a++) {
-                double p[3] = {v->grid.origin[0] + (ci + (a + 0.5) / sub) * sp[0],
-                               v->grid.origin[1] + (cj + (b + 0.5) / sub) * sp[1],
-                               v->grid.origin[2] + (ck + (c + 0.5) / sub) * sp[2]};
-                float pf[3] = {(float)p[0], (float)p[1], (float)p[2]}, beta[2];
+                float pf[3] = {(float)(o[0] + (ci + (a + 0.5) / sub) * sp[0]),
+                               (float)(o[1] + (cj + (b + 0.5) / sub) * sp[1]),
+                               (float)(o[2] + (ck + (c + 0.5) / sub) * sp[2])},
+                      beta[2];
                 light_sample_beta(vol, pf, beta);
                 double ice = beta[0], water = beta[1];
                 sigma += tr[1] * ice + tr[0] * water;
-                if (!(ice + water > 0.0))
-                    continue;
-                /* What the beam loses over a short stretch through P: in a medium that
-                 * varies across the light this is the net of the beam's loss and the
-                 * peripheral light it gains, the light that leaves it for good. */
-                double pa[3], pb[3];
-                for (int i = 0; i < 3; i++) {
-                    pa[i] = p[i] - 0.5 * h * sdir[i];
-                    pb[i] = p[i] + 0.5 * h * sdir[i];
-                }
-                double la = beam_at(map, pa), lb = beam_at(map, pb);
-                double q = fmax(la - lb, 0.0) / h;
                 double lw = loss[0] * water, li = loss[1] * ice;
-                q0 += q;
-                q1 += q * (lw * gs[0] + li * gs[1]) / (lw + li);
-                /* Where on the stretch the beam loses it: the centroid of an exponential
-                 * fall from la to lb, at pa when the stretch is opaque. */
-                double s_bar = 0.5 * h;
-                if (q > 0.0) {
-                    double kh = lb > 0.0 ? log(la / lb) : INFINITY;
-                    if (kh > 50.0)
-                        s_bar = h / kh;
-                    else if (kh > 1e-4)
-                        s_bar = h * (1.0 / kh - 1.0 / expm1(kh));
-                }
-                for (int i = 0; i < 3; i++) {
-                    double centre = v->grid.origin[i] + (ijk[i] + 0.5) * sp[i];
-                    dq[i] += q * (pa[i] + s_bar * sdir[i] - centre);
-                }
+                wg += lw * gs[0] + li * gs[1];
+                wsum += lw + li;
             }
         }
     }
-    double n = (double)sub * sub * sub;
-    out->q0 = q0 / n;
-    for (int i = 0; i < 3; i++) {
-        out->q1[i] = q1 / n * sdir[i];
-        out->dq[i] = dq[i] / n;
+    memset(out, 0, sizeof(*out));
+    out->sigma = sigma / m;
+    if (!(wsum > 0.0))
+        return;
+    double q0 = 0.0, dq[3] = {0.0, 0.0, 0.0};
+    for (int a = 0; a < 3; a++) {
+        if (sdir[a] == 0.0)
+            continue;
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        for (int side = 0; side < 2; side++) {
+            int f[3] = {ci, cj, ck};
+            f[a] += side;
+            double fb[3];
+            face_beam(map, v, sub, sdir, a, f, fb);
+            double in = side ? -sdir[a] : sdir[a]; /* s.(-n): in through the face, per area */
+            q0 += in * fb[0] / sp[a];
+            dq[a] += in * fb[0] * (side ? 0.5 : -0.5);
+            dq[b] += in * fb[1] / sp[a];
+            dq[c] += in * fb[2] / sp[a];
+        }
     }
-    out->sigma = sigma / n;
+    double inside = 0.0;
+    for (int c = 0; c < sub; c++) {
+        for (int b = 0; b < sub; b++) {
+            for (int a = 0; a < sub; a++) {
+                double p[3] = {o[0] + (idx[0] + (a + 0.5) / sub) * sp[0],
+                               o[1] + (idx[1] + (b + 0.5) / sub) * sp[1],
+                               o[2] + (idx[2] + (c + 0.5) / sub) * sp[2]};
+                inside += beam_at(map, p);
+            }
+        }
+    }
+    inside /= m;
+    /* A light map's beam may rise along the light where a neighbouring column's drift makes it
+     * (a cell lit more through its far faces than its near ones): no negative source. */
+    q0 = fmax(q0, 0.0);
+    double g = wg / wsum;
+    out->q0 = q0;
+    for (int a = 0; a < 3; a++) {
+        double lim = 0.5 * sp[a] * q0; /* the centroid lies in the cell */
+        out->dq[a] = fmax(-lim, fmin(lim, dq[a] + sdir[a] * inside));
+        out->q1[a] = q0 * g * sdir[a];
+    }
 }
 
 /* Resistance of half a cell of transport extinction SIGMA and length DX across the face:
