@@ -83,6 +83,14 @@ void light_volume_finish(struct light_volume *v);
  * inside the box; zero outside it.  OUT: phi, Fx, Fy, Fz. */
 void light_volume_sample(const struct light_volume *v, const double p[3], float out[4]);
 
+/* The source light_volume_build gives cell CELL (its indices along x, y, z) of VOL lit by MAP
+ * (the settings S, the desc DESC or NULL for the defaults): *Q0, the power the beam loses in the
+ * cell over its volume and E (per metre), and DQ, Q0 times the offset of the loss's centroid
+ * from the cell's centre (metres). */
+void light_volume_cell_source(const struct ext_volume *vol, const struct light_map *map,
+                              const struct light_settings *s, const struct light_volume_desc *desc,
+                              const int cell[3], double *q0, double dq[3]);
+
 /* The resistance to the net flux at a surface that faces clear air (the box's faces, and the
  * jump from optically thick to clear inside it), per unit area in units of 1 / flux per
  * fluence: phi at the surface = R F.  A Milne-type condition.  The exact solution of Milne's

@@ -530,6 +530,39 @@ done:
     return ok;
 }
 
+/* The cells of D's resolution over VOL's box. */
+static void cells_grid(const struct ext_volume *vol, const struct light_volume_desc *d,
+                       struct grid3 *out)
+{
+    memset(out, 0, sizeof(*out));
+    for (int a = 0; a < 3; a++) {
+        out->n[a] = d->resolution[a];
+        out->origin[a] = vol->grid.origin[a];
+        out->spacing[a] = vol->grid.n[a] * vol->grid.spacing[a] / d->resolution[a];
+    }
+}
+
+void light_volume_cell_source(const struct ext_volume *vol, const struct light_map *map,
+                              const struct light_settings *s, const struct light_volume_desc *desc,
+                              const int cell[3], double *q0, double dq[3])
+{
+    assert(vol && map && s && cell && q0 && dq);
+    struct light_volume_desc d = desc ? *desc : (struct light_volume_desc){0};
+    light_volume_desc_defaults(&d, &vol->grid);
+    struct light_volume v = {0};
+    cells_grid(vol, &d, &v.grid);
+    const double *sun = map->grid.sun;
+    double len = sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2]);
+    const double sdir[3] = {-sun[0] / len, -sun[1] / len, -sun[2] / len};
+    double tr[2], loss[2], gs[2];
+    light_volume_phase_terms(s, sun, tr, loss, gs);
+    struct cell_terms t;
+    cell_terms(vol, map, &v, d.substeps, sdir, tr, loss, gs, cell[0], cell[1], cell[2], &t);
+    *q0 = t.q0;
+    for (int a = 0; a < 3; a++)
+        dq[a] = t.dq[a];
+}
+
 bool light_volume_build(const struct ext_volume *vol, const struct light_map *map,
                         const struct light_settings *s, const struct light_volume_desc *desc,
                         struct light_volume *out)
@@ -542,11 +575,7 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
     float *field_keep = out->field;
     size_t keep_count = out->field ? grid3_count(&out->grid) : 0;
     memset(out, 0, sizeof(*out));
-    for (int a = 0; a < 3; a++) {
-        out->grid.n[a] = d.resolution[a];
-        out->grid.origin[a] = vol->grid.origin[a];
-        out->grid.spacing[a] = vol->grid.n[a] * vol->grid.spacing[a] / d.resolution[a];
-    }
+    cells_grid(vol, &d, &out->grid);
     const size_t count = grid3_count(&out->grid);
     if (field_keep && keep_count == count) {
         out->field = field_keep;

@@ -187,6 +187,58 @@ static void test_source_is_what_enters_a_face(void **state)
     assert_true(fabs(ratio[1] - ratio[0]) < 0.02 && fabs(ratio[1] - ratio[2]) < 0.02);
 }
 
+/* Where in a cell the beam's loss lies (light_volume_cell_source), the sun overhead on 1 km
+ * voxels and 2 km cells: an opaque top layer over x < 3 km and an opaque layer under it.  The
+ * top cell at x 0 - 2 km, lit through its top face, loses all of it there: its centroid at the
+ * top face, half a cell up (the cell's bound).  The cell under the shadow's edge (x 2 - 4 km)
+ * is lit only where its top face lies beyond x = 3 km (a third of the face's points; the
+ * extinction is trilinear between voxel centres): its centroid lies up and toward +x, by about
+ * a third of a cell (the face's first moment across the light: 0 if that moment were left out,
+ * below 0 with its sign turned). */
+static void test_source_centroid(void **state)
+{
+    (void)state;
+    struct ext_volume vol = {0};
+    struct grid3 g = {.n = {8, 8, 8}, .spacing = {1e3, 1e3, 1e3}};
+    assert_true(ext_volume_init(&vol, &g));
+    for (int k = 0; k < 8; k++) {
+        for (int j = 0; j < 8; j++) {
+            for (int i = 0; i < 8; i++) {
+                bool top = k >= 6 && i < 3, under = k == 4 || k == 5;
+                vol.beta[2 * grid3_index(&g, i, j, k) + 1] = top ? 0.5f : under ? 2e-3f : 0.0f;
+            }
+        }
+    }
+    struct light_settings s;
+    light_settings_defaults(&s);
+    struct optics_params optics;
+    optics_params_defaults(&optics);
+    light_settings_set_optics(&s, &optics, 20.0);
+    for (int a = 0; a < 3; a++)
+        s.resolution[a] = 64;
+    double sun[3];
+    light_sun_direction(0.0, 90.0, sun);
+    struct light_map map = {0};
+    assert_true(light_map_build(&vol, sun, &s, &map));
+    const double dx = 2e3;
+    double q0, dq[3];
+    light_volume_cell_source(&vol, &map, &s, NULL, (int[3]){0, 1, 3}, &q0, dq);
+    print_message("lit top cell: q0 %.4g per m, centroid (%.0f, %.0f, %.0f) m\n", q0, dq[0] / q0,
+                  dq[1] / q0, dq[2] / q0);
+    assert_float_equal(q0 * dx, 1.0, 0.02); /* all of the beam through its top */
+    assert_true(dq[2] / q0 > 0.45 * dx && dq[2] / q0 <= 0.5 * dx);
+    assert_true(fabs(dq[0]) / q0 < 0.01 * dx);
+    light_volume_cell_source(&vol, &map, &s, NULL, (int[3]){1, 1, 2}, &q0, dq);
+    print_message("cell under the shadow's edge: q0 %.4g per m, centroid (%.0f, %.0f, %.0f) m\n",
+                  q0, dq[0] / q0, dq[1] / q0, dq[2] / q0);
+    assert_true(q0 * dx > 0.1 && q0 * dx < 0.5); /* a third of the face's points lit */
+    assert_true(dq[0] / q0 > 0.25 * dx && dq[0] / q0 < 0.4 * dx);
+    assert_true(dq[2] / q0 > 0.05 * dx && dq[2] / q0 < 0.4 * dx);
+    assert_true(fabs(dq[1]) / q0 < 0.01 * dx);
+    light_map_finish(&map);
+    ext_volume_finish(&vol);
+}
+
 /* Hard cases: optical depth 1e4 (every cell opaque), a single voxel, a grazing sun. */
 static void test_hard_cases_stay_finite(void **state)
 {
@@ -327,6 +379,7 @@ int main(void)
         cmocka_unit_test(test_slab_matches_closed_form),
         cmocka_unit_test(test_storm_conserves_energy),
         cmocka_unit_test(test_source_is_what_enters_a_face),
+        cmocka_unit_test(test_source_centroid),
         cmocka_unit_test(test_hard_cases_stay_finite),
         cmocka_unit_test(test_bricks_need_fewer_iterations),
         cmocka_unit_test(test_scattered_light_toward_the_eye),
