@@ -83,6 +83,11 @@ void light_volume_finish(struct light_volume *v);
  * inside the box; zero outside it.  OUT: phi, Fx, Fy, Fz. */
 void light_volume_sample(const struct light_volume *v, const double p[3], float out[4]);
 
+/* The cells of DESC's resolution (its defaults filled) over the volume box BOX: the grid of
+ * light_volume_build's field and of the GPU build's. */
+void light_volume_grid(const struct grid3 *box, const struct light_volume_desc *desc,
+                       struct grid3 *out);
+
 /* The source light_volume_build gives cell CELL (its indices along x, y, z) of VOL lit by MAP
  * (the settings S, the desc DESC or NULL for the defaults): *Q0, the power the beam loses in the
  * cell over its volume and E (per metre), and DQ, Q0 times the offset of the loss's centroid

@@ -530,15 +530,14 @@ done:
     return ok;
 }
 
-/* The cells of D's resolution over VOL's box. */
-static void cells_grid(const struct ext_volume *vol, const struct light_volume_desc *d,
+void light_volume_grid(const struct grid3 *box, const struct light_volume_desc *d,
                        struct grid3 *out)
 {
     memset(out, 0, sizeof(*out));
     for (int a = 0; a < 3; a++) {
         out->n[a] = d->resolution[a];
-        out->origin[a] = vol->grid.origin[a];
-        out->spacing[a] = vol->grid.n[a] * vol->grid.spacing[a] / d->resolution[a];
+        out->origin[a] = box->origin[a];
+        out->spacing[a] = box->n[a] * box->spacing[a] / d->resolution[a];
     }
 }
 
@@ -550,12 +549,10 @@ void light_volume_cell_source(const struct ext_volume *vol, const struct light_m
     struct light_volume_desc d = desc ? *desc : (struct light_volume_desc){0};
     light_volume_desc_defaults(&d, &vol->grid);
     struct light_volume v = {0};
-    cells_grid(vol, &d, &v.grid);
-    const double *sun = map->grid.sun;
-    double len = sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2]);
-    const double sdir[3] = {-sun[0] / len, -sun[1] / len, -sun[2] / len};
+    light_volume_grid(&vol->grid, &d, &v.grid);
+    const double *sdir = map->grid.w; /* the light's direction, unit */
     double tr[2], loss[2], gs[2];
-    light_volume_phase_terms(s, sun, tr, loss, gs);
+    light_volume_phase_terms(s, map->grid.sun, tr, loss, gs);
     struct cell_terms t;
     cell_terms(vol, map, &v, d.substeps, sdir, tr, loss, gs, cell[0], cell[1], cell[2], &t);
     *q0 = t.q0;
@@ -575,7 +572,7 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
     float *field_keep = out->field;
     size_t keep_count = out->field ? grid3_count(&out->grid) : 0;
     memset(out, 0, sizeof(*out));
-    cells_grid(vol, &d, &out->grid);
+    light_volume_grid(&vol->grid, &d, &out->grid);
     const size_t count = grid3_count(&out->grid);
     if (field_keep && keep_count == count) {
         out->field = field_keep;
@@ -598,12 +595,9 @@ bool light_volume_build(const struct ext_volume *vol, const struct light_map *ma
         goto error;
     }
 
-    /* The light travels along -sun. */
-    const double *sun = map->grid.sun;
-    double len = sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2]);
-    const double sdir[3] = {-sun[0] / len, -sun[1] / len, -sun[2] / len};
+    const double *sdir = map->grid.w; /* the light travels along -sun: unit */
     double tr[2], loss[2], gs[2];
-    light_volume_phase_terms(s, sun, tr, loss, gs);
+    light_volume_phase_terms(s, map->grid.sun, tr, loss, gs);
 
     const int *n = sys.n;
     for (int k = 0; k < n[2]; k++) {

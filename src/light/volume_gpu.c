@@ -115,11 +115,7 @@ bool light_volume_gpu_build_begin(struct light_volume_gpu *v, const struct gpu_t
         if (!(p[k - 1] = pass(v, k, k == 1 && grid3_stretched(vol_grid))))
             return false;
     }
-    for (int a = 0; a < 3; a++) {
-        v->grid.n[a] = d.resolution[a];
-        v->grid.origin[a] = vol_grid->origin[a];
-        v->grid.spacing[a] = vol_grid->n[a] * vol_grid->spacing[a] / d.resolution[a];
-    }
+    light_volume_grid(vol_grid, &d, &v->grid);
     const int count = (int)grid3_count(&v->grid);
     const int bricks = bricks_count(&v->grid);
     if (!v->field.id || memcmp(v->field.size, v->grid.n, sizeof(v->grid.n)) != 0) {
@@ -146,11 +142,9 @@ bool light_volume_gpu_build_begin(struct light_volume_gpu *v, const struct gpu_t
     bind_buffers(v);
 
     /* PASS 1: the source and the extinction per cell. */
-    double sun_len = sqrt(lgrid->sun[0] * lgrid->sun[0] + lgrid->sun[1] * lgrid->sun[1] +
-                          lgrid->sun[2] * lgrid->sun[2]);
     float sdir[3], vol_origin[3], vol_inv[3];
     for (int a = 0; a < 3; a++) {
-        sdir[a] = (float)(-lgrid->sun[a] / sun_len);
+        sdir[a] = (float)lgrid->w[a]; /* the light's direction, unit */
         vol_origin[a] = (float)vol_grid->origin[a];
         vol_inv[a] = (float)(1.0 / vol_grid->spacing[a]);
     }
