@@ -124,6 +124,7 @@ struct config_render {
     double ground[3];      /* render.ground: ground albedo, linear RGB */
     bool ground_on;        /* render.ground_on: draw the ground plane */
     double termination;    /* render.termination: stop a ray below this transmittance */
+    double lod_pixels;     /* render.lod: a step at least this many pixels wide; 0 = off */
     bool skip;             /* render.skip: empty-space skipping (macro cells) */
     enum render_precision precision; /* render.precision: float | half storage */
 };

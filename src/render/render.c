@@ -473,14 +473,6 @@ static int slices_shown(const struct renderer *r)
 static void slice_uniforms(const struct renderer *r, const struct gpu_program *prog, int n,
                            const struct render_view *view)
 {
-    /* A pixel's width: the narrower of its two sides, constant (orthographic, proj[15] = 1)
-     * or growing with the distance (perspective). */
-    float px = 2.0f / (fabsf(view->proj[0]) * (float)view->width);
-    float py = 2.0f / (fabsf(view->proj[5]) * (float)view->height);
-    float foot = fminf(px, py);
-    float footprint[2] = {view->proj[15] != 0.0f ? foot : 0.0f,
-                          view->proj[15] != 0.0f ? 0.0f : foot};
-    gpu_uniform_vec2(prog, "pixel_footprint", footprint);
     float planes[4][4] = {{0}}, lo[4] = {0}, scale[4] = {0}, opacity[4] = {0}, every[4] = {0};
     float follow[4] = {0}, values[TRANSFER_CONTOUR_MAX][4] = {{0}}, value_count[4] = {0};
     for (int i = 0; i < n; i++) {
@@ -1133,6 +1125,17 @@ static void eye_uniforms(struct renderer *r, const struct gpu_program *prog,
     gpu_uniform_vec3(prog, "box_min", box_min);
     gpu_uniform_vec3(prog, "box_size", box_size);
     gpu_uniform_float(prog, "step_len", step);
+    /* A pixel's width: the narrower of its two sides, constant (orthographic, proj[15] = 1)
+     * or growing with the distance (perspective); the slices' contours and the level of
+     * detail (LOD) read it. */
+    float px = 2.0f / (fabsf(view->proj[0]) * (float)view->width);
+    float py = 2.0f / (fabsf(view->proj[5]) * (float)view->height);
+    float foot = fminf(px, py);
+    float footprint[2] = {view->proj[15] != 0.0f ? foot : 0.0f,
+                          view->proj[15] != 0.0f ? 0.0f : foot};
+    gpu_uniform_vec2(prog, "pixel_footprint", footprint);
+    if (s->lod_pixels > 0.0f)
+        gpu_uniform_float(prog, "lod_pixels", s->lod_pixels);
     gpu_uniform_vec3(prog, "voxel_size", voxel);
     gpu_uniform_int(prog, "max_steps", RENDER_MAX_STEPS);
     gpu_uniform_float(prog, "termination", s->termination);
@@ -1216,14 +1219,14 @@ bool renderer_draw(struct renderer *r, const struct render_settings *s,
         cells = temporal ? renderer_pair_cells(r) : (r->cells.levels ? &r->cells : NULL);
     const struct gpu_program *progs[2] = {NULL, NULL};
     for (int pass = 0; pass < (cells ? 2 : 1); pass++) {
-        snprintf(defines, sizeof(defines), "%s%s%s%s%s%s%s%s%s%s%s#define PASS %d\n",
-                 cells && pass == 0 && r->ballot ? "#define BALLOT 1\n" : "",
-                 light_defines, grid3_stretched(&r->grid) ? "#define STRETCHED 1\n" : "",
+        snprintf(defines, sizeof(defines), "%s%s%s%s%s%s%s%s%s%s%s%s#define PASS %d\n",
+                 cells && pass == 0 && r->ballot ? "#define BALLOT 1\n" : "", light_defines,
+                 grid3_stretched(&r->grid) ? "#define STRETCHED 1\n" : "",
                  opaque ? "#define OPAQUE 1\n" : "", phase,
                  s->no_ground_shadow ? "#define GROUND_SHADOW 0\n" : "",
                  r->have_tint ? "#define TINT 1\n" : "", temporal ? "#define TEMPORAL 1\n" : "",
                  cells ? "#define SKIP 1\n" : "", r->counting ? "#define COUNT 1\n" : "",
-                 layer_define, cells ? pass + 1 : 0);
+                 s->lod_pixels > 0.0f ? "#define LOD 1\n" : "", layer_define, cells ? pass + 1 : 0);
         progs[pass] = variant(r, defines);
         if (!progs[pass])
             return false;

@@ -29,6 +29,9 @@ struct render_settings {
     bool ground_on;
     float step_m;          /* ray step; 0 = half the voxel crossing along each ray */
     float termination;     /* stop rays below this transmittance */
+    /* Level of detail (LOD 1, render.lod): a step at least this many pixels wide where it
+     * is; 0 = off, every step the voxel rule's or step_m. */
+    float lod_pixels;
     /* Effects compiled out of the eye pass (app/effects.h); zero = simulated. */
     bool single_phase;     /* one phase for every species: PHASE_MIX 0 */
     bool single_phase_ice; /* ... the ice phase (else the water phase) */

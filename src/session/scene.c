@@ -183,6 +183,7 @@ void scene_render_settings(const struct config *cfg, struct render_settings *s)
     s->ground_on = cfg->render.ground_on;
     s->step_m = (float)cfg->render.step_m;
     s->termination = (float)cfg->render.termination;
+    s->lod_pixels = (float)cfg->render.lod_pixels;
     s->no_skip = !cfg->render.skip;
 }
 
