@@ -116,8 +116,14 @@ bool bench_device(const struct bench_device_desc *d, struct bench_device_result 
     int counts[2] = {hmd_views(hw, hh, views[0]), cave_views(d->displays, cw, ch, views[1])};
     if (counts[1] < 0)
         goto done;
-    snprintf(out->frames[0].name, sizeof(out->frames[0].name), "HMD");
-    snprintf(out->frames[1].name, sizeof(out->frames[1].name), "cave4");
+    for (int f = 0; f < BENCH_DEVICE_FRAMES; f++) {
+        const char *what = f % 2 ? "cave4" : "HMD";
+        if (f < 2)
+            snprintf(out->frames[f].name, sizeof(out->frames[f].name), "%s", what);
+        else
+            snprintf(out->frames[f].name, sizeof(out->frames[f].name), "%s, render.lod = %g", what,
+                     (double)BENCH_DEVICE_LOD);
+    }
     double ms, builds[FRAMES_MAX];
     for (int k = -1; k < frames; k++) { /* k = -1 compiles and allocates */
         if (!bench_timed_build(r, lg, &sc, sc.shadows, &sc.light, sc.mode, &ms))
@@ -125,16 +131,21 @@ bool bench_device(const struct bench_device_desc *d, struct bench_device_result 
         if (k >= 0)
             builds[k] = ms;
     }
-    for (int f = 0; f < 2; f++) {
+    for (int f = 0; f < BENCH_DEVICE_FRAMES; f++) {
         struct bench_device_frame *fr = &out->frames[f];
-        fr->views = counts[f];
-        fr->width = views[f][0].width;
-        fr->height = views[f][0].height;
+        const struct render_view *vs = views[f % 2];
+        int count = counts[f % 2];
+        struct render_settings settings = sc.settings;
+        if (f >= 2)
+            settings.lod_pixels = BENCH_DEVICE_LOD;
+        fr->views = count;
+        fr->width = vs[0].width;
+        fr->height = vs[0].height;
         double times[FRAMES_MAX];
         for (int k = -1; k < frames; k++) {
             double total = 0.0;
-            for (int v = 0; v < counts[f]; v++) {
-                if (!bench_timed_draw(r, &sc.settings, &views[f][v], &target, &ms))
+            for (int v = 0; v < count; v++) {
+                if (!bench_timed_draw(r, &settings, &vs[v], &target, &ms))
                     goto done;
                 total += ms;
             }
@@ -145,10 +156,9 @@ bool bench_device(const struct bench_device_desc *d, struct bench_device_result 
         fr->frame_ms = median_of(times, frames, &fr->frame_spread);
         /* What one frame's rays fetched. */
         struct render_counts c, sum = {0};
-        for (int v = 0; v < counts[f]; v++) {
+        for (int v = 0; v < count; v++) {
             if (!renderer_set_counting(r, true) ||
-                !bench_timed_draw(r, &sc.settings, &views[f][v], &target, &ms) ||
-                !renderer_counts(r, &c))
+                !bench_timed_draw(r, &settings, &vs[v], &target, &ms) || !renderer_counts(r, &c))
                 goto done;
             sum.beta_samples += c.beta_samples;
             sum.light_reads += c.light_reads;
@@ -180,7 +190,7 @@ void bench_write_device_table(FILE *f, const struct bench_device_desc *d,
     fprintf(f, "| frame | views | each, pixels | GPU ms per frame | frames per second | light "
                "map rebuild, ms | rays marched | fetches per frame | fetches per second | of "
                "the device's peak |\n|---|---:|---|---:|---:|---:|---:|---:|---:|---:|\n");
-    for (int i = 0; i < 2; i++) {
+    for (int i = 0; i < BENCH_DEVICE_FRAMES; i++) {
         const struct bench_device_frame *fr = &r->frames[i];
         double per_s = fr->frame_ms > 0 ? fr->fetches / (fr->frame_ms * 1e-3) : 0.0;
         fprintf(f,
@@ -193,13 +203,16 @@ void bench_write_device_table(FILE *f, const struct bench_device_desc *d,
     }
     fprintf(f,
             "\nThe storm on %dx%dx%d voxels (60 x 60 x 16 km), light map %dx%dx%d shared by "
-            "the views of a frame, built once per frame for the rebuild column; views "
-            "timed with GPU timer queries (wall time around glFinish on a CPU rasteriser), "
+            "the views of a frame, built once per frame for the rebuild column; the "
+            "render.lod rows' ray steps at least %g pixels wide where a voxel looks smaller "
+            "(docs/architecture.md, \"Level of detail\"); views timed with GPU timer queries (wall "
+            "time around glFinish on a CPU rasteriser), "
             "medians of %d frame%s (± half their range).  "
             "Fetches: extinction samples and light map reads the rays took (counted on a "
             "frame of its own); the peak: %.3g filtered fetches per second, a fetch-only "
             "pass over a volume that stays in the texture cache.  Whole run %.0f s.  "
             "Device: %s.\n",
-            r->n[0], r->n[1], r->n[2], r->light_n[0], r->light_n[1], r->light_n[2], frames,
-            frames > 1 ? "s" : "", r->peak_fetches, r->total_s, r->device);
+            r->n[0], r->n[1], r->n[2], r->light_n[0], r->light_n[1], r->light_n[2],
+            (double)BENCH_DEVICE_LOD, frames, frames > 1 ? "s" : "", r->peak_fetches, r->total_s,
+            r->device);
 }

@@ -110,8 +110,8 @@ check "playback table: the light build by its passes" bash -c "
 check "playback series removed" test -z "$(ls "$tmp" | grep anvil-bench-playback)"
 expect_exit 0 "gpu bench" "$anvil" bench --quick --gpu -o "$tmp/g"
 check "gpu table written" test -s "$tmp/g/gpu-table.md"
-check "gpu table: an HMD frame of two views and a CAVE frame of eight" \
-    bash -c "grep -q '^| HMD | 2 |' '$tmp/g/gpu-table.md' && grep -q '^| cave4 | 8 |' '$tmp/g/gpu-table.md'"
+check "gpu table: an HMD frame of two views and a CAVE frame of eight, each with render.lod too" \
+    bash -c "grep -q '^| HMD | 2 |' '$tmp/g/gpu-table.md' && grep -q '^| cave4 | 8 |' '$tmp/g/gpu-table.md' && grep -q '^| HMD, render.lod = 2 | 2 |' '$tmp/g/gpu-table.md' && grep -q '^| cave4, render.lod = 2 | 8 |' '$tmp/g/gpu-table.md'"
 check "gpu table names the device" grep -q "Device: " "$tmp/g/gpu-table.md"
 mkdir -p "$tmp/no-displays"
 expect_exit 4 "gpu bench: --displays without cave4.cfg" "$anvil" bench --quick --gpu \
