@@ -521,11 +521,12 @@ void march_step(vec3 origin, vec3 dir, float ta, float ds, vec2 b, vec2 phase,
 #endif
 }
 
-// STEP, or with a level of detail the width of LOD_PIXELS pixels at T if that is more.
-float lod_grown(float step, float t)
+// STEP, or with a level of detail the width of LOD_PIXELS pixels at T if that is more, but
+// not beyond CAP (lod_make says why).
+float lod_grown(float step, float t, float cap)
 {
 #if LOD
-    return max(step, lod_pixels * (pixel_footprint.x + pixel_footprint.y * t));
+    return max(step, min(lod_pixels * (pixel_footprint.x + pixel_footprint.y * t), cap));
 #else
     return step;
 #endif
@@ -537,19 +538,24 @@ float lod_grown(float step, float t)
 // least LOD_PIXELS pixels' width there; from TU on, after NU steps of S, each step is that
 // width at its start, A + B t (the footprint times lod_pixels): in perspective (B > 0) the
 // steps grow geometrically, t_k+1 = (1 + B) t_k + A, in an orthographic view (B = 0) they
-// are A each.  Every step's start is a closed form of its index, so leaping to any step puts
-// it where the march would have: skipping stays exact.
+// are A each; from TG on, after NG steps, where that width reaches SMAX, steps of SMAX.  SMAX
+// is half the ray's crossing of a voxel's height (or S, if more): the grown steps coarsen the
+// sampling across the grid, never down its levels, so that a thin layer of cloud (a deck,
+// an anvil, a cirrus sheet, one level thick) is still sampled twice on its way through.  Every
+// step's start is a closed form of its index, so leaping to any step puts it where the march
+// would have: skipping stays exact.
 struct lod_lattice {
-    float t0, s, a, b, tu, c, growth; // c = A / B, growth = ln(1 + B)
-    int nu;
+    float t0, s, a, b, tu, c, growth, smax, tg; // c = A / B, growth = ln(1 + B)
+    int nu, ng;
 };
 
-lod_lattice lod_make(float t0, float s)
+lod_lattice lod_make(float t0, float s, float smax)
 {
     lod_lattice l;
     l.t0 = t0;
     l.s = s;
-    l.a = lod_pixels * pixel_footprint.x;
+    l.smax = max(smax, s);
+    l.a = min(lod_pixels * pixel_footprint.x, l.smax);
     l.b = lod_pixels * pixel_footprint.y;
     l.c = 0.0;
     l.growth = 0.0;
@@ -562,6 +568,14 @@ lod_lattice lod_make(float t0, float s)
         l.nu = l.a > s ? 0 : 1 << 30;
     }
     l.tu = t0 + float(l.nu) * s;
+    l.ng = 1 << 30;
+    l.tg = 1e30;
+    if (l.b > 0.0) {
+        // A grown step from t is B (t + C) long: SMAX from t = SMAX / B - C on.
+        float q = (l.smax / l.b) / (l.tu + l.c);
+        l.ng = l.nu + int(clamp(ceil(log(max(q, 1.0)) / l.growth), 0.0, 1073741823.0 - float(l.nu)));
+        l.tg = (l.tu + l.c) * exp(float(l.ng - l.nu) * l.growth) - l.c;
+    }
     return l;
 }
 
@@ -572,6 +586,8 @@ float lod_start(lod_lattice l, int k)
         return l.t0 + float(k) * l.s;
     if (l.b <= 0.0)
         return l.tu + float(k - l.nu) * l.a;
+    if (k >= l.ng)
+        return l.tg + float(k - l.ng) * l.smax;
     return (l.tu + l.c) * exp(float(k - l.nu) * l.growth) - l.c;
 }
 
@@ -595,10 +611,13 @@ int lod_first_from(lod_lattice l, int i, float t)
         k = int(ceil((t - l.t0) / l.s - 0.5));
     } else if (l.b <= 0.0) {
         k = l.nu + int(ceil((t - l.tu) / l.a - 0.5));
+    } else if (t >= l.tg + 0.5 * l.smax) {
+        k = l.ng + int(ceil((t - l.tg) / l.smax - 0.5));
     } else {
         // middle of step k >= t  <=>  t_k >= (t - A/2) / (1 + B/2)
         float tk = (t - 0.5 * l.a) / (1.0 + 0.5 * l.b);
         k = l.nu + int(ceil(log(max((tk + l.c) / (l.tu + l.c), 1e-30)) / l.growth));
+        k = min(k, l.ng);
     }
     k = max(k, i + 1);
     for (int n = 0; n < 2 && k > i + 1 && lod_middle(l, k - 1) >= t; n++)
@@ -788,9 +807,9 @@ void main()
                 if (left <= 1e-6 * len)
                     break;
                 float za = origin.z + dir.z * t;
-                float d = min(step_xy, level_step(za, per_dz));
+                // (A level of detail grows the step across the grid, never down its levels.)
+                float d = min(lod_grown(step_xy, t, 1e30), level_step(za, per_dz));
                 d = min(d, level_step(za + dir.z * d, per_dz));
-                d = lod_grown(d, t);
                 d = min(d, left);
 #if SKIP
                 // A step wholly in clear cells adds nothing: t goes over it as the plain march
@@ -834,7 +853,7 @@ void main()
             // is: march_medium reads its light at the mean depth of its scattering, and the
             // cut changed the pictures by less than it cost (a loop that, on the same
             // rasteriser, costs its trip whether a ray takes it or not).
-            lod_lattice l = lod_make(t0, ds);
+            lod_lattice l = lod_make(t0, ds, 0.5 * voxel_size.z / max(abs(dir.z), 1e-6));
             int n_plain = min(n, l.nu), k = n_plain;
             for (int i = 0; i < n_plain; i++) {
                 float tm = t0 + (float(i) + 0.5) * ds;
@@ -918,11 +937,12 @@ void main()
             // taken one part at a time; clear air and thin cloud go at the voxel rule's pace.
             float fine = ds / float(parts);
             float t = t0;
+            float cap = 0.5 * voxel_size.z / max(abs(dir.z), 1e-6); // lod_grown
             for (int i = 0; i < max_steps; i++) {
                 float left = t1 - t;
                 if (left <= 0.01 * fine)
                     break;
-                float d = min(lod_grown(ds, t), left);
+                float d = min(lod_grown(ds, t, cap), left);
 #if SKIP
                 // Steps with both samples in clear cells are steps of d = min(ds, left) (with
                 // a level of detail, grown to its width at t) that add nothing: t advances
@@ -935,7 +955,7 @@ void main()
                     i++;
                     n_leapt++;
                     left = t1 - t;
-                    d = min(lod_grown(ds, t), left);
+                    d = min(lod_grown(ds, t, cap), left);
                     if (left <= 0.01 * fine)
                         break;
                 }

@@ -257,10 +257,10 @@ static const struct config_field settings[] = {
     DBL("render.termination", render.termination, 0, 1, F_MAX_OPEN, 0.001,
         "stop a ray when its transmittance falls below this"),
     DBL("render.lod", render.lod_pixels, 0, 64, 0, 0.0,
-        "level of detail: 0 = off; N > 0 = a ray step is at least N pixels wide where it is, "
-        "so that cloud whose voxels look smaller than a pixel is sampled at the picture's "
-        "pace, not the volume's (fewer samples, a slightly different picture; "
-        "docs/architecture.md)"),
+        "level of detail: 0 = off; N > 0 = a ray step is at least N pixels wide where it is "
+        "(at most half a voxel's height along the ray), so that cloud whose voxels look "
+        "smaller than a pixel is sampled at the picture's pace, not the volume's (fewer "
+        "samples, a slightly different picture; docs/architecture.md)"),
     BOOL("render.skip", render.skip, 1,
          "empty-space skipping: rays leap macro cells that hold nothing (the same picture, "
          "faster; false for comparisons)"),

@@ -21,18 +21,59 @@ enum kind { W_BUTTON, W_TOGGLE, W_SLIDER, W_CANVAS, W_LABEL };
 
 /* What a widget edits. */
 enum id {
-    ID_NONE, ID_TAB, ID_RESET,
-    ID_PLAY, ID_BACK, ID_FORWARD, ID_FIRST, ID_SPEED, ID_STEP, ID_LOOP,
+    ID_NONE,
+    ID_TAB,
+    ID_RESET,
+    ID_PLAY,
+    ID_BACK,
+    ID_FORWARD,
+    ID_FIRST,
+    ID_SPEED,
+    ID_STEP,
+    ID_LOOP,
     ID_SPECIES_ON,
-    ID_SUB, ID_PICK, ID_SCALE, ID_TINT,
-    ID_TF_MODE, ID_TF_FIELD, ID_CHANNEL, ID_CANVAS, ID_DELETE, ID_SLOT, ID_SAVE, ID_LOAD,
-    ID_AZIMUTH, ID_ELEVATION,
-    ID_RAY_STEP, ID_RESOLUTION, ID_EPSILON, ID_DIFFUSE,
-    ID_SAVE_VIEW, ID_FRAME, ID_PROBE_ON, ID_PROBE_MODE, ID_PROBE_THRESHOLD, ID_PROBE_DISTANCE,
-    ID_LAYER_ADD, ID_LAYER_ON, ID_LAYER_FIELD, ID_LAYER_MODE, ID_LAYER_EDIT, ID_LAYER_REMOVE,
+    ID_SUB,
+    ID_PICK,
+    ID_SCALE,
+    ID_TINT,
+    ID_TF_MODE,
+    ID_TF_FIELD,
+    ID_CHANNEL,
+    ID_CANVAS,
+    ID_DELETE,
+    ID_SLOT,
+    ID_SAVE,
+    ID_LOAD,
+    ID_AZIMUTH,
+    ID_ELEVATION,
+    ID_RAY_STEP,
+    ID_LOD,
+    ID_RESOLUTION,
+    ID_EPSILON,
+    ID_DIFFUSE,
+    ID_SAVE_VIEW,
+    ID_FRAME,
+    ID_PROBE_ON,
+    ID_PROBE_MODE,
+    ID_PROBE_THRESHOLD,
+    ID_PROBE_DISTANCE,
+    ID_LAYER_ADD,
+    ID_LAYER_ON,
+    ID_LAYER_FIELD,
+    ID_LAYER_MODE,
+    ID_LAYER_EDIT,
+    ID_LAYER_REMOVE,
     ID_LAYER_OPACITY,
-    ID_SLICE_ADD, ID_SLICE_ON, ID_SLICE_FIELD, ID_SLICE_AXIS, ID_SLICE_SELECT, ID_SLICE_REMOVE,
-    ID_SLICE_POSITION, ID_SLICE_TILT, ID_SLICE_OPACITY, ID_SLICE_CONTOURS,
+    ID_SLICE_ADD,
+    ID_SLICE_ON,
+    ID_SLICE_FIELD,
+    ID_SLICE_AXIS,
+    ID_SLICE_SELECT,
+    ID_SLICE_REMOVE,
+    ID_SLICE_POSITION,
+    ID_SLICE_TILT,
+    ID_SLICE_OPACITY,
+    ID_SLICE_CONTOURS,
 };
 
 struct widget {
@@ -175,6 +216,8 @@ static double slider_value(const struct menu *m, const struct widget *wd)
         return md->sun_elevation;
     case ID_RAY_STEP:
         return md->step_m;
+    case ID_LOD:
+        return md->lod_pixels;
     case ID_RESOLUTION:
         return md->light_resolution;
     case ID_EPSILON:
@@ -214,6 +257,8 @@ static double snap(const struct widget *wd, double v)
         return floor(v + 0.5);
     if (wd->id == ID_RESOLUTION)
         return 16.0 * floor(v / 16.0 + 0.5);
+    if (wd->id == ID_LOD) /* half pixels; under a half: off */
+        return 0.5 * floor(2.0 * v + 0.5);
     return v;
 }
 
@@ -245,6 +290,12 @@ static void slider_label(const struct menu *m, const struct widget *wd, char *bu
             snprintf(buf, n, "Ray step: automatic");
         else
             snprintf(buf, n, "Ray step: %.0f m", v);
+        break;
+    case ID_LOD:
+        if (v <= 0.0)
+            snprintf(buf, n, "Level of detail: off (every step)");
+        else
+            snprintf(buf, n, "Level of detail: steps %.1f pixels wide", v);
         break;
     case ID_RESOLUTION:
         snprintf(buf, n, "Light map: %d cells per axis", (int)v);
@@ -514,6 +565,8 @@ static void layout(struct menu *m)
     case MENU_PAGE_QUALITY:
         slider(m, ID_RAY_STEP, 0, "quality.step", y, 0.0,
                md->step_max_m > 0.0 ? md->step_max_m : 2000.0, "");
+        y += 56;
+        slider(m, ID_LOD, 0, "quality.lod", y, 0.0, 8.0, "");
         y += 56;
         slider(m, ID_RESOLUTION, 0, "quality.resolution", y, 16.0, 256.0, "");
         y += 56;
@@ -1163,6 +1216,10 @@ static void commit_slider(struct menu *m, const struct widget *wd, double v)
         break;
     case ID_RAY_STEP:
         md->step_m = v;
+        m->changes |= MENU_CHANGE_QUALITY;
+        break;
+    case ID_LOD:
+        md->lod_pixels = v;
         m->changes |= MENU_CHANGE_QUALITY;
         break;
     case ID_RESOLUTION:

@@ -85,6 +85,7 @@ struct menu_model {
     double sun_azimuth, sun_elevation;   /* degrees */
     /* Quality */
     double step_m, step_max_m;           /* ray step (0 = automatic) and the slider's top */
+    double lod_pixels;                   /* level of detail: steps this many pixels wide (0 off) */
     int light_resolution;                /* light map cells per axis */
     double epsilon;                      /* compression error bound */
     bool diffuse_on;                     /* multiple scattering (effects.multiple) */

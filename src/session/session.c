@@ -185,6 +185,7 @@ static void model_from_session(struct session *s, struct menu_model *m)
     m->sun_azimuth = fmod(s->sun_az + 360.0, 360.0);
     m->sun_elevation = s->sun_el;
     m->step_m = s->settings.step_m;
+    m->lod_pixels = s->settings.lod_pixels;
     const struct grid3 *g = renderer_grid(s->renderer);
     double smin = fmin(g->spacing[0], fmin(g->spacing[1], g->spacing[2]));
     m->step_max_m = smin > 0.0 ? 4.0 * smin : 2000.0;
@@ -372,6 +373,7 @@ struct session *session_create(const struct config *cfg, const struct session_de
     s->camera_home = s->camera;
     look_from_config(cfg, &s->settings.look);
     s->settings.step_m = cfg->render.step_m;
+    s->settings.lod_pixels = cfg->render.lod_pixels;
     memcpy(s->settings.light_resolution, cfg->lightmap.resolution,
            sizeof(s->settings.light_resolution));
     s->settings.epsilon = cfg->lightmap.epsilon;
@@ -670,8 +672,12 @@ void session_look_text(const struct session *s, char *buf, size_t size)
     const struct config *cfg = &s->cfg;
     if (cfg->scene.kind == SCENE_DATA)
         fprintf(f, "data = { step = %d; };\n", s->playback.step);
-    if (set->step_m != cfg->render.step_m)
+    if (set->step_m != cfg->render.step_m && set->lod_pixels != cfg->render.lod_pixels)
+        fprintf(f, "render = { step = %.17e; lod = %.17e; };\n", set->step_m, set->lod_pixels);
+    else if (set->step_m != cfg->render.step_m)
         fprintf(f, "render = { step = %.17e; };\n", set->step_m);
+    else if (set->lod_pixels != cfg->render.lod_pixels)
+        fprintf(f, "render = { lod = %.17e; };\n", set->lod_pixels);
     if (memcmp(set->light_resolution, cfg->lightmap.resolution, sizeof(set->light_resolution)) ||
         set->epsilon != cfg->lightmap.epsilon)
         fprintf(f, "lightmap = { resolution = [%d, %d, %d]; epsilon = %.17e; };\n",
@@ -871,6 +877,7 @@ static void apply_changes(struct session *s, unsigned ch)
         session_set_sun(s, m->sun_azimuth, m->sun_elevation);
     if (ch & MENU_CHANGE_QUALITY) {
         set.step_m = m->step_m;
+        set.lod_pixels = m->lod_pixels;
         for (int a = 0; a < 3; a++)
             set.light_resolution[a] = m->light_resolution;
         set.epsilon = m->epsilon;
@@ -1628,6 +1635,7 @@ bool session_apply(struct session *s, const struct frame_state *f, bool *changed
     s->drawn = s->base;
     scene_sun_settings(&s->cfg, f->sun_azimuth_deg, f->sun_elevation_deg, &s->drawn);
     s->drawn.step_m = (float)s->settings.step_m;
+    s->drawn.lod_pixels = (float)s->settings.lod_pixels;
     if (s->effects.on[EFFECT_TEMPORAL]) {
         if (!temporal_frame(s, f, &uploaded))
             return false;

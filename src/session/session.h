@@ -126,6 +126,7 @@ bool session_draw(struct session *s, struct display *d, const struct frame_state
 struct session_settings {
     struct look look;
     double step_m;           /* render.step: eye pass ray step (0: automatic) */
+    double lod_pixels;       /* render.lod: steps at least this many pixels wide (0: off) */
     int light_resolution[3]; /* lightmap.resolution */
     double epsilon;          /* lightmap.epsilon */
     bool diffuse;            /* effects.multiple (and lateral escape with it) */

@@ -158,6 +158,41 @@ check "the diffuse light shows in the default picture" \
 check "toggling the diffuse light rebuilds the light map once" test \
     "$(json "$tmp/diffuse.json" light_map_builds)" -eq $(($(json "$tmp/plain.json" light_map_builds) + 1))
 
+# --- The level of detail set on the Quality page: the picture changes (160 x 120 pixels are
+# wider than the small storm's steps), fewer extinction samples are taken, and Save view's
+# bookmark holds render.lod and renders the session's picture.
+mkdir -p "$tmp/lod"
+cat >"$tmp/lod/in.txt" <<'SCRIPT'
+0 key menu
+0 aim tab.quality
+1 button trigger down
+2 button trigger up
+3 aim quality.lod 0.4 0.5
+4 button trigger down
+5 button trigger up
+6 aim tab.time
+7 button trigger down
+8 button trigger up
+9 aim time.save
+10 button trigger down
+11 button trigger up
+12 key menu
+SCRIPT
+(cd "$tmp/lod" && "$anvil" render --quiet $small --input in.txt -o session.pfm \
+    --stats session.json >/dev/null)
+check "lod script exits 0" test $? -eq 0
+check "lod: the bookmark holds render.lod" grep -q '^render = { lod = [1-9]' "$tmp/lod/bookmark-1.cfg"
+(cd "$tmp/lod" && "$anvil" render --quiet bookmark-1.cfg $small -o batch.pfm \
+    --stats batch.json)
+check "lod: the bookmark renders the session's picture" \
+    cmp -s "$tmp/lod/session.pfm" "$tmp/lod/batch.pfm"
+"$anvil" render --quiet $small --input "$tmp/nodiffuse.txt" -o "$tmp/lod/plain.pfm" \
+    --stats "$tmp/lod/plain.json"
+check "lod: not the plain picture" bash -c "! cmp -s '$tmp/lod/plain.pfm' '$tmp/lod/batch.pfm'"
+check "lod: fewer extinction samples than the plain picture" awk \
+    -v a="$(json "$tmp/lod/batch.json" beta_samples)" -v b="$(json "$tmp/lod/plain.json" beta_samples)" \
+    'BEGIN { exit !(a < b) }'
+
 # --- A bad script is refused with file:line.
 printf '0 key play\n1 wiggle\n' >"$tmp/bad.txt"
 "$anvil" render --quiet $small --input "$tmp/bad.txt" -o "$tmp/bad.png" 2>"$tmp/err"
