@@ -511,7 +511,10 @@ static void unproject(const double m[16], double x, double y, double z, double o
 
 /* The ray through the pointer in the first view, world space: the desktop wand.  The inverse
  * view-projection in double, as the eye pass's rays (common/mat4d): a float one puts a pick
- * at long range (far / near ~1e5) off the cloud under the pointer. */
+ * at long range (far / near ~1e5) off the cloud under the pointer.  Pushed when the pointer,
+ * the window or the view moved since the last push, not every frame: a script's `aim` (or a
+ * recording's pose) holds until then, instead of being taken back by a pointer that did not
+ * move before its trigger acts. */
 static void push_pointer(struct display *d, struct input_queue *q)
 {
     if (d->set.count < 1 || !(d->impl == &display_orbit_impl || d->impl == &display_desktop_impl ||
@@ -530,8 +533,17 @@ static void push_pointer(struct display *d, struct input_queue *q)
                 sum += (double)v->rv.proj[4 * k + r] * (double)v->rv.view[4 * c + k];
             vp[4 * c + r] = sum;
         }
+    if (d->pointer_sent && d->pointer_cursor[0] == d->cursor[0] &&
+        d->pointer_cursor[1] == d->cursor[1] && d->pointer_window[0] == ww &&
+        d->pointer_window[1] == wh && memcmp(d->pointer_vp, vp, sizeof(vp)) == 0)
+        return;
     if (!mat4d_invert(vp, inv))
         return;
+    d->pointer_sent = true;
+    memcpy(d->pointer_cursor, d->cursor, sizeof(d->pointer_cursor));
+    memcpy(d->pointer_vp, vp, sizeof(vp));
+    d->pointer_window[0] = ww;
+    d->pointer_window[1] = wh;
     double x = (d->cursor[0] + 0.5) / ww * 2.0 - 1.0;
     double y = 1.0 - (d->cursor[1] + 0.5) / wh * 2.0;
     double o[3], far[3], dir[3], len = 0.0;

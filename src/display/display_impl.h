@@ -68,6 +68,11 @@ struct display {
     struct input_queue pending;
     bool dragging;
     double cursor[2], drag_from[2];
+    /* The desktop wand's last pose as pushed: the cursor, the window and the first view's
+     * view-projection it came from (push_pointer pushes again only when one of them moves). */
+    bool pointer_sent;
+    double pointer_cursor[2], pointer_vp[16];
+    int pointer_window[2];
     unsigned char joy_buttons[INPUT_BUTTON_COUNT];
     float joy_axes[INPUT_AXIS_COUNT];
     int swap_windows, swap_joined; /* windows asked to join desc.swap_group; those that did */

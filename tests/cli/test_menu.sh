@@ -215,6 +215,14 @@ if command -v xvfb-run >/dev/null; then
         "$tmp/series.cfg" $small --input "$tmp/run.txt" --stats "$tmp/run.json"
     check "run with a script in a window exits 0" test $? -eq 0
     check "run never blocked a frame on a load" test "$(json "$tmp/run.json" frames_waited)" -eq 0
+    # A script's aims in a window: the pointer, which does not move, does not take them back
+    # before the trigger acts (the level of detail set on the Quality page, then Save view).
+    mkdir -p "$tmp/runlod"
+    sed 's/^12 key menu$/12 key menu\n14 key quit/' "$tmp/lod/in.txt" >"$tmp/runlod/in.txt"
+    (cd "$tmp/runlod" && timeout 120 xvfb-run -a -s "-screen 0 800x600x24" "$anvil" run --quiet \
+        $small --input in.txt >/dev/null)
+    check "run: a script's aims and clicks on the menu in a window" \
+        grep -q '^render = { lod = [1-9]' "$tmp/runlod/bookmark-1.cfg"
 fi
 
 finish
