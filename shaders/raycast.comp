@@ -115,6 +115,7 @@ uniform vec2 pixel_footprint; // a pixel's width at ray parameter t: x + y t, me
 #endif
 #if LOD
 uniform float lod_pixels;    // a step is at least this many pixels wide (LOD)
+uniform float lod_level_dz;  // the thinnest level's height, metres (uniform levels: voxel_size.z)
 #endif
 
 // World point P -> texture coordinate of the volume's 3-D textures (all on one grid).
@@ -559,18 +560,21 @@ lod_lattice lod_make(float t0, float s, float smax)
     l.b = lod_pixels * pixel_footprint.y;
     l.c = 0.0;
     l.growth = 0.0;
-    if (l.b > 0.0) {
+    if (l.smax <= s) {
+        l.nu = 1 << 30; // nothing may grow: the plain march throughout
+    } else if (l.b > 0.0) {
         float tc = (s - l.a) / l.b; // the width reaches S here
         l.nu = int(clamp(ceil((tc - t0) / s), 0.0, 1073741823.0));
         l.c = l.a / l.b;
-        l.growth = log(1.0 + l.b);
+        float u = 1.0 + l.b; // ln(1 + B) without losing B's digits to the sum
+        l.growth = u == 1.0 ? l.b : log(u) * l.b / (u - 1.0);
     } else {
         l.nu = l.a > s ? 0 : 1 << 30;
     }
     l.tu = t0 + float(l.nu) * s;
     l.ng = 1 << 30;
     l.tg = 1e30;
-    if (l.b > 0.0) {
+    if (l.b > 0.0 && l.nu < (1 << 30)) {
         // A grown step from t is B (t + C) long: SMAX from t = SMAX / B - C on.
         float q = (l.smax / l.b) / (l.tu + l.c);
         l.ng = l.nu + int(clamp(ceil(log(max(q, 1.0)) / l.growth), 0.0, 1073741823.0 - float(l.nu)));
@@ -853,7 +857,7 @@ void main()
             // is: march_medium reads its light at the mean depth of its scattering, and the
             // cut changed the pictures by less than it cost (a loop that, on the same
             // rasteriser, costs its trip whether a ray takes it or not).
-            lod_lattice l = lod_make(t0, ds, 0.5 * voxel_size.z / max(abs(dir.z), 1e-6));
+            lod_lattice l = lod_make(t0, ds, 0.5 * lod_level_dz / max(abs(dir.z), 1e-6));
             int n_plain = min(n, l.nu), k = n_plain;
             for (int i = 0; i < n_plain; i++) {
                 float tm = t0 + (float(i) + 0.5) * ds;
@@ -880,8 +884,8 @@ void main()
                     break;
             }
             float ta = lod_start(l, k);
-            for (int i = k; i < max_steps && n_plain < n && trans >= termination && ta < t1;
-                 i++) {
+            // (k counts the steps, leapt ones too: at most max_steps, as the plain march.)
+            while (k < max_steps && n_plain < n && trans >= termination && ta < t1) {
                 float tb = min(lod_start(l, k + 1), t1);
                 float tm = ta + 0.5 * (tb - ta);
 #if SKIP
@@ -937,7 +941,11 @@ void main()
             // taken one part at a time; clear air and thin cloud go at the voxel rule's pace.
             float fine = ds / float(parts);
             float t = t0;
-            float cap = 0.5 * voxel_size.z / max(abs(dir.z), 1e-6); // lod_grown
+#if LOD
+            float cap = 0.5 * lod_level_dz / max(abs(dir.z), 1e-6); // lod_grown
+#else
+            float cap = 0.0;
+#endif
             for (int i = 0; i < max_steps; i++) {
                 float left = t1 - t;
                 if (left <= 0.01 * fine)
@@ -964,6 +972,15 @@ void main()
 #endif
                 vec2 b = beta_at(origin + dir * (t + 0.5 * d));
                 vec2 be = beta_at(origin + dir * (t + d));
+#if LOD
+                // A grown step that is thick is the plain march's step first, then as thick
+                // as that is, in its parts.
+                if (d > ds && max(b.r + b.g, be.r + be.g) * d > THICK_STEP) {
+                    d = min(ds, left);
+                    b = beta_at(origin + dir * (t + 0.5 * d));
+                    be = beta_at(origin + dir * (t + d));
+                }
+#endif
                 if (max(b.r + b.g, be.r + be.g) * d > THICK_STEP) {
                     d = min(fine, left);
                     b = beta_at(origin + dir * (t + 0.5 * d));

@@ -1134,8 +1134,14 @@ static void eye_uniforms(struct renderer *r, const struct gpu_program *prog,
     float footprint[2] = {view->proj[15] != 0.0f ? foot : 0.0f,
                           view->proj[15] != 0.0f ? 0.0f : foot};
     gpu_uniform_vec2(prog, "pixel_footprint", footprint);
-    if (s->lod_pixels > 0.0f)
+    if (s->lod_pixels > 0.0f) {
+        /* The grown steps stop at half the ray's crossing of the thinnest level. */
+        double dz = g->spacing[2];
+        for (int k = 0; g->z_levels && k + 1 < g->n[2]; k++)
+            dz = fmin(dz, g->z_centre[k + 1] - g->z_centre[k]);
         gpu_uniform_float(prog, "lod_pixels", s->lod_pixels);
+        gpu_uniform_float(prog, "lod_level_dz", (float)dz);
+    }
     gpu_uniform_vec3(prog, "voxel_size", voxel);
     gpu_uniform_int(prog, "max_steps", RENDER_MAX_STEPS);
     gpu_uniform_float(prog, "termination", s->termination);

@@ -248,8 +248,9 @@ static void test_skipping_exact_on_every_path(void **state)
 /* A deck two levels thick (a slab cut down to 500 m of a 16 km box), seen from 100 km at 25
  * degrees down, where four pixels are 5 km and a ray crosses the deck in 1.2 km: the grown
  * steps stop at half a level's crossing, so every ray samples the deck on its way through,
- * on uniform levels and on the model's, and the picture is the plain march's within 2 %
- * (steps of four pixels' width step over it on some rays and not on others). */
+ * on uniform levels and on the model's (with the automatic step, and with render.step, a
+ * deck of the thin low levels), and the picture is the plain march's within 2 % (steps of
+ * four pixels' width step over it on some rays and not on others). */
 static void test_thin_deck_kept(void **state)
 {
     static const char *deck[] = {"scene.kind=slab",
@@ -260,15 +261,31 @@ static void test_thin_deck_kept(void **state)
                                  "render.width=96",
                                  "render.height=72",
                                  "render.ground_on=false"};
-    for (int stretched = 0; stretched < 2; stretched++) {
+    /* And with render.step set, on uneven levels, where the steps follow no level: they stop
+     * at half the crossing of the thinnest. */
+    static const char *stepped[] = {"scene.kind=slab",
+                                    "scene.size=[32,32,64]",
+                                    "scene.tau=40",
+                                    "camera.position=[-40,-40,45]",
+                                    "camera.target=[30,30,8]",
+                                    "render.width=96",
+                                    "render.height=72",
+                                    "render.ground_on=false",
+                                    "render.step=150"};
+    for (int c = 0; c < 3; c++) {
+        bool stretched = c > 0;
+        const char **sets = c == 2 ? stepped : deck;
+        int n = c == 2 ? 9 : 8, level = c == 2 ? 3 : 32; /* low down: thin levels there */
         struct drawn off, on;
-        draw_deck(deck, 8, 0.0f, false, false, stretched, 32, &off);
-        draw_deck(deck, 8, 4.0f, false, false, stretched, 32, &on);
+        draw_deck(sets, n, 0.0f, false, false, stretched, level, &off);
+        draw_deck(sets, n, 4.0f, false, false, stretched, level, &on);
         double worst, rms = rms_off(&on, &off, &worst);
         double mean = mean_of(&on) / mean_of(&off);
         print_message("deck%s, render.lod = 4: beta samples %llu -> %llu, RMS %.4f, at most "
                       "%.4f, mean %.4f\n",
-                      stretched ? " on uneven levels" : "",
+                      c == 2      ? " on uneven levels, render.step = 150"
+                      : stretched ? " on uneven levels"
+                                  : "",
                       (unsigned long long)off.counts.beta_samples,
                       (unsigned long long)on.counts.beta_samples, rms, worst, mean);
         assert_true(rms < 0.02);
