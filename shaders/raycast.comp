@@ -857,7 +857,9 @@ void main()
             // is: march_medium reads its light at the mean depth of its scattering, and the
             // cut changed the pictures by less than it cost (a loop that, on the same
             // rasteriser, costs its trip whether a ray takes it or not).
-            lod_lattice l = lod_make(t0, ds, 0.5 * lod_level_dz / max(abs(dir.z), 1e-6));
+            // (A bound within 0.1 % of the plain step is no room to grow: the plain march.)
+            float smax = 0.5 * lod_level_dz / max(abs(dir.z), 1e-6);
+            lod_lattice l = lod_make(t0, ds, smax > 1.001 * step ? smax : 0.0);
             int n_plain = min(n, l.nu), k = n_plain;
             for (int i = 0; i < n_plain; i++) {
                 float tm = t0 + (float(i) + 0.5) * ds;
@@ -943,6 +945,7 @@ void main()
             float t = t0;
 #if LOD
             float cap = 0.5 * lod_level_dz / max(abs(dir.z), 1e-6); // lod_grown
+            cap = cap > 1.001 * step ? cap : 0.0;
 #else
             float cap = 0.0;
 #endif
