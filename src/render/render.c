@@ -1136,11 +1136,8 @@ static void eye_uniforms(struct renderer *r, const struct gpu_program *prog,
     gpu_uniform_vec2(prog, "pixel_footprint", footprint);
     if (s->lod_pixels > 0.0f) {
         /* The grown steps stop at half the ray's crossing of the thinnest level. */
-        double dz = g->spacing[2];
-        for (int k = 0; g->z_levels && k + 1 < g->n[2]; k++)
-            dz = fmin(dz, g->z_centre[k + 1] - g->z_centre[k]);
         gpu_uniform_float(prog, "lod_pixels", s->lod_pixels);
-        gpu_uniform_float(prog, "lod_level_dz", (float)dz);
+        gpu_uniform_float(prog, "lod_level_dz", (float)grid3_min_dz(g));
     }
     gpu_uniform_vec3(prog, "voxel_size", voxel);
     gpu_uniform_int(prog, "max_steps", RENDER_MAX_STEPS);
