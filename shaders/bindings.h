@@ -56,6 +56,7 @@
 #define BIND_CELLS_TEX_BETA 0       /* the volume's extinction, texelFetch only */
 #define BIND_CELLS_TEX_BETA_NEXT 1  /* TEMPORAL 1: step k + 1's */
 #define BIND_CELLS_BUF_CELLS 0      /* the pyramid, written */
+#define BIND_CELLS_BUF_SCRATCH 1    /* cells_distance.comp: two passes' distances */
 
 /* ---- opaque pass (shaders/opaque.vert, opaque.frag) ---------------------------------------
  * Reads the light map's units too.  renderer_draw binds the eye pass's units before it draws

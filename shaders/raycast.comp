@@ -141,7 +141,7 @@ vec3 vol_tex(vec3 p)
 #if SKIP
 layout(std430, binding = BIND_EYE_BUF_CELLS) readonly buffer macro_cells {
     ivec4 cell_dims[16]; // cells along x, y, z and the level's first index
-    ivec4 cell_header;   // levels, voxels per cell edge, the walk's top level
+    ivec4 cell_header;   // levels, voxels per cell edge
     float cell_max[];
 };
 uniform vec3 cell_size;  // metres, a level-0 cell

@@ -15,9 +15,16 @@
 #include "shaders/bindings.h"
 
 /* The buffer's header: RENDER_CELL_LEVELS ivec4 (cells along x, y, z, the level's first
- * index) and one ivec4 (levels, voxels per cell edge, the walk's top level, 0), as the shaders
+ * index) and one ivec4 (levels, voxels per cell edge, 0, 0), as the shaders
  * declare it. */
 #define HEADER_INTS (4 * RENDER_CELL_LEVELS + 4)
+
+static const char *distance_defines(void)
+{
+    static char text[64];
+    snprintf(text, sizeof(text), "#define CELL_DISTANCE_MAX %d\n", RENDER_CELL_DISTANCE_MAX);
+    return text;
+}
 
 bool render_cells_programs_init(struct render_cells_programs *p)
 {
@@ -28,7 +35,8 @@ bool render_cells_programs_init(struct render_cells_programs *p)
                             "#define TEMPORAL 0\n#define STRETCHED 1\n") &&
            gpu_program_init(&p->build[3], "cells_build.comp",
                             "#define TEMPORAL 1\n#define STRETCHED 1\n") &&
-           gpu_program_init(&p->reduce, "cells_reduce.comp", NULL);
+           gpu_program_init(&p->reduce, "cells_reduce.comp", NULL) &&
+           gpu_program_init(&p->distance, "cells_distance.comp", distance_defines());
 }
 
 void render_cells_programs_finish(struct render_cells_programs *p)
@@ -36,6 +44,7 @@ void render_cells_programs_finish(struct render_cells_programs *p)
     for (int i = 0; i < 4; i++)
         gpu_program_finish(&p->build[i]);
     gpu_program_finish(&p->reduce);
+    gpu_program_finish(&p->distance);
 }
 
 void render_cells_layout(const int n[3], int cell_voxels, struct render_cells *c)
@@ -60,11 +69,6 @@ void render_cells_layout(const int n[3], int cell_voxels, struct render_cells *c
     }
     c->levels = level;
     c->count = count;
-    c->walk_top = level - 1;
-    while (c->walk_top > 0 && (size_t)c->dims[c->walk_top - 1][0] * c->dims[c->walk_top - 1][1] *
-                                      c->dims[c->walk_top - 1][2] <=
-                                  RENDER_CELL_WALK_CELLS)
-        c->walk_top--;
 }
 
 /* A cell row's levels go to cells_build.comp in a uniform array of 32 (stretched grids only). */
@@ -158,8 +162,26 @@ bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *
     memcpy(header, c->dims, sizeof(c->dims));
     header[4 * RENDER_CELL_LEVELS] = c->levels;
     header[4 * RENDER_CELL_LEVELS + 1] = c->cell_voxels;
-    header[4 * RENDER_CELL_LEVELS + 2] = c->walk_top;
     gpu_buffer_upload(&c->buf, 0, sizeof(header), header);
+    return true;
+}
+
+/* Level 0's clear distances (cells_distance.comp), after the coarser levels are made. */
+static bool distance_gpu(struct render_cells *c, const struct render_cells_programs *p)
+{
+    const int *d = c->dims[0];
+    size_t n = (size_t)d[0] * d[1] * d[2];
+    struct gpu_buffer scratch = {0};
+    if (!gpu_buffer_init(&scratch, 2 * n * sizeof(float), NULL))
+        return false;
+    gpu_buffer_bind(&c->buf, BIND_CELLS_BUF_CELLS);
+    gpu_buffer_bind(&scratch, BIND_CELLS_BUF_SCRATCH);
+    for (int pass = 0; pass < 3; pass++) {
+        gpu_uniform_int(&p->distance, "pass", pass);
+        int lines = pass == 0 ? d[1] * d[2] : pass == 1 ? d[0] * d[2] : d[0] * d[1];
+        gpu_dispatch(&p->distance, lines, 1, 1);
+    }
+    gpu_buffer_finish(&scratch);
     return true;
 }
 
@@ -182,6 +204,8 @@ bool render_cells_build_piece(struct render_cells *c, const struct render_cells_
             gpu_uniform_int(&p->reduce, "level", level);
             gpu_dispatch(&p->reduce, c->dims[level][0], c->dims[level][1], c->dims[level][2]);
         }
+        if (!distance_gpu(c, p))
+            return false;
         *done = true;
         return true;
     }
@@ -413,6 +437,59 @@ void render_cells_cpu_levels(struct render_cells_cpu *w)
                     w->cells[d[3] + cx + (size_t)d[0] * (cy + (size_t)d[1] * cz)] = m;
                 }
     }
+    render_cells_distance_cpu(c, w->cells); /* after the levels, as on the GPU */
+}
+
+void render_cells_distance_cpu(const struct render_cells *c, float *cells)
+{
+    const int *d = c->dims[0];
+    const int far = RENDER_CELL_DISTANCE_MAX + 1;
+    const size_t n = (size_t)d[0] * d[1] * d[2];
+    float *v = cells + d[3];
+    /* Two raster passes with the 26 neighbours at a distance of 1 each (a chamfer of the
+     * chessboard metric, exact in it): first the 13 neighbours before a cell in x, y, z order,
+     * then the 13 after it in the reverse order.  Distances as floats, 0 in occupied cells. */
+    float *dist = malloc(n * sizeof(float));
+    if (!dist) {
+        log_error("out of memory for the distances of %zu macro cells", n);
+        return; /* cells holding 0: leapt a cell at a time, as exact */
+    }
+    for (size_t i = 0; i < n; i++)
+        dist[i] = v[i] > 0.0f ? 0.0f : (float)far;
+    for (int pass = 0; pass < 2; pass++) {
+        int s = pass ? -1 : 1;
+        for (int zi = 0; zi < d[2]; zi++) {
+            int z = pass ? d[2] - 1 - zi : zi;
+            for (int yi = 0; yi < d[1]; yi++) {
+                int y = pass ? d[1] - 1 - yi : yi;
+                for (int xi = 0; xi < d[0]; xi++) {
+                    int x = pass ? d[0] - 1 - xi : xi;
+                    size_t i = (size_t)x + (size_t)d[0] * (y + (size_t)d[1] * z);
+                    float m = dist[i];
+                    /* The neighbours that come before in this pass's order. */
+                    for (int dz = -1; dz <= 0 && m > 0.0f; dz++)
+                        for (int dy = -1; dy <= 1; dy++)
+                            for (int dx = -1; dx <= 1; dx++) {
+                                if (dz == 0 && (dy > 0 || (dy == 0 && dx >= 0)))
+                                    continue;
+                                int nx = x + s * dx, ny = y + s * dy, nz = z + s * dz;
+                                if (nx < 0 || ny < 0 || nz < 0 || nx >= d[0] || ny >= d[1] ||
+                                    nz >= d[2])
+                                    continue;
+                                float e =
+                                    dist[(size_t)nx + (size_t)d[0] * (ny + (size_t)d[1] * nz)] +
+                                    1.0f;
+                                m = e < m ? e : m;
+                            }
+                    dist[i] = m;
+                }
+            }
+        }
+    }
+    for (size_t i = 0; i < n; i++)
+        if (v[i] <= 0.0f)
+            v[i] = -dist[i];
+    free(dist);
 }
 
 float *render_cells_cpu(const struct ext_volume *vol, const struct ext_volume *next, int halo,

@@ -292,16 +292,19 @@ int renderer_collect_timings(struct renderer *r, bool wait);
  * than they leap), the largest extinction (ice plus water; NaN
  * and negative as 0) that a trilinear sample anywhere within half a voxel of the block can
  * read: the block's voxels and one voxel around it.  Each further level holds the largest of
- * 2 x 2 x 2 cells of the one below, up to one cell.  A cell holding 0 is empty: the eye pass
- * leaps it (shaders/cells.glsl) and the light build reads no voxel in it, and both come out
- * the same as without the leap. */
+ * 2 x 2 x 2 cells of the one below, up to one cell.  A cell holding 0 or less is empty: the
+ * eye pass leaps it (shaders/cells.glsl) and the light build reads no voxel in it, and both
+ * come out the same as without the leap.  Last, each empty cell of level 0 gets its distance
+ * to the nearest occupied one (RENDER_CELL_DISTANCE_MAX), stored as its negative, so that the
+ * eye pass leaps all the empty cells around it at once. */
 
 #define RENDER_CELL_VOXELS 4           /* on a uniform grid */
 #define RENDER_CELL_VOXELS_STRETCHED 8 /* on the model's levels (grid3_stretched) */
 #define RENDER_CELL_LEVELS 16
-/* The eye pass's walk starts at the finest level of at most this many cells (walk_top), not at
- * the pyramid's one top cell: a ray through an empty cell of it leaps it at the first read. */
-#define RENDER_CELL_WALK_CELLS 64
+/* A clear level-0 cell holds −d, d its Chebyshev distance in cells to the nearest occupied
+ * cell, at most this + 1 (shaders/cells_distance.comp): the eye pass leaps the cube of
+ * 2 d − 1 cells around it at one read. */
+#define RENDER_CELL_DISTANCE_MAX 15
 
 struct render_cells {
     struct gpu_buffer buf;                /* the header, then a float per cell, level 0 first */
@@ -311,13 +314,13 @@ struct render_cells {
     int cell_voxels;                      /* voxels along a level-0 cell's edge */
     int built_layers;                     /* a build in pieces: level 0's layers made */
     int built_rows;                       /* and the rows of cells made of the layers next */
-    int walk_top;                         /* the level the eye pass's walk starts at */
 };
 
 struct render_cells_programs {
     struct gpu_program build[4]; /* level 0 of one volume, of two (TEMPORAL, bit 0); on a
                                     stretched grid (STRETCHED, bit 1) */
     struct gpu_program reduce;
+    struct gpu_program distance;
 };
 
 bool render_cells_programs_init(struct render_cells_programs *p);
@@ -395,6 +398,9 @@ void render_cells_cpu_planes(struct render_cells_cpu *w, const float *beta, int 
 /* Once every plane is reduced: level 0 from the planes, then the coarser levels, into
  * W->cells. */
 void render_cells_cpu_levels(struct render_cells_cpu *w);
+/* Level 0's clear distances in CELLS, laid out as C (render_cells_cpu_levels does this last):
+ * each clear cell's 0 becomes −d, as cells_distance.comp makes them (the same values). */
+void render_cells_distance_cpu(const struct render_cells *c, float *cells);
 void render_cells_cpu_finish(struct render_cells_cpu *w);
 /* The cells of VOL (and of NEXT, of VOL's grid, the larger of the two; may be NULL) in one
  * go: malloc'd, the caller frees, *LAYOUT their sizes; NULL (logged) when out of memory. */
