@@ -166,14 +166,18 @@ bool render_cells_build_begin(struct render_cells *c, const struct gpu_texture *
     return true;
 }
 
-/* Level 0's clear distances (cells_distance.comp), after the coarser levels are made. */
-static bool distance_gpu(struct render_cells *c, const struct render_cells_programs *p)
+/* Level 0's clear distances (cells_distance.comp), after the coarser levels are made.  Without
+ * memory for the passes the clear cells keep 0: leapt a cell at a time, as exactly. */
+static void distance_gpu(struct render_cells *c, const struct render_cells_programs *p)
 {
     const int *d = c->dims[0];
     size_t n = (size_t)d[0] * d[1] * d[2];
     struct gpu_buffer scratch = {0};
-    if (!gpu_buffer_init(&scratch, 2 * n * sizeof(float), NULL))
-        return false;
+    if (!gpu_buffer_init(&scratch, 2 * n * sizeof(float), NULL)) {
+        log_warn("no GPU memory for the macro cells' clear distances: empty space is leapt a "
+                 "cell at a time");
+        return;
+    }
     gpu_buffer_bind(&c->buf, BIND_CELLS_BUF_CELLS);
     gpu_buffer_bind(&scratch, BIND_CELLS_BUF_SCRATCH);
     for (int pass = 0; pass < 3; pass++) {
@@ -182,7 +186,6 @@ static bool distance_gpu(struct render_cells *c, const struct render_cells_progr
         gpu_dispatch(&p->distance, lines, 1, 1);
     }
     gpu_buffer_finish(&scratch);
-    return true;
 }
 
 bool render_cells_build_step(struct render_cells *c, const struct render_cells_programs *p,
@@ -204,8 +207,7 @@ bool render_cells_build_piece(struct render_cells *c, const struct render_cells_
             gpu_uniform_int(&p->reduce, "level", level);
             gpu_dispatch(&p->reduce, c->dims[level][0], c->dims[level][1], c->dims[level][2]);
         }
-        if (!distance_gpu(c, p))
-            return false;
+        distance_gpu(c, p);
         *done = true;
         return true;
     }

@@ -64,6 +64,21 @@ static double check_cells(const struct render_cells *cells, const struct ext_vol
     return (double)clear / (double)n0;
 }
 
+/* COUNT voxels of VOL (at places SEED picks) given water or ice of 1e-3 to 5e-3 per metre. */
+static void scatter_voxels(struct ext_volume *vol, int count, unsigned seed)
+{
+    const int *n = vol->grid.n;
+    for (int k = 0; k < count; k++) {
+        seed = seed * 1664525u + 1013904223u;
+        int x = (int)((seed >> 8) % (unsigned)n[0]);
+        seed = seed * 1664525u + 1013904223u;
+        int y = (int)((seed >> 8) % (unsigned)n[1]);
+        seed = seed * 1664525u + 1013904223u;
+        int z = (int)((seed >> 8) % (unsigned)n[2]);
+        vol->beta[2 * grid3_index(&vol->grid, x, y, z) + (seed & 1)] = 1e-3f * (float)(1 + k % 5);
+    }
+}
+
 /* The macro cells of a storm with bad values in it (NaN, infinity, negative), and of a single
  * voxel on a cell's face, whose footprint reaches into the neighbouring cell. */
 static void test_cells_match_cpu(void **state)
@@ -133,6 +148,32 @@ static void test_cells_match_cpu(void **state)
     assert_true(highest_clear == -1.0f);
     free(got);
     ext_volume_finish(&vol);
+
+    /* A few voxels scattered through an empty box whose sides are no multiple of a cell,
+     * uniform and on the model's levels: every distance from 1 to the cap, GPU and CPU alike. */
+    for (int stretched = 0; stretched < 2; stretched++) {
+        const char *sparse[] = {"scene.kind=empty", "scene.size=[203,157,61]",
+                                "scene.extent=[203,157,30]"};
+        test_config_from(&cfg, sparse, 3);
+        assert_true(scene_build_volume(&cfg, &vol));
+        if (stretched)
+            test_stretch_levels(&vol);
+        scatter_voxels(&vol, 12, 5u);
+        assert_true(renderer_set_volume(renderer, &vol));
+        c = renderer_cells(renderer);
+        check_cells(c, &vol, NULL);
+        got = render_cells_read(c);
+        bool seen[RENDER_CELL_DISTANCE_MAX + 2] = {false};
+        for (int i = 0; i < c->dims[0][0] * c->dims[0][1] * c->dims[0][2]; i++)
+            if (got[i] <= 0.0f)
+                seen[(int)-got[i]] = true;
+        for (int e = 1; e <= RENDER_CELL_DISTANCE_MAX + 1; e++)
+            if (!seen[e] && (!stretched || e <= c->dims[0][2] / 2))
+                fail_msg("%s: no clear cell %d cells from cloud",
+                         stretched ? "stretched" : "uniform", e);
+        free(got);
+        ext_volume_finish(&vol);
+    }
 }
 
 /* The cells of the volume shown built with PROGRAMS over several of cells_build.comp's work
@@ -196,6 +237,9 @@ static void test_cells_work_groups(void **state)
 /* The config's scene drawn with its own light map, with empty-space skipping and without;
  * *WITH and *WITHOUT what the rays did.  Returns the largest relative difference of any
  * channel. */
+/* Voxels that skip_against_plain_on scatters through the scene's volume (0: none). */
+static int scatter_count;
+
 static double skip_against_plain_on(const char **sets, int n, bool stretched,
                                     struct render_counts *with, struct render_counts *without)
 {
@@ -205,7 +249,11 @@ static double skip_against_plain_on(const char **sets, int n, bool stretched,
     assert_true(scene_build_volume(&cfg, &vol));
     if (stretched)
         test_stretch_levels(&vol);
+    if (scatter_count)
+        scatter_voxels(&vol, scatter_count, 17u + (unsigned)scatter_count);
     assert_true(renderer_set_volume(renderer, &vol));
+    if (scatter_count)
+        check_cells(renderer_cells(renderer), &vol, NULL);
     assert_true(renderer_set_optics(renderer, &cfg.optics.params));
     struct lightmaps light;
     assert_true(lightmaps_init(&light, &cfg));
@@ -370,6 +418,62 @@ static void test_clear_distance_leaps(void **state)
     assert_true(with.cells_read < 12 * with.rays);
 }
 
+/* A ray that starts in a clear cell exactly at the cap's distance from cloud: from a camera
+ * inside the box at cell 13 along x, toward the voxel whose footprint reaches cell 29, the
+ * first leap ends at that cell's face.  A leap one cell longer at the cap would go into it. */
+static void test_clear_distance_at_the_cap(void **state)
+{
+    const char *sets[] = {"scene.kind=voxel",
+                          "scene.size=[240,64,64]",
+                          "scene.extent=[240,64,64]",
+                          "camera.position=[54,32.3,32.2]",
+                          "camera.target=[120,32.3,32.2]",
+                          "camera.fov=6",
+                          "render.width=32",
+                          "render.height=32",
+                          "effects.shadows=on"};
+    struct render_counts with, without;
+    double d = skip_against_plain(sets, 9, &with, &without);
+    print_message("relative difference %.3g; %.2f cells read a ray\n", d,
+                  (double)with.cells_read / (double)with.rays);
+    assert_true(d <= 1e-4);
+    assert_true(with.rays_marched > 0);
+}
+
+/* A few voxels scattered through empty boxes of odd sizes, uniform and on the model's levels,
+ * seen from inside, from far off, grazing the floor and at the level of detail: the pictures
+ * are the plain pass's. */
+static void test_scattered_voxels_keep_pictures(void **state)
+{
+    static const char *cameras[][3] = {
+        {"camera.position=[30,20,6]", "camera.target=[90,70,3]", "camera.fov=40"},
+        {"camera.position=[-1500,-500,400]", "camera.target=[60,40,5]", "camera.fov=4"},
+        {"camera.position=[-40,35,0.02]", "camera.target=[130,45,0.02]", "camera.fov=40"},
+        {"camera.position=[-60,-80,60]", "camera.target=[60,40,5]", "camera.fov=40"}};
+    for (int k = 0; k < 8; k++) {
+        const char **cam = cameras[k % 4];
+        const char *sets[] = {"scene.kind=empty",
+                              "scene.size=[131,97,43]",
+                              "scene.extent=[131,97,14]",
+                              cam[0],
+                              cam[1],
+                              cam[2],
+                              "camera.near=1",
+                              "render.width=64",
+                              "render.height=48",
+                              "effects.shadows=on",
+                              k == 3 ? "render.lod=2" : "render.skip=true"};
+        scatter_count = 1 + 5 * k;
+        struct render_counts with, without;
+        double d = skip_against_plain_on(sets, 11, k >= 4, &with, &without);
+        scatter_count = 0;
+        print_message("%d voxels, %s, %s: relative difference %.3g, %llu of %llu rays marched\n",
+                      1 + 5 * k, k >= 4 ? "stretched" : "uniform", cam[0], d,
+                      (unsigned long long)with.rays_marched, (unsigned long long)with.rays);
+        assert_true(d <= 1e-4);
+    }
+}
+
 /* effects.temporal: the pair's cells hold the larger of both steps, and the blended picture
  * is the plain one. */
 static void test_temporal_pair(void **state)
@@ -445,6 +549,8 @@ int main(void)
         cmocka_unit_test(test_skipping_keeps_pictures),
         cmocka_unit_test(test_empty_box_reads_nothing),
         cmocka_unit_test(test_clear_distance_leaps),
+        cmocka_unit_test(test_clear_distance_at_the_cap),
+        cmocka_unit_test(test_scattered_voxels_keep_pictures),
         cmocka_unit_test(test_temporal_pair),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -148,11 +148,36 @@ static void test_pair_of_distances_is_the_union(void **state)
     free(both);
 }
 
+/* Grids of every shape, down to one cell along an axis, at densities from every cell to
+ * almost none: each the brute force's distances. */
+static void test_distances_on_many_grids(void **state)
+{
+    (void)state;
+    unsigned seed = 99u;
+    const unsigned densities[] = {1, 3, 20, 200, 3000, 100000};
+    for (int run = 0; run < 300; run++) {
+        int n[3];
+        for (int a = 0; a < 3; a++)
+            n[a] = 1 + (int)(next_random(&seed) % (a == 2 ? 60u : 90u));
+        struct render_cells layout;
+        render_cells_layout(n, RENDER_CELL_VOXELS, &layout);
+        float *original = random_cells(&layout, densities[run % 6], seed + (unsigned)run);
+        float *got = malloc(layout.count * sizeof(float));
+        assert_non_null(got);
+        memcpy(got, original, layout.count * sizeof(float));
+        render_cells_distance_cpu(&layout, got);
+        check_distances(&layout, original, got);
+        free(original);
+        free(got);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_distances_are_chebyshev),
         cmocka_unit_test(test_pair_of_distances_is_the_union),
+        cmocka_unit_test(test_distances_on_many_grids),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
