@@ -50,7 +50,7 @@ float cells_skip(vec3 origin, vec3 dir, vec3 inv_dir, float t, float t_end, vec3
         float nt = max(nudge, 4e-7 * abs(t));
         vec3 p = origin + dir * (t + nt);
         ivec3 c = clamp(ivec3(floor((p - box_min) / cell_size)), ivec3(0), last);
-        float m = cell_max[cell_dims[0].w + c.x + cell_dims[0].x * (c.y + cell_dims[0].y * c.z)];
+        float m = cell_max[cell_index(c, 0)];
         cells++;
         float r = max(-m - 1.0, 0.0);
         vec3 lo = box_min + (vec3(c) - r) * cell_size;

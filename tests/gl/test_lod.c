@@ -51,16 +51,8 @@ static void draw_deck(const char **sets, int n, float lod, bool no_skip, int ort
     assert_true(renderer_set_volume(renderer, &vol));
     assert_true(renderer_set_optics(renderer, &cfg.optics.params));
     struct lightmaps light;
-    assert_true(lightmaps_init(&light, &cfg));
     struct effects e;
-    struct effects_facts f;
-    effects_facts_init(&f);
-    double sun[3];
-    light_sun_direction(cfg.light.azimuth_deg, cfg.light.elevation_deg, sun);
-    assert_true(effects_measure_volume(&vol, sun, &cfg.optics.params, &f));
-    effects_decide(&cfg, &f, &e);
-    lightmaps_set_effects(&light, &e);
-    assert_true(lightmaps_update(&light, &cfg, renderer, NULL));
+    test_scene_light(renderer, &cfg, &vol, &light, &e);
     struct render_view view;
     scene_camera_view(&cfg, cfg.render.width, cfg.render.height, &view);
     if (ortho) {

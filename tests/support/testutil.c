@@ -1,5 +1,6 @@
 #include "testutil.h"
 
+#include "session/effects.h"
 #include "session/lightmaps.h"
 #include "session/scene.h"
 #include "session/stats.h"
@@ -99,6 +100,18 @@ void test_upload_scene(struct renderer *r, const struct config *cfg, struct ext_
     assert_true(scene_build_volume(cfg, vol));
     assert_true(renderer_set_volume(r, vol));
     assert_true(renderer_set_optics(r, &cfg->optics.params));
+}
+
+void test_scene_light(struct renderer *r, const struct config *cfg, const struct ext_volume *vol,
+                      struct lightmaps *light, struct effects *e)
+{
+    const struct effects_context none = {0};
+    struct effects_facts f;
+    assert_true(effects_gather(cfg, vol, &none, &f));
+    effects_decide(cfg, &f, e);
+    assert_true(lightmaps_init(light, cfg));
+    lightmaps_set_effects(light, e);
+    assert_true(lightmaps_update(light, cfg, r, NULL));
 }
 
 void test_write_wrf_step(const char *path, const struct field_volume *in)

@@ -38,6 +38,8 @@ struct config;
 struct renderer;
 struct ext_volume;
 struct field_volume;
+struct lightmaps;
+struct effects;
 
 /* VOL's levels moved onto uneven ones in the same box (the model's own levels of a WRF file,
  * data/volume.h): faces at (k / n)^2 of the height, thin at the bottom, thick aloft. */
@@ -54,6 +56,12 @@ void test_config_file(struct config *cfg, const char *path, const char **sets, i
 
 /* Builds CFG's volume into VOL (the caller finishes it) and uploads it and the optics to R. */
 void test_upload_scene(struct renderer *r, const struct config *cfg, struct ext_volume *vol);
+
+/* LIGHT made for CFG and built for R's volume VOL, with the effects E that CFG decides for VOL
+ * as a program does (effects_gather, no display, no time steps, views not known); the caller
+ * finishes LIGHT. */
+void test_scene_light(struct renderer *r, const struct config *cfg, const struct ext_volume *vol,
+                      struct lightmaps *light, struct effects *e);
 
 /* A headless OpenGL 4.5 context, or exit(TEST_SKIP) with a message when none can be made. */
 struct gpu_context *test_gl_context_or_skip(void);
