@@ -8,6 +8,8 @@
 #include "app/cmd_bench.h"
 #include "common/log.h"
 #include "config/config.h"
+#include "render/image.h"
+#include "session/output.h"
 #include "session/scene.h"
 #include "session/traced.h"
 
@@ -34,7 +36,8 @@ static int usage(FILE *out)
                  "Path-traces the config's view (Monte Carlo: all orders of scattering, sun and\n"
                  "sky) and writes the mean radiance to FILE.pfm and the standard error of each\n"
                  "pixel to FILE.stderr.pfm (docs/reference.md).\n"
-                 "  --spp N      samples per pixel (default 64; the standard error needs >= 2)\n"
+                 "  --spp N      samples per pixel, at least 2 (for the standard error; default\n"
+                 "               64)\n"
                  "  --threads N  worker threads (default: one per CPU); the image does not\n"
                  "               depend on it\n"
                  "  --seed S     random seed (default 1)\n"
@@ -66,7 +69,7 @@ static int parse_options(int argc, char **argv, struct reference_options *o)
             o->output = optarg;
             break;
         case 'n':
-            if (!app_option_long("reference", "--spp", optarg, 1, 1L << 30, &o->spp))
+            if (!app_option_long("reference", "--spp", optarg, 2, 1L << 30, &o->spp))
                 return EXIT_BAD_INPUT;
             break;
         case 't':
@@ -107,6 +110,14 @@ static int parse_options(int argc, char **argv, struct reference_options *o)
         log_error("reference: missing -o FILE.pfm");
         return EXIT_USAGE;
     }
+    /* The names are checked before the paths are traced, which may take hours. */
+    if (!image_path_supported(o->output)) {
+        log_error("%s: unknown image type: expected a name ending in .pfm (or .png, tone-mapped)",
+                  o->output);
+        return EXIT_BAD_INPUT;
+    }
+    if (!frame_output_folder_exists(o->output))
+        return EXIT_BAD_INPUT;
     return EXIT_OK;
 }
 

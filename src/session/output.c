@@ -68,12 +68,22 @@ static bool folder_exists(const char *path, char *folder, size_t size)
     return stat(folder, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
+/* The message for PATH whose folder FOLDER is not a folder. */
+static void folder_missing(const char *path, const char *folder)
+{
+    struct stat st;
+    if (stat(folder, &st) == 0)
+        log_error("%s: %s is not a folder", path, folder);
+    else
+        log_error("%s: the folder %s does not exist (make it first)", path, folder);
+}
+
 bool frame_output_folder_exists(const char *path)
 {
     char folder[1024];
     if (folder_exists(path, folder, sizeof(folder)))
         return true;
-    log_error("%s: the folder %s does not exist (make it first)", path, folder);
+    folder_missing(path, folder);
     return false;
 }
 
@@ -87,7 +97,7 @@ bool frame_output_check(const char *path)
         return false;
     }
     if (!folder_exists(path, folder, sizeof(folder))) {
-        log_error("%s: the folder %s does not exist (make it first)", path, folder);
+        folder_missing(path, folder);
         return false;
     }
     if (video_path_supported(path)) {

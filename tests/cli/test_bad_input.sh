@@ -165,4 +165,20 @@ if [ $gl -eq 1 ]; then
     check "the old recording is kept" grep -q "the old recording" kept.txt
 fi
 rm -f series.nc
+
+# ---- output names: refused before the work, which for a reference may take hours ----------
+# With a billion samples a pixel the trace would never end: the checks must come first.
+expect_exit 1 "a reference into a folder that is not there" timeout 20 "$anvil" reference \
+    "${small[@]}" --spp 1000000000 -o nodir/ref.pfm
+check "it names the folder" stderr_has "the folder nodir does not exist"
+expect_exit 1 "a reference into an unknown image type" timeout 20 "$anvil" reference \
+    "${small[@]}" --spp 1000000000 -o ref.jpg
+check "it says what names it takes" stderr_has "ref.jpg: unknown image type: expected a name ending in .pfm"
+expect_exit 1 "a reference of one sample a pixel (no standard error)" "$anvil" reference \
+    "${small[@]}" --spp 1 -o ref.pfm
+check "it asks for two" stderr_has "expected an integer in \[2,"
+check "no image is written" test ! -e ref.pfm -a ! -e ref.stderr.pfm
+echo "a file" >afile
+expect_exit 1 "a picture into a folder that is a file" "$anvil" render "${small[@]}" -o afile/x.png
+check "it says the file is no folder" stderr_has "afile/x.png: afile is not a folder"
 finish
