@@ -364,12 +364,12 @@ int cmd_info(int argc, char **argv)
             if (!parse_triple_int(v, isabel_size) || isabel_size[0] > 4096 ||
                 isabel_size[1] > 4096 || isabel_size[2] > 4096) {
                 log_error("info: --isabel-size %s: expected NXxNYxNZ, each 1 to 4096", v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
         } else if (!strcmp(o, "--isabel-extent")) {
             if (!parse_triple_double(v, isabel_extent)) {
                 log_error("info: --isabel-extent %s: expected XxYxZ in km", v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
         } else {
             break;
@@ -600,7 +600,7 @@ static int synth_nest(const char *out, const char *nest, struct synth_desc *sd, 
     if (box[0] - 1 + box[2] > sd->n[0] || box[1] - 1 + box[3] > sd->n[1]) {
         log_error("synth: --nest-box %d,%d,%d,%d: beyond the parent's %d x %d columns", box[0],
                   box[1], box[2], box[3], sd->n[0], sd->n[1]);
-        return EXIT_USAGE;
+        return EXIT_BAD_INPUT;
     }
     struct synth_desc fine = *sd;
     fine.n[0] *= ratio;
@@ -696,53 +696,53 @@ int cmd_synth(int argc, char **argv)
                 format = 1 + HGRID_CF;
             else {
                 log_error("synth: --format %s: expected wrf, cm1 or cf", v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
         } else if (!strcmp(a, "--size")) {
             if (!parse_triple_int(v, size)) {
                 log_error("synth: --size %s: expected NXxNYxNZ, e.g. 500x500x100", v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
         } else if (!strcmp(a, "--extent")) {
             if (!parse_triple_double(v, extent_km)) {
                 log_error("synth: --extent %s: expected XxYxZ in km, e.g. 60x60x16", v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
         } else if (!strcmp(a, "--steps")) {
             if (sscanf(v, "%d%c", &steps, &tail) != 1 || steps < 1 || steps > 10000) {
                 log_error("synth: --steps %s: expected a count from 1 to 10000", v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
         } else if (!strcmp(a, "--seed")) {
             if (sscanf(v, "%u%c", &seed, &tail) != 1) {
                 log_error("synth: --seed %s: expected a non-negative integer", v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
         } else if (!strcmp(a, "--start")) {
             double t;
             if (!extfile_parse_date(v, &t)) {
                 log_error("synth: --start %s: expected YYYY-MM-DD_hh:mm:ss", v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
             start = v;
         } else if (!strcmp(a, "--interval")) {
             if (sscanf(v, "%lf%c", &interval_min, &tail) != 1 || !(interval_min > 0)) {
                 log_error("synth: --interval %s: expected minutes > 0", v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
         } else if (!strcmp(a, "--stretch")) {
             if (sscanf(v, "%lf%c", &stretch, &tail) != 1 || !(stretch >= 1.0 && stretch <= 2.0)) {
                 log_error("synth: --stretch %s: expected a ratio from 1 to 2 (each level that "
                           "many times as thick as the one below)",
                           v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
         } else if (!strcmp(a, "--nest")) {
             nest = v;
         } else if (!strcmp(a, "--nest-ratio")) {
             if (sscanf(v, "%d%c", &nest_ratio, &tail) != 1 || nest_ratio < 2 || nest_ratio > 7) {
                 log_error("synth: --nest-ratio %s: expected a whole ratio from 2 to 7", v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
         } else if (!strcmp(a, "--nest-box")) {
             if (sscanf(v, "%d,%d,%d,%d%c", &nest_box[0], &nest_box[1], &nest_box[2],
@@ -751,13 +751,13 @@ int cmd_synth(int argc, char **argv)
                 log_error("synth: --nest-box %s: expected I,J,NI,NJ: the first parent column "
                           "(from 1) and at least 2 x 2 columns",
                           v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
         } else if (!strcmp(a, "--center")) {
             if (sscanf(v, "%lf,%lf%c", &lat, &lon, &tail) != 2 || fabs(lat) > 80 ||
                 fabs(lon) > 360) {
                 log_error("synth: --center %s: expected LAT,LON in degrees (|LAT| <= 80)", v);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
         } else {
             log_error("synth: unknown option %s", a);

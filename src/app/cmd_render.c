@@ -47,6 +47,40 @@ struct render_options {
     const char *record;    /* --record FILE: every frame's input, head and clock */
 };
 
+/* --frames: "all" (FIRST 0, LAST -1: to the end) or "A:B[:STEP]". */
+static bool parse_frames(const char *spec, long *first, long *last, long *step)
+{
+    *first = 0;
+    *last = -1;
+    *step = 1;
+    if (!spec || strcmp(spec, "all") == 0)
+        return true;
+    char *end;
+    long a = strtol(spec, &end, 10), b = a, c = 1;
+    if (end == spec || *end != ':')
+        goto bad;
+    char *q = end + 1;
+    b = strtol(q, &end, 10);
+    if (end == q || (*end && *end != ':'))
+        goto bad;
+    if (*end == ':') {
+        q = end + 1;
+        c = strtol(q, &end, 10);
+        if (end == q || *end)
+            goto bad;
+    }
+    if (a < 0 || b < a || c < 1)
+        goto bad;
+    *first = a;
+    *last = b;
+    *step = c;
+    return true;
+bad:
+    log_error("--frames %s: expected all or FIRST:LAST[:STEP] (0 <= FIRST <= LAST, STEP >= 1)",
+              spec);
+    return false;
+}
+
 static int parse_options(int argc, char **argv, struct render_options *o, bool need_output)
 {
     static const struct option longopts[] = {
@@ -104,7 +138,7 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
             o->time = strtod(optarg, &end);
             if (*end || !isfinite(o->time)) {
                 log_error("--time %s: expected a number of seconds", optarg);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
             break;
         }
@@ -123,7 +157,7 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         case 'P':
             if (strcmp(optarg, "png") != 0 && strcmp(optarg, "pfm") != 0) {
                 log_error("--format %s: expected png or pfm", optarg);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
             o->format = optarg;
             break;
@@ -135,7 +169,7 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
             o->fps = strtod(optarg, &end);
             if (*end || !(o->fps >= 1.0 && o->fps <= 1000.0)) {
                 log_error("--fps %s: expected frames per second in [1, 1000]", optarg);
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             }
             break;
         }
@@ -168,6 +202,9 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
         log_error("run: --frames, --fps and --codec belong to render (an animation to files)");
         return EXIT_USAGE;
     }
+    long first, last, step; /* checked here, before any work; used by animation() */
+    if (o->frames && !parse_frames(o->frames, &first, &last, &step))
+        return EXIT_BAD_INPUT;
     if (!need_output || !o->output)
         return EXIT_OK;
     /* An animation: numbered images or a movie, their folder there; checked before any work. */
@@ -203,47 +240,13 @@ static int parse_options(int argc, char **argv, struct render_options *o, bool n
     return EXIT_OK;
 }
 
-/* --frames: "all" (FIRST 0, LAST -1: to the end) or "A:B[:STEP]". */
-static bool parse_frames(const char *spec, long *first, long *last, long *step)
-{
-    *first = 0;
-    *last = -1;
-    *step = 1;
-    if (!spec || strcmp(spec, "all") == 0)
-        return true;
-    char *end;
-    long a = strtol(spec, &end, 10), b = a, c = 1;
-    if (end == spec || *end != ':')
-        goto bad;
-    char *q = end + 1;
-    b = strtol(q, &end, 10);
-    if (end == q || (*end && *end != ':'))
-        goto bad;
-    if (*end == ':') {
-        q = end + 1;
-        c = strtol(q, &end, 10);
-        if (end == q || *end)
-            goto bad;
-    }
-    if (a < 0 || b < a || c < 1)
-        goto bad;
-    *first = a;
-    *last = b;
-    *step = c;
-    return true;
-bad:
-    log_error("--frames %s: expected all or FIRST:LAST[:STEP] (0 <= FIRST <= LAST, STEP >= 1)",
-              spec);
-    return false;
-}
-
 /* What the animation's frames are, from the options and the session; *FPS its frame rate. */
 static int animation(const struct render_options *o, struct session *s, struct loop_desc *ld,
                      struct camera_path *path)
 {
     long first, last, step;
     if (!parse_frames(o->frames, &first, &last, &step))
-        return EXIT_USAGE;
+        return EXIT_BAD_INPUT;
     const struct config *cfg = session_config(s);
     if (o->path) {
         if (o->display) {
@@ -389,7 +392,7 @@ static int apply_wand_option(const struct render_options *o, struct display_conf
     if (strlen(o->wand) >= sizeof(dcfg->wand.device)) {
         log_error("--wand %s: expected an OpenHMD product name of at most %zu characters",
                   o->wand, sizeof(dcfg->wand.device) - 1);
-        return EXIT_USAGE;
+        return EXIT_BAD_INPUT;
     }
     dcfg->wand.source = DISPLAY_WAND_OPENHMD;
     snprintf(dcfg->wand.device, sizeof(dcfg->wand.device), "%s", o->wand);

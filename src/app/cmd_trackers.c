@@ -56,11 +56,11 @@ int cmd_trackers(int argc, char **argv)
             break;
         case 'S':
             if (!app_option_double("trackers", "--seconds", optarg, 0.0, 1e9, &seconds))
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             break;
         case 'i':
             if (!app_option_double("trackers", "--interval", optarg, 0.05, 3600.0, &interval))
-                return EXIT_USAGE;
+                return EXIT_BAD_INPUT;
             break;
         case 'q':
             log_set_level(LOG_ERROR);

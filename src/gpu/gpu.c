@@ -568,6 +568,12 @@ void gpu_uniform_ivec4_array(const struct gpu_program *p, const char *name, int 
     glProgramUniform4iv(p->id, glGetUniformLocation(p->id, name), count, v);
 }
 
+void gpu_uniform_float_array(const struct gpu_program *p, const char *name, int count,
+                             const float *v)
+{
+    glProgramUniform1fv(p->id, glGetUniformLocation(p->id, name), count, v);
+}
+
 void gpu_uniform_vec4(const struct gpu_program *p, const char *name, const float v[4])
 {
     glProgramUniform4fv(p->id, glGetUniformLocation(p->id, name), 1, v);

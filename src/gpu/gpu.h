@@ -207,6 +207,9 @@ void gpu_uniform_ivec3(const struct gpu_program *p, const char *name, const int 
 void gpu_uniform_ivec4_array(const struct gpu_program *p, const char *name, int count,
                              const int *v);
 void gpu_uniform_vec4(const struct gpu_program *p, const char *name, const float v[4]);
+/* COUNT floats of V into the uniform array NAME from its element 0. */
+void gpu_uniform_float_array(const struct gpu_program *p, const char *name, int count,
+                             const float *v);
 void gpu_uniform_mat4(const struct gpu_program *p, const char *name, const float m[16]);
 
 /* Runs PROG over enough groups to cover W x H x D invocations, then a memory barrier so the

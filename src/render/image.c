@@ -1,6 +1,8 @@
 #include "render/image.h"
 
 #include <math.h>
+#include <pthread.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -31,16 +33,46 @@ void image_finish(struct image *img)
     img->width = img->height = 0;
 }
 
+/* The steps (image.h), made once: x_k, where the operator's sRGB value times 255 is k - 1/2,
+ * solved in double (s = (k - 1/2) / 255, c the sRGB curve's inverse of s, x = c / (1 - c)),
+ * and the least float at or above it.  A float x is then quantized as the real function of
+ * it would be (ties aside, which no float meets): monotone in x, unlike the same formula in
+ * floats, whose x / (1 + x) falls by an ulp where 1 + x rounds up (64 such drops in the 8-bit
+ * values between 1e-5 and 1e4). */
+static float tonemap_steps[IMAGE_TONEMAP_STEPS];
+static pthread_once_t tonemap_steps_once = PTHREAD_ONCE_INIT;
+
+static void tonemap_steps_make(void)
+{
+    for (int k = 1; k <= IMAGE_TONEMAP_STEPS; k++) {
+        double s = (k - 0.5) / 255.0;
+        double c = s <= 12.92 * 0.0031308 ? s / 12.92 : pow((s + 0.055) / 1.055, 2.4);
+        double x = c / (1.0 - c);
+        float f = (float)x;
+        if ((double)f < x)
+            f = nextafterf(f, INFINITY);
+        tonemap_steps[k - 1] = f;
+    }
+}
+
+void image_tonemap_steps(float out[IMAGE_TONEMAP_STEPS])
+{
+    pthread_once(&tonemap_steps_once, tonemap_steps_make);
+    memcpy(out, tonemap_steps, sizeof(tonemap_steps));
+}
+
 uint8_t image_tonemap(float linear, float exposure)
 {
-    float l = linear > 0.0f ? linear : 0.0f;
-    if (!isfinite(l))
-        l = 0.0f;
-    float x = exposure * l;
-    float c = isfinite(x) ? x / (1.0f + x) : 1.0f; /* Reinhard's global operator */
-    float s = c <= 0.0031308f ? 12.92f * c : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
-    int v = (int)lrintf(s * 255.0f);
-    return (uint8_t)(v < 0 ? 0 : v > 255 ? 255 : v);
+    pthread_once(&tonemap_steps_once, tonemap_steps_make);
+    float l = linear > 0.0f && isfinite(linear) ? linear : 0.0f;
+    float x = exposure * l; /* +inf (an overflow) lies above every step: white */
+    unsigned v = 0;
+    for (unsigned half = 128; half > 0; half >>= 1) {
+        unsigned k = v + half;
+        if (k <= IMAGE_TONEMAP_STEPS && x >= tonemap_steps[k - 1])
+            v = k;
+    }
+    return (uint8_t)v;
 }
 
 static bool has_suffix(const char *s, const char *suffix)

@@ -19,8 +19,16 @@ bool image_init(struct image *img, int width, int height);
 void image_finish(struct image *img);
 
 /* Tone mapping shared with shaders/tonemap.comp: c = x / (1 + x), x = exposure L (Reinhard
- * et al. 2002, the global operator: highlights roll off instead of clipping), then sRGB. */
+ * et al. 2002, the global operator: highlights roll off instead of clipping), then sRGB, to
+ * 8 bits: the value is the number of the steps below at or under x, so that it is the real
+ * function's, rounded to nearest, of the float x (monotone), and a GPU that counts the same
+ * steps gives the same bytes whatever its pow rounds to.  A negative or non-finite L reads 0. */
 uint8_t image_tonemap(float linear, float exposure);
+
+/* OUT[k - 1], k = 1 .. 255: the least float x at which image_tonemap(x, 1) reaches k
+ * (ascending; made once, in double, thread safe). */
+#define IMAGE_TONEMAP_STEPS 255
+void image_tonemap_steps(float out[IMAGE_TONEMAP_STEPS]);
 
 /* Writes by extension: ".png" tone-mapped with EXPOSURE, ".pfm" linear RGB.  Anything else
  * is an error naming the path and the accepted extensions. */

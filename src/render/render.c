@@ -150,6 +150,9 @@ struct renderer *renderer_create(void)
         renderer_destroy(r);
         return NULL;
     }
+    float steps[IMAGE_TONEMAP_STEPS];
+    image_tonemap_steps(steps);
+    gpu_uniform_float_array(&r->tonemap_packed, "steps", IMAGE_TONEMAP_STEPS, steps);
     struct optics_params optics;
     optics_params_defaults(&optics);
     if (!renderer_set_optics(r, &optics)) {

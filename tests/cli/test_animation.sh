@@ -14,8 +14,13 @@ expect_exit 1 "--display with one image" "$anvil" render $small --display "$src/
 check "says -o names a folder" stderr_has "names a folder"
 expect_exit 1 "a still into a folder that is not there" "$anvil" render $small -o "$tmp/none/x.png"
 expect_exit 2 "--frames with run" "$anvil" run $small --frames all
-expect_exit 2 "a bad frame range" "$anvil" render $small --frames 3:1 -o "$tmp/f-%d.png"
-expect_exit 2 "a bad frame rate" "$anvil" render $small --fps 0 -o "$tmp/f.mp4"
+expect_exit 1 "a bad frame range" "$anvil" render $small --frames 3:1 -o "$tmp/f-%d.png"
+expect_exit 1 "a bad frame rate" "$anvil" render $small --fps 0 -o "$tmp/f.mp4"
+check "one line says so, no usage after it" test "$(wc -l <"$tmp/err")" -eq 1
+# The range is read before the data: a file that is not there is not what it stops at.
+expect_exit 1 "a bad frame range before the data" "$anvil" render "$tmp/none.nc" \
+    --frames 2:1 -o "$tmp/f-%d.png"
+check "it names the range" stderr_has "\-\-frames 2:1: expected all or FIRST:LAST"
 expect_exit 1 "an unknown encoder" "$anvil" render $small --codec nosuch -o "$tmp/f.mp4"
 check "names the encoders there are" stderr_has "it has:"
 check "no movie left behind" bash -c "! ls '$tmp'/f.mp4* 2>/dev/null | grep -q ."

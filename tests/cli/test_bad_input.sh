@@ -166,6 +166,15 @@ if [ $gl -eq 1 ]; then
 fi
 rm -f series.nc
 
+# ---- option values: exit 1 with one message (docs/user-guide.md, "Exit codes") ----------
+expect_exit 1 "render --time that is no number" "$anvil" render --time abc -o x.png
+expect_exit 1 "render --format jpg" "$anvil" render --format jpg -o x.png
+expect_exit 1 "synth --steps 0" "$anvil" synth --steps 0 -o x.nc
+expect_exit 1 "synth --size 8x8" "$anvil" synth --size 8x8 -o x.nc
+expect_exit 1 "trackers --seconds -1" "$anvil" trackers "$src/displays/cave4-dtrack.cfg" --seconds -1
+check "no usage after it" test "$(wc -l <"$tmp/err")" -eq 1
+check "nothing was written" test ! -e x.png -a ! -e x.nc
+
 # ---- output names: refused before the work, which for a reference may take hours ----------
 # With a billion samples a pixel the trace would never end: the checks must come first.
 expect_exit 1 "a reference into a folder that is not there" timeout 20 "$anvil" reference \
