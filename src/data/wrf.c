@@ -2392,9 +2392,10 @@ enum wrf_point_result wrf_read_point(struct wrf *w, int step, const struct wrf_d
         if (!(rel >= -1e-9 && rel <= n[a] + 1e-9)) {
             if (a < 2)
                 return WRF_POINT_OUTSIDE;
-            out->ground_m = org[2]; /* the height grid's bottom and top */
-            out->top_m = org[2] + n[2] * sp[2];
-            return rel < 0 ? WRF_POINT_BELOW : WRF_POINT_ABOVE;
+            /* Below or above the whole height grid: the column's own ground and top, read
+             * below, are what the point is below or above (the grid's bottom is the
+             * domain's lowest ground, not this column's). */
+            rel = rel < 0.0 ? 0.0 : n[2];
         }
         f[a] = rel - 0.5;
     }

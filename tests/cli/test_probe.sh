@@ -47,6 +47,16 @@ expect_exit 1 "a point outside the domain" "$anvil" --quiet probe "$cfg" --at 30
 check "  says where the data lies" stderr_has "outside the data (its columns lie at 21.80 to 25.67 N"
 expect_exit 1 "a point below the ground" "$anvil" --quiet probe "$cfg" --at 24,-89,-50
 check "  says so" stderr_has "below the ground"
+# Below the whole height grid as just below the ground: the column's own ground is named,
+# not the domain's lowest (the Tibetan plateau, ground at 5293 m where the grid starts at 5044).
+thompson="$data/wrf/lambert_thompson_cropped.nc"
+if [ -r "$thompson" ]; then
+    expect_exit 1 "a point below the height grid" "$anvil" --quiet probe "$thompson" --at 30,87,5000
+    check "  names this column's ground" stderr_has "below the ground (5293 m above sea level there"
+    expect_exit 1 "a point below the ground, inside the grid" "$anvil" --quiet probe "$thompson" \
+        --at 30,87,5100
+    check "  names the same ground" stderr_has "below the ground (5293 m above sea level there"
+fi
 expect_exit 1 "a point above the data" "$anvil" --quiet probe "$cfg" --at 24,-89,40000
 check "  says so" stderr_has "above the top of the data"
 expect_exit 1 "a step the data lacks" "$anvil" --quiet probe "$cfg" --at 24,-89,3000 --step 4
