@@ -25,6 +25,8 @@
 #include "data/synth.h"
 #include "data/wrf.h"
 #include "data/wrf_write.h"
+#include "render/image.h"
+#include "render/video.h"
 
 /* ---- anvil info ------------------------------------------------------------------------- */
 
@@ -769,6 +771,12 @@ int cmd_synth(int argc, char **argv)
         log_error("synth: no output file (-o OUT.nc)");
         synth_usage(stderr);
         return EXIT_USAGE;
+    }
+    if (image_path_supported(out) || video_path_supported(out)) {
+        log_error("%s: synth writes NetCDF, not a picture or a movie: expected a name like "
+                  "storm.nc or wrfout_d01_2005-08-28_12:00:00",
+                  out);
+        return EXIT_BAD_INPUT;
     }
     struct synth_desc sd = {.kind = SYNTH_STORM, .seed = seed};
     for (int a = 0; a < 3; a++) {

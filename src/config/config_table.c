@@ -995,6 +995,11 @@ bool config_table_set(const struct config_table *t, void *base, const char *assi
     }
     *eq = '\0';
     char *path = trim(copy), *text = trim(eq + 1);
+    if (!*path) {
+        log_error("--set %s: no setting before the '=': expected SETTING=VALUE, e.g. %s",
+                  assignment, t->example);
+        goto done;
+    }
     const char *rel;
     if (!find_element(&t, &base, path, &rel))
         goto done;

@@ -762,7 +762,9 @@ bool display_write_images(struct display *d, const char *dir, const char *ext, f
         const float bg[4] = {0.0f, 0.0f, 0.0f, 1.0f};
         if (ok && !d->desc.partial && display_contact_sheet(images, n, walls, 2, bg, &sheet)) {
             char path[1200];
-            snprintf(path, sizeof(path), "%s/contact.%s", dir, ext);
+            size_t dl = strlen(dir);
+            snprintf(path, sizeof(path), "%s%scontact.%s", dir,
+                     dl > 0 && dir[dl - 1] == '/' ? "" : "/", ext);
             ok = image_write(&sheet, path, exposure);
             if (ok)
                 log_info("wrote %s (%dx%d, %d views)", path, sheet.width, sheet.height,

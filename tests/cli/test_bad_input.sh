@@ -173,6 +173,10 @@ expect_exit 1 "synth --steps 0" "$anvil" synth --steps 0 -o x.nc
 expect_exit 1 "synth --size 8x8" "$anvil" synth --size 8x8 -o x.nc
 expect_exit 1 "trackers --seconds -1" "$anvil" trackers "$src/displays/cave4-dtrack.cfg" --seconds -1
 check "no usage after it" test "$(wc -l <"$tmp/err")" -eq 1
+expect_exit 1 "synth into a picture's name" "$anvil" synth -o x.png
+check "it says synth writes NetCDF" stderr_has "x.png: synth writes NetCDF"
+expect_exit 1 "--set with no setting before the =" "$anvil" render --set =3 -o x.png
+check "it says what is missing" stderr_has "no setting before the '='"
 check "nothing was written" test ! -e x.png -a ! -e x.nc
 
 # ---- output names: refused before the work, which for a reference may take hours ----------
