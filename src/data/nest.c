@@ -241,6 +241,24 @@ static bool place(struct nest_set *s, const struct domain_attrs *attrs)
 
     const struct wrf_meta *outer = wrf_get_meta(s->dom[0].wrf);
     const struct wrf_meta *finest = wrf_get_meta(s->dom[s->count - 1].wrf);
+    /* The domains of one run share its map projection (WRF writes the mother domain's into
+     * every domain's files): two projections are two runs, whatever their grids say. */
+    for (int i = 1; i < s->count; i++) {
+        const struct wrf_meta *m = wrf_get_meta(s->dom[i].wrf);
+        const double a[3] = {outer->truelat1, outer->truelat2, outer->stand_lon};
+        const double b[3] = {m->truelat1, m->truelat2, m->stand_lon};
+        bool same = m->map_proj == outer->map_proj;
+        for (int k = 0; k < 3 && same; k++)
+            same = !(isfinite(a[k]) && isfinite(b[k])) || fabs(a[k] - b[k]) <= 1e-3;
+        if (!same) {
+            log_error("%s and %s are not domains of one run: their map projections differ "
+                      "(MAP_PROJ %d against %d, TRUELAT1 %g against %g, TRUELAT2 %g against "
+                      "%g, STAND_LON %g against %g)",
+                      s->dom[0].path, s->dom[i].path, outer->map_proj, m->map_proj, a[0], b[0],
+                      a[1], b[1], a[2], b[2]);
+            return false;
+        }
+    }
     for (int i = 0; i < s->count; i++) {
         const struct wrf_meta *m = wrf_get_meta(s->dom[i].wrf);
         double r = m->dx / finest->dx;

@@ -79,4 +79,10 @@ expect_exit 1 "a budget the composite exceeds" "$anvil" render wrfout_d01.nc wrf
 check "it says what the domains need" stderr_has "wrfout_d01.nc and 1 nest: a time step of every domain and their composite on 72 x 72 x 16 voxels need 4 MiB, above the budget data.memory = 2 MiB"
 expect_exit 0 "the parent alone fits it" "$anvil" render wrfout_d01.nc --set data.memory=2 \
     $small -o x.png
+# Two runs on two map projections are not a parent and its nest, and are called so.
+katrina="$data/wrf/katrina_2005_mercator_wsm3.nc" thompson="$data/wrf/lambert_thompson_cropped.nc"
+if [ -r "$katrina" ] && [ -r "$thompson" ]; then
+    expect_exit 1 "two runs given as domains" "$anvil" info "$katrina" "$thompson"
+    check "it says their projections differ" stderr_has "are not domains of one run: their map projections differ (MAP_PROJ 1 against 3"
+fi
 finish
