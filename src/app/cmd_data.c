@@ -19,6 +19,7 @@
 #include "data/cf.h"
 #include "data/cm1.h"
 #include "data/extfile.h"
+#include "data/geo.h"
 #include "data/hgrid_write.h"
 #include "data/isabel.h"
 #include "data/nest.h"
@@ -100,9 +101,25 @@ static int info_wrf_series(struct wrf *w, const char *const *paths, int count, d
            m->nx, m->ny, m->nz, m->dx, m->dy);
     printf("  projection  MAP_PROJ %d, CEN_LAT %.4f, CEN_LON %.4f, MP_PHYSICS %d\n", m->map_proj,
            m->cen_lat, m->cen_lon, m->mp_physics);
-    if (isfinite(m->lat_min))
-        printf("  lat/lon     %.3f to %.3f N, %.3f to %.3f E\n", m->lat_min, m->lat_max, m->lon_min,
-               m->lon_max);
+    if (isfinite(m->lat_min)) {
+        char range[96];
+        geo_format_range(range, sizeof(range), 3, m->lat_min, m->lat_max, m->lon_min, m->lon_max);
+        printf("  lat/lon     %s%s\n", range, wrf_moves(w) ? " at the first step" : "");
+        if (wrf_moves(w)) {
+            int last = wrf_step_count(w) - 1;
+            const struct wrf_meta *z = wrf_step_meta(w, last);
+            if (z != m) {
+                geo_format_range(range, sizeof(range), 3, z->lat_min, z->lat_max, z->lon_min,
+                                 z->lon_max);
+                printf("  moves       a moving nest: %s at the last step (%d); each step's map, "
+                       "terrain and lat/lon are its own\n",
+                       range, last);
+            } else {
+                printf("  moves       a moving nest: the first step's map, terrain and lat/lon "
+                       "stand for every step (its steps' would not fit the budget)\n");
+            }
+        }
+    }
     printf("  species     present:");
     for (int f = 0; f < SPECIES_COUNT; f++)
         if (m->has_species[f])
@@ -209,10 +226,12 @@ static int info_hgrid(enum hgrid_kind kind, const char *const *paths, int count,
     printf("  grid        %d x %d columns x %d levels (%s x %s x %s), dx %.6g m, dy %.6g m\n",
            m->nx, m->ny, m->nz, m->axis_names[0], m->axis_names[1], m->axis_names[2], m->dx,
            m->dy);
-    if (m->latlon)
-        printf("  lat/lon     %.3f to %.3f N, %.3f to %.3f E (regular)\n", m->lat0,
-               m->lat0 + (m->ny - 1) * m->dlat, m->lon0, m->lon0 + (m->nx - 1) * m->dlon);
-    else
+    if (m->latlon) {
+        char range[96];
+        geo_format_range(range, sizeof(range), 3, m->lat0, m->lat0 + (m->ny - 1) * m->dlat, m->lon0,
+                         m->lon0 + (m->nx - 1) * m->dlon);
+        printf("  lat/lon     %s (regular)\n", range);
+    } else
         printf("  origin      first column at x %.6g km, y %.6g km in the file (placed at the "
                "volume's west and south edge)\n",
                m->x0 / 1e3, m->y0 / 1e3);

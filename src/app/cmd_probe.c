@@ -177,7 +177,7 @@ int cmd_probe(int argc, char **argv)
         step = cfg->scene.kind == SCENE_DATA ? cfg->data.step : 0;
     double world[3];
     char why[192];
-    if (!probe_world_at(pr, where[0], where[1], where[2], world, why, sizeof(why))) {
+    if (!probe_world_at(pr, (int)step, where[0], where[1], where[2], world, why, sizeof(why))) {
         log_error("probe: --at %s: %s", at, why);
         goto done;
     }

@@ -1,6 +1,7 @@
 #include "data/geo.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -230,4 +231,26 @@ bool geo_map_box(const struct geo_map *m, const double rect[4], double box[4])
         }
     }
     return true;
+}
+
+/* One axis of geo_format_range: A to B with the hemisphere letters POS and NEG. */
+static int format_axis(char *out, size_t size, int digits, double a, double b, char pos, char neg)
+{
+    char ha = a < 0.0 ? neg : pos, hb = b < 0.0 ? neg : pos;
+    if (ha == hb)
+        return snprintf(out, size, "%.*f to %.*f %c", digits, fabs(a), digits, fabs(b), hb);
+    return snprintf(out, size, "%.*f %c to %.*f %c", digits, fabs(a), ha, digits, fabs(b), hb);
+}
+
+void geo_format_range(char *out, size_t size, int digits, double lat_min, double lat_max,
+                      double lon_min, double lon_max)
+{
+    if (size == 0)
+        return;
+    double w = remainder(lon_min, 360.0), e = remainder(lon_max, 360.0);
+    int n = format_axis(out, size, digits, lat_min, lat_max, 'N', 'S');
+    if (n < 0 || (size_t)n + 2 >= size)
+        return;
+    snprintf(out + n, size - (size_t)n, ", ");
+    format_axis(out + n + 2, size - (size_t)n - 2, digits, w, e, 'E', 'W');
 }

@@ -19,6 +19,7 @@
 #define ANVIL_DATA_GEO_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 #define GEO_EARTH_RADIUS_M 6370000.0 /* WRF's sphere */
 
@@ -57,5 +58,10 @@ bool geo_map_grid_index(const struct geo_map *m, double lat, double lon, double 
 
 /* The lat/lon box of the frame rectangle [x0, x1] x [y0, y1] (its border sampled), degrees. */
 bool geo_map_box(const struct geo_map *m, const double rect[4], double box[4]);
+
+/* "21.80 to 25.67 N, 91.65 to 87.43 W" (DIGITS decimals; "5.00 S to 3.00 N" across the
+ * equator, longitudes taken into -180 .. 180) into OUT of SIZE bytes. */
+void geo_format_range(char *out, size_t size, int digits, double lat_min, double lat_max,
+                      double lon_min, double lon_max);
 
 #endif

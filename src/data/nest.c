@@ -241,6 +241,11 @@ static bool place(struct nest_set *s, const struct domain_attrs *attrs)
 
     const struct wrf_meta *outer = wrf_get_meta(s->dom[0].wrf);
     const struct wrf_meta *finest = wrf_get_meta(s->dom[s->count - 1].wrf);
+    for (int i = 0; i < s->count; i++)
+        if (wrf_moves(s->dom[i].wrf))
+            log_warn("%s: domain %d moves (a moving nest): the composite of the domains keeps "
+                     "it, and its map, where its first step has it, at every step",
+                     s->dom[i].path, s->dom[i].grid_id);
     /* The domains of one run share its map projection (WRF writes the mother domain's into
      * every domain's files): two projections are two runs, whatever their grids say. */
     for (int i = 1; i < s->count; i++) {

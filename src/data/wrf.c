@@ -13,6 +13,7 @@
 #include <netcdf.h>
 
 #include "common/log.h"
+#include "data/geo.h"
 #include "common/parallel.h"
 #include "data/derived.h"
 #include "data/extfile.h"
@@ -53,6 +54,9 @@ struct wrf {
     double auto_top; /* the highest model top of the first step, m: data.top = 0 */
     double *mean_zw; /* nzs: each staggered level's mean height over the first step's columns,
                         m (the native levels' mean column) */
+    bool moves;      /* XLAT/XLONG differ between the first and the last step (wrf_moves) */
+    struct wrf_meta *step_meta; /* step_count, each step's 2-D fields, when it moves (and
+                                   they fit); NULL otherwise */
 };
 
 const char *wrf_var_name(enum wrf_var v)
@@ -232,7 +236,8 @@ static double global_double(int ncid, const char *name, double fallback)
 
 /* Reads a 2-D field (south_north, west_east), with or without a leading Time dimension (first
  * time then), into a new array.  Absent → *out NULL, true.  Wrong shape → logged, false. */
-static bool read_meta_2d(const char *path, int ncid, const char *name, int nx, int ny, float **out)
+static bool read_meta_2d(const char *path, int ncid, const char *name, int nx, int ny, float **out,
+                         size_t time)
 {
     *out = NULL;
     int varid, ndims, dims[NC_MAX_VAR_DIMS];
@@ -260,7 +265,7 @@ static bool read_meta_2d(const char *path, int ncid, const char *name, int nx, i
         log_error("%s: out of memory reading %s", path, name);
         return false;
     }
-    size_t start[3] = {0, 0, 0}, count[3] = {1, (size_t)ny, (size_t)nx};
+    size_t start[3] = {time, 0, 0}, count[3] = {1, (size_t)ny, (size_t)nx};
     size_t *s = ndims == 3 ? start : start + 1, *c = ndims == 3 ? count : count + 1;
     int st = nc_get_vara_float(ncid, varid, s, c, buf);
     if (st != NC_NOERR) {
@@ -270,6 +275,146 @@ static bool read_meta_2d(const char *path, int ncid, const char *name, int nx, i
     }
     *out = buf;
     return true;
+}
+
+/* META's latitude and longitude range from its XLAT and XLONG (NAN without them). */
+static void latlon_range(struct wrf_meta *m)
+{
+    m->lat_min = m->lat_max = m->lon_min = m->lon_max = NAN;
+    if (m->xlat && m->xlong) {
+        double a = INFINITY, b = -INFINITY, c = INFINITY, d = -INFINITY;
+        for (size_t i = 0; i < (size_t)m->nx * m->ny; i++) {
+            if (isfinite(m->xlat[i]) && fabsf(m->xlat[i]) <= 90.0f) {
+                a = fmin(a, m->xlat[i]);
+                b = fmax(b, m->xlat[i]);
+            }
+            if (isfinite(m->xlong[i]) && fabsf(m->xlong[i]) <= 360.0f) {
+                c = fmin(c, m->xlong[i]);
+                d = fmax(d, m->xlong[i]);
+            }
+        }
+        if (a <= b && c <= d) {
+            m->lat_min = a;
+            m->lat_max = b;
+            m->lon_min = c;
+            m->lon_max = d;
+        }
+    }
+}
+
+/* The 2-D fields of time TIME of the open file PATH into M (XLAT, XLONG, HGT, LANDMASK,
+ * LU_INDEX, MAPFAC_M; each NULL where the file lacks it), and their lat/lon range.  M's nx
+ * and ny are set. */
+static bool read_meta_fields(const char *path, int ncid, size_t time, struct wrf_meta *m)
+{
+    if (!read_meta_2d(path, ncid, "XLAT", m->nx, m->ny, &m->xlat, time) ||
+        !read_meta_2d(path, ncid, "XLONG", m->nx, m->ny, &m->xlong, time) ||
+        !read_meta_2d(path, ncid, "HGT", m->nx, m->ny, &m->hgt, time) ||
+        !read_meta_2d(path, ncid, "LANDMASK", m->nx, m->ny, &m->landmask, time) ||
+        !read_meta_2d(path, ncid, "LU_INDEX", m->nx, m->ny, &m->lu_index, time) ||
+        !read_meta_2d(path, ncid, "MAPFAC_M", m->nx, m->ny, &m->mapfac_m, time))
+        return false;
+    for (size_t i = 0; m->mapfac_m && i < (size_t)m->nx * m->ny; i++) {
+        float v = m->mapfac_m[i];
+        if (!(v >= 0.01f && v <= 100.0f)) { /* NaN too */
+            log_warn("%s: MAPFAC_M: %g at column %zu of %d x %d is not a map scale factor (0.01 "
+                     "to 100): the vertical vorticity is taken on the map's grid",
+                     path, v, i, m->nx, m->ny);
+            free(m->mapfac_m);
+            m->mapfac_m = NULL;
+        }
+    }
+    latlon_range(m);
+    return true;
+}
+
+static void meta_fields_free(struct wrf_meta *m)
+{
+    free(m->xlat);
+    free(m->xlong);
+    free(m->hgt);
+    free(m->landmask);
+    free(m->lu_index);
+    free(m->mapfac_m);
+    m->xlat = m->xlong = m->hgt = m->landmask = m->lu_index = m->mapfac_m = NULL;
+}
+
+/* Opening's budget for every step's 2-D fields of a moving domain, beside MEMORY_MB. */
+#define MOTION_BYTES_MAX ((size_t)1 << 30)
+
+/* A domain that moves (WRF's moving nests, prescribed or following a vortex): its XLAT and
+ * XLONG at the last step differ from the first's.  Then every step's 2-D fields are read, so
+ * that the map, the terrain and the latitude and longitude of a step are its own
+ * (wrf_step_meta); where they would not fit the budget, the first step's stand for all, with
+ * a warning. */
+static bool read_motion(struct wrf *w, double memory_mb)
+{
+    const struct wrf_meta *m = &w->meta;
+    if (!m->xlat || !m->xlong || w->step_count < 2)
+        return true;
+    const struct wrf_step *last = &w->steps[w->step_count - 1];
+    const struct wrf_file *f = &w->files[last->file];
+    struct wrf_meta e = {.nx = m->nx, .ny = m->ny};
+    data_nc_lock_file(f->path, "reading", false);
+    bool ok = read_meta_2d(f->path, f->ncid, "XLAT", m->nx, m->ny, &e.xlat, (size_t)last->index) &&
+              read_meta_2d(f->path, f->ncid, "XLONG", m->nx, m->ny, &e.xlong, (size_t)last->index);
+    data_nc_unlock();
+    double moved = 0.0;
+    for (size_t i = 0; ok && e.xlat && e.xlong && i < (size_t)m->nx * m->ny; i++) {
+        double a = fabs((double)e.xlat[i] - m->xlat[i]), b = fabs((double)e.xlong[i] - m->xlong[i]);
+        if (isfinite(a) && isfinite(b))
+            moved = fmax(moved, fmax(a, b));
+    }
+    meta_fields_free(&e);
+    if (!ok)
+        return false;
+    if (!(moved > 1e-4))
+        return true;
+    w->moves = true;
+    size_t plane = (size_t)m->nx * m->ny, bytes = 6 * plane * sizeof(float) * w->step_count;
+    if (bytes > MOTION_BYTES_MAX || (memory_mb > 0.0 && (double)bytes > memory_mb * 1048576.0)) {
+        log_warn("%s: the domain moves (a moving nest, up to %.2f degrees from its first step): "
+                 "its steps' positions would take %.0f MiB, so the first step's map, terrain "
+                 "and latitude and longitude stand for every step",
+                 f->path, moved, (double)bytes / 1048576.0);
+        return true;
+    }
+    w->step_meta = calloc((size_t)w->step_count, sizeof(*w->step_meta));
+    if (!w->step_meta) {
+        log_error("out of memory for the positions of %d time steps", w->step_count);
+        return false;
+    }
+    for (int k = 0; k < w->step_count; k++) {
+        struct wrf_meta *sm = &w->step_meta[k];
+        *sm = *m;
+        sm->xlat = sm->xlong = sm->hgt = sm->landmask = sm->lu_index = sm->mapfac_m = NULL;
+        const struct wrf_file *fk = &w->files[w->steps[k].file];
+        data_nc_lock_file(fk->path, "reading", false);
+        ok = read_meta_fields(fk->path, fk->ncid, (size_t)w->steps[k].index, sm);
+        data_nc_unlock();
+        if (!ok)
+            return false;
+    }
+    const struct wrf_meta *z = &w->step_meta[w->step_count - 1];
+    char first[96], at_last[96];
+    geo_format_range(first, sizeof(first), 2, m->lat_min, m->lat_max, m->lon_min, m->lon_max);
+    geo_format_range(at_last, sizeof(at_last), 2, z->lat_min, z->lat_max, z->lon_min, z->lon_max);
+    log_info("%s: the domain moves (a moving nest): its columns lie at %s at the first step and "
+             "%s at the last; each step has its own map, terrain and latitude and longitude",
+             f->path, first, at_last);
+    return true;
+}
+
+bool wrf_moves(const struct wrf *w)
+{
+    return w->moves;
+}
+
+const struct wrf_meta *wrf_step_meta(const struct wrf *w, int step)
+{
+    if (w->step_meta && step >= 0 && step < w->step_count)
+        return &w->step_meta[step];
+    return &w->meta;
 }
 
 /* The height grid's automatic top: the highest model top (last staggered level) over all
@@ -359,24 +504,8 @@ static bool read_meta(struct wrf *w)
     m->has_wind = f->varid[WRF_U] >= 0 && f->varid[WRF_V] >= 0;
     m->has_w = m->has_wind && f->varid[WRF_W] >= 0;
 
-    if (!read_meta_2d(f->path, ncid, "XLAT", m->nx, m->ny, &m->xlat) ||
-        !read_meta_2d(f->path, ncid, "XLONG", m->nx, m->ny, &m->xlong) ||
-        !read_meta_2d(f->path, ncid, "HGT", m->nx, m->ny, &m->hgt) ||
-        !read_meta_2d(f->path, ncid, "LANDMASK", m->nx, m->ny, &m->landmask) ||
-        !read_meta_2d(f->path, ncid, "LU_INDEX", m->nx, m->ny, &m->lu_index))
+    if (!read_meta_fields(f->path, ncid, (size_t)w->steps[0].index, m))
         return false;
-    if (!read_meta_2d(f->path, ncid, "MAPFAC_M", m->nx, m->ny, &m->mapfac_m))
-        return false;
-    for (size_t i = 0; m->mapfac_m && i < (size_t)m->nx * m->ny; i++) {
-        float v = m->mapfac_m[i];
-        if (!(v >= 0.01f && v <= 100.0f)) { /* NaN too */
-            log_warn("%s: MAPFAC_M: %g at column %zu of %d x %d is not a map scale factor (0.01 "
-                     "to 100): the vertical vorticity is taken on the map's grid",
-                     f->path, v, i, m->nx, m->ny);
-            free(m->mapfac_m);
-            m->mapfac_m = NULL;
-        }
-    }
     size_t lu_len = 0;
     if (nc_inq_attlen(ncid, NC_GLOBAL, "MMINLU", &lu_len) == NC_NOERR &&
         lu_len < sizeof(m->land_use) &&
@@ -384,26 +513,6 @@ static bool read_meta(struct wrf *w)
         m->land_use[lu_len] = '\0';
     else
         m->land_use[0] = '\0';
-    m->lat_min = m->lat_max = m->lon_min = m->lon_max = NAN;
-    if (m->xlat && m->xlong) {
-        double a = INFINITY, b = -INFINITY, c = INFINITY, d = -INFINITY;
-        for (size_t i = 0; i < (size_t)m->nx * m->ny; i++) {
-            if (isfinite(m->xlat[i]) && fabsf(m->xlat[i]) <= 90.0f) {
-                a = fmin(a, m->xlat[i]);
-                b = fmax(b, m->xlat[i]);
-            }
-            if (isfinite(m->xlong[i]) && fabsf(m->xlong[i]) <= 360.0f) {
-                c = fmin(c, m->xlong[i]);
-                d = fmax(d, m->xlong[i]);
-            }
-        }
-        if (a <= b && c <= d) {
-            m->lat_min = a;
-            m->lat_max = b;
-            m->lon_min = c;
-            m->lon_max = d;
-        }
-    }
     return true;
 }
 
@@ -735,6 +844,8 @@ struct wrf *wrf_open(const char *const *paths, int count, double memory_mb)
     if (!meta_ok)
         goto error;
     data_nc_unlock();
+    if (!read_motion(w, memory_mb))
+        goto error;
     if (dated)
         warn_gaps(w);
     return w;
@@ -760,12 +871,10 @@ void wrf_close(struct wrf *w)
     free(w->files);
     free(w->steps);
     free(w->mean_zw);
-    free(w->meta.xlat);
-    free(w->meta.xlong);
-    free(w->meta.hgt);
-    free(w->meta.landmask);
-    free(w->meta.lu_index);
-    free(w->meta.mapfac_m);
+    for (int k = 0; w->step_meta && k < w->step_count; k++)
+        meta_fields_free(&w->step_meta[k]);
+    free(w->step_meta);
+    meta_fields_free(&w->meta);
     free(w);
 }
 

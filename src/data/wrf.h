@@ -142,6 +142,14 @@ void wrf_close(struct wrf *w); /* NULL is fine */
 
 /* Valid until wrf_close. */
 const struct wrf_meta *wrf_get_meta(const struct wrf *w);
+/* Whether the domain moves: a moving nest, whose XLAT/XLONG at the last step differ from the
+ * first's (by more than 1e-4 degrees). */
+bool wrf_moves(const struct wrf *w);
+/* STEP's metadata: for a domain that moves, the 2-D fields (XLAT, XLONG, HGT, LANDMASK,
+ * LU_INDEX, MAPFAC_M) and the lat/lon range of that step, the rest as wrf_get_meta's; else (or
+ * where the steps' fields did not fit opening's budget) wrf_get_meta's.  Valid until
+ * wrf_close. */
+const struct wrf_meta *wrf_step_meta(const struct wrf *w, int step);
 int wrf_step_count(const struct wrf *w);
 /* "YYYY-MM-DD_hh:mm:ss" as the file wrote it ("" when the file has no Times); valid until
  * wrf_close. */

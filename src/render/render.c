@@ -1460,6 +1460,22 @@ bool renderer_add_mesh(struct renderer *r, struct render_mesh *m)
     return true;
 }
 
+bool renderer_replace_mesh(struct renderer *r, struct render_mesh *old,
+                           struct render_mesh *new_mesh)
+{
+    for (int i = 0; old && i < r->n_meshes; i++) {
+        if (r->meshes[i] == old) {
+            if (new_mesh) {
+                r->meshes[i] = new_mesh;
+                return true;
+            }
+            renderer_remove_mesh(r, old);
+            return true;
+        }
+    }
+    return !new_mesh || renderer_add_mesh(r, new_mesh);
+}
+
 void renderer_remove_mesh(struct renderer *r, struct render_mesh *m)
 {
     for (int i = 0; i < r->n_meshes; i++) {

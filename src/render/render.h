@@ -465,5 +465,9 @@ void render_mesh_set_visible(struct render_mesh *m, bool visible);
 /* Draws M in every following view until removed; the renderer borrows M. */
 bool renderer_add_mesh(struct renderer *r, struct render_mesh *m);
 void renderer_remove_mesh(struct renderer *r, struct render_mesh *m);
+/* Puts NEW where OLD is drawn (the same place in the order), or adds NEW when OLD is not
+ * there (NULL: OLD removed only).  False (logged) when there is no room. */
+bool renderer_replace_mesh(struct renderer *r, struct render_mesh *old,
+                           struct render_mesh *new_mesh);
 
 #endif

@@ -310,7 +310,17 @@ void scene_geo_init(const struct config *cfg, const struct wrf_meta *meta, struc
     scene_geo_finish_init(cfg, out);
 }
 
-struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r,
+/* The map's four meshes, in their drawing order (NULL where absent). */
+static void map_meshes(const struct scene_map *m, struct render_mesh *out[4])
+{
+    out[0] = m->terrain_mesh;
+    out[1] = m->coast_mesh;
+    out[2] = m->graticule_mesh;
+    out[3] = m->labels ? render_text_mesh(m->labels) : NULL;
+}
+
+/* scene_map_create without adding the meshes to R. */
+static struct scene_map *map_build(const struct config *cfg, struct renderer *r,
                                    const struct wrf_meta *meta)
 {
     struct scene_map *m = calloc(1, sizeof(*m));
@@ -368,25 +378,57 @@ struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r,
     if (m->info.placed && cfg->map.graticule)
         build_graticule(cfg, m);
 
-    struct render_mesh *meshes[4] = {m->terrain_mesh, m->coast_mesh, m->graticule_mesh,
-                                     m->labels ? render_text_mesh(m->labels) : NULL};
-    for (int i = 0; i < 4; i++) {
-        if (meshes[i] && !renderer_add_mesh(r, meshes[i]))
-            goto error;
-    }
     return m;
 
 error:
-    scene_map_destroy(m, r);
+    scene_map_destroy(m, NULL);
     return NULL;
+}
+
+struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r,
+                                   const struct wrf_meta *meta)
+{
+    struct scene_map *m = map_build(cfg, r, meta);
+    if (!m)
+        return NULL;
+    struct render_mesh *meshes[4];
+    map_meshes(m, meshes);
+    for (int i = 0; i < 4; i++) {
+        if (meshes[i] && !renderer_add_mesh(r, meshes[i])) {
+            scene_map_destroy(m, r);
+            return NULL;
+        }
+    }
+    return m;
+}
+
+struct scene_map *scene_map_remake(struct scene_map *old, const struct config *cfg,
+                                   struct renderer *r, const struct wrf_meta *meta)
+{
+    struct scene_map *m = map_build(cfg, r, meta);
+    if (!m)
+        return NULL;
+    struct render_mesh *was[4], *now[4];
+    map_meshes(old, was);
+    map_meshes(m, now);
+    for (int i = 0; i < 4; i++) {
+        if (!renderer_replace_mesh(r, was[i], now[i])) {
+            for (int j = 0; j < i; j++) /* the old meshes back where they were */
+                renderer_replace_mesh(r, now[j], was[j]);
+            scene_map_destroy(m, NULL);
+            return NULL;
+        }
+    }
+    scene_map_destroy(old, NULL); /* its meshes are out of R already */
+    return m;
 }
 
 void scene_map_destroy(struct scene_map *m, struct renderer *r)
 {
     if (!m)
         return;
-    struct render_mesh *meshes[4] = {m->terrain_mesh, m->coast_mesh, m->graticule_mesh,
-                                     m->labels ? render_text_mesh(m->labels) : NULL};
+    struct render_mesh *meshes[4];
+    map_meshes(m, meshes);
     for (int i = 0; i < 4; i++) {
         if (meshes[i] && r)
             renderer_remove_mesh(r, meshes[i]);

@@ -26,6 +26,11 @@ struct scene_map;
 struct scene_map *scene_map_create(const struct config *cfg, struct renderer *r,
                                    const struct wrf_meta *meta);
 void scene_map_destroy(struct scene_map *m, struct renderer *r); /* NULL is fine */
+/* A map made again with META (a moving domain's step, wrf_step_meta) in place of OLD: its
+ * meshes take the old ones' places in R's drawing order and OLD is destroyed.  NULL (logged)
+ * when it could not be made; OLD then stands as it was. */
+struct scene_map *scene_map_remake(struct scene_map *old, const struct config *cfg,
+                                   struct renderer *r, const struct wrf_meta *meta);
 
 /* Turns the analytic ground plane off where the terrain mesh (with its skirt) replaces it.
  * Call after every scene_render_settings. */

@@ -510,6 +510,13 @@ const struct wrf_meta *player_wrf_meta(struct player *p)
     return w ? wrf_get_meta(w) : NULL;
 }
 
+const struct wrf_meta *player_wrf_step_meta(struct player *p, int step, bool *moves)
+{
+    struct wrf *w = p->src ? data_source_wrf(p->src) : NULL;
+    *moves = w && wrf_moves(w);
+    return w ? wrf_step_meta(w, step) : NULL;
+}
+
 void player_destroy(struct player *p)
 {
     if (!p)

@@ -85,6 +85,9 @@ void player_keep_first(struct player *p, struct ext_volume *vol);
 /* The WRF metadata of a WRF scene (terrain, lat/lon), or NULL.  Immutable; valid until
  * player_destroy; safe to read while the series' thread loads. */
 const struct wrf_meta *player_wrf_meta(struct player *p);
+/* STEP's WRF metadata (wrf_step_meta: a moving domain's own 2-D fields), or NULL as
+ * player_wrf_meta; whether the domain moves in *MOVES. */
+const struct wrf_meta *player_wrf_step_meta(struct player *p, int step, bool *moves);
 
 int player_step_count(const struct player *p);
 /* "2005-08-28_06:00:00" or "" (static per player, valid until destroy). */

@@ -8,6 +8,7 @@
 #include "common/log.h"
 #include "data/source.h"
 #include "data/synth.h"
+#include "data/wrf.h"
 #include "data/wrf_write.h"
 #include "session/map.h"
 #include "session/scene.h"
@@ -26,6 +27,7 @@ struct probe {
     struct field_volume fields; /* KIND_FIELDS: the step FIELDS_STEP, or none yet */
     int fields_step;
     struct geo_map geo;
+    int geo_step; /* the step GEO places: a moving domain's own (geo_at) */
 };
 
 void probe_settings_from_config(const struct config *cfg, struct probe_settings *out)
@@ -96,6 +98,26 @@ void probe_destroy(struct probe *p)
     free(p);
 }
 
+/* The placement at STEP: for a domain that moves, that step's (made again when the step
+ * changes), else the one made with the probe. */
+static const struct geo_map *geo_at(struct probe *p, int step)
+{
+    struct wrf *w = p->src ? data_source_wrf(p->src) : NULL;
+    if (!w || !wrf_moves(w) || step == p->geo_step)
+        return &p->geo;
+    const struct wrf_meta *m = wrf_step_meta(w, step);
+    struct geo_map g = {0};
+    if (m->xlat && m->xlong &&
+        geo_map_init_grid(&g, m->xlat, m->xlong, m->nx, m->ny, m->dx, m->dy)) {
+        g.offset[0] = p->geo.offset[0];
+        g.offset[1] = p->geo.offset[1];
+        geo_map_finish(&p->geo);
+        p->geo = g;
+        p->geo_step = step;
+    }
+    return &p->geo;
+}
+
 int probe_step_count(const struct probe *p)
 {
     return p->src ? data_source_step_count(p->src) : 1;
@@ -106,32 +128,37 @@ const struct geo_map *probe_geo(const struct probe *p)
     return &p->geo;
 }
 
-/* "outside the data (its columns lie at ...)" for a WRF scene, else about the frame point. */
-static void outside_text(const struct probe *p, const double world[2], char *why, size_t size)
+/* "outside the data (its columns lie at ...)" for a WRF scene (at STEP), else about the frame
+ * point. */
+static void outside_text(const struct probe *p, int step, const double world[2], char *why,
+                         size_t size)
 {
     const struct wrf *w = p->src ? data_source_wrf(p->src) : NULL;
-    const struct wrf_meta *m = w ? wrf_get_meta(w) : NULL;
-    if (m && isfinite(m->lat_min))
-        snprintf(why, size, "outside the data (its columns lie at %.2f to %.2f N, %.2f to %.2f E)",
-                 m->lat_min, m->lat_max, m->lon_min, m->lon_max);
-    else if (world)
+    const struct wrf_meta *m = w ? wrf_step_meta(w, step) : NULL;
+    char range[96];
+    if (m && isfinite(m->lat_min)) {
+        geo_format_range(range, sizeof(range), 2, m->lat_min, m->lat_max, m->lon_min, m->lon_max);
+        snprintf(why, size, "outside the data (its columns lie at %s%s)", range,
+                 wrf_moves(w) ? " at this step" : "");
+    } else if (world)
         snprintf(why, size, "outside the data (x %.1f km, y %.1f km)", world[0] / 1000.0,
                  world[1] / 1000.0);
     else
         snprintf(why, size, "outside the data");
 }
 
-bool probe_world_at(const struct probe *p, double lat, double lon, double height_m,
+bool probe_world_at(struct probe *p, int step, double lat, double lon, double height_m,
                     double world[3], char *why, size_t why_size)
 {
-    if (p->geo.kind == GEO_NONE) {
+    const struct geo_map *geo = geo_at(p, step);
+    if (geo->kind == GEO_NONE) {
         snprintf(why, why_size,
                  "the scene has no latitude and longitude (no XLAT/XLONG; map.use_origin and "
                  "map.origin place other data)");
         return false;
     }
-    if (!geo_map_to_frame(&p->geo, lat, lon, &world[0], &world[1])) {
-        outside_text(p, NULL, why, why_size); /* too far out for the grid's inverse */
+    if (!geo_map_to_frame(geo, lat, lon, &world[0], &world[1])) {
+        outside_text(p, step, NULL, why, why_size); /* too far out for the grid's inverse */
         return false;
     }
     world[2] = height_m * p->k;
@@ -152,9 +179,9 @@ bool probe_read(struct probe *p, int step, const double world[3], struct probe_v
     out->data[0] = world[0];
     out->data[1] = world[1];
     out->data[2] = world[2] / p->k;
+    const struct geo_map *geo = geo_at(p, step);
     out->placed =
-        p->geo.kind != GEO_NONE && geo_map_to_latlon(&p->geo, world[0], world[1], &out->lat,
-                                                     &out->lon);
+        geo->kind != GEO_NONE && geo_map_to_latlon(geo, world[0], world[1], &out->lat, &out->lon);
     out->valid = true;
     if (p->kind == KIND_NONE)
         return true; /* an extinction file or a test scene: extinction and light only */
@@ -166,7 +193,7 @@ bool probe_read(struct probe *p, int step, const double world[3], struct probe_v
             probe_sample_from_wrf(&wp, out->data[2], &out->s);
             return true;
         case WRF_POINT_OUTSIDE:
-            outside_text(p, world, out->why, sizeof(out->why));
+            outside_text(p, step, world, out->why, sizeof(out->why));
             out->valid = false;
             return true;
         case WRF_POINT_BELOW:
@@ -192,7 +219,7 @@ bool probe_read(struct probe *p, int step, const double world[3], struct probe_v
         p->fields_step = p->storm ? 0 : step;
     }
     if (!probe_sample_fields(&p->fields, out->data, &out->s)) {
-        outside_text(p, world, out->why, sizeof(out->why));
+        outside_text(p, step, world, out->why, sizeof(out->why));
         out->valid = false;
         return true;
     }

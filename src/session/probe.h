@@ -70,9 +70,10 @@ int probe_step_count(const struct probe *p);
 /* The scene's placement (kind GEO_NONE when it has none). */
 const struct geo_map *probe_geo(const struct probe *p);
 
-/* The world point at LAT, LON (degrees) and HEIGHT_M above sea level.  False with WHY when
- * the scene has no lat/lon or the point cannot be placed. */
-bool probe_world_at(const struct probe *p, double lat, double lon, double height_m,
+/* The world point at LAT, LON (degrees) and HEIGHT_M above sea level at STEP (a domain that
+ * moves is placed where that step has it).  False with WHY when the scene has no lat/lon or
+ * the point cannot be placed. */
+bool probe_world_at(struct probe *p, int step, double lat, double lon, double height_m,
                     double world[3], char *why, size_t why_size);
 
 /* The values of STEP at WORLD (metres) into OUT (extinction and light left zero for the

@@ -49,6 +49,8 @@ struct session {
     struct lightmaps light;
     struct effects effects;
     struct scene_map *map;
+    int map_step; /* the step whose map (terrain, coastlines, graticule) MAP is: a moving
+                     domain's follows the step shown (follow_domain) */
     struct player *player;
 
     /* What the setters change. */
@@ -434,7 +436,10 @@ struct session *session_create(const struct config *cfg, const struct session_de
         goto error;
     lightmaps_set_effects(&s->light, &s->effects);
     lightmaps_set_timing(&s->light, &s->stats.build_times);
-    s->map = scene_map_create(cfg, s->renderer, player_wrf_meta(s->player));
+    bool moves;
+    s->map_step = cfg->scene.kind == SCENE_DATA ? cfg->data.step : 0; /* the first step shown */
+    s->map =
+        scene_map_create(cfg, s->renderer, player_wrf_step_meta(s->player, s->map_step, &moves));
     if (!s->map)
         goto error;
     scene_render_settings(cfg, &s->base);
@@ -1604,6 +1609,25 @@ static bool temporal_frame(struct session *s, const struct frame_state *f, bool 
     return true;
 }
 
+/* A domain that moves (a moving nest): the map of the step shown, its terrain, coastlines and
+ * graticule where that step has them.  Made in the frame that first shows the step (a
+ * moving nest's grid is small: Katrina's 48 x 48 columns take about a millisecond); where it
+ * cannot be made the last map stays, with the message. */
+static void follow_domain(struct session *s)
+{
+    if (s->map_step == s->shown)
+        return;
+    bool moves;
+    const struct wrf_meta *m = player_wrf_step_meta(s->player, s->shown, &moves);
+    if (moves && m) {
+        struct scene_map *map = scene_map_remake(s->map, &s->cfg, s->renderer, m);
+        if (!map)
+            return;
+        s->map = map;
+    }
+    s->map_step = s->shown;
+}
+
 bool session_apply(struct session *s, const struct frame_state *f, bool *changed)
 {
     s->frame_start_ms = time_now_ms();
@@ -1642,6 +1666,7 @@ bool session_apply(struct session *s, const struct frame_state *f, bool *changed
     } else if (s->staged) {
         staged_light_ids(s);
     }
+    follow_domain(s);
     player_stats(s->player, &s->stats);
     s->stats.time_step = s->shown;
     s->applied = *f;

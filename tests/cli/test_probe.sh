@@ -36,6 +36,21 @@ expect_exit 0 "the storm placed at map.origin" "$anvil" --quiet probe --at 25.2,
 check "  its temperature is the standard atmosphere's" \
     stdout_has '"temperature_source": "standard atmosphere"'
 
+# Katrina is a moving nest: a point its last step covers and its first does not is found at
+# the last step and said to be outside at the first; info says it moves; a movie of its steps
+# makes the map (terrain, coastlines) again for each step.
+expect_exit 0 "a point of the nest's last step" "$anvil" --quiet probe "$katrina" \
+    --at 26.3,-90.5,3000 --step 3
+check "  placed there" stdout_has "26.300 N, 90.500 W"
+expect_exit 1 "the same point at the first step" "$anvil" --quiet probe "$katrina" \
+    --at 26.3,-90.5,3000 --step 0
+check "  outside that step's columns" stderr_has "its columns lie at 21.80 to 25.67 N, 91.65 to 87.43 W at this step"
+expect_exit 0 "info on the moving nest" "$anvil" --quiet info "$katrina"
+check "  says it moves and where to" stdout_has "moves       a moving nest: 22.803 to 26.642 N, 93.003 to 88.775 W at the last step (3)"
+expect_exit 0 "its steps as frames" "$anvil" render "$katrina" --verbose --set render.width=32 \
+    --set render.height=24 --frames 0:3 -o "$tmp/k-%d.png"
+check "  a map for each step shown" test "$(grep -c 'map: terrain' "$tmp/err")" -eq 4
+
 # Bad input: one message each, exit 1.
 expect_exit 1 "--at with two numbers" "$anvil" probe "$cfg" --at 24,-89
 check "  says what --at is" stderr_has "expected LAT,LON,HEIGHT_M: three numbers"

@@ -41,6 +41,18 @@ static float at4(int nc, const char *name, int t, int k, int j, int i)
 
 /* One value of a 2-D variable (south_north, west_east), with or without a leading Time (the
  * first then). */
+/* A 2-D field at column (I, J) of time T (the first time for a field without one). */
+static float at2t(int nc, const char *name, int t, int j, int i)
+{
+    int v, ndims;
+    CHECK(nc_inq_varid(nc, name, &v));
+    CHECK(nc_inq_varndims(nc, v, &ndims));
+    size_t start[3] = {(size_t)t, (size_t)j, (size_t)i}, one[3] = {1, 1, 1};
+    float x;
+    CHECK(nc_get_vara_float(nc, v, ndims == 3 ? start : start + 1, one, &x));
+    return x;
+}
+
 static float at2(int nc, const char *name, int j, int i)
 {
     int v, ndims;
@@ -175,7 +187,8 @@ static void test_katrina_grid_point(void **state)
             }
         }
     assert_true(best > 1e-5);
-    float lat = at2(nc, "XLAT", bj, bi), lon = at2(nc, "XLONG", bj, bi);
+    /* The column's position at that step: the sample is a moving nest. */
+    float lat = at2t(nc, "XLAT", t, bj, bi), lon = at2t(nc, "XLONG", t, bj, bi);
     column_of(nc, t, bi, bj, (int)nz, &c);
     double qr[64], p[64], temp[64], u[64], v[64], w[64];
     levels_of(nc, "QCLOUD", t, bi, bj, (int)nz, qc);

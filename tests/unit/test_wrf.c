@@ -67,6 +67,34 @@ static void test_katrina_meta(void **state)
     wrf_close(w);
 }
 
+/* The Katrina sample is a moving nest (it follows the storm north-west): every step has its
+ * own XLAT and XLONG (values read with the NetCDF library), the first step's are the meta's;
+ * the Lambert sample, one step, does not move. */
+static void test_katrina_moves(void **state)
+{
+    struct wrf *w = open_one(KATRINA);
+    assert_non_null(w);
+    assert_true(wrf_moves(w));
+    const struct wrf_meta *m0 = wrf_step_meta(w, 0), *m3 = wrf_step_meta(w, 3);
+    assert_float_equal(m0->xlat[0], 21.80395, 1e-4);
+    assert_float_equal(m3->xlat[0], 22.80254, 1e-4);
+    assert_float_equal(m3->xlong[0], -93.00261, 1e-4);
+    assert_float_equal(m3->xlat[47 * 48 + 47], 26.64153, 1e-4);
+    assert_float_equal(m3->xlong[47 * 48 + 47], -88.77514, 1e-4);
+    assert_true(m3->lat_max >= 26.6415 && m3->lat_min <= 22.8026);
+    assert_float_equal(m0->lat_min, wrf_get_meta(w)->lat_min, 0.0);
+    assert_non_null(m3->hgt);
+    assert_int_equal(m3->nx, 48);
+    assert_float_equal(m3->dx, 10000.0, 1e-9);
+    assert_true(wrf_step_meta(w, 7) == wrf_get_meta(w)); /* no such step: the meta's */
+    wrf_close(w);
+    w = open_one(LAMBERT);
+    assert_non_null(w);
+    assert_false(wrf_moves(w));
+    assert_true(wrf_step_meta(w, 0) == wrf_get_meta(w));
+    wrf_close(w);
+}
+
 static void test_katrina_step(void **state)
 {
     struct wrf *w = open_one(KATRINA);
@@ -754,6 +782,7 @@ int main(void)
     log_set_level(LOG_ERROR);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_katrina_meta),
+        cmocka_unit_test(test_katrina_moves),
         cmocka_unit_test(test_katrina_step),
         cmocka_unit_test(test_katrina_spot_values),
         cmocka_unit_test(test_lambert),
