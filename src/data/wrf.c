@@ -399,9 +399,9 @@ static bool read_motion(struct wrf *w, double memory_mb)
     char first[96], at_last[96];
     geo_format_range(first, sizeof(first), 2, m->lat_min, m->lat_max, m->lon_min, m->lon_max);
     geo_format_range(at_last, sizeof(at_last), 2, z->lat_min, z->lat_max, z->lon_min, z->lon_max);
-    log_info("%s: the domain moves (a moving nest): its columns lie at %s at the first step and "
-             "%s at the last; each step has its own map, terrain and latitude and longitude",
-             f->path, first, at_last);
+    log_debug("%s: the domain moves (a moving nest): its columns lie at %s at the first step and "
+              "%s at the last",
+              f->path, first, at_last);
     return true;
 }
 

@@ -11,6 +11,7 @@
 #include "data/derived.h"
 #include "data/detail.h"
 #include "data/series.h"
+#include "data/geo.h"
 #include "data/source.h"
 #include "data/synth.h"
 #include "data/wrf.h"
@@ -441,6 +442,18 @@ struct player *player_create(const struct config *cfg, const struct player_desc 
         if (!p->src)
             goto error;
         p->steps = data_source_step_count(p->src);
+        struct wrf *w = data_source_wrf(p->src);
+        if (w && wrf_moves(w)) {
+            const struct wrf_meta *a = wrf_step_meta(w, 0), *b = wrf_step_meta(w, p->steps - 1);
+            char first[96], last[96];
+            geo_format_range(first, sizeof(first), 2, a->lat_min, a->lat_max, a->lon_min,
+                             a->lon_max);
+            geo_format_range(last, sizeof(last), 2, b->lat_min, b->lat_max, b->lon_min, b->lon_max);
+            if (a != b)
+                log_info("%s: a moving nest, at %s at its first step and %s at its last: each "
+                         "step is drawn on its own map",
+                         wrf_step_path(w, 0), first, last);
+        }
     }
     p->dates = calloc((size_t)p->steps, sizeof(*p->dates));
     if (!p->dates)
