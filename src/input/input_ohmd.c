@@ -17,6 +17,7 @@ struct ohmd_input {
     int control_count;
     int hints[CONTROLS_MAX];
     bool pressed[CONTROLS_MAX];
+    bool primed; /* PRESSED holds the controls' state of a first poll */
     float last_pose[9];
 };
 
@@ -83,9 +84,18 @@ static bool ohmd_poll(struct input_source *s, const struct input_frame *frame,
     if (h->control_count > 0) {
         float state[CONTROLS_MAX] = {0};
         ohmd_device_getf(h->device, OHMD_CONTROLS_STATE, state);
+        /* The first poll only learns the state: a control already held when the device
+         * opened (OpenHMD's Null controller reports its menu control as held throughout) is
+         * no press, and a press begins when a control changes. */
+        bool first = !h->primed;
+        h->primed = true;
         for (int c = 0; c < h->control_count; c++) {
             int b = button_of(h->hints[c]);
             bool down = state[c] > 0.5f;
+            if (first) {
+                h->pressed[c] = down;
+                continue;
+            }
             if (b < 0 || down == h->pressed[c])
                 continue;
             h->pressed[c] = down;
