@@ -1106,6 +1106,34 @@ static void place_menu(struct session *s, const struct display_camera *cam, int 
     if (s->tracker) {
         if (s->placed)
             return;
+        if (s->display.wall_count == 1) {
+            /* One screen (a stereo desktop, a powerwall): only what lies in front of it is
+             * seen, so the panel goes on it, at its right, as the orbit view's: at most 85 %
+             * of half its width and 90 % of its height; on the screen's plane it has no
+             * parallax. */
+            const struct display_wall *wl = &s->display.walls[0];
+            float r[3], u[3], ww = 0.0f, wh = 0.0f;
+            for (int i = 0; i < 3; i++) {
+                r[i] = (float)(wl->lower_right[i] - wl->lower_left[i]);
+                u[i] = (float)(wl->upper_left[i] - wl->lower_left[i]);
+                ww += r[i] * r[i];
+                wh += u[i] * u[i];
+            }
+            ww = sqrtf(ww);
+            wh = sqrtf(wh);
+            if (ww > 0.0f && wh > 0.0f) {
+                float w = fminf(0.425f * ww, 0.9f * wh / menu_aspect(s->menu)), c[3];
+                for (int i = 0; i < 3; i++) {
+                    r[i] /= ww;
+                    u[i] /= wh;
+                    c[i] = (float)wl->lower_left[i] + r[i] * (0.97f * ww - 0.5f * w) +
+                           u[i] * 0.5f * wh;
+                }
+                menu_set_pose(s->menu, c, r, u, w);
+                s->placed = true;
+                return;
+            }
+        }
         /* In front of the user, a little below the eyes, facing them. */
         const double *h = s->display.head.position;
         const float c[3] = {(float)h[0], (float)h[1] - 0.35f, (float)h[2] - 0.75f};

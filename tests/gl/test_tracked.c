@@ -305,6 +305,27 @@ static void test_wand_plays(void **state)
     rig_close(&r);
 }
 
+/* One screen (displays/desktop-stereo.cfg): the menu lies on it, inside its rectangle, where
+ * the eyes see it (before, placed as in a CAVE below and behind the head, only its tab row
+ * was on the screen). */
+static void test_menu_on_one_screen(void **state)
+{
+    struct display_config dcfg;
+    assert_true(display_config_load(ANVIL_SOURCE_DIR "/displays/desktop-stereo.cfg", &dcfg));
+    struct rig r;
+    rig_open(&r, &dcfg, false, true);
+    rig_frame(&r); /* the menu is placed */
+    float c[4][3];
+    menu_corners(session_menu(r.s), c);
+    const struct display_wall *w = &dcfg.walls[0];
+    for (int k = 0; k < 4; k++) {
+        assert_true(c[k][0] >= w->lower_left[0] - 1e-5 && c[k][0] <= w->lower_right[0] + 1e-5);
+        assert_true(c[k][1] >= w->lower_left[1] - 1e-5 && c[k][1] <= w->upper_left[1] + 1e-5);
+        assert_true(fabsf(c[k][2] - (float)w->lower_left[2]) < 1e-5);
+    }
+    rig_close(&r);
+}
+
 /* A VRPN head through the loop; its server goes away and the loop keeps drawing. */
 static void test_vrpn_head(void **state)
 {
@@ -385,6 +406,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_head_through_the_loop),
         cmocka_unit_test(test_wand_plays),
+        cmocka_unit_test(test_menu_on_one_screen),
         cmocka_unit_test(test_vrpn_head),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
