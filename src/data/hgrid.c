@@ -1134,7 +1134,7 @@ bool hgrid_read_step(struct hgrid *h, int step, const struct hgrid_desc *d,
     }
     /* Temperature (ml[0]) and pressure (ml[1]) on the mass levels; bad values become the
      * standard atmosphere at the level. */
-    bool t_on = ok && (want_temperature(m, d) || want_density(m, d));
+    bool t_on = ok && (want_temperature(m, d) || want_density(m, d) || d->pressure);
     bool have_t = false, have_p = false;
     if (t_on && has(m, HGRID_PRESSURE)) {
         ok = read_raw(&r, HGRID_PRESSURE, counts);
@@ -1195,6 +1195,12 @@ bool hgrid_read_step(struct hgrid *h, int step, const struct hgrid_desc *d,
             if (ok)
                 resample(&r, rho, out->rho_air);
         }
+    }
+    if (ok && d->pressure && have_p) {
+        out->pressure = malloc(cells * sizeof(float));
+        ok = out->pressure != NULL;
+        if (ok)
+            resample(&r, ml[1], out->pressure);
     }
     if (ok && want_temperature(m, d) && have_t) {
         out->temperature = malloc(cells * sizeof(float));

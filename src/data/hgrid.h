@@ -128,6 +128,7 @@ struct hgrid_desc {
     double memory_mb; /* refuse a step whose arrays need more; 0 = no limit */
     bool qvapor, temperature, wind;
     bool wind_components; /* with WIND: also keep u, v and w (field_volume u, v, w) */
+    bool pressure;        /* keep the air pressure (field_volume pressure) where the file has it */
     bool no_density;
     bool native_levels; /* uneven levels stay the file's own (hgrid_grid) */
 };

@@ -116,8 +116,8 @@ bool probe_sample_fields(const struct field_volume *fv, const double p[3],
     wrf_std_atmosphere(p[2], &t_std, &p_std);
     out->temperature_from = fv->temperature ? PROBE_DATA : PROBE_STANDARD;
     out->temperature_k = fv->temperature ? trilinear(&fv->grid, fv->temperature, 1, i0, t) : t_std;
-    out->pressure_from = PROBE_STANDARD;
-    out->pressure_pa = p_std;
+    out->pressure_from = fv->pressure ? PROBE_DATA : PROBE_STANDARD;
+    out->pressure_pa = fv->pressure ? trilinear(&fv->grid, fv->pressure, 1, i0, t) : p_std;
     /* The readers' components are east and north (CF's eastward_wind, CM1's and Isabel's x
      * and y, which the frame takes as east and north). */
     out->has_wind = fv->u && fv->v;

@@ -230,6 +230,7 @@ static bool load_fields(struct data_source *s, int step, bool qvapor, bool tempe
                                 .temperature = temperature || s->desc.wrf.temperature,
                                 .wind = wind || components || s->desc.wrf.wind,
                                 .wind_components = components,
+                                .pressure = s->desc.pressure,
                                 .no_density = s->desc.wrf.no_density,
                                 .native_levels = s->desc.wrf.native_levels};
         return hgrid_read_step(s->hg, step, &hd, out, NULL);

@@ -39,6 +39,8 @@ struct data_source_desc {
     bool wind_components;         /* CM1, CF, Isabel: where the wind is read, also keep its
                                      components (field_volume u, v, w: the probe's direction);
                                      WRF's probe reads its points itself (wrf_read_point) */
+    bool pressure;                /* CM1, CF: keep the file's air pressure (field_volume
+                                     pressure: the probe's) */
 };
 
 struct data_source;

@@ -167,6 +167,7 @@ void field_volume_finish(struct field_volume *v)
     free(v->vorticity);
     free(v->level_z);
     free(v->rho_air);
+    free(v->pressure);
     memset(v, 0, sizeof(*v));
 }
 

@@ -107,6 +107,8 @@ struct field_volume {
     float *vorticity;        /* vertical vorticity dv/dx - du/dy, 1/s, or NULL: WRF's, from its
                                 staggered U and V on the model levels (data/derived.h) */
     float *rho_air;          /* kg/m^3 or NULL */
+    float *pressure;         /* air pressure, Pa, or NULL: CM1's and CF's where asked for (the
+                                probe) and in the file */
     /* The model's own levels where it has terrain-following ones (WRF): the height above sea
      * level of mass level k (0 the lowest) at column (i, j), level_z[i + n0 (j + n1 k)], m,
      * for k < LEVEL_COUNT; NULL unless asked for.  On height-level data the grid's levels are

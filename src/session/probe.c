@@ -70,6 +70,7 @@ struct probe *probe_create(const struct config *cfg)
         p->desc.detail.on = false; /* the model's values, not the procedural detail */
         p->desc.wrf.qvapor = true; /* vapour where the files have it */
         p->desc.wind_components = true; /* the wind's direction (CM1, CF, Isabel) */
+        p->desc.pressure = true;        /* the file's pressure (CM1, CF) */
         p->src = data_source_open(&p->desc);
         if (!p->src)
             goto error;

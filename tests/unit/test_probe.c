@@ -17,6 +17,7 @@
 #include "config/config.h"
 #include "data/probe.h"
 #include "data/wrf.h"
+#include "data/wrf_write.h"
 #include "session/player.h"
 
 #define CHECK(x) assert_int_equal((x), NC_NOERR)
@@ -422,6 +423,53 @@ static void test_sample_fields(void **state)
     field_volume_finish(&fv);
 }
 
+/* CM1's and CF's pressure is the file's: synth's files (the standard atmosphere) with their
+ * pressure scaled by 1.01 here, probed at 3 km: 1.01 x the standard atmosphere there, said to
+ * come from the data (before, the probe gave the standard atmosphere whatever the file held). */
+static void test_height_level_pressure_is_the_files(void **state)
+{
+    const char *bin = getenv("ANVIL_BIN");
+    if (!bin)
+        skip();
+    const char *formats[2] = {"cm1", "cf"}, *names[2] = {"prs", "pa"};
+    for (int f = 0; f < 2; f++) {
+        const char *path = test_tmp_path(f ? "p-cf.nc" : "p-cm1.nc");
+        char cmd[1024];
+        snprintf(cmd, sizeof(cmd), "'%s' --quiet synth --format %s --size 16x16x20 -o '%s'", bin,
+                 formats[f], path);
+        assert_int_equal(system(cmd), 0);
+        int nc, v, nd, dims[4];
+        CHECK(nc_open(path, NC_WRITE, &nc));
+        CHECK(nc_inq_varid(nc, names[f], &v));
+        CHECK(nc_inq_varndims(nc, v, &nd));
+        CHECK(nc_inq_vardimid(nc, v, dims));
+        size_t count = 1;
+        for (int d = 0; d < nd; d++) {
+            size_t len;
+            CHECK(nc_inq_dimlen(nc, dims[d], &len));
+            count *= len;
+        }
+        float *a = malloc(count * sizeof(float));
+        assert_non_null(a);
+        CHECK(nc_get_var_float(nc, v, a));
+        for (size_t i = 0; i < count; i++)
+            a[i] *= 1.01f;
+        CHECK(nc_put_var_float(nc, v, a));
+        free(a);
+        CHECK(nc_close(nc));
+        char args[1200];
+        snprintf(args, sizeof(args), "'%s' --at 25.2,-79.8,3000 --set map.use_origin=true", path);
+        const char *js = probe_json(args);
+        assert_non_null(strstr(js, "\"pressure_source\": \"data\""));
+        double t_std, p_std;
+        wrf_std_atmosphere(3000.0, &t_std, &p_std);
+        double hpa = json_number(js, "pressure_hpa");
+        /* Linear between the levels: within 0.3 % of it; the standard atmosphere is 1 % off. */
+        if (!(fabs(hpa - 1.01 * p_std / 100.0) < 0.003 * 1.01 * p_std / 100.0))
+            fail_msg("%s: %g hPa, expected about %g", formats[f], hpa, 1.01 * p_std / 100.0);
+    }
+}
+
 /* The counts of a histogram made here, by the rule the header gives. */
 static void count_here(const float *v, size_t n, double lo, double hi, uint32_t *count,
                        uint64_t *below, uint64_t *above)
@@ -567,6 +615,7 @@ int main(void)
         cmocka_unit_test(test_wind_direction),
         cmocka_unit_test(test_first_visible),
         cmocka_unit_test(test_sample_fields),
+        cmocka_unit_test(test_height_level_pressure_is_the_files),
         cmocka_unit_test(test_histogram_counts),
         cmocka_unit_test(test_histogram_of_edited_layer),
     };
