@@ -201,10 +201,25 @@ bool probe_read(struct probe *p, int step, const double world[3], struct probe_v
             outside(out, "below the ground (%.0f m above sea level there; the point: %.0f m)",
                     wp.ground_m, out->data[2]);
             return true;
-        case WRF_POINT_ABOVE:
+        case WRF_POINT_ABOVE: {
+            /* The volume's box reaches the highest model top: between this column's top and
+             * the box's the volume holds the column's top level (its voxels clamp to it), so a
+             * point seen there (the first visible point along a ray) reads that level. */
+            struct grid3 g;
+            double at[3] = {out->data[0], out->data[1], wp.top_m - 1e-3};
+            if (data_source_grid(p->src, &g) &&
+                out->data[2] <= grid3_voxel_to_z(&g, (double)g.n[2]) + 0.01 &&
+                data_source_read_point(p->src, step, at, &wp) == WRF_POINT_OK) {
+                out->fields = true;
+                out->at_top = true;
+                out->top_m = at[2];
+                probe_sample_from_wrf(&wp, at[2], &out->s);
+                return true;
+            }
             outside(out, "above the top of the data (%.0f m above sea level there; the point: "
                     "%.0f m)", wp.top_m, out->data[2]);
             return true;
+        }
         case WRF_POINT_ERROR:
             return false;
         }
@@ -299,7 +314,10 @@ void probe_values_readout(const struct probe_values *v, struct readout_model *m)
         ROW(m, "position", false, "x %.1f km, y %.1f km", v->data[0] / 1000.0,
             v->data[1] / 1000.0);
     }
-    if (v->fields && v->s.has_ground)
+    if (v->fields && v->at_top)
+        ROW(m, "height", false, "%.0f m (above the model top here: the values at %.0f m)",
+            v->data[2], v->top_m);
+    else if (v->fields && v->s.has_ground)
         ROW(m, "height", false, "%.0f m (%.0f m above ground)", v->data[2],
             v->data[2] - v->s.ground_m);
     else
@@ -378,6 +396,8 @@ void probe_values_write_json(const struct probe_values *v, FILE *out)
             v->data[1], v->data[2]);
     fprintf(out, "  \"ground_m\": ");
     json_number(out, v->fields && v->s.has_ground ? v->s.ground_m : NAN);
+    fprintf(out, ",\n  \"values_at_m\": "); /* the column's top, above it (at_top) */
+    json_number(out, v->fields ? (v->at_top ? v->top_m : v->data[2]) : NAN);
     fprintf(out, ",\n  \"mass_ratio_g_per_kg\": {");
     for (int f = 0; f < SPECIES_COUNT; f++) {
         fprintf(out, "%s\"%s\": ", f ? ", " : "", species_name((enum species)f));

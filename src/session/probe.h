@@ -49,6 +49,9 @@ struct probe_values {
     char date[32];        /* "2005-08-28_06:00:00", "" when the data has no dates */
     bool fields;          /* the data has values at points (not an extinction file) */
     struct probe_sample s;
+    bool at_top; /* above this column's model top but inside the volume, where the
+                    volume holds its top level's values: S is read there, at TOP_M */
+    double top_m;
     double beta[2];       /* extinction of the volume on screen: ice, water phase, 1/m */
     bool have_light;      /* a light map was built */
     double light;         /* its beam at the point: direct and forward-scattered sunlight,

@@ -72,6 +72,11 @@ if [ -r "$thompson" ]; then
         --at 30,87,5100
     check "  names the same ground" stderr_has "below the ground (5293 m above sea level there"
 fi
+# Between this column's model top (6065 m) and the volume's (the highest, 6068 m on the
+# model's own levels), where the volume holds the column's top level: its values, said so.
+expect_exit 0 "a point above the column's top, inside the volume" "$anvil" --quiet probe \
+    "$katrina" --at 24,-89,6066
+check "  the values at the column's top" stdout_has "6066 m (above the model top here: the values at 6065 m)"
 expect_exit 1 "a point above the data" "$anvil" --quiet probe "$cfg" --at 24,-89,40000
 check "  says so" stderr_has "above the top of the data"
 expect_exit 1 "a step the data lacks" "$anvil" --quiet probe "$cfg" --at 24,-89,3000 --step 4
