@@ -412,8 +412,9 @@ static bool make_first(struct player *p, int step)
                                     : data_source_load(p->src, step, &p->first, &load_ms,
                                                        &convert_ms)))
         return false;
-    log_info("time step %d (%s) read in %.0f ms, converted in %.0f ms", step,
-             data_source_step_date(p->src, step), load_ms, convert_ms);
+    const char *date = data_source_step_date(p->src, step);
+    log_info("time step %d%s%s%s read in %.0f ms, converted in %.0f ms", step, date[0] ? " (" : "",
+             date, date[0] ? ")" : "", load_ms, convert_ms);
     return true;
 }
 

@@ -29,9 +29,11 @@ static bool load_data_step(const struct config *cfg, struct ext_volume *out)
     } else {
         double load_ms = 0.0, convert_ms = 0.0;
         ok = data_source_load(src, cfg->data.step, out, &load_ms, &convert_ms);
-        if (ok)
-            log_info("time step %d (%s) read in %.0f ms, converted in %.0f ms", cfg->data.step,
-                     data_source_step_date(src, cfg->data.step), load_ms, convert_ms);
+        if (ok) {
+            const char *date = data_source_step_date(src, cfg->data.step);
+            log_info("time step %d%s%s%s read in %.0f ms, converted in %.0f ms", cfg->data.step,
+                     date[0] ? " (" : "", date, date[0] ? ")" : "", load_ms, convert_ms);
+        }
     }
     data_source_close(src);
     return ok;
