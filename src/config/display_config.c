@@ -593,6 +593,8 @@ bool display_config_load(const char *path, struct display_config *cfg)
 int display_config_walls_of_rank(struct display_config *cfg, int rank, int size)
 {
     int n = 0;
+    if (cfg->room_wall_count == 0)
+        cfg->room_wall_count = cfg->wall_count;
     for (int w = 0; w < cfg->wall_count; w++) {
         int owner = cfg->walls[w].rank >= 0 ? cfg->walls[w].rank : w % (size > 0 ? size : 1);
         if (owner == rank)

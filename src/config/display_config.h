@@ -203,6 +203,8 @@ struct display_config {
     struct display_wand wand;
     struct display_wall walls[DISPLAY_MAX_WALLS];
     int wall_count;
+    int room_wall_count; /* the whole display's walls when WALLS holds one rank's
+                            (display_config_walls_of_rank); 0: WALLS is the whole display */
 };
 
 /* Fills every setting with its default: a desktop mono window 0.52 x 0.32 m seen from 0.6 m,

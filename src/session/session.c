@@ -1106,7 +1106,10 @@ static void place_menu(struct session *s, const struct display_camera *cam, int 
     if (s->tracker) {
         if (s->placed)
             return;
-        if (s->display.wall_count == 1) {
+        /* (A rank of a cluster holds its own walls: the room's count says what it is.) */
+        int room =
+            s->display.room_wall_count > 0 ? s->display.room_wall_count : s->display.wall_count;
+        if (room == 1 && s->display.wall_count == 1) {
             /* One screen (a stereo desktop, a powerwall): only what lies in front of it is
              * seen, so the panel goes on it, at its right, as the orbit view's: at most 85 %
              * of half its width and 90 % of its height; on the screen's plane it has no
