@@ -22,7 +22,7 @@ static void on_interrupt(int sig)
 static int usage(FILE *out)
 {
     fprintf(out,
-            "usage: anvil trackers DISPLAY.cfg [--set PATH=VALUE]... [--seconds S] "
+            "usage: anvil trackers [--display] DISPLAY.cfg [--set PATH=VALUE]... [--seconds S] "
             "[--interval S] [--quiet]\n"
             "Prints the display's tracked head and wand (head.source, wand.source: dtrack or\n"
             "vrpn) as they arrive: position (m) and heading, pitch, roll (degrees) in room\n"
@@ -36,10 +36,15 @@ static int usage(FILE *out)
 int cmd_trackers(int argc, char **argv)
 {
     static const struct option longopts[] = {
-        {"set", required_argument, NULL, 's'},      {"seconds", required_argument, NULL, 'S'},
-        {"interval", required_argument, NULL, 'i'}, {"quiet", no_argument, NULL, 'q'},
-        {"help", no_argument, NULL, 'h'},           {NULL, 0, NULL, 0},
+        {"set", required_argument, NULL, 's'},
+        {"seconds", required_argument, NULL, 'S'},
+        {"interval", required_argument, NULL, 'i'},
+        {"quiet", no_argument, NULL, 'q'},
+        {"help", no_argument, NULL, 'h'},
+        {"display", required_argument, NULL, 'D'},
+        {NULL, 0, NULL, 0},
     };
+    const char *display = NULL; /* --display FILE, as render and run take it */
     char *sets[MAX_SETS];
     int n_sets = 0;
     double seconds = INFINITY, interval = 0.5;
@@ -47,6 +52,9 @@ int cmd_trackers(int argc, char **argv)
     int c;
     while ((c = getopt_long(argc, argv, "qh", longopts, NULL)) != -1) {
         switch (c) {
+        case 'D':
+            display = optarg;
+            break;
         case 's':
             if (n_sets == MAX_SETS) {
                 log_error("too many --set options (at most %d)", MAX_SETS);
@@ -71,11 +79,11 @@ int cmd_trackers(int argc, char **argv)
             return usage(stderr);
         }
     }
-    if (optind >= argc) {
+    if (optind >= argc && !display) {
         log_error("trackers: missing DISPLAY.cfg");
         return usage(stderr);
     }
-    const char *path = argv[optind++];
+    const char *path = display ? display : argv[optind++];
     if (optind < argc) {
         log_error("trackers: unexpected argument \"%s\" (one display file)", argv[optind]);
         return usage(stderr);

@@ -40,6 +40,9 @@ expect_exit 2 "trackers without a display file" "$anvil" trackers
 expect_exit 1 "trackers of a display without trackers" "$anvil" trackers \
     "$src/displays/cave4.cfg" --seconds 0.1
 check "says neither is a tracker" stderr_has "neither head.source"
+expect_exit 1 "the same with --display, as render takes it" "$anvil" trackers \
+    --display "$src/displays/cave4.cfg" --seconds 0.1
+check "the same file read" stderr_has "neither head.source"
 printf '@include "%s"\nhead = {\n  address = "Head@tracker";\n};\n' \
     "$(cd "$src" && pwd)/displays/cave4-dtrack.cfg" >"$tmp/bad.cfg"
 expect_exit 1 "a VRPN address for DTrack" "$anvil" trackers "$tmp/bad.cfg" --seconds 0.1
