@@ -457,7 +457,8 @@ void effects_decide(const struct config *cfg, const struct effects_facts *facts,
                  "keeps it for every view and frame)");
     else if (steps > 1)
         snprintf(out->light_builds, sizeof(out->light_builds),
-                 "built once per time step shown (%d steps)%s%s, shared by every view",
+                 "built once for each time step shown (the data has %d)%s%s, shared by every "
+                 "view",
                  steps, facts->sun_moves ? " and whenever the sun moves" : "",
                  out->on[EFFECT_TEMPORAL] ? " (temporal: two held, blended)" : "");
     else
