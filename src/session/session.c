@@ -1641,9 +1641,10 @@ static bool temporal_frame(struct session *s, const struct frame_state *f, bool 
 }
 
 /* A domain that moves (a moving nest): the map of the step shown, its terrain, coastlines and
- * graticule where that step has them.  Made in the frame that first shows the step (a
- * moving nest's grid is small: Katrina's 48 x 48 columns take about a millisecond); where it
- * cannot be made the last map stays, with the message. */
+ * graticule where that step has them.  Made in the frame that first shows the step (19 - 28
+ * ms on llvmpipe's machine for Katrina's 48 x 48 columns and ~500 coastline segments, most
+ * of it the coastlines' reading and placing; not yet between frames with the staged step);
+ * where it cannot be made the last map stays, with the message. */
 static void follow_domain(struct session *s)
 {
     if (s->map_step == s->shown)
