@@ -32,7 +32,7 @@ check "slab: sheared light grid" stdout_has "light grid     sheared: horizontal 
 if [ -f "$data/wrf/katrina_2005_mercator_wsm3.nc" ]; then
     expect_exit 0 "katrina" "$anvil" effects -q "$src/configs/katrina.cfg"
     check "katrina: water phase for all" stdout_has "the water phase for all"
-    check "katrina: four time steps" stdout_has "4 steps"
+    check "katrina: four time steps" stdout_has "the data has 4"
 fi
 expect_exit 0 "the diffuse light volume" "$anvil" effects --set effects.multiple=volume
 check "volume: multiple on, from the volume" stdout_has "multiple       on   (volume) volume in the config"
