@@ -13,7 +13,6 @@
 #include <netcdf.h>
 
 #include "common/log.h"
-#include "data/geo.h"
 #include "common/parallel.h"
 #include "data/derived.h"
 #include "data/extfile.h"
@@ -395,14 +394,7 @@ static bool read_motion(struct wrf *w, double memory_mb)
         if (!ok)
             return false;
     }
-    const struct wrf_meta *z = &w->step_meta[w->step_count - 1];
-    char first[96], at_last[96];
-    geo_format_range(first, sizeof(first), 2, m->lat_min, m->lat_max, m->lon_min, m->lon_max);
-    geo_format_range(at_last, sizeof(at_last), 2, z->lat_min, z->lat_max, z->lon_min, z->lon_max);
-    log_debug("%s: the domain moves (a moving nest): its columns lie at %s at the first step and "
-              "%s at the last",
-              f->path, first, at_last);
-    return true;
+    return true; /* the session says where it goes (player_create), info too */
 }
 
 bool wrf_moves(const struct wrf *w)
